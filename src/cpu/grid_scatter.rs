@@ -1,0 +1,39 @@
+//! Mirror of `wgsl/grid_scatter.wgsl`. Sequential, so the scratch order is splat order; the
+//! GPU's depends on scheduling until `grid_rank`.
+
+use crate::grid::{cell_index, disk_cell_range};
+use crate::types::{GridParams, Splat};
+use glam::UVec3;
+
+pub const WG: u32 = 64;
+
+pub fn grid_scatter(
+    grid: &GridParams,
+    splats: &[Splat],
+    cell_start: &[u32],
+    cell_cursor: &mut [u32],
+    scratch_splats: &mut [u32],
+    scratch_cells: &mut [u32],
+    groups: u32,
+) {
+    for wg in 0..groups {
+        for lid in 0..WG {
+            let i = wg * WG + lid;
+            if i >= grid.splat_count {
+                continue;
+            }
+            let (lo, hi) = disk_cell_range(&splats[i as usize], grid);
+            for z in lo.z..=hi.z {
+                for y in lo.y..=hi.y {
+                    for x in lo.x..=hi.x {
+                        let c = cell_index(UVec3::new(x, y, z), grid) as usize;
+                        let slot = cell_start[c] + cell_cursor[c];
+                        cell_cursor[c] += 1;
+                        scratch_splats[slot as usize] = i;
+                        scratch_cells[slot as usize] = c as u32;
+                    }
+                }
+            }
+        }
+    }
+}

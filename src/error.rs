@@ -1,0 +1,50 @@
+//! One error type for the library: every variant renders as a single line that names what
+//! went wrong and where (file and line, or file and element), so the CLI can print it as is.
+
+use std::path::{Path, PathBuf};
+
+#[derive(Debug, thiserror::Error)]
+pub enum Error {
+    #[error("{}: {source}", path.display())]
+    Io {
+        path: PathBuf,
+        source: std::io::Error,
+    },
+    /// A malformed input file: scene, model or shader. `at` is "line N", "element vertex #17"…
+    #[error("{}: {at}: {message}", path.display())]
+    Parse {
+        path: PathBuf,
+        at: String,
+        message: String,
+    },
+    /// A well-formed input that asks for something impossible (NaN geometry, negative power…).
+    #[error("{0}")]
+    Invalid(String),
+    #[error("{0}")]
+    NoAdapter(String),
+    #[error("GPU error: {0}")]
+    Gpu(String),
+}
+
+pub type Result<T, E = Error> = std::result::Result<T, E>;
+
+impl Error {
+    pub fn io(path: &Path, source: std::io::Error) -> Self {
+        Error::Io {
+            path: path.to_owned(),
+            source,
+        }
+    }
+
+    pub fn parse(path: &Path, at: impl Into<String>, message: impl Into<String>) -> Self {
+        Error::Parse {
+            path: path.to_owned(),
+            at: at.into(),
+            message: message.into(),
+        }
+    }
+
+    pub fn at_line(path: &Path, line: usize, message: impl Into<String>) -> Self {
+        Self::parse(path, format!("line {line}"), message)
+    }
+}

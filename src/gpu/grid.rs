@@ -1,0 +1,91 @@
+//! Splat grid build on the GPU: count → exclusive scan → scatter → rank, the same passes as
+//! `cpu::build_grid`. The result stays on the device for tracing; `download` brings it back.
+
+use super::{Gpu, scan};
+use crate::cpu::{grid_count, grid_rank, groups_for};
+use crate::error::{Error, Result};
+use crate::grid::{SplatGrid, check_cell_len};
+use crate::types::GridParams;
+
+/// The grid on the device.
+pub struct GpuGrid {
+    pub params: GridParams,
+    pub params_buf: wgpu::Buffer,
+    /// `cell_count + 1` offsets into `cell_splats`.
+    pub cell_start: wgpu::Buffer,
+    pub cell_splats: wgpu::Buffer,
+    /// Number of (cell, splat) entries.
+    pub entries: u32,
+}
+
+pub fn build_grid(gpu: &Gpu, params: &GridParams, splats: &wgpu::Buffer) -> Result<GpuGrid> {
+    let params_buf = gpu.uniform("grid params", params);
+    let cells = params.cell_count as u64;
+    let cell_start = gpu.storage_zeroed("cell start", (cells + 1) * 4)?;
+    let splat_groups = groups_for(params.splat_count, grid_count::WG);
+
+    let max_cell_len = gpu.storage_zeroed("grid max cell length", 4)?;
+    let mut encoder = gpu.encoder("grid count");
+    gpu.dispatch(
+        &mut encoder,
+        "grid_count",
+        &[&params_buf, splats, &cell_start, &max_cell_len],
+        splat_groups,
+    )?;
+    scan::exclusive_scan(gpu, &mut encoder, &cell_start, params.cell_count + 1)?;
+    // stats = [entry total (last scan value), longest cell list]
+    let stats = gpu.storage_zeroed("grid stats", 8)?;
+    encoder.copy_buffer_to_buffer(&cell_start, cells * 4, &stats, 0, 4);
+    encoder.copy_buffer_to_buffer(&max_cell_len, 0, &stats, 4, 4);
+    gpu.submit_and_wait(encoder)?;
+
+    // The total sizes the entry list; this readback is the only sync of the build.
+    let stats: Vec<u32> = gpu.read(&stats, 2)?;
+    let (entries, max_cell_len) = match stats[..] {
+        [e, m] => (e, m),
+        _ => return Err(Error::Gpu("grid stats readback was short".into())),
+    };
+    check_cell_len(max_cell_len)?;
+
+    let params = GridParams {
+        entry_count: entries,
+        ..*params
+    };
+    gpu.queue.write_buffer(&params_buf, 0, bytemuck::bytes_of(&params));
+    let bytes = entries as u64 * 4;
+    let cursor = gpu.storage_zeroed("cell cursor", cells * 4)?;
+    let scratch_splats = gpu.storage_zeroed("scratch splats", bytes)?;
+    let scratch_cells = gpu.storage_zeroed("scratch cells", bytes)?;
+    let cell_splats = gpu.storage_zeroed("cell splats", bytes)?;
+    let mut encoder = gpu.encoder("grid scatter");
+    gpu.dispatch(
+        &mut encoder,
+        "grid_scatter",
+        &[&params_buf, splats, &cell_start, &cursor, &scratch_splats, &scratch_cells],
+        splat_groups,
+    )?;
+    gpu.dispatch(
+        &mut encoder,
+        "grid_rank",
+        &[&params_buf, &cell_start, &scratch_splats, &scratch_cells, &cell_splats],
+        groups_for(entries, grid_rank::WG),
+    )?;
+    gpu.submit_and_wait(encoder)?;
+    Ok(GpuGrid {
+        params,
+        params_buf,
+        cell_start,
+        cell_splats,
+        entries,
+    })
+}
+
+impl GpuGrid {
+    pub fn download(&self, gpu: &Gpu) -> Result<SplatGrid> {
+        Ok(SplatGrid {
+            params: self.params,
+            cell_start: gpu.read(&self.cell_start, self.params.cell_count as usize + 1)?,
+            cell_splats: gpu.read(&self.cell_splats, self.entries as usize)?,
+        })
+    }
+}

@@ -1,0 +1,328 @@
+//! The GPU side: a headless device, compiled stage pipelines, buffer helpers, and the host code
+//! that records each stage's dispatches.
+
+pub mod grid;
+pub mod scan;
+pub mod shaders;
+
+use std::collections::HashMap;
+use std::sync::{Arc, Mutex};
+
+use bytemuck::Pod;
+use wgpu::util::DeviceExt;
+
+use crate::error::{Error, Result};
+
+/// Which graphics API to run on.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, clap::ValueEnum, serde::Serialize)]
+#[serde(rename_all = "lowercase")]
+pub enum BackendChoice {
+    /// `WGPU_BACKEND` if set, else Vulkan, else OpenGL (GLES via EGL).
+    #[default]
+    Auto,
+    Vulkan,
+    Gl,
+}
+
+const INSTALL_HINT: &str = "install a Vulkan driver; without a GPU, Mesa's software \
+    rasterizer lavapipe works: `sudo apt-get install mesa-vulkan-drivers` (Debian/Ubuntu) or \
+    `sudo dnf install mesa-vulkan-drivers` (Fedora); Mesa's OpenGL (EGL) is used as a fallback";
+
+/// A headless device and everything recorded on it.
+pub struct Gpu {
+    pub device: wgpu::Device,
+    pub queue: wgpu::Queue,
+    pub info: wgpu::AdapterInfo,
+    pub limits: wgpu::Limits,
+    pipelines: Mutex<HashMap<&'static str, wgpu::ComputePipeline>>,
+    /// First uncaptured device error, surfaced as an `Error` after the next wait
+    /// (wgpu's default handler panics).
+    error: Arc<Mutex<Option<String>>>,
+}
+
+impl Gpu {
+    /// Opens a device on the chosen backend (see `BackendChoice`).
+    pub fn new(choice: BackendChoice) -> Result<Gpu> {
+        let attempts: Vec<(&str, wgpu::Backends)> = match choice {
+            BackendChoice::Vulkan => vec![("Vulkan", wgpu::Backends::VULKAN)],
+            BackendChoice::Gl => vec![("GL", wgpu::Backends::GL)],
+            BackendChoice::Auto => match wgpu::Backends::from_env() {
+                Some(b) => vec![("WGPU_BACKEND", b)],
+                None => vec![("Vulkan", wgpu::Backends::VULKAN), ("GL", wgpu::Backends::GL)],
+            },
+        };
+        let mut tried = Vec::new();
+        for (name, backends) in attempts {
+            match Self::open(backends)? {
+                Some(gpu) => return Ok(gpu),
+                None => tried.push(name),
+            }
+        }
+        Err(Error::NoAdapter(format!(
+            "no GPU adapter with compute shaders found (tried: {}); {INSTALL_HINT}",
+            tried.join(", ")
+        )))
+    }
+
+    fn open(backends: wgpu::Backends) -> Result<Option<Gpu>> {
+        let mut desc = wgpu::InstanceDescriptor::new_without_display_handle_from_env();
+        desc.backends = backends;
+        let instance = wgpu::Instance::new(desc);
+        let adapters = pollster::block_on(instance.enumerate_adapters(backends));
+        let Some(adapter) = adapters
+            .into_iter()
+            .filter(|a| {
+                a.get_downlevel_capabilities()
+                    .flags
+                    .contains(wgpu::DownlevelFlags::COMPUTE_SHADERS)
+            })
+            .min_by_key(|a| adapter_rank(a.get_info().device_type))
+        else {
+            return Ok(None);
+        };
+        let info = adapter.get_info();
+        let limits = required_limits(&adapter.limits());
+        let (device, queue) = pollster::block_on(adapter.request_device(&wgpu::DeviceDescriptor {
+            label: Some("lobelight"),
+            required_features: wgpu::Features::empty(),
+            required_limits: limits.clone(),
+            experimental_features: wgpu::ExperimentalFeatures::disabled(),
+            memory_hints: wgpu::MemoryHints::Performance,
+            trace: wgpu::Trace::Off,
+        }))
+        .map_err(|e| Error::Gpu(format!("{} ({:?}): cannot open device: {e}", info.name, info.backend)))?;
+        let error = Arc::new(Mutex::new(None::<String>));
+        let slot = error.clone();
+        device.on_uncaptured_error(Arc::new(move |e: wgpu::Error| {
+            if let Ok(mut s) = slot.lock() {
+                s.get_or_insert_with(|| e.to_string());
+            }
+        }));
+        Ok(Some(Gpu {
+            device,
+            queue,
+            info,
+            limits,
+            pipelines: Mutex::new(HashMap::new()),
+            error,
+        }))
+    }
+
+    pub fn backend_name(&self) -> &'static str {
+        match self.info.backend {
+            wgpu::Backend::Vulkan => "vulkan",
+            wgpu::Backend::Gl => "gl",
+            wgpu::Backend::Metal => "metal",
+            wgpu::Backend::Dx12 => "dx12",
+            wgpu::Backend::BrowserWebGpu => "webgpu",
+            wgpu::Backend::Noop => "noop",
+        }
+    }
+
+    /// The compiled pipeline of a stage of `shaders::STAGES`, compiled on first use.
+    pub fn pipeline(&self, name: &'static str) -> Result<wgpu::ComputePipeline> {
+        let mut cache = self
+            .pipelines
+            .lock()
+            .map_err(|_| Error::Gpu("pipeline cache poisoned".into()))?;
+        if let Some(p) = cache.get(name) {
+            return Ok(p.clone());
+        }
+        let source = shaders::resolve_stage(name)?;
+        let module = self.device.create_shader_module(wgpu::ShaderModuleDescriptor {
+            label: Some(name),
+            source: wgpu::ShaderSource::Wgsl(source.into()),
+        });
+        let pipeline = self.device.create_compute_pipeline(&wgpu::ComputePipelineDescriptor {
+            label: Some(name),
+            layout: None,
+            module: &module,
+            entry_point: Some("main"),
+            compilation_options: Default::default(),
+            cache: None,
+        });
+        self.check()?;
+        cache.insert(name, pipeline.clone());
+        Ok(pipeline)
+    }
+
+    /// Records one dispatch of `stage` over `groups` workgroups, binding `buffers` to group 0
+    /// in binding order. Large counts are laid out in 2D (see `wgsl/shared/dispatch.wgsl`).
+    pub fn dispatch(
+        &self,
+        encoder: &mut wgpu::CommandEncoder,
+        stage: &'static str,
+        buffers: &[&wgpu::Buffer],
+        groups: u32,
+    ) -> Result<()> {
+        if groups == 0 {
+            return Ok(());
+        }
+        let pipeline = self.pipeline(stage)?;
+        let entries: Vec<wgpu::BindGroupEntry> = buffers
+            .iter()
+            .enumerate()
+            .map(|(i, b)| wgpu::BindGroupEntry {
+                binding: i as u32,
+                resource: b.as_entire_binding(),
+            })
+            .collect();
+        let bind_group = self.device.create_bind_group(&wgpu::BindGroupDescriptor {
+            label: Some(stage),
+            layout: &pipeline.get_bind_group_layout(0),
+            entries: &entries,
+        });
+        let (x, y) = self.dispatch_dims(groups)?;
+        let mut pass = encoder.begin_compute_pass(&wgpu::ComputePassDescriptor {
+            label: Some(stage),
+            timestamp_writes: None,
+        });
+        pass.set_pipeline(&pipeline);
+        pass.set_bind_group(0, &bind_group, &[]);
+        pass.dispatch_workgroups(x, y, 1);
+        Ok(())
+    }
+
+    /// Splits a workgroup count into (x, y) within the per-dimension limit; shaders bound-check
+    /// the few extra workgroups of the last row.
+    pub fn dispatch_dims(&self, groups: u32) -> Result<(u32, u32)> {
+        let max = self.limits.max_compute_workgroups_per_dimension;
+        let x = groups.min(max);
+        let y = groups.div_ceil(x);
+        if y > max {
+            return Err(Error::Invalid(format!(
+                "dispatch of {groups} workgroups exceeds this device's {max}² limit"
+            )));
+        }
+        Ok((x, y))
+    }
+
+    pub fn encoder(&self, label: &str) -> wgpu::CommandEncoder {
+        self.device
+            .create_command_encoder(&wgpu::CommandEncoderDescriptor { label: Some(label) })
+    }
+
+    /// Submits and waits until the device is idle, then reports any device error.
+    pub fn submit_and_wait(&self, encoder: wgpu::CommandEncoder) -> Result<()> {
+        self.queue.submit(Some(encoder.finish()));
+        self.device
+            .poll(wgpu::PollType::wait_indefinitely())
+            .map_err(|e| Error::Gpu(format!("waiting for the device: {e}")))?;
+        self.check()
+    }
+
+    fn check(&self) -> Result<()> {
+        match self.error.lock() {
+            Ok(mut e) => match e.take() {
+                Some(msg) => Err(Error::Gpu(msg)),
+                None => Ok(()),
+            },
+            Err(_) => Err(Error::Gpu("error slot poisoned".into())),
+        }
+    }
+
+    /// A storage buffer holding `data` (at least 4 bytes: empty bindings are invalid).
+    pub fn storage<T: Pod>(&self, label: &str, data: &[T]) -> Result<wgpu::Buffer> {
+        let bytes: &[u8] = bytemuck::cast_slice(data);
+        self.check_size(label, bytes.len() as u64)?;
+        let contents = if bytes.is_empty() { &[0u8; 4][..] } else { bytes };
+        Ok(self.device.create_buffer_init(&wgpu::util::BufferInitDescriptor {
+            label: Some(label),
+            contents,
+            usage: wgpu::BufferUsages::STORAGE | wgpu::BufferUsages::COPY_SRC | wgpu::BufferUsages::COPY_DST,
+        }))
+    }
+
+    /// A zeroed storage buffer of `bytes` bytes (rounded up to 4, at least 4).
+    pub fn storage_zeroed(&self, label: &str, bytes: u64) -> Result<wgpu::Buffer> {
+        self.check_size(label, bytes)?;
+        Ok(self.device.create_buffer(&wgpu::BufferDescriptor {
+            label: Some(label),
+            size: bytes.max(4).next_multiple_of(4),
+            usage: wgpu::BufferUsages::STORAGE | wgpu::BufferUsages::COPY_SRC | wgpu::BufferUsages::COPY_DST,
+            mapped_at_creation: false,
+        }))
+    }
+
+    pub fn uniform<T: Pod>(&self, label: &str, value: &T) -> wgpu::Buffer {
+        self.device.create_buffer_init(&wgpu::util::BufferInitDescriptor {
+            label: Some(label),
+            contents: bytemuck::bytes_of(value),
+            usage: wgpu::BufferUsages::UNIFORM | wgpu::BufferUsages::COPY_DST,
+        })
+    }
+
+    /// Largest storage binding this device allows, in bytes: every capacity derives from it.
+    pub fn max_binding_bytes(&self) -> u64 {
+        (self.limits.max_storage_buffer_binding_size as u64).min(self.limits.max_buffer_size)
+    }
+
+    fn check_size(&self, label: &str, bytes: u64) -> Result<()> {
+        let max = self.max_binding_bytes();
+        if bytes > max {
+            return Err(Error::Invalid(format!(
+                "{label}: {bytes} bytes exceed this device's largest storage binding ({max} bytes)"
+            )));
+        }
+        Ok(())
+    }
+
+    /// Copies `count` elements of `buffer` back to the host.
+    pub fn read<T: Pod>(&self, buffer: &wgpu::Buffer, count: usize) -> Result<Vec<T>> {
+        let bytes = (count * std::mem::size_of::<T>()) as u64;
+        if bytes == 0 {
+            return Ok(Vec::new());
+        }
+        let staging = self.device.create_buffer(&wgpu::BufferDescriptor {
+            label: Some("readback"),
+            size: bytes.next_multiple_of(4),
+            usage: wgpu::BufferUsages::MAP_READ | wgpu::BufferUsages::COPY_DST,
+            mapped_at_creation: false,
+        });
+        let mut encoder = self.encoder("readback");
+        encoder.copy_buffer_to_buffer(buffer, 0, &staging, 0, bytes.next_multiple_of(4));
+        self.submit_and_wait(encoder)?;
+        let (tx, rx) = std::sync::mpsc::channel();
+        staging.slice(..).map_async(wgpu::MapMode::Read, move |r| {
+            let _ = tx.send(r);
+        });
+        self.device
+            .poll(wgpu::PollType::wait_indefinitely())
+            .map_err(|e| Error::Gpu(format!("waiting for readback: {e}")))?;
+        rx.recv()
+            .map_err(|_| Error::Gpu("readback callback dropped".into()))?
+            .map_err(|e| Error::Gpu(format!("mapping readback buffer: {e}")))?;
+        let view = staging
+            .slice(..)
+            .get_mapped_range()
+            .map_err(|e| Error::Gpu(format!("reading mapped buffer: {e}")))?;
+        let out = bytemuck::pod_collect_to_vec(&view[..bytes as usize]);
+        drop(view);
+        staging.unmap();
+        Ok(out)
+    }
+}
+
+/// Lower is better: a real GPU before a software one.
+fn adapter_rank(t: wgpu::DeviceType) -> u8 {
+    match t {
+        wgpu::DeviceType::DiscreteGpu => 0,
+        wgpu::DeviceType::IntegratedGpu => 1,
+        wgpu::DeviceType::VirtualGpu => 2,
+        wgpu::DeviceType::Other => 3,
+        wgpu::DeviceType::Cpu => 4,
+    }
+}
+
+/// WebGPU's downlevel defaults (what every backend we target offers), raised only where our
+/// stages benefit: buffer sizes and dispatch dimensions up to what the adapter allows.
+fn required_limits(adapter: &wgpu::Limits) -> wgpu::Limits {
+    let base = wgpu::Limits::downlevel_defaults();
+    wgpu::Limits {
+        max_buffer_size: adapter.max_buffer_size,
+        max_storage_buffer_binding_size: adapter.max_storage_buffer_binding_size,
+        max_storage_buffers_per_shader_stage: adapter.max_storage_buffers_per_shader_stage.min(8),
+        max_compute_workgroups_per_dimension: adapter.max_compute_workgroups_per_dimension,
+        ..base
+    }
+}

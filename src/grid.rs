@@ -1,0 +1,161 @@
+//! The uniform splat grid shared by grid build, photon tracing and shadow rays: its parameters
+//! (chosen on the host from the scene bounds and splat count) and the cell range of a disk,
+//! the Rust twin of `wgsl/shared/grid.wgsl`.
+
+use crate::error::{Error, Result};
+use crate::types::{GridParams, Splat};
+use glam::{UVec3, Vec3};
+
+/// How the grid resolution is chosen.
+#[derive(Clone, Copy, Debug, PartialEq, serde::Deserialize, serde::Serialize)]
+#[serde(deny_unknown_fields, default)]
+pub struct GridConfig {
+    /// Target number of cells per splat: the cell edge is `cbrt(volume / (cells_per_splat * N))`.
+    pub cells_per_splat: f32,
+    /// Cap on cells along any axis, which bounds memory (`max_dim³` counters).
+    pub max_dim: u32,
+}
+
+impl Default for GridConfig {
+    fn default() -> Self {
+        GridConfig {
+            cells_per_splat: 2.0,
+            max_dim: 256,
+        }
+    }
+}
+
+/// Half extents of a disk's axis-aligned bounding box: `r * sqrt(1 - n_i²)` along axis i.
+pub fn disk_half_extent(s: &Splat) -> Vec3 {
+    let n = Vec3::from(s.normal);
+    let one_minus = (Vec3::ONE - n * n).max(Vec3::ZERO);
+    s.radius * Vec3::new(one_minus.x.sqrt(), one_minus.y.sqrt(), one_minus.z.sqrt())
+}
+
+/// Inclusive range of cells touched by a splat's bounding box, clamped to the grid.
+/// Same operations in the same order as `disk_cell_range` in WGSL, so both round alike.
+pub fn disk_cell_range(s: &Splat, g: &GridParams) -> (UVec3, UVec3) {
+    let half = disk_half_extent(s);
+    let c = Vec3::from(s.center);
+    let origin = Vec3::from(g.origin);
+    let inv = g.inv_cell_size;
+    let lo_f = ((c - half - origin) * inv).floor();
+    let hi_f = ((c + half - origin) * inv).floor();
+    let top = (UVec3::from(g.dims) - UVec3::ONE).as_vec3();
+    let lo = lo_f.clamp(Vec3::ZERO, top).as_uvec3();
+    let hi = hi_f.clamp(Vec3::ZERO, top).as_uvec3();
+    (lo, hi)
+}
+
+pub fn cell_index(c: UVec3, g: &GridParams) -> u32 {
+    c.x + g.dims[0] * (c.y + g.dims[1] * c.z)
+}
+
+/// Longest cell list the grid build accepts. Each `grid_rank` invocation loops over one list,
+/// and llvmpipe (Mesa's software rasterizer, our CI device) silently ends an invocation's
+/// loops after about 65k iterations in total; longer lists only arise when thousands of
+/// splats coincide, which is a broken scene rather than a large one.
+pub const MAX_CELL_LEN: u32 = 4096;
+
+pub fn check_cell_len(max_cell_len: u32) -> Result<()> {
+    if max_cell_len > MAX_CELL_LEN {
+        return Err(Error::Invalid(format!(
+            "{max_cell_len} splats overlap one grid cell (at most {MAX_CELL_LEN}): the scene has \
+             many coincident or oversized splats"
+        )));
+    }
+    Ok(())
+}
+
+/// Bounds of all splat disks (their bounding boxes).
+pub fn splat_bounds(splats: &[Splat]) -> Option<(Vec3, Vec3)> {
+    let mut it = splats.iter();
+    let first = it.next()?;
+    let h = disk_half_extent(first);
+    let c = Vec3::from(first.center);
+    let init = (c - h, c + h);
+    Some(it.fold(init, |(lo, hi), s| {
+        let h = disk_half_extent(s);
+        let c = Vec3::from(s.center);
+        (lo.min(c - h), hi.max(c + h))
+    }))
+}
+
+/// Chooses the grid for a set of splats: cubic cells, about `cells_per_splat` cells per splat,
+/// no smaller than the mean splat radius, at most `max_dim` cells along any axis.
+pub fn grid_params(splats: &[Splat], cfg: &GridConfig) -> Result<GridParams> {
+    if !(cfg.cells_per_splat > 0.0 && cfg.cells_per_splat.is_finite()) {
+        return Err(Error::Invalid(format!(
+            "grid.cells_per_splat must be a positive number, got {}",
+            cfg.cells_per_splat
+        )));
+    }
+    if cfg.max_dim == 0 || cfg.max_dim > 2048 {
+        return Err(Error::Invalid(format!(
+            "grid.max_dim must be in 1..=2048, got {}",
+            cfg.max_dim
+        )));
+    }
+    let (lo, hi) = splat_bounds(splats).ok_or_else(|| Error::Invalid("the scene has no splats".into()))?;
+    if !lo.is_finite() || !hi.is_finite() {
+        return Err(Error::Invalid("splat bounds are not finite".into()));
+    }
+    // Pad relative to the coordinates' magnitude so that no disk sits exactly on the far face,
+    // also for scenes far from the origin where one ulp is large.
+    let magnitude = lo.abs().max(hi.abs()).max_element().max((hi - lo).max_element());
+    let pad = Vec3::splat(magnitude.max(f32::MIN_POSITIVE) * 1e-5);
+    let (lo, hi) = (lo - pad, hi + pad);
+    let extent = hi - lo;
+    let max_dim = cfg.max_dim as f32;
+    // Flat scenes have zero volume along an axis: treat each extent as at least one cell of the
+    // finest grid allowed, so the volume estimate stays meaningful.
+    let floor = extent.max_element() / max_dim;
+    let clamped = extent.max(Vec3::splat(floor));
+    let volume = clamped.x as f64 * clamped.y as f64 * clamped.z as f64;
+    let target_cells = cfg.cells_per_splat as f64 * splats.len() as f64;
+    // Cells no smaller than the mean splat radius: a disk then touches a few cells per axis,
+    // and coincident splats cannot multiply into thousands of cells that each list them all.
+    let mean_radius = (splats.iter().map(|s| s.radius as f64).sum::<f64>() / splats.len() as f64) as f32;
+    let mut cell = (volume / target_cells).cbrt() as f32;
+    cell = cell.max(mean_radius).max(floor).max(f32::MIN_POSITIVE);
+    let dims = (extent / cell).ceil().max(Vec3::ONE).min(Vec3::splat(max_dim)).as_uvec3();
+    let cell_count = dims.x as u64 * dims.y as u64 * dims.z as u64;
+    if cell_count >= u32::MAX as u64 {
+        return Err(Error::Invalid(format!("grid of {cell_count} cells is too large")));
+    }
+    Ok(GridParams {
+        origin: lo.into(),
+        cell_size: cell,
+        dims: dims.into(),
+        cell_count: cell_count as u32,
+        inv_cell_size: 1.0 / cell,
+        splat_count: splats.len() as u32,
+        entry_count: 0,
+        _pad0: 0,
+    })
+}
+
+/// A built grid: `cell_splats[cell_start[c]..cell_start[c + 1]]` lists the splats touching
+/// cell `c`, in increasing splat index. `cell_start` has `cell_count + 1` entries.
+#[derive(Clone, Debug, PartialEq)]
+pub struct SplatGrid {
+    pub params: GridParams,
+    pub cell_start: Vec<u32>,
+    pub cell_splats: Vec<u32>,
+}
+
+impl SplatGrid {
+    pub fn cell(&self, c: u32) -> &[u32] {
+        let (b, e) = (self.cell_start[c as usize], self.cell_start[c as usize + 1]);
+        &self.cell_splats[b as usize..e as usize]
+    }
+
+    /// Number of cells that list at least one splat.
+    pub fn occupied_cells(&self) -> usize {
+        self.cell_start.windows(2).filter(|w| w[1] > w[0]).count()
+    }
+
+    pub fn max_cell_len(&self) -> u32 {
+        self.cell_start.windows(2).map(|w| w[1] - w[0]).max().unwrap_or(0)
+    }
+}

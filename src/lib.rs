@@ -1,0 +1,12 @@
+//! lobelight: global illumination on splats with per-splat Gaussian lobes of incident light.
+//!
+//! Every stage runs as a WGSL compute or render pass (`gpu`), and has a CPU mirror (`cpu`) used
+//! as the reference in tests. See README.md for the command line and DESIGN notes for the math.
+
+pub mod cpu;
+pub mod error;
+pub mod gpu;
+pub mod grid;
+pub mod types;
+
+pub use error::{Error, Result};

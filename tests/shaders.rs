@@ -1,0 +1,91 @@
+//! Every WGSL file is registered, resolves its imports and passes naga's validation; the
+//! resolver's errors name the file and line. No GPU needed.
+
+use lobelight::gpu::shaders::{self, SHARED, STAGES};
+
+fn names_in(dir: &str) -> Vec<String> {
+    let mut names: Vec<String> = std::fs::read_dir(dir)
+        .expect("wgsl directory")
+        .filter_map(|e| e.ok())
+        .map(|e| e.path())
+        .filter(|p| p.extension().is_some_and(|x| x == "wgsl"))
+        .map(|p| p.file_stem().unwrap().to_string_lossy().into_owned())
+        .collect();
+    names.sort();
+    names
+}
+
+#[test]
+fn every_wgsl_file_is_registered() {
+    let mut stages: Vec<String> = STAGES.iter().map(|s| s.name.to_owned()).collect();
+    stages.sort();
+    assert_eq!(names_in("wgsl"), stages, "wgsl/*.wgsl vs shaders::STAGES");
+    let mut shared: Vec<String> = SHARED.iter().map(|s| s.name.to_owned()).collect();
+    shared.sort();
+    assert_eq!(names_in("wgsl/shared"), shared, "wgsl/shared/*.wgsl vs shaders::SHARED");
+}
+
+#[test]
+fn every_stage_validates_with_naga() {
+    for stage in STAGES {
+        let source = shaders::resolve_stage(stage.name).unwrap();
+        let module = shaders::validate(stage.name, &source).unwrap_or_else(|e| panic!("{e}"));
+        assert!(
+            module.entry_points.iter().any(|e| e.name == "main"),
+            "{} has no entry point `main`",
+            stage.name
+        );
+    }
+}
+
+#[test]
+fn every_shared_module_validates_alone() {
+    for module in SHARED {
+        let path = format!("wgsl/shared/{}.wgsl", module.name);
+        let source = shaders::resolve(&path, module.text, &|m| {
+            SHARED.iter().find(|s| s.name == m).map(|s| s.text)
+        })
+        .unwrap();
+        shaders::validate(module.name, &source).unwrap_or_else(|e| panic!("{e}"));
+    }
+}
+
+fn lookup(name: &str) -> Option<&'static str> {
+    match name {
+        "a" => Some("// #import b\nconst A: u32 = B;\n"),
+        "b" => Some("const B: u32 = 1u;\n"),
+        "loop1" => Some("// #import loop2\n"),
+        "loop2" => Some("// #import loop1\n"),
+        _ => None,
+    }
+}
+
+#[test]
+fn imports_are_spliced_once() {
+    let out = shaders::resolve("x.wgsl", "// #import a\n// #import b\n// #import a\nfn f() {}\n", &lookup).unwrap();
+    assert_eq!(out.matches("const B").count(), 1);
+    assert_eq!(out.matches("const A").count(), 1);
+    // b is spliced before a's body, which uses it.
+    assert!(out.find("const B").unwrap() < out.find("const A").unwrap());
+}
+
+#[test]
+fn unknown_import_names_file_and_line() {
+    let err = shaders::resolve("wgsl/x.wgsl", "fn f() {}\n  // #import nope\n", &lookup).unwrap_err();
+    let msg = err.to_string();
+    assert!(msg.contains("wgsl/x.wgsl: line 2"), "{msg}");
+    assert!(msg.contains("nope"), "{msg}");
+}
+
+#[test]
+fn import_cycle_is_an_error() {
+    let err = shaders::resolve("wgsl/x.wgsl", "// #import loop1\n", &lookup).unwrap_err();
+    let msg = err.to_string();
+    assert!(msg.contains("cycle") && msg.contains("wgsl/shared/loop2.wgsl: line 1"), "{msg}");
+}
+
+#[test]
+fn malformed_import_is_an_error() {
+    let err = shaders::resolve("wgsl/x.wgsl", "// #import a b\n", &lookup).unwrap_err();
+    assert!(err.to_string().contains("line 1"), "{err}");
+}

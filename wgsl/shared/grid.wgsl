@@ -1,0 +1,25 @@
+// #import types
+
+// The cells touched by a splat's disk: the disk's axis-aligned bounding box (half extent along
+// axis i is r * sqrt(1 - n_i^2)), clamped to the grid. Mirrored by `grid::disk_cell_range`.
+struct CellRange {
+    lo: vec3<u32>,
+    hi: vec3<u32>,
+}
+
+fn disk_cell_range(s: Splat, g: GridParams) -> CellRange {
+    let n2 = s.normal * s.normal;
+    let half = s.radius * sqrt(max(vec3<f32>(0.0), vec3<f32>(1.0) - n2));
+    let inv = g.inv_cell_size;
+    let lo_f = floor((s.center - half - g.origin) * inv);
+    let hi_f = floor((s.center + half - g.origin) * inv);
+    let top = vec3<f32>(g.dims - vec3<u32>(1u));
+    var r: CellRange;
+    r.lo = vec3<u32>(clamp(lo_f, vec3<f32>(0.0), top));
+    r.hi = vec3<u32>(clamp(hi_f, vec3<f32>(0.0), top));
+    return r;
+}
+
+fn cell_index(c: vec3<u32>, g: GridParams) -> u32 {
+    return c.x + g.dims.x * (c.y + g.dims.y * c.z);
+}

@@ -1,0 +1,84 @@
+// Twins of the #[repr(C)] structs in src/types.rs; tests/layout.rs checks offsets and sizes.
+// vec3 members are followed by a 4-byte scalar so that Rust's [f32; 3] lines up without padding.
+
+struct Splat {
+    center: vec3<f32>,
+    radius: f32,
+    normal: vec3<f32>,
+    material: u32,
+    diffuse: vec3<f32>,
+    _pad: u32,
+}
+
+struct Material {
+    specular: vec3<f32>,
+    roughness: f32,
+}
+
+const LIGHT_POINT: u32 = 0u;
+const LIGHT_SPOT: u32 = 1u;
+const LIGHT_AREA: u32 = 2u;
+const LIGHT_DIRECTIONAL: u32 = 3u;
+
+struct Light {
+    position: vec3<f32>,
+    kind: u32,
+    direction: vec3<f32>,
+    cos_outer: f32,
+    power: vec3<f32>,
+    cos_inner: f32,
+    edge_u: vec3<f32>,
+    area: f32,
+    edge_v: vec3<f32>,
+    _pad: u32,
+}
+
+struct Photon {
+    position: vec3<f32>,
+    bounce: u32,
+    direction: vec3<f32>,
+    splat: u32,
+    power: vec3<f32>,
+    _pad: u32,
+}
+
+struct Lobe {
+    axis: vec3<f32>,
+    width: f32,
+    irradiance: vec3<f32>,
+    weight: f32,
+}
+
+struct Camera {
+    view_proj: mat4x4<f32>,
+    inv_view_proj: mat4x4<f32>,
+    eye: vec3<f32>,
+    fov_y: f32,
+    resolution: vec2<u32>,
+    _pad: vec2<u32>,
+}
+
+struct GridParams {
+    origin: vec3<f32>,
+    cell_size: f32,
+    dims: vec3<u32>,
+    cell_count: u32,
+    inv_cell_size: f32,
+    splat_count: u32,
+    entry_count: u32,
+    _pad0: u32,
+}
+
+struct ScanParams {
+    len: u32,
+    _pad0: u32,
+    _pad1: u32,
+    _pad2: u32,
+}
+
+struct Counters {
+    count: atomic<u32>,
+    capacity: u32,
+    overflow: atomic<u32>,
+    _pad: u32,
+}
