@@ -96,13 +96,18 @@ pub fn grid_params(splats: &[Splat], cfg: &GridConfig) -> Result<GridParams> {
             cfg.max_dim
         )));
     }
-    let (lo, hi) = splat_bounds(splats).ok_or_else(|| Error::Invalid("the scene has no splats".into()))?;
+    let (lo, hi) =
+        splat_bounds(splats).ok_or_else(|| Error::Invalid("the scene has no splats".into()))?;
     if !lo.is_finite() || !hi.is_finite() {
         return Err(Error::Invalid("splat bounds are not finite".into()));
     }
     // Pad relative to the coordinates' magnitude so that no disk sits exactly on the far face,
     // also for scenes far from the origin where one ulp is large.
-    let magnitude = lo.abs().max(hi.abs()).max_element().max((hi - lo).max_element());
+    let magnitude = lo
+        .abs()
+        .max(hi.abs())
+        .max_element()
+        .max((hi - lo).max_element());
     let pad = Vec3::splat(magnitude.max(f32::MIN_POSITIVE) * 1e-5);
     let (lo, hi) = (lo - pad, hi + pad);
     let extent = hi - lo;
@@ -115,13 +120,20 @@ pub fn grid_params(splats: &[Splat], cfg: &GridConfig) -> Result<GridParams> {
     let target_cells = cfg.cells_per_splat as f64 * splats.len() as f64;
     // Cells no smaller than the mean splat radius: a disk then touches a few cells per axis,
     // and coincident splats cannot multiply into thousands of cells that each list them all.
-    let mean_radius = (splats.iter().map(|s| s.radius as f64).sum::<f64>() / splats.len() as f64) as f32;
+    let mean_radius =
+        (splats.iter().map(|s| s.radius as f64).sum::<f64>() / splats.len() as f64) as f32;
     let mut cell = (volume / target_cells).cbrt() as f32;
     cell = cell.max(mean_radius).max(floor).max(f32::MIN_POSITIVE);
-    let dims = (extent / cell).ceil().max(Vec3::ONE).min(Vec3::splat(max_dim)).as_uvec3();
+    let dims = (extent / cell)
+        .ceil()
+        .max(Vec3::ONE)
+        .min(Vec3::splat(max_dim))
+        .as_uvec3();
     let cell_count = dims.x as u64 * dims.y as u64 * dims.z as u64;
     if cell_count >= u32::MAX as u64 {
-        return Err(Error::Invalid(format!("grid of {cell_count} cells is too large")));
+        return Err(Error::Invalid(format!(
+            "grid of {cell_count} cells is too large"
+        )));
     }
     Ok(GridParams {
         origin: lo.into(),
@@ -156,6 +168,10 @@ impl SplatGrid {
     }
 
     pub fn max_cell_len(&self) -> u32 {
-        self.cell_start.windows(2).map(|w| w[1] - w[0]).max().unwrap_or(0)
+        self.cell_start
+            .windows(2)
+            .map(|w| w[1] - w[0])
+            .max()
+            .unwrap_or(0)
     }
 }

@@ -7,6 +7,9 @@ pub mod cpu;
 pub mod error;
 pub mod gpu;
 pub mod grid;
+pub mod info;
+pub mod model;
+pub mod scene;
 pub mod types;
 
 pub use error::{Error, Result};

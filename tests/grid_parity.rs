@@ -7,10 +7,17 @@ use lobelight::gpu::grid::build_grid;
 use lobelight::grid::{GridConfig, SplatGrid, cell_index, disk_cell_range, grid_params};
 use lobelight::types::Splat;
 
-fn gpu_grid(gpu: &lobelight::gpu::Gpu, splats: &[Splat], cfg: &GridConfig) -> (SplatGrid, SplatGrid) {
+fn gpu_grid(
+    gpu: &lobelight::gpu::Gpu,
+    splats: &[Splat],
+    cfg: &GridConfig,
+) -> (SplatGrid, SplatGrid) {
     let params = grid_params(splats, cfg).unwrap();
     let buf = gpu.storage("splats", splats).unwrap();
-    let on_gpu = build_grid(gpu, &params, &buf).unwrap().download(gpu).unwrap();
+    let on_gpu = build_grid(gpu, &params, &buf)
+        .unwrap()
+        .download(gpu)
+        .unwrap();
     let on_cpu = cpu::build_grid(&params, splats).unwrap();
     (on_gpu, on_cpu)
 }
@@ -18,13 +25,26 @@ fn gpu_grid(gpu: &lobelight::gpu::Gpu, splats: &[Splat], cfg: &GridConfig) -> (S
 /// Compares two grids and names the first difference (the vectors are too long to print).
 fn assert_same(a: &SplatGrid, b: &SplatGrid, what: &str) {
     assert_eq!(a.params, b.params, "{what}: params");
-    let first_diff = |x: &[u32], y: &[u32]| x.iter().zip(y).position(|(p, q)| p != q).or((x.len() != y.len()).then_some(x.len().min(y.len())));
+    let first_diff = |x: &[u32], y: &[u32]| {
+        x.iter()
+            .zip(y)
+            .position(|(p, q)| p != q)
+            .or((x.len() != y.len()).then_some(x.len().min(y.len())))
+    };
     if let Some(i) = first_diff(&a.cell_start, &b.cell_start) {
-        panic!("{what}: cell_start differs first at cell {i}: {:?} vs {:?}", a.cell_start.get(i), b.cell_start.get(i));
+        panic!(
+            "{what}: cell_start differs first at cell {i}: {:?} vs {:?}",
+            a.cell_start.get(i),
+            b.cell_start.get(i)
+        );
     }
     if let Some(i) = first_diff(&a.cell_splats, &b.cell_splats) {
         let lo = i.saturating_sub(3);
-        panic!("{what}: cell_splats differs first at entry {i}: {:?} vs {:?}", &a.cell_splats[lo..(i + 3).min(a.cell_splats.len())], &b.cell_splats[lo..(i + 3).min(b.cell_splats.len())]);
+        panic!(
+            "{what}: cell_splats differs first at entry {i}: {:?} vs {:?}",
+            &a.cell_splats[lo..(i + 3).min(a.cell_splats.len())],
+            &b.cell_splats[lo..(i + 3).min(b.cell_splats.len())]
+        );
     }
 }
 
@@ -73,7 +93,10 @@ fn gpu_grid_equals_cpu_grid() {
             on_cpu.cell_splats.len(),
             on_cpu.max_cell_len()
         );
-        assert!(on_cpu.params.cell_count > 1024 * 4, "case {i} should need a multi-level scan");
+        assert!(
+            on_cpu.params.cell_count > 1024 * 4,
+            "case {i} should need a multi-level scan"
+        );
         check_grid(&on_cpu, &splats);
         assert_same(&on_gpu, &on_cpu, &format!("case {i}"));
     }
@@ -85,7 +108,12 @@ fn all_splats_in_one_cell() {
     // Identical tiny disks at one point: the grid degenerates to very few cells that list
     // everything; the sort must still order them.
     let splats: Vec<Splat> = (0..3000)
-        .map(|_| Splat { center: [0.25, 0.5, -0.75], radius: 1e-3, normal: [0.0, 0.0, 1.0], ..Default::default() })
+        .map(|_| Splat {
+            center: [0.25, 0.5, -0.75],
+            radius: 1e-3,
+            normal: [0.0, 0.0, 1.0],
+            ..Default::default()
+        })
         .collect();
     let (on_gpu, on_cpu) = gpu_grid(&gpu, &splats, &GridConfig::default());
     check_grid(&on_cpu, &splats);
@@ -120,12 +148,20 @@ fn scan_matches_cpu_for_many_lengths() {
 fn too_many_coincident_splats_is_a_clear_error() {
     let gpu = common::gpu();
     let splats: Vec<Splat> = (0..lobelight::grid::MAX_CELL_LEN + 1)
-        .map(|_| Splat { center: [0.0; 3], radius: 1e-3, normal: [0.0, 1.0, 0.0], ..Default::default() })
+        .map(|_| Splat {
+            center: [0.0; 3],
+            radius: 1e-3,
+            normal: [0.0, 1.0, 0.0],
+            ..Default::default()
+        })
         .collect();
     let params = grid_params(&splats, &GridConfig::default()).unwrap();
     let cpu_err = cpu::build_grid(&params, &splats).unwrap_err().to_string();
     let buf = gpu.storage("splats", &splats).unwrap();
-    let gpu_err = build_grid(&gpu, &params, &buf).err().expect("GPU build should refuse").to_string();
+    let gpu_err = build_grid(&gpu, &params, &buf)
+        .err()
+        .expect("GPU build should refuse")
+        .to_string();
     for msg in [cpu_err, gpu_err] {
         assert!(msg.contains("4097 splats overlap one grid cell"), "{msg}");
     }

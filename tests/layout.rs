@@ -24,15 +24,74 @@ macro_rules! layout {
 
 fn rust_layouts() -> Vec<RustLayout> {
     vec![
-        layout!(Splat { center, radius, normal, material, diffuse, _pad }),
-        layout!(Material { specular, roughness }),
-        layout!(Light { position, kind, direction, cos_outer, power, cos_inner, edge_u, area, edge_v, _pad }),
-        layout!(Photon { position, bounce, direction, splat, power, _pad }),
-        layout!(Lobe { axis, width, irradiance, weight }),
-        layout!(Camera { view_proj, inv_view_proj, eye, fov_y, resolution, _pad }),
-        layout!(GridParams { origin, cell_size, dims, cell_count, inv_cell_size, splat_count, entry_count, _pad0 }),
-        layout!(ScanParams { len, _pad0, _pad1, _pad2 }),
-        layout!(Counters { count, capacity, overflow, _pad }),
+        layout!(Splat {
+            center,
+            radius,
+            normal,
+            material,
+            diffuse,
+            _pad
+        }),
+        layout!(Material {
+            specular,
+            roughness
+        }),
+        layout!(Light {
+            position,
+            kind,
+            direction,
+            cos_outer,
+            power,
+            cos_inner,
+            edge_u,
+            area,
+            edge_v,
+            _pad
+        }),
+        layout!(Photon {
+            position,
+            bounce,
+            direction,
+            splat,
+            power,
+            _pad
+        }),
+        layout!(Lobe {
+            axis,
+            width,
+            irradiance,
+            weight
+        }),
+        layout!(Camera {
+            view_proj,
+            inv_view_proj,
+            eye,
+            fov_y,
+            resolution,
+            _pad
+        }),
+        layout!(GridParams {
+            origin,
+            cell_size,
+            dims,
+            cell_count,
+            inv_cell_size,
+            splat_count,
+            entry_count,
+            _pad0
+        }),
+        layout!(ScanParams {
+            len,
+            _pad0,
+            _pad1,
+            _pad2
+        }),
+        layout!(Counters {
+            count,
+            capacity,
+            overflow,
+            _pad
+        }),
     ]
 }
 
@@ -44,24 +103,37 @@ fn rust_structs_match_wgsl_twins() {
     layouter.update(module.to_ctx()).unwrap();
     let mut wgsl_structs = Vec::new();
     for (handle, ty) in module.types.iter() {
-        let naga::TypeInner::Struct { members, span } = &ty.inner else { continue };
+        let naga::TypeInner::Struct { members, span } = &ty.inner else {
+            continue;
+        };
         let name = ty.name.clone().unwrap();
         let rust = rust_layouts().into_iter().find(|r| r.name == name);
-        let rust = rust.unwrap_or_else(|| panic!("WGSL struct {name} has no Rust twin in this test"));
+        let rust =
+            rust.unwrap_or_else(|| panic!("WGSL struct {name} has no Rust twin in this test"));
         let wgsl_members: Vec<(String, usize)> = members
             .iter()
             .map(|m| (m.name.clone().unwrap(), m.offset as usize))
             .collect();
-        let rust_members: Vec<(String, usize)> =
-            rust.members.iter().map(|(n, o)| (n.to_string(), *o)).collect();
+        let rust_members: Vec<(String, usize)> = rust
+            .members
+            .iter()
+            .map(|(n, o)| (n.to_string(), *o))
+            .collect();
         assert_eq!(wgsl_members, rust_members, "member offsets of {name}");
         assert_eq!(*span as usize, rust.size, "size of {name}");
-        assert_eq!(layouter[handle].size as usize, rust.size, "layouter size of {name}");
+        assert_eq!(
+            layouter[handle].size as usize, rust.size,
+            "layouter size of {name}"
+        );
         // Uniform and storage arrays of these need 16-byte multiples on every backend.
         assert_eq!(rust.size % 16, 0, "{name} should be a multiple of 16 bytes");
         wgsl_structs.push(name);
     }
     for r in rust_layouts() {
-        assert!(wgsl_structs.iter().any(|n| n == r.name), "Rust struct {} has no WGSL twin", r.name);
+        assert!(
+            wgsl_structs.iter().any(|n| n == r.name),
+            "Rust struct {} has no WGSL twin",
+            r.name
+        );
     }
 }

@@ -22,7 +22,11 @@ fn every_wgsl_file_is_registered() {
     assert_eq!(names_in("wgsl"), stages, "wgsl/*.wgsl vs shaders::STAGES");
     let mut shared: Vec<String> = SHARED.iter().map(|s| s.name.to_owned()).collect();
     shared.sort();
-    assert_eq!(names_in("wgsl/shared"), shared, "wgsl/shared/*.wgsl vs shaders::SHARED");
+    assert_eq!(
+        names_in("wgsl/shared"),
+        shared,
+        "wgsl/shared/*.wgsl vs shaders::SHARED"
+    );
 }
 
 #[test]
@@ -62,7 +66,12 @@ fn lookup(name: &str) -> Option<&'static str> {
 
 #[test]
 fn imports_are_spliced_once() {
-    let out = shaders::resolve("x.wgsl", "// #import a\n// #import b\n// #import a\nfn f() {}\n", &lookup).unwrap();
+    let out = shaders::resolve(
+        "x.wgsl",
+        "// #import a\n// #import b\n// #import a\nfn f() {}\n",
+        &lookup,
+    )
+    .unwrap();
     assert_eq!(out.matches("const B").count(), 1);
     assert_eq!(out.matches("const A").count(), 1);
     // b is spliced before a's body, which uses it.
@@ -71,7 +80,8 @@ fn imports_are_spliced_once() {
 
 #[test]
 fn unknown_import_names_file_and_line() {
-    let err = shaders::resolve("wgsl/x.wgsl", "fn f() {}\n  // #import nope\n", &lookup).unwrap_err();
+    let err =
+        shaders::resolve("wgsl/x.wgsl", "fn f() {}\n  // #import nope\n", &lookup).unwrap_err();
     let msg = err.to_string();
     assert!(msg.contains("wgsl/x.wgsl: line 2"), "{msg}");
     assert!(msg.contains("nope"), "{msg}");
@@ -81,7 +91,10 @@ fn unknown_import_names_file_and_line() {
 fn import_cycle_is_an_error() {
     let err = shaders::resolve("wgsl/x.wgsl", "// #import loop1\n", &lookup).unwrap_err();
     let msg = err.to_string();
-    assert!(msg.contains("cycle") && msg.contains("wgsl/shared/loop2.wgsl: line 1"), "{msg}");
+    assert!(
+        msg.contains("cycle") && msg.contains("wgsl/shared/loop2.wgsl: line 1"),
+        "{msg}"
+    );
 }
 
 #[test]

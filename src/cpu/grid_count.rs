@@ -6,7 +6,13 @@ use glam::UVec3;
 
 pub const WG: u32 = 64;
 
-pub fn grid_count(grid: &GridParams, splats: &[Splat], cell_counts: &mut [u32], max_cell_len: &mut u32, groups: u32) {
+pub fn grid_count(
+    grid: &GridParams,
+    splats: &[Splat],
+    cell_counts: &mut [u32],
+    max_cell_len: &mut u32,
+    groups: u32,
+) {
     for wg in 0..groups {
         for lid in 0..WG {
             let i = wg * WG + lid;

@@ -21,7 +21,10 @@ pub fn grid_rank(
             let i = scratch_splats[e as usize];
             let c = scratch_cells[e as usize] as usize;
             let (begin, end) = (cell_start[c] as usize, cell_start[c + 1] as usize);
-            let rank = scratch_splats[begin..end].iter().filter(|&&s| s < i).count();
+            let rank = scratch_splats[begin..end]
+                .iter()
+                .filter(|&&s| s < i)
+                .count();
             cell_splats[begin + rank] = i;
         }
     }

@@ -4,8 +4,8 @@
 //! They are the reference for the parity tests and a fallback when no GPU is wanted.
 
 pub mod grid_count;
-pub mod grid_scatter;
 pub mod grid_rank;
+pub mod grid_scatter;
 pub mod scan_apply;
 pub mod scan_reduce;
 
@@ -42,7 +42,13 @@ pub fn build_grid(params: &GridParams, splats: &[Splat]) -> Result<SplatGrid> {
     let splat_groups = groups_for(params.splat_count, grid_count::WG);
     let mut cell_start = vec![0u32; params.cell_count as usize + 1];
     let mut max_cell_len = 0;
-    grid_count::grid_count(params, splats, &mut cell_start, &mut max_cell_len, splat_groups);
+    grid_count::grid_count(
+        params,
+        splats,
+        &mut cell_start,
+        &mut max_cell_len,
+        splat_groups,
+    );
     check_cell_len(max_cell_len)?;
     exclusive_scan(&mut cell_start);
     let params = GridParams {
@@ -63,7 +69,14 @@ pub fn build_grid(params: &GridParams, splats: &[Splat]) -> Result<SplatGrid> {
     );
     let mut cell_splats = vec![0u32; entries];
     let entry_groups = groups_for(params.entry_count, grid_rank::WG);
-    grid_rank::grid_rank(&params, &cell_start, &scratch_splats, &scratch_cells, &mut cell_splats, entry_groups);
+    grid_rank::grid_rank(
+        &params,
+        &cell_start,
+        &scratch_splats,
+        &scratch_cells,
+        &mut cell_splats,
+        entry_groups,
+    );
     Ok(SplatGrid {
         params,
         cell_start,

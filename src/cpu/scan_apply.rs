@@ -39,7 +39,8 @@ pub fn scan_apply(params: &ScanParams, values: &mut [u32], block_offsets: &[u32]
             }
             for k in 0..ITEMS {
                 if base + k < params.len {
-                    values[(base + k) as usize] = prefix.wrapping_add(local[lid as usize][k as usize]);
+                    values[(base + k) as usize] =
+                        prefix.wrapping_add(local[lid as usize][k as usize]);
                 }
             }
         }

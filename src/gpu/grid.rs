@@ -51,7 +51,8 @@ pub fn build_grid(gpu: &Gpu, params: &GridParams, splats: &wgpu::Buffer) -> Resu
         entry_count: entries,
         ..*params
     };
-    gpu.queue.write_buffer(&params_buf, 0, bytemuck::bytes_of(&params));
+    gpu.queue
+        .write_buffer(&params_buf, 0, bytemuck::bytes_of(&params));
     let bytes = entries as u64 * 4;
     let cursor = gpu.storage_zeroed("cell cursor", cells * 4)?;
     let scratch_splats = gpu.storage_zeroed("scratch splats", bytes)?;
@@ -61,13 +62,26 @@ pub fn build_grid(gpu: &Gpu, params: &GridParams, splats: &wgpu::Buffer) -> Resu
     gpu.dispatch(
         &mut encoder,
         "grid_scatter",
-        &[&params_buf, splats, &cell_start, &cursor, &scratch_splats, &scratch_cells],
+        &[
+            &params_buf,
+            splats,
+            &cell_start,
+            &cursor,
+            &scratch_splats,
+            &scratch_cells,
+        ],
         splat_groups,
     )?;
     gpu.dispatch(
         &mut encoder,
         "grid_rank",
-        &[&params_buf, &cell_start, &scratch_splats, &scratch_cells, &cell_splats],
+        &[
+            &params_buf,
+            &cell_start,
+            &scratch_splats,
+            &scratch_cells,
+            &cell_splats,
+        ],
         groups_for(entries, grid_rank::WG),
     )?;
     gpu.submit_and_wait(encoder)?;

@@ -9,7 +9,12 @@ use crate::error::Result;
 use crate::types::ScanParams;
 
 /// Records the scan of the first `len` values of `values` into `encoder`.
-pub fn exclusive_scan(gpu: &Gpu, encoder: &mut wgpu::CommandEncoder, values: &wgpu::Buffer, len: u32) -> Result<()> {
+pub fn exclusive_scan(
+    gpu: &Gpu,
+    encoder: &mut wgpu::CommandEncoder,
+    values: &wgpu::Buffer,
+    len: u32,
+) -> Result<()> {
     let blocks = groups_for(len, BLOCK);
     let params = gpu.uniform(
         "scan params",
@@ -23,7 +28,17 @@ pub fn exclusive_scan(gpu: &Gpu, encoder: &mut wgpu::CommandEncoder, values: &wg
         return gpu.dispatch(encoder, "scan_apply", &[&params, values, &zero], blocks);
     }
     let block_sums = gpu.storage_zeroed("scan block sums", blocks as u64 * 4)?;
-    gpu.dispatch(encoder, "scan_reduce", &[&params, values, &block_sums], blocks)?;
+    gpu.dispatch(
+        encoder,
+        "scan_reduce",
+        &[&params, values, &block_sums],
+        blocks,
+    )?;
     exclusive_scan(gpu, encoder, &block_sums, blocks)?;
-    gpu.dispatch(encoder, "scan_apply", &[&params, values, &block_sums], blocks)
+    gpu.dispatch(
+        encoder,
+        "scan_apply",
+        &[&params, values, &block_sums],
+        blocks,
+    )
 }

@@ -52,14 +52,19 @@ pub fn stage(name: &str) -> Option<&'static WgslFile> {
 
 /// The full source of a stage with its imports resolved.
 pub fn resolve_stage(name: &str) -> Result<String> {
-    let file = stage(name).ok_or_else(|| Error::Invalid(format!("no shader stage named '{name}'")))?;
+    let file =
+        stage(name).ok_or_else(|| Error::Invalid(format!("no shader stage named '{name}'")))?;
     resolve(&format!("wgsl/{name}.wgsl"), file.text, &|m| {
         SHARED.iter().find(|s| s.name == m).map(|s| s.text)
     })
 }
 
 /// Resolves `// #import` lines of `text` (named `path` in errors) using `lookup` for modules.
-pub fn resolve(path: &str, text: &str, lookup: &dyn Fn(&str) -> Option<&'static str>) -> Result<String> {
+pub fn resolve(
+    path: &str,
+    text: &str,
+    lookup: &dyn Fn(&str) -> Option<&'static str>,
+) -> Result<String> {
     let mut out = String::with_capacity(text.len() * 2);
     let mut done = HashSet::new();
     let mut active = vec![path.to_owned()];
@@ -84,16 +89,23 @@ fn splice(
         let err = |msg: String| Error::at_line(Path::new(path), n + 1, msg);
         let name = rest.trim();
         if name.is_empty() || !name.chars().all(|c| c.is_ascii_alphanumeric() || c == '_') {
-            return Err(err(format!("malformed import '{}': expected `// #import name`", line.trim())));
+            return Err(err(format!(
+                "malformed import '{}': expected `// #import name`",
+                line.trim()
+            )));
         }
         let module_path = format!("wgsl/shared/{name}.wgsl");
         if active.contains(&module_path) {
-            return Err(err(format!("import cycle: {} -> {module_path}", active.join(" -> "))));
+            return Err(err(format!(
+                "import cycle: {} -> {module_path}",
+                active.join(" -> ")
+            )));
         }
         if !done.insert(name.to_owned()) {
             continue;
         }
-        let module = lookup(name).ok_or_else(|| err(format!("unknown import '{name}' (no {module_path})")))?;
+        let module = lookup(name)
+            .ok_or_else(|| err(format!("unknown import '{name}' (no {module_path})")))?;
         out.push_str(&format!("// ---- begin {module_path}\n"));
         active.push(module_path.clone());
         splice(&module_path, module, lookup, done, active, out)?;

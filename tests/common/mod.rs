@@ -39,7 +39,11 @@ impl Rng {
 
     pub fn unit_vector(&mut self) -> [f32; 3] {
         loop {
-            let v = [self.range(-1.0, 1.0), self.range(-1.0, 1.0), self.range(-1.0, 1.0)];
+            let v = [
+                self.range(-1.0, 1.0),
+                self.range(-1.0, 1.0),
+                self.range(-1.0, 1.0),
+            ];
             let l2 = v[0] * v[0] + v[1] * v[1] + v[2] * v[2];
             if l2 > 1e-4 && l2 <= 1.0 {
                 let l = l2.sqrt();
@@ -54,7 +58,11 @@ pub fn random_splats(n: usize, rmin: f32, rmax: f32, seed: u64) -> Vec<Splat> {
     let mut rng = Rng(seed);
     (0..n)
         .map(|_| Splat {
-            center: [rng.range(-1.0, 1.0), rng.range(-1.0, 1.0), rng.range(-1.0, 1.0)],
+            center: [
+                rng.range(-1.0, 1.0),
+                rng.range(-1.0, 1.0),
+                rng.range(-1.0, 1.0),
+            ],
             radius: rng.range(rmin, rmax),
             normal: rng.unit_vector(),
             material: 0,

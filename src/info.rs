@@ -1,0 +1,179 @@
+//! `lobelight info`: what a scene holds and what it will cost, with the grid built on the
+//! device (or the CPU mirror) so its figures are real.
+
+use std::time::Instant;
+
+use serde::Serialize;
+
+use crate::cpu;
+use crate::error::Result;
+use crate::gpu::{Gpu, grid::build_grid};
+use crate::grid::{SplatGrid, grid_params};
+use crate::scene::{ObjectSummary, Scene};
+use crate::types::{Lobe, Photon, Splat};
+
+#[derive(Debug, Serialize)]
+pub struct Info {
+    pub scene: String,
+    pub adapter: String,
+    pub backend: String,
+    pub splats: usize,
+    pub lights: usize,
+    pub materials: Vec<String>,
+    pub glossy: bool,
+    pub objects: Vec<ObjectSummary>,
+    pub bounds: Bounds,
+    pub search_radius: f32,
+    pub grid: GridInfo,
+    pub memory_bytes: Memory,
+}
+
+#[derive(Debug, Serialize)]
+pub struct Bounds {
+    pub min: [f32; 3],
+    pub max: [f32; 3],
+}
+
+#[derive(Debug, Serialize)]
+pub struct GridInfo {
+    pub dims: [u32; 3],
+    pub cell_size: f32,
+    pub cells: u32,
+    pub entries: u32,
+    pub occupied_cells: usize,
+    pub max_cell_len: u32,
+    pub mean_cells_per_splat: f64,
+    pub build_ms: f64,
+}
+
+/// Device memory the bake and render will need, by buffer family.
+#[derive(Debug, Serialize)]
+pub struct Memory {
+    pub splats: u64,
+    pub grid: u64,
+    /// Stored photons if every emitted photon is stored once (a rough upper estimate at the
+    /// thesis's ~0.7 stored per emitted plus bounces).
+    pub photons: u64,
+    pub lobes: u64,
+    pub total: u64,
+}
+
+/// Builds the grid on `gpu`, or on the CPU mirror when `gpu` is `None`.
+pub fn info(scene: &Scene, gpu: Option<&Gpu>) -> Result<Info> {
+    let params = grid_params(&scene.splats, &scene.grid)?;
+    let start = Instant::now();
+    let grid: SplatGrid = match gpu {
+        Some(gpu) => {
+            let splats = gpu.storage("splats", &scene.splats)?;
+            build_grid(gpu, &params, &splats)?.download(gpu)?
+        }
+        None => cpu::build_grid(&params, &scene.splats)?,
+    };
+    let build_ms = start.elapsed().as_secs_f64() * 1e3;
+    let (lo, hi) = scene.bounds();
+    let n = scene.splats.len() as u64;
+    let entries = grid.cell_splats.len() as u64;
+    let memory = {
+        let splats = n * std::mem::size_of::<Splat>() as u64;
+        // Offsets, plus the build's scratch (two u32 per entry) and final lists.
+        let grid = (params.cell_count as u64 + 1) * 4 * 2 + entries * 4 * 3;
+        let photons = scene.bake.photons * std::mem::size_of::<Photon>() as u64;
+        let lobes = n * scene.bake.lobes as u64 * std::mem::size_of::<Lobe>() as u64;
+        Memory {
+            splats,
+            grid,
+            photons,
+            lobes,
+            total: splats + grid + photons + lobes,
+        }
+    };
+    Ok(Info {
+        scene: scene.path.display().to_string(),
+        adapter: gpu.map_or_else(|| "cpu mirror".into(), |g| g.info.name.clone()),
+        backend: gpu.map_or_else(|| "cpu".into(), |g| g.backend_name().into()),
+        splats: scene.splats.len(),
+        lights: scene.lights.len(),
+        materials: scene.material_names.clone(),
+        glossy: scene.has_glossy(),
+        objects: scene.objects.clone(),
+        bounds: Bounds {
+            min: lo.into(),
+            max: hi.into(),
+        },
+        search_radius: scene.search_radius(),
+        grid: GridInfo {
+            dims: grid.params.dims,
+            cell_size: grid.params.cell_size,
+            cells: grid.params.cell_count,
+            entries: entries as u32,
+            occupied_cells: grid.occupied_cells(),
+            max_cell_len: grid.max_cell_len(),
+            mean_cells_per_splat: entries as f64 / n.max(1) as f64,
+            build_ms,
+        },
+        memory_bytes: memory,
+    })
+}
+
+fn mib(b: u64) -> String {
+    format!("{:.1} MiB", b as f64 / (1 << 20) as f64)
+}
+
+impl std::fmt::Display for Info {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        writeln!(f, "scene      {}", self.scene)?;
+        writeln!(f, "device     {} ({})", self.adapter, self.backend)?;
+        writeln!(f, "splats     {}", self.splats)?;
+        for o in &self.objects {
+            let src = o
+                .source
+                .as_deref()
+                .map(|s| format!(" {s}"))
+                .unwrap_or_default();
+            let dropped = if o.dropped > 0 {
+                format!(" ({} unused vertices dropped)", o.dropped)
+            } else {
+                String::new()
+            };
+            writeln!(f, "  {}{src}: {} splats{dropped}", o.shape, o.splats)?;
+        }
+        writeln!(f, "lights     {}", self.lights)?;
+        writeln!(
+            f,
+            "materials  {} (glossy: {})",
+            self.materials.join(", "),
+            if self.glossy { "yes" } else { "no" }
+        )?;
+        let (lo, hi) = (self.bounds.min, self.bounds.max);
+        writeln!(
+            f,
+            "bounds     [{:.3}, {:.3}, {:.3}] .. [{:.3}, {:.3}, {:.3}]",
+            lo[0], lo[1], lo[2], hi[0], hi[1], hi[2]
+        )?;
+        writeln!(f, "radius     {:.4} (photon search)", self.search_radius)?;
+        let g = &self.grid;
+        writeln!(
+            f,
+            "grid       {}x{}x{} cells of {:.4}, {} occupied, {} entries ({:.2} per splat, at most {} in a cell), built in {:.1} ms",
+            g.dims[0],
+            g.dims[1],
+            g.dims[2],
+            g.cell_size,
+            g.occupied_cells,
+            g.entries,
+            g.mean_cells_per_splat,
+            g.max_cell_len,
+            g.build_ms
+        )?;
+        let m = &self.memory_bytes;
+        write!(
+            f,
+            "memory     {} (splats {}, grid {}, photons {}, lobes {})",
+            mib(m.total),
+            mib(m.splats),
+            mib(m.grid),
+            mib(m.photons),
+            mib(m.lobes)
+        )
+    }
+}

@@ -1,0 +1,243 @@
+//! Models: PLY and OBJ files (gzip too) read into a `Mesh`, then turned into splats.
+//! A mesh gives one splat per vertex with the area-weighted normal of its faces and a radius
+//! that covers its triangles; a point cloud uses its normals if it has them, PCA normals
+//! otherwise, and radii from the neighbour spacing (`normals`).
+
+pub mod normals;
+pub mod obj;
+pub mod ply;
+
+use std::io::Read;
+use std::path::Path;
+
+use glam::{Affine3A, Vec3};
+
+use crate::error::{Error, Result};
+use crate::scene::file::Anchor;
+use crate::scene::shapes::{Disk, max_scale, normal_matrix};
+
+/// Vertices, optional per-vertex normals and colours (as stored: sRGB in [0, 1]), triangles.
+#[derive(Clone, Debug, Default, PartialEq)]
+pub struct Mesh {
+    pub positions: Vec<Vec3>,
+    pub normals: Option<Vec<Vec3>>,
+    pub colors: Option<Vec<[f32; 3]>>,
+    pub faces: Vec<[u32; 3]>,
+}
+
+impl Mesh {
+    /// Adds a polygon as a triangle fan.
+    pub fn push_polygon(&mut self, idx: &[u32]) {
+        for k in 1..idx.len().saturating_sub(1) {
+            self.faces.push([idx[0], idx[k], idx[k + 1]]);
+        }
+    }
+}
+
+/// Largest decompressed model accepted, so a small gzip bomb cannot exhaust memory.
+const MAX_MODEL_BYTES: u64 = 4 << 30;
+
+/// Reads a `.ply`, `.obj` (optionally `.gz`) file.
+pub fn load(path: &Path) -> Result<Mesh> {
+    let raw = std::fs::read(path).map_err(|e| Error::io(path, e))?;
+    let bytes = if raw.starts_with(&[0x1f, 0x8b]) {
+        let mut out = Vec::new();
+        flate2::read::GzDecoder::new(&raw[..])
+            .take(MAX_MODEL_BYTES)
+            .read_to_end(&mut out)
+            .map_err(|e| Error::parse(path, "gzip", format!("cannot decompress: {e}")))?;
+        out
+    } else {
+        raw
+    };
+    let name = path.to_string_lossy().to_ascii_lowercase();
+    let name = name.strip_suffix(".gz").unwrap_or(&name);
+    let mesh = if name.ends_with(".ply") {
+        ply::parse(path, &bytes)?
+    } else if name.ends_with(".obj") {
+        obj::parse(path, &bytes)?
+    } else {
+        return Err(Error::parse(
+            path,
+            "name",
+            "unknown model format: expected .ply, .obj, .ply.gz or .obj.gz",
+        ));
+    };
+    validate(path, &mesh)?;
+    Ok(mesh)
+}
+
+fn validate(path: &Path, m: &Mesh) -> Result<()> {
+    if m.positions.is_empty() {
+        return Err(Error::parse(path, "vertices", "the model has no vertices"));
+    }
+    let n = m.positions.len() as u32;
+    if let Some(k) = m.faces.iter().position(|f| f.iter().any(|&i| i >= n)) {
+        return Err(Error::parse(
+            path,
+            format!("face #{k}"),
+            format!(
+                "vertex index out of range: {:?} with {n} vertices",
+                m.faces[k]
+            ),
+        ));
+    }
+    for (what, len) in [
+        ("normals", m.normals.as_ref().map(Vec::len)),
+        ("colors", m.colors.as_ref().map(Vec::len)),
+    ] {
+        if let Some(len) = len.filter(|&l| l != m.positions.len()) {
+            return Err(Error::parse(
+                path,
+                what,
+                format!("{len} {what} for {n} vertices"),
+            ));
+        }
+    }
+    Ok(())
+}
+
+/// Splats of a model in its own coordinates, with linear-RGB colours when it has colours.
+#[derive(Clone, Debug, Default)]
+pub struct SplatSet {
+    pub disks: Vec<Disk>,
+    pub colors: Option<Vec<[f32; 3]>>,
+    /// Vertices no (non-degenerate) face uses: they have no normal or extent.
+    pub dropped: usize,
+}
+
+pub fn srgb_to_linear(c: f32) -> f32 {
+    let c = c.clamp(0.0, 1.0);
+    if c <= 0.04045 {
+        c / 12.92
+    } else {
+        ((c + 0.055) / 1.055).powf(2.4)
+    }
+}
+
+pub fn to_splats(mesh: &Mesh, path: &Path) -> Result<SplatSet> {
+    let (normals, radii) = if mesh.faces.is_empty() {
+        let radii = normals::spacing_radii(&mesh.positions);
+        let normals = match &mesh.normals {
+            Some(n) => n.iter().map(|v| v.normalize_or_zero()).collect(),
+            None => normals::pca_normals(&mesh.positions),
+        };
+        (normals, radii)
+    } else {
+        mesh_normals_and_radii(mesh)
+    };
+    let mut set = SplatSet::default();
+    let mut colors = mesh.colors.as_ref().map(|_| Vec::new());
+    for (i, p) in mesh.positions.iter().enumerate() {
+        let (n, r) = (normals[i], radii[i]);
+        if n == Vec3::ZERO || !(r > 0.0 && r.is_finite()) {
+            set.dropped += 1;
+            continue;
+        }
+        set.disks.push(Disk {
+            center: *p,
+            normal: n,
+            radius: r,
+        });
+        if let (Some(out), Some(src)) = (colors.as_mut(), mesh.colors.as_ref()) {
+            out.push(src[i].map(srgb_to_linear));
+        }
+    }
+    if set.disks.is_empty() {
+        return Err(Error::parse(
+            path,
+            "vertices",
+            "no usable vertex: every face is degenerate",
+        ));
+    }
+    set.colors = colors;
+    Ok(set)
+}
+
+/// Area-weighted vertex normals, and per-vertex radii that cover every incident triangle:
+/// the largest over its triangles of the distance from a vertex to the point of the triangle
+/// farthest from all three vertices (the circumcentre when acute, else the longest edge's
+/// midpoint).
+fn mesh_normals_and_radii(mesh: &Mesh) -> (Vec<Vec3>, Vec<f32>) {
+    let n = mesh.positions.len();
+    let mut normals = vec![Vec3::ZERO; n];
+    let mut radii = vec![0f32; n];
+    for f in &mesh.faces {
+        let [a, b, c] = f.map(|i| mesh.positions[i as usize]);
+        let cross = (b - a).cross(c - a);
+        if cross.length_squared() <= f32::MIN_POSITIVE || !cross.is_finite() {
+            continue;
+        }
+        let cover = triangle_cover_radius(a, b, c);
+        for &i in f {
+            normals[i as usize] += cross;
+            radii[i as usize] = radii[i as usize].max(cover);
+        }
+    }
+    let normals = match &mesh.normals {
+        // File normals where valid, computed ones elsewhere.
+        Some(file) => file
+            .iter()
+            .zip(&normals)
+            .map(|(f, c)| {
+                if f.is_finite() && f.length() > 1e-12 {
+                    f.normalize()
+                } else {
+                    c.normalize_or_zero()
+                }
+            })
+            .collect(),
+        None => normals.iter().map(|v| v.normalize_or_zero()).collect(),
+    };
+    (normals, radii)
+}
+
+/// Radius around each vertex that covers a triangle (see `mesh_normals_and_radii`).
+pub fn triangle_cover_radius(a: Vec3, b: Vec3, c: Vec3) -> f32 {
+    let (ab, bc, ca) = ((b - a).length(), (c - b).length(), (a - c).length());
+    let longest = ab.max(bc).max(ca);
+    let (x, y, z) = (
+        (b - a).length_squared(),
+        (c - b).length_squared(),
+        (a - c).length_squared(),
+    );
+    let max_sq = x.max(y).max(z);
+    if max_sq >= x + y + z - max_sq {
+        // Right or obtuse: the longest edge's midpoint is the farthest point.
+        return 0.5 * longest;
+    }
+    let area2 = (b - a).cross(c - a).length();
+    // Circumradius R = abc / (4 · area) = abc / (2 · |cross|).
+    ab * bc * ca / (2.0 * area2)
+}
+
+/// Moves model splats into the scene: optional fit to a size and anchor, then the transform.
+pub fn place(disks: &[Disk], fit: Option<f32>, anchor: Anchor, m: &Affine3A) -> Vec<Disk> {
+    let (lo, hi) = disks
+        .iter()
+        .fold((Vec3::INFINITY, Vec3::NEG_INFINITY), |(lo, hi), d| {
+            (lo.min(d.center), hi.max(d.center))
+        });
+    let (offset, scale) = match fit {
+        Some(size) => {
+            let extent = (hi - lo).max_element().max(f32::MIN_POSITIVE);
+            let center = 0.5 * (lo + hi);
+            let anchor_point = match anchor {
+                Anchor::Center => center,
+                Anchor::Bottom => Vec3::new(center.x, lo.y, center.z),
+            };
+            (anchor_point, size / extent)
+        }
+        None => (Vec3::ZERO, 1.0),
+    };
+    let nm = normal_matrix(m);
+    let stretch = max_scale(m);
+    disks
+        .iter()
+        .map(|d| Disk {
+            center: m.transform_point3((d.center - offset) * scale),
+            normal: (nm * d.normal).normalize_or_zero(),
+            radius: d.radius * scale * stretch,
+        })
+        .collect()
+}

@@ -1,0 +1,129 @@
+//! Wavefront OBJ reader: `v x y z [r g b]` (the common vertex-colour extension, colours in
+//! [0, 1]) and `f` polygons (`i`, `i/t`, `i/t/n`, `i//n`, negative indices relative to the end).
+//! Other known statements are skipped; anything else is an error naming the line, so a file
+//! that is not OBJ at all is caught instead of loading as an empty model.
+
+use std::path::Path;
+
+use super::Mesh;
+use crate::error::{Error, Result};
+
+/// Statements that carry nothing splats use.
+const IGNORED: &[&str] = &[
+    "vt",
+    "vn",
+    "vp",
+    "g",
+    "o",
+    "s",
+    "usemtl",
+    "mtllib",
+    "l",
+    "p",
+    "cstype",
+    "deg",
+    "bmat",
+    "step",
+    "curv",
+    "curv2",
+    "surf",
+    "parm",
+    "trim",
+    "hole",
+    "scrv",
+    "sp",
+    "end",
+    "con",
+    "mg",
+    "bevel",
+    "c_interp",
+    "d_interp",
+    "lod",
+    "shadow_obj",
+    "trace_obj",
+    "ctech",
+    "stech",
+];
+
+pub fn parse(path: &Path, bytes: &[u8]) -> Result<Mesh> {
+    let text = std::str::from_utf8(bytes).map_err(|e| {
+        let line = bytes[..e.valid_up_to()]
+            .iter()
+            .filter(|&&b| b == b'\n')
+            .count()
+            + 1;
+        Error::at_line(path, line, "not a text file (invalid UTF-8)")
+    })?;
+    let mut mesh = Mesh::default();
+    let mut colored = None;
+    let mut idx = Vec::new();
+    for (n, raw) in text.lines().enumerate() {
+        let err = |msg: String| Error::at_line(path, n + 1, msg);
+        let line = raw.split('#').next().unwrap_or("").trim();
+        let mut words = line.split_whitespace();
+        let Some(keyword) = words.next() else {
+            continue;
+        };
+        match keyword {
+            "v" => {
+                let vals: Vec<f32> = words
+                    .map(|w| {
+                        w.parse::<f32>()
+                            .map_err(|_| err(format!("`{w}` is not a number")))
+                    })
+                    .collect::<Result<_>>()?;
+                let has_color = match vals.len() {
+                    3 | 4 => false,
+                    6 => true,
+                    k => return Err(err(format!("a vertex needs 3, 4 or 6 numbers, got {k}"))),
+                };
+                if !vals.iter().all(|v| v.is_finite()) {
+                    return Err(err(format!("vertex {vals:?} is not finite")));
+                }
+                // Colours only count when every vertex has them.
+                if *colored.get_or_insert(has_color) != has_color {
+                    return Err(err("some vertices have colours and others do not".into()));
+                }
+                mesh.positions.push([vals[0], vals[1], vals[2]].into());
+                if has_color {
+                    mesh.colors
+                        .get_or_insert_with(Vec::new)
+                        .push([vals[3], vals[4], vals[5]]);
+                }
+            }
+            "f" => {
+                idx.clear();
+                let count = mesh.positions.len() as i64;
+                for w in words {
+                    let first = w.split('/').next().unwrap_or("");
+                    let i: i64 = first
+                        .parse()
+                        .map_err(|_| err(format!("`{w}` is not a vertex reference")))?;
+                    // 1-based; negative counts back from the last vertex read so far.
+                    let resolved = if i > 0 { i - 1 } else { count + i };
+                    if i == 0 || resolved < 0 || resolved >= count {
+                        return Err(err(format!(
+                            "vertex reference {i} is out of range (1..={count})"
+                        )));
+                    }
+                    idx.push(resolved as u32);
+                }
+                if idx.len() < 3 {
+                    return Err(err(format!(
+                        "a face needs at least 3 vertices, got {}",
+                        idx.len()
+                    )));
+                }
+                mesh.push_polygon(&idx);
+            }
+            k if IGNORED.contains(&k) => {}
+            k => {
+                let shown: String = k.chars().take(20).collect();
+                return Err(err(format!(
+                    "unknown statement `{shown}`: is this an OBJ file?"
+                )));
+            }
+        }
+    }
+    Ok(mesh)
+}

@@ -1,0 +1,247 @@
+//! The scene file format (TOML), as serde structs. Every table denies unknown keys, so a typo
+//! is an error that names the file, line and key instead of a silently ignored setting.
+//! README.md documents the format; `scene::load` turns it into splats, lights and materials.
+
+use std::collections::BTreeMap;
+
+use serde::Deserialize;
+
+use crate::grid::GridConfig;
+
+pub type Vec3 = [f32; 3];
+
+/// An RGB triple, or one number for grey.
+#[derive(Clone, Copy, Debug, PartialEq, Deserialize)]
+#[serde(untagged)]
+pub enum Rgb {
+    Grey(f32),
+    Rgb(Vec3),
+}
+
+impl Rgb {
+    pub fn rgb(self) -> Vec3 {
+        match self {
+            Rgb::Grey(v) => [v; 3],
+            Rgb::Rgb(c) => c,
+        }
+    }
+}
+
+/// A uniform scale factor or one per axis.
+#[derive(Clone, Copy, Debug, PartialEq, Deserialize)]
+#[serde(untagged)]
+pub enum Scale {
+    Uniform(f32),
+    PerAxis(Vec3),
+}
+
+#[derive(Clone, Debug, PartialEq, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct SceneFile {
+    #[serde(default)]
+    pub camera: CameraDesc,
+    #[serde(default)]
+    pub bake: BakeDesc,
+    #[serde(default)]
+    pub grid: GridConfig,
+    /// Named materials; objects refer to them by name. `default` is grey diffuse unless defined.
+    #[serde(default)]
+    pub materials: BTreeMap<String, MaterialDesc>,
+    #[serde(default, rename = "light")]
+    pub lights: Vec<toml::Spanned<LightDesc>>,
+    #[serde(default, rename = "object")]
+    pub objects: Vec<toml::Spanned<ObjectDesc>>,
+}
+
+#[derive(Clone, Debug, PartialEq, Deserialize)]
+#[serde(deny_unknown_fields, default)]
+pub struct CameraDesc {
+    pub eye: Vec3,
+    pub target: Vec3,
+    pub up: Vec3,
+    /// Field of view in degrees, along `fov_axis`.
+    pub fov: f32,
+    /// "x" (horizontal, as Mitsuba's default) or "y".
+    pub fov_axis: FovAxis,
+    /// Image size in pixels, [width, height].
+    pub resolution: [u32; 2],
+}
+
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Deserialize)]
+#[serde(rename_all = "lowercase")]
+pub enum FovAxis {
+    #[default]
+    X,
+    Y,
+}
+
+impl Default for CameraDesc {
+    /// The Cornell box camera of DESIGN.md §11.
+    fn default() -> Self {
+        CameraDesc {
+            eye: [0.0, 0.0, 3.9],
+            target: [0.0, 0.0, 0.0],
+            up: [0.0, 1.0, 0.0],
+            fov: 39.3077,
+            fov_axis: FovAxis::X,
+            resolution: [512, 512],
+        }
+    }
+}
+
+/// Lighting-bake settings; the command line overrides them.
+#[derive(Clone, Debug, PartialEq, Deserialize)]
+#[serde(deny_unknown_fields, default)]
+pub struct BakeDesc {
+    /// Photons emitted.
+    pub photons: u64,
+    /// Photon search radius for the lobe fit; default: 1/40 of the scene's largest extent.
+    pub radius: Option<f32>,
+    /// Lobes per splat.
+    pub lobes: u32,
+    /// EM iterations.
+    pub iterations: u32,
+    pub seed: u32,
+    /// Maximum photon path length (bounces).
+    pub max_depth: u32,
+}
+
+impl Default for BakeDesc {
+    fn default() -> Self {
+        BakeDesc {
+            photons: 1_000_000,
+            radius: None,
+            lobes: 5,
+            iterations: 10,
+            seed: 1,
+            max_depth: 8,
+        }
+    }
+}
+
+/// Isotropic Ward material (DESIGN.md §3).
+#[derive(Clone, Debug, PartialEq, Deserialize)]
+#[serde(deny_unknown_fields, default)]
+pub struct MaterialDesc {
+    /// Diffuse albedo ρd (linear RGB).
+    pub diffuse: Rgb,
+    /// Specular albedo ρs (linear RGB).
+    pub specular: Rgb,
+    /// Ward roughness α (> 0).
+    pub roughness: f32,
+}
+
+impl Default for MaterialDesc {
+    fn default() -> Self {
+        MaterialDesc {
+            diffuse: Rgb::Grey(0.5),
+            specular: Rgb::Grey(0.0),
+            roughness: 0.1,
+        }
+    }
+}
+
+#[derive(Clone, Debug, PartialEq, Deserialize)]
+#[serde(deny_unknown_fields, tag = "type", rename_all = "lowercase")]
+pub enum LightDesc {
+    /// Isotropic point light: total power (W) or radiant intensity (W/sr).
+    Point {
+        position: Vec3,
+        power: Option<Rgb>,
+        intensity: Option<Rgb>,
+    },
+    /// Spot light: power (W) spread over the cone, smooth falloff between the angles.
+    Spot {
+        position: Vec3,
+        /// The direction the spot points in; or give `target`.
+        direction: Option<Vec3>,
+        target: Option<Vec3>,
+        power: Rgb,
+        /// Half-angle of the cone in degrees.
+        angle: f32,
+        /// Half-angle in degrees inside which intensity is full; default = `angle`.
+        inner_angle: Option<f32>,
+    },
+    /// One-sided rectangle emitting uniform radiance on the side of `normal`.
+    Area {
+        center: Vec3,
+        /// Width along `u_axis` and height along normal × u_axis.
+        size: [f32; 2],
+        normal: Vec3,
+        /// Direction of the first side; default: the world axis most perpendicular to `normal`.
+        u_axis: Option<Vec3>,
+        radiance: Option<Rgb>,
+        power: Option<Rgb>,
+    },
+    /// Parallel light travelling along `direction`, irradiance in W/m² across the beam.
+    Directional { direction: Vec3, irradiance: Rgb },
+}
+
+/// What an object is made of.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Deserialize)]
+#[serde(rename_all = "snake_case")]
+pub enum ShapeKind {
+    /// The five walls of [-1, 1]³, open towards +z, normals inwards.
+    CornellBox,
+    /// The cube [-1, 1]³, normals outwards.
+    Box,
+    /// A sphere of `radius` around the origin.
+    Sphere,
+    /// A `size` rectangle in the xy plane centred at the origin, normal +z.
+    Quad,
+    /// A PLY or OBJ file: a mesh (splats at its vertices) or a point cloud.
+    Model,
+}
+
+impl ShapeKind {
+    /// The name used in scene files.
+    pub fn name(self) -> &'static str {
+        match self {
+            ShapeKind::CornellBox => "cornell_box",
+            ShapeKind::Box => "box",
+            ShapeKind::Sphere => "sphere",
+            ShapeKind::Quad => "quad",
+            ShapeKind::Model => "model",
+        }
+    }
+}
+
+/// Where a fitted model's bounding box sits before the transform.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Deserialize)]
+#[serde(rename_all = "lowercase")]
+pub enum Anchor {
+    #[default]
+    Center,
+    /// The box's bottom face centred at the origin (so `translate` puts it on a floor).
+    Bottom,
+}
+
+/// One object. The keys that apply depend on `shape`; the loader rejects the others.
+#[derive(Clone, Debug, PartialEq, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct ObjectDesc {
+    pub shape: ShapeKind,
+    /// Material name (default: "default").
+    pub material: Option<String>,
+    /// cornell_box: materials of the left (x = -1) and right (x = +1) walls.
+    pub left_material: Option<String>,
+    pub right_material: Option<String>,
+    /// Procedural shapes: distance between neighbouring splats (world units).
+    pub spacing: Option<f32>,
+    /// sphere: radius (default 1).
+    pub radius: Option<f32>,
+    /// quad: [width, height] (default [1, 1]).
+    pub size: Option<[f32; 2]>,
+    /// model: file path, relative to the scene file.
+    pub path: Option<String>,
+    /// model: uniformly rescale so the largest bounding-box side is this long.
+    pub fit: Option<f32>,
+    /// model: where the fitted bounding box sits (with `fit`).
+    pub anchor: Option<Anchor>,
+    /// model: use per-vertex colours as diffuse albedo when the file has them (default true).
+    pub vertex_colors: Option<bool>,
+    /// Applied as scale, then rotation (degrees about x, then y, then z), then translation.
+    pub scale: Option<Scale>,
+    pub rotate: Option<Vec3>,
+    pub translate: Option<Vec3>,
+}

@@ -1,0 +1,566 @@
+//! Scenes: the TOML file (`file`), procedural shapes (`shapes`) and models (`crate::model`)
+//! turned into the flat arrays the stages consume: splats, materials, lights.
+
+pub mod file;
+pub mod shapes;
+
+use std::path::{Path, PathBuf};
+
+use glam::{Affine3A, Quat, Vec3};
+
+use crate::error::{Error, Result};
+use crate::grid::GridConfig;
+use crate::model;
+use crate::types::{Light, Material, Splat, light_kind};
+use file::{
+    Anchor, BakeDesc, CameraDesc, LightDesc, MaterialDesc, ObjectDesc, Scale, SceneFile, ShapeKind,
+};
+use shapes::Disk;
+
+/// Splat spacing of procedural shapes when an object does not set `spacing`.
+pub const DEFAULT_SPACING: f32 = 0.025;
+
+/// A loaded scene, ready for the stages.
+#[derive(Clone, Debug)]
+pub struct Scene {
+    pub path: PathBuf,
+    pub camera: CameraDesc,
+    pub bake: BakeDesc,
+    pub grid: GridConfig,
+    pub splats: Vec<Splat>,
+    pub materials: Vec<Material>,
+    pub material_names: Vec<String>,
+    pub lights: Vec<Light>,
+    /// One line per object: what it is and how many splats it made.
+    pub objects: Vec<ObjectSummary>,
+}
+
+#[derive(Clone, Debug, serde::Serialize)]
+pub struct ObjectSummary {
+    pub shape: String,
+    pub source: Option<String>,
+    pub splats: usize,
+    /// Model vertices dropped because no face used them (they have no normal or extent).
+    pub dropped: usize,
+}
+
+impl Scene {
+    /// Bounds of the splat disks.
+    pub fn bounds(&self) -> (Vec3, Vec3) {
+        crate::grid::splat_bounds(&self.splats).unwrap_or((Vec3::ZERO, Vec3::ZERO))
+    }
+
+    /// True when some material has a specular part, i.e. lobes are worth fitting.
+    pub fn has_glossy(&self) -> bool {
+        self.materials
+            .iter()
+            .any(|m| m.specular.iter().any(|&s| s > 0.0))
+    }
+
+    /// Photon search radius: the scene's, or 1/40 of the largest extent of the bounds.
+    pub fn search_radius(&self) -> f32 {
+        self.bake.radius.unwrap_or_else(|| {
+            let (lo, hi) = self.bounds();
+            (hi - lo).max_element() / 40.0
+        })
+    }
+}
+
+/// Reads and builds a scene file.
+pub fn load(path: &Path) -> Result<Scene> {
+    let text = std::fs::read_to_string(path).map_err(|e| Error::io(path, e))?;
+    parse(path, &text)
+}
+
+fn line_of(text: &str, offset: usize) -> usize {
+    text[..offset.min(text.len())].matches('\n').count() + 1
+}
+
+/// Builds a scene from TOML text; `path` names it in errors and anchors model paths.
+pub fn parse(path: &Path, text: &str) -> Result<Scene> {
+    let file: SceneFile = toml::from_str(text).map_err(|e| {
+        let at = e.span().map_or_else(
+            || "top".to_string(),
+            |s| format!("line {}", line_of(text, s.start)),
+        );
+        Error::parse(path, at, e.message().trim().to_string())
+    })?;
+    let at_line = |span: std::ops::Range<usize>, msg: String| {
+        Error::at_line(path, line_of(text, span.start), msg)
+    };
+    let invalid = |msg: String| Error::parse(path, "scene", msg);
+
+    validate_camera(&file.camera).map_err(|m| invalid(format!("[camera]: {m}")))?;
+    validate_bake(&file.bake).map_err(|m| invalid(format!("[bake]: {m}")))?;
+
+    // Materials: "default" first (grey diffuse unless the file defines it), then by name.
+    let mut material_names = vec!["default".to_string()];
+    let mut material_descs = vec![file.materials.get("default").cloned().unwrap_or_default()];
+    for (name, m) in &file.materials {
+        if name != "default" {
+            material_names.push(name.clone());
+            material_descs.push(m.clone());
+        }
+    }
+    let mut materials = Vec::new();
+    for (name, m) in material_names.iter().zip(&material_descs) {
+        materials.push(material(m).map_err(|msg| invalid(format!("[materials.{name}]: {msg}")))?);
+    }
+    let material_index = |name: Option<&String>| -> std::result::Result<u32, String> {
+        let name = name.map_or("default", |s| s.as_str());
+        material_names
+            .iter()
+            .position(|n| n == name)
+            .map(|i| i as u32)
+            .ok_or_else(|| {
+                format!(
+                    "unknown material '{name}' (defined: {})",
+                    material_names.join(", ")
+                )
+            })
+    };
+
+    let base_dir = path.parent().unwrap_or(Path::new("."));
+    let mut splats = Vec::new();
+    let mut objects = Vec::new();
+    for (k, obj) in file.objects.iter().enumerate() {
+        let span = obj.span();
+        let obj = obj.get_ref();
+        let at = |msg: String| {
+            at_line(
+                span.clone(),
+                format!("object #{} ({}): {msg}", k + 1, obj.shape.name()),
+            )
+        };
+        let summary = build_object(
+            obj,
+            base_dir,
+            &material_index,
+            &material_descs,
+            &mut splats,
+            &at,
+        )?;
+        objects.push(summary);
+    }
+    if splats.is_empty() {
+        return Err(invalid(
+            "the scene has no splats: add at least one [[object]]".into(),
+        ));
+    }
+    let bounds = crate::grid::splat_bounds(&splats).unwrap_or((Vec3::ZERO, Vec3::ZERO));
+
+    let mut lights = Vec::new();
+    for (k, l) in file.lights.iter().enumerate() {
+        let light = light(l.get_ref(), bounds)
+            .map_err(|m| at_line(l.span(), format!("light #{}: {m}", k + 1)))?;
+        lights.push(light);
+    }
+    if lights.is_empty() {
+        return Err(invalid(
+            "the scene has no lights: add at least one [[light]]".into(),
+        ));
+    }
+
+    Ok(Scene {
+        path: path.to_owned(),
+        camera: file.camera,
+        bake: file.bake,
+        grid: file.grid,
+        splats,
+        materials,
+        material_names,
+        lights,
+        objects,
+    })
+}
+
+fn finite3(v: [f32; 3]) -> bool {
+    v.iter().all(|x| x.is_finite())
+}
+
+fn validate_camera(c: &CameraDesc) -> std::result::Result<(), String> {
+    if !(finite3(c.eye) && finite3(c.target) && finite3(c.up)) {
+        return Err("eye, target and up must be finite".into());
+    }
+    let forward = Vec3::from(c.target) - Vec3::from(c.eye);
+    if forward.length() < 1e-12 {
+        return Err("eye and target coincide".into());
+    }
+    if forward.cross(c.up.into()).length() < 1e-6 * forward.length() * Vec3::from(c.up).length() {
+        return Err("up is zero or parallel to the viewing direction".into());
+    }
+    if !(c.fov > 0.0 && c.fov < 180.0) {
+        return Err(format!(
+            "fov must be between 0 and 180 degrees, got {}",
+            c.fov
+        ));
+    }
+    let [w, h] = c.resolution;
+    if w == 0 || h == 0 || w > 16384 || h > 16384 {
+        return Err(format!(
+            "resolution must be within 1..=16384 per side, got {w}x{h}"
+        ));
+    }
+    Ok(())
+}
+
+fn validate_bake(b: &BakeDesc) -> std::result::Result<(), String> {
+    if b.photons == 0 {
+        return Err("photons must be at least 1".into());
+    }
+    if let Some(r) = b.radius
+        && !(r > 0.0 && r.is_finite())
+    {
+        return Err(format!("radius must be positive, got {r}"));
+    }
+    if !(1..=8).contains(&b.lobes) {
+        return Err(format!("lobes must be within 1..=8, got {}", b.lobes));
+    }
+    if b.iterations == 0 || b.iterations > 1000 {
+        return Err(format!(
+            "iterations must be within 1..=1000, got {}",
+            b.iterations
+        ));
+    }
+    if b.max_depth == 0 || b.max_depth > 64 {
+        return Err(format!(
+            "max_depth must be within 1..=64, got {}",
+            b.max_depth
+        ));
+    }
+    Ok(())
+}
+
+fn material(m: &MaterialDesc) -> std::result::Result<Material, String> {
+    let (d, s) = (m.diffuse.rgb(), m.specular.rgb());
+    for (name, c) in [("diffuse", d), ("specular", s)] {
+        if !c.iter().all(|x| (0.0..=1.0).contains(x)) {
+            return Err(format!(
+                "{name} albedo must be within [0, 1] per channel, got {c:?}"
+            ));
+        }
+    }
+    if (0..3).any(|i| d[i] + s[i] > 1.0 + 1e-6) {
+        return Err(format!(
+            "diffuse + specular exceeds 1 ({d:?} + {s:?}): the surface would create energy"
+        ));
+    }
+    if !(m.roughness > 0.0 && m.roughness.is_finite()) {
+        return Err(format!("roughness must be positive, got {}", m.roughness));
+    }
+    Ok(Material {
+        specular: s,
+        roughness: m.roughness,
+    })
+}
+
+fn nonneg_rgb(c: [f32; 3], what: &str) -> std::result::Result<[f32; 3], String> {
+    if c.iter().all(|x| x.is_finite() && *x >= 0.0) {
+        Ok(c)
+    } else {
+        Err(format!("{what} must be finite and non-negative, got {c:?}"))
+    }
+}
+
+fn unit(v: [f32; 3], what: &str) -> std::result::Result<Vec3, String> {
+    let v = Vec3::from(v);
+    if !v.is_finite() || v.length() < 1e-12 {
+        return Err(format!(
+            "{what} must be a finite non-zero vector, got {v:?}"
+        ));
+    }
+    Ok(v.normalize())
+}
+
+fn one_of(
+    a: Option<file::Rgb>,
+    b: Option<file::Rgb>,
+    names: &str,
+) -> std::result::Result<(bool, [f32; 3]), String> {
+    match (a, b) {
+        (Some(a), None) => Ok((true, a.rgb())),
+        (None, Some(b)) => Ok((false, b.rgb())),
+        _ => Err(format!("give exactly one of {names}")),
+    }
+}
+
+fn light(l: &LightDesc, (lo, hi): (Vec3, Vec3)) -> std::result::Result<Light, String> {
+    let four_pi = 4.0 * std::f32::consts::PI;
+    let mut out = Light::default();
+    match l {
+        LightDesc::Point {
+            position,
+            power,
+            intensity,
+        } => {
+            let (is_power, c) = one_of(*power, *intensity, "`power` (W) or `intensity` (W/sr)")?;
+            let c = nonneg_rgb(c, "power")?;
+            out.kind = light_kind::POINT;
+            out.position = finite_point(*position)?;
+            out.power = if is_power { c } else { c.map(|x| x * four_pi) };
+        }
+        LightDesc::Spot {
+            position,
+            direction,
+            target,
+            power,
+            angle,
+            inner_angle,
+        } => {
+            let dir = match (direction, target) {
+                (Some(d), None) => unit(*d, "direction")?,
+                (None, Some(t)) => unit(
+                    (Vec3::from(*t) - Vec3::from(*position)).into(),
+                    "target - position",
+                )?,
+                _ => return Err("give exactly one of `direction` or `target`".into()),
+            };
+            let inner = inner_angle.unwrap_or(*angle);
+            if !(*angle > 0.0 && *angle < 180.0 && inner > 0.0 && inner <= *angle) {
+                return Err(format!(
+                    "need 0 < inner_angle <= angle < 180 degrees, got {inner} and {angle}"
+                ));
+            }
+            out.kind = light_kind::SPOT;
+            out.position = finite_point(*position)?;
+            out.direction = dir.into();
+            out.power = nonneg_rgb(power.rgb(), "power")?;
+            out.cos_outer = angle.to_radians().cos();
+            out.cos_inner = inner.to_radians().cos();
+        }
+        LightDesc::Area {
+            center,
+            size,
+            normal,
+            u_axis,
+            radiance,
+            power,
+        } => {
+            let n = unit(*normal, "normal")?;
+            if !(size[0] > 0.0 && size[1] > 0.0 && size[0].is_finite() && size[1].is_finite()) {
+                return Err(format!("size must be positive, got {size:?}"));
+            }
+            let u_hint = match u_axis {
+                Some(u) => unit(*u, "u_axis")?,
+                None => least_aligned_axis(n),
+            };
+            let u = (u_hint - n * n.dot(u_hint)).normalize_or_zero();
+            if u == Vec3::ZERO {
+                return Err("u_axis is parallel to normal".into());
+            }
+            let v = n.cross(u);
+            let (eu, ev) = (u * size[0], v * size[1]);
+            let area = size[0] * size[1];
+            let (is_radiance, c) =
+                one_of(*radiance, *power, "`radiance` (W/m²/sr) or `power` (W)")?;
+            let c = nonneg_rgb(c, "emission")?;
+            out.kind = light_kind::AREA;
+            out.position = (Vec3::from(finite_point(*center)?) - 0.5 * (eu + ev)).into();
+            out.direction = n.into();
+            out.edge_u = eu.into();
+            out.edge_v = ev.into();
+            out.area = area;
+            // A one-sided Lambertian emitter of radiance L emits π·L·A watts.
+            out.power = if is_radiance {
+                c.map(|x| x * std::f32::consts::PI * area)
+            } else {
+                c
+            };
+        }
+        LightDesc::Directional {
+            direction,
+            irradiance,
+        } => {
+            let d = unit(*direction, "direction")?;
+            // Emit from a disk that covers the scene's bounding sphere, outside it.
+            let center = 0.5 * (lo + hi);
+            let r = (0.5 * (hi - lo).length()).max(1e-6);
+            let area = std::f32::consts::PI * r * r;
+            out.kind = light_kind::DIRECTIONAL;
+            out.position = (center - d * (2.0 * r)).into();
+            out.direction = d.into();
+            out.area = area;
+            out.power = nonneg_rgb(irradiance.rgb(), "irradiance")?.map(|x| x * area);
+        }
+    }
+    Ok(out)
+}
+
+fn finite_point(p: [f32; 3]) -> std::result::Result<[f32; 3], String> {
+    if finite3(p) {
+        Ok(p)
+    } else {
+        Err(format!("position must be finite, got {p:?}"))
+    }
+}
+
+/// The world axis most perpendicular to `n`, a default tangent.
+fn least_aligned_axis(n: Vec3) -> Vec3 {
+    let a = n.abs();
+    if a.x <= a.y && a.x <= a.z {
+        Vec3::X
+    } else if a.y <= a.z {
+        Vec3::Y
+    } else {
+        Vec3::Z
+    }
+}
+
+fn transform(o: &ObjectDesc) -> std::result::Result<Affine3A, String> {
+    let scale = match o.scale {
+        None => Vec3::ONE,
+        Some(Scale::Uniform(s)) => Vec3::splat(s),
+        Some(Scale::PerAxis(s)) => Vec3::from(s),
+    };
+    if !scale.is_finite() || scale.abs().min_element() < 1e-12 {
+        return Err(format!("scale must be finite and non-zero, got {scale:?}"));
+    }
+    let r = Vec3::from(o.rotate.unwrap_or([0.0; 3]));
+    let t = Vec3::from(o.translate.unwrap_or([0.0; 3]));
+    if !r.is_finite() || !t.is_finite() {
+        return Err("rotate and translate must be finite".into());
+    }
+    let rot = Quat::from_rotation_z(r.z.to_radians())
+        * Quat::from_rotation_y(r.y.to_radians())
+        * Quat::from_rotation_x(r.x.to_radians());
+    Ok(Affine3A::from_scale_rotation_translation(scale, rot, t))
+}
+
+/// Keys each shape accepts besides shape, material and the transform.
+fn allowed_keys(shape: ShapeKind) -> &'static [&'static str] {
+    match shape {
+        ShapeKind::CornellBox => &["left_material", "right_material", "spacing"],
+        ShapeKind::Box => &["spacing"],
+        ShapeKind::Sphere => &["radius", "spacing"],
+        ShapeKind::Quad => &["size", "spacing"],
+        ShapeKind::Model => &["path", "fit", "anchor", "vertex_colors"],
+    }
+}
+
+fn set_keys(o: &ObjectDesc) -> Vec<&'static str> {
+    let mut keys = Vec::new();
+    let mut add = |present: bool, name| {
+        if present {
+            keys.push(name);
+        }
+    };
+    add(o.left_material.is_some(), "left_material");
+    add(o.right_material.is_some(), "right_material");
+    add(o.spacing.is_some(), "spacing");
+    add(o.radius.is_some(), "radius");
+    add(o.size.is_some(), "size");
+    add(o.path.is_some(), "path");
+    add(o.fit.is_some(), "fit");
+    add(o.anchor.is_some(), "anchor");
+    add(o.vertex_colors.is_some(), "vertex_colors");
+    keys
+}
+
+fn build_object(
+    o: &ObjectDesc,
+    base_dir: &Path,
+    material_index: &dyn Fn(Option<&String>) -> std::result::Result<u32, String>,
+    material_descs: &[MaterialDesc],
+    splats: &mut Vec<Splat>,
+    at: &dyn Fn(String) -> Error,
+) -> Result<ObjectSummary> {
+    for key in set_keys(o) {
+        if !allowed_keys(o.shape).contains(&key) {
+            return Err(at(format!("key `{key}` does not apply to this shape")));
+        }
+    }
+    let m = transform(o).map_err(at)?;
+    let spacing = o.spacing.unwrap_or(DEFAULT_SPACING);
+    if !(spacing > 0.0 && spacing.is_finite()) {
+        return Err(at(format!("spacing must be positive, got {spacing}")));
+    }
+    let material = material_index(o.material.as_ref()).map_err(at)?;
+    let diffuse_of = |mat: u32| material_descs[mat as usize].diffuse.rgb();
+    let before = splats.len();
+    let mut push = |disks: &[Disk], mat: u32, diffuse: Option<&[[f32; 3]]>| {
+        for (k, d) in disks.iter().enumerate() {
+            splats.push(Splat {
+                center: d.center.into(),
+                radius: d.radius,
+                normal: d.normal.into(),
+                material: mat,
+                diffuse: diffuse.map_or(diffuse_of(mat), |c| c[k]),
+                _pad: 0,
+            });
+        }
+    };
+    let mut disks = Vec::new();
+    let mut source = None;
+    let mut dropped = 0;
+    match o.shape {
+        ShapeKind::CornellBox => {
+            let counts = shapes::cornell_walls(&m, spacing, &mut disks);
+            let left =
+                material_index(o.left_material.as_ref().or(o.material.as_ref())).map_err(at)?;
+            let right =
+                material_index(o.right_material.as_ref().or(o.material.as_ref())).map_err(at)?;
+            let mut start = 0;
+            for (wall, n) in counts.into_iter().enumerate() {
+                let mat = match wall {
+                    3 => left,
+                    4 => right,
+                    _ => material,
+                };
+                push(&disks[start..start + n], mat, None);
+                start += n;
+            }
+        }
+        ShapeKind::Box => {
+            shapes::cube(&m, spacing, &mut disks);
+            push(&disks, material, None);
+        }
+        ShapeKind::Sphere => {
+            let r = o.radius.unwrap_or(1.0);
+            if !(r > 0.0 && r.is_finite()) {
+                return Err(at(format!("radius must be positive, got {r}")));
+            }
+            shapes::sphere(&m, r, spacing, &mut disks);
+            push(&disks, material, None);
+        }
+        ShapeKind::Quad => {
+            let size = o.size.unwrap_or([1.0, 1.0]);
+            if !(size[0] > 0.0 && size[1] > 0.0 && size[0].is_finite() && size[1].is_finite()) {
+                return Err(at(format!("size must be positive, got {size:?}")));
+            }
+            shapes::quad(&m, size, spacing, &mut disks);
+            push(&disks, material, None);
+        }
+        ShapeKind::Model => {
+            let rel = o
+                .path
+                .as_ref()
+                .ok_or_else(|| at("a model needs `path`".into()))?;
+            let file = base_dir.join(rel);
+            let mesh = model::load(&file)?;
+            let fit = match o.fit {
+                Some(f) if !(f > 0.0 && f.is_finite()) => {
+                    return Err(at(format!("fit must be positive, got {f}")));
+                }
+                f => f,
+            };
+            let splat_set = model::to_splats(&mesh, &file)?;
+            dropped = splat_set.dropped;
+            let placed = model::place(
+                &splat_set.disks,
+                fit,
+                o.anchor.unwrap_or(Anchor::Center),
+                &m,
+            );
+            let colors = (o.vertex_colors.unwrap_or(true) && splat_set.colors.is_some())
+                .then(|| splat_set.colors.clone().unwrap_or_default());
+            push(&placed, material, colors.as_deref());
+            source = Some(rel.clone());
+        }
+    }
+    Ok(ObjectSummary {
+        shape: o.shape.name().to_string(),
+        source,
+        splats: splats.len() - before,
+        dropped,
+    })
+}
