@@ -277,7 +277,9 @@ impl Gpu {
 
     /// Largest storage binding this device allows, in bytes: every capacity derives from it.
     pub fn max_binding_bytes(&self) -> u64 {
-        (self.limits.max_storage_buffer_binding_size as u64).min(self.limits.max_buffer_size)
+        self.limits
+            .max_storage_buffer_binding_size
+            .min(self.limits.max_buffer_size)
     }
 
     fn check_size(&self, label: &str, bytes: u64) -> Result<()> {

@@ -1,0 +1,380 @@
+//! Model loading: every PLY encoding reads the same mesh, malformed files give an error naming
+//! the file and element (never a panic or a huge allocation), meshes and point clouds become
+//! splats that close the surface. No GPU needed.
+
+mod common;
+
+use std::io::Write;
+use std::path::{Path, PathBuf};
+
+use glam::Vec3;
+use lobelight::model::{self, Mesh};
+
+fn tmp(name: &str, bytes: &[u8]) -> PathBuf {
+    let dir = std::env::temp_dir().join(format!("lobelight-models-{}", std::process::id()));
+    std::fs::create_dir_all(&dir).unwrap();
+    let p = dir.join(name);
+    std::fs::write(&p, bytes).unwrap();
+    p
+}
+
+/// A unit-sphere mesh: a latitude/longitude grid, quads split into triangles.
+fn uv_sphere(rings: u32, segments: u32) -> Mesh {
+    let mut m = Mesh::default();
+    for i in 0..=rings {
+        let theta = std::f32::consts::PI * i as f32 / rings as f32;
+        for j in 0..segments {
+            let phi = 2.0 * std::f32::consts::PI * j as f32 / segments as f32;
+            m.positions.push(Vec3::new(
+                theta.sin() * phi.cos(),
+                theta.cos(),
+                theta.sin() * phi.sin(),
+            ));
+        }
+    }
+    for i in 0..rings {
+        for j in 0..segments {
+            let a = i * segments + j;
+            let b = i * segments + (j + 1) % segments;
+            let (c, d) = (a + segments, b + segments);
+            // Counter-clockwise seen from outside.
+            m.faces.push([a, b, d]);
+            m.faces.push([a, d, c]);
+        }
+    }
+    m
+}
+
+fn ply_header(format: &str, m: &Mesh, colors: bool) -> String {
+    let mut h = format!(
+        "ply\nformat {format} 1.0\ncomment test\nelement vertex {}\n",
+        m.positions.len()
+    );
+    h += "property float x\nproperty float y\nproperty float z\n";
+    if colors {
+        h += "property uchar red\nproperty uchar green\nproperty uchar blue\n";
+    }
+    h += &format!(
+        "element face {}\nproperty list uchar int vertex_indices\nend_header\n",
+        m.faces.len()
+    );
+    h
+}
+
+fn write_ply(format: &str, m: &Mesh, colors: Option<&[[u8; 3]]>) -> Vec<u8> {
+    let mut out = ply_header(format, m, colors.is_some()).into_bytes();
+    let big = format == "binary_big_endian";
+    let f32b = |v: f32| {
+        if big {
+            v.to_be_bytes()
+        } else {
+            v.to_le_bytes()
+        }
+    };
+    let i32b = |v: i32| {
+        if big {
+            v.to_be_bytes()
+        } else {
+            v.to_le_bytes()
+        }
+    };
+    for (k, p) in m.positions.iter().enumerate() {
+        if format == "ascii" {
+            write!(out, "{} {} {}", p.x, p.y, p.z).unwrap();
+            if let Some(c) = colors {
+                write!(out, " {} {} {}", c[k][0], c[k][1], c[k][2]).unwrap();
+            }
+            out.push(b'\n');
+        } else {
+            for v in p.to_array() {
+                out.extend(f32b(v));
+            }
+            if let Some(c) = colors {
+                out.extend(c[k]);
+            }
+        }
+    }
+    for f in &m.faces {
+        if format == "ascii" {
+            writeln!(out, "3 {} {} {}", f[0], f[1], f[2]).unwrap();
+        } else {
+            out.push(3);
+            for i in f {
+                out.extend(i32b(*i as i32));
+            }
+        }
+    }
+    out
+}
+
+fn gzip(bytes: &[u8]) -> Vec<u8> {
+    let mut e = flate2::write::GzEncoder::new(Vec::new(), flate2::Compression::fast());
+    e.write_all(bytes).unwrap();
+    e.finish().unwrap()
+}
+
+fn err_of(name: &str, bytes: &[u8]) -> String {
+    let p = tmp(name, bytes);
+    model::load(&p).unwrap_err().to_string()
+}
+
+#[test]
+fn every_ply_encoding_reads_the_same_mesh() {
+    let m = uv_sphere(8, 12);
+    let colors: Vec<[u8; 3]> = (0..m.positions.len())
+        .map(|k| [k as u8, 255 - k as u8, 128])
+        .collect();
+    let mut loaded = Vec::new();
+    for (name, bytes) in [
+        ("a.ply", write_ply("ascii", &m, Some(&colors))),
+        (
+            "le.ply",
+            write_ply("binary_little_endian", &m, Some(&colors)),
+        ),
+        ("be.ply", write_ply("binary_big_endian", &m, Some(&colors))),
+        (
+            "gz.ply.gz",
+            gzip(&write_ply("binary_little_endian", &m, Some(&colors))),
+        ),
+    ] {
+        loaded.push((name, model::load(&tmp(name, &bytes)).unwrap()));
+    }
+    for (name, got) in &loaded {
+        assert_eq!(got.faces, m.faces, "{name}");
+        assert_eq!(got.positions.len(), m.positions.len(), "{name}");
+        for (a, b) in got.positions.iter().zip(&m.positions) {
+            // ASCII goes through decimal text: shortest round-trip formatting is exact.
+            assert_eq!(a, b, "{name}");
+        }
+        let c = got.colors.as_ref().expect("colours");
+        assert_eq!(c[3], [3.0 / 255.0, 252.0 / 255.0, 128.0 / 255.0], "{name}");
+    }
+}
+
+#[test]
+fn truncated_ply_names_the_element() {
+    let m = uv_sphere(4, 6);
+    let bin = write_ply("binary_little_endian", &m, None);
+    let msg = err_of("trunc.ply", &bin[..bin.len() - 7]);
+    assert!(
+        msg.contains("trunc.ply: element face #") && msg.contains("truncated"),
+        "{msg}"
+    );
+    let ascii = write_ply("ascii", &m, None);
+    let cut = String::from_utf8(ascii).unwrap();
+    let cut = &cut[..cut.find("\n3 ").unwrap()]; // drop all faces
+    let msg = err_of("trunc_ascii.ply", cut.as_bytes());
+    assert!(
+        msg.contains("element face #0") && msg.contains("truncated"),
+        "{msg}"
+    );
+}
+
+#[test]
+fn lying_header_count_is_refused_before_allocating() {
+    let text = "ply\nformat binary_little_endian 1.0\nelement vertex 4000000000000\nproperty float x\nproperty float y\nproperty float z\nend_header\n\0\0\0\0";
+    let msg = err_of("huge.ply", text.as_bytes());
+    assert!(
+        msg.contains("element vertex") && msg.contains("more than the 4 bytes"),
+        "{msg}"
+    );
+}
+
+#[test]
+fn nan_coordinates_name_the_vertex() {
+    let text = "ply\nformat ascii 1.0\nelement vertex 3\nproperty float x\nproperty float y\nproperty float z\nend_header\n0 0 0\n1 nan 0\n0 1 0\n";
+    let msg = err_of("nan.ply", text.as_bytes());
+    assert!(
+        msg.contains("element vertex #1 (line 9)") && msg.contains("not finite"),
+        "{msg}"
+    );
+}
+
+#[test]
+fn malformed_ply_headers() {
+    let cases: [(&str, &str); 5] = [
+        (
+            "ply\nformat ascii 1.0\nelement vertex 1\nproperty quad x\nend_header\n",
+            "unknown property type `quad`",
+        ),
+        ("ply\nformat xml 1.0\nend_header\n", "unknown format `xml`"),
+        (
+            "ply\nformat ascii 1.0\nelement vertex 1\nproperty float x\n",
+            "before `end_header`",
+        ),
+        ("PLY file\n", "not a PLY file"),
+        (
+            "ply\nformat ascii 1.0\nelement vertex 1\nproperty float x\nproperty float y\nproperty float z\nend_header\n1 2 3 4\n",
+            "extra value",
+        ),
+    ];
+    for (text, want) in cases {
+        let msg = err_of("h.ply", text.as_bytes());
+        assert!(msg.contains(want), "{want}: {msg}");
+    }
+}
+
+#[test]
+fn face_index_out_of_range() {
+    let text = "ply\nformat ascii 1.0\nelement vertex 3\nproperty float x\nproperty float y\nproperty float z\nelement face 1\nproperty list uchar int vertex_indices\nend_header\n0 0 0\n1 0 0\n0 1 0\n3 0 1 7\n";
+    let msg = err_of("idx.ply", text.as_bytes());
+    assert!(
+        msg.contains("face #0") && msg.contains("out of range"),
+        "{msg}"
+    );
+}
+
+#[test]
+fn garbage_obj_is_refused() {
+    let msg = err_of("garbage.obj", b"hello world\nthis is not a model\n");
+    assert!(
+        msg.contains("garbage.obj: line 1: unknown statement `hello`"),
+        "{msg}"
+    );
+    let msg = err_of("binary.obj", &[0x7f, b'E', b'L', b'F', 0xff, 0xfe, 0, 1, 2]);
+    assert!(msg.contains("not a text file"), "{msg}");
+    let msg = err_of("bad_number.obj", b"v 0 0 0\nv 1 x 0\n");
+    assert!(
+        msg.contains("line 2") && msg.contains("`x` is not a number"),
+        "{msg}"
+    );
+    let msg = err_of("bad_face.obj", b"v 0 0 0\nv 1 0 0\nv 0 1 0\nf 1 2 9\n");
+    assert!(
+        msg.contains("line 4") && msg.contains("out of range"),
+        "{msg}"
+    );
+    let msg = err_of("empty.obj", b"# nothing\n");
+    assert!(msg.contains("no vertices"), "{msg}");
+    let msg = err_of("model.stl", b"solid x\n");
+    assert!(msg.contains("unknown model format"), "{msg}");
+}
+
+#[test]
+fn obj_colours_quads_and_relative_indices() {
+    let text = "# a quad\nv 0 0 0 1 0 0\nv 1 0 0 0 1 0\nv 1 1 0 0 0 1\nv 0 1 0 1 1 1\nvn 0 0 1\nf -4//1 -3//1 -2//1 -1//1\n";
+    let m = model::load(&tmp("quad.obj", text.as_bytes())).unwrap();
+    assert_eq!(m.faces, vec![[0, 1, 2], [0, 2, 3]]);
+    assert_eq!(m.colors.as_ref().unwrap()[1], [0.0, 1.0, 0.0]);
+    let s = model::to_splats(&m, Path::new("quad.obj")).unwrap();
+    assert_eq!(s.disks.len(), 4);
+    for d in &s.disks {
+        assert!((d.normal - Vec3::Z).length() < 1e-6, "{:?}", d.normal);
+    }
+    // sRGB 1.0 stays 1.0 in linear; the file's colours become per-splat albedo.
+    assert_eq!(s.colors.as_ref().unwrap()[3], [1.0, 1.0, 1.0]);
+    assert!((model::srgb_to_linear(0.5) - 0.21404).abs() < 1e-4);
+}
+
+/// Whether `q` lies on some disk (within `slab` of its plane).
+fn covered(q: Vec3, disks: &[lobelight::scene::shapes::Disk], slab: f32) -> bool {
+    disks.iter().any(|d| {
+        let v = q - d.center;
+        let h = v.dot(d.normal);
+        h.abs() <= slab && v.length_squared() - h * h <= d.radius * d.radius
+    })
+}
+
+#[test]
+fn mesh_splats_cover_every_triangle() {
+    let m = uv_sphere(24, 36);
+    let s = model::to_splats(&m, Path::new("sphere")).unwrap();
+    assert_eq!(s.dropped, 0);
+    let mut rng = common::Rng(3);
+    for k in 0..4000 {
+        let f = m.faces[k % m.faces.len()];
+        let (mut a, mut b) = (rng.f32(), rng.f32());
+        if a + b > 1.0 {
+            (a, b) = (1.0 - a, 1.0 - b);
+        }
+        let [p0, p1, p2] = f.map(|i| m.positions[i as usize]);
+        let q = p0 + a * (p1 - p0) + b * (p2 - p0);
+        // The three corner splats of the triangle must cover it (disks tilt with the surface:
+        // allow the sagitta of the sphere's curvature across a triangle).
+        let corners: Vec<_> = f.iter().map(|&i| s.disks[i as usize]).collect();
+        assert!(
+            covered(q, &corners, 0.02),
+            "point {q} of face {f:?} is in a hole"
+        );
+    }
+    // Outward normals: area-weighted normals of a CCW mesh point away from the centre.
+    for d in &s.disks {
+        assert!(d.normal.dot(d.center.normalize()) > 0.95);
+    }
+}
+
+#[test]
+fn procedural_shapes_have_no_holes() {
+    use lobelight::scene::shapes;
+    let m = glam::Affine3A::from_scale_rotation_translation(
+        Vec3::new(0.7, 1.3, 0.4),
+        glam::Quat::from_rotation_y(0.3) * glam::Quat::from_rotation_x(0.2),
+        Vec3::new(0.1, 0.2, 0.3),
+    );
+    let mut rng = common::Rng(5);
+    let mut disks = Vec::new();
+    shapes::cube(&m, 0.05, &mut disks);
+    for _ in 0..3000 {
+        // A random point on a random face of the cube.
+        let face = (rng.next_u64() % 6) as usize;
+        let mut p = [
+            rng.range(-1.0, 1.0),
+            rng.range(-1.0, 1.0),
+            rng.range(-1.0, 1.0),
+        ];
+        p[face / 2] = if face.is_multiple_of(2) { 1.0 } else { -1.0 };
+        let q = m.transform_point3(p.into());
+        assert!(covered(q, &disks, 1e-4), "cube point {q} is in a hole");
+    }
+    let mut disks = Vec::new();
+    let sphere = glam::Affine3A::from_translation(Vec3::new(1.0, 0.0, 0.0));
+    shapes::sphere(&sphere, 0.5, 0.03, &mut disks);
+    for _ in 0..3000 {
+        let q = Vec3::new(1.0, 0.0, 0.0) + 0.5 * Vec3::from(rng.unit_vector());
+        assert!(covered(q, &disks, 0.01), "sphere point {q} is in a hole");
+    }
+}
+
+#[test]
+fn point_cloud_gets_oriented_pca_normals_and_closing_radii() {
+    // A Fibonacci sphere of radius 2 as a bare point cloud (no faces, no normals).
+    let n = 3000;
+    let mut m = Mesh::default();
+    let golden = std::f32::consts::PI * (3.0 - 5f32.sqrt());
+    for k in 0..n {
+        let z = 1.0 - (2.0 * k as f32 + 1.0) / n as f32;
+        let r = (1.0 - z * z).sqrt();
+        let phi = golden * k as f32;
+        m.positions
+            .push(2.0 * Vec3::new(r * phi.cos(), r * phi.sin(), z));
+    }
+    let s = model::to_splats(&m, Path::new("cloud")).unwrap();
+    assert_eq!(s.disks.len(), n);
+    let outward = s
+        .disks
+        .iter()
+        .filter(|d| d.normal.dot(d.center.normalize()) > 0.95)
+        .count();
+    assert_eq!(
+        outward, n,
+        "every normal should point outwards, consistently oriented"
+    );
+    let mut rng = common::Rng(9);
+    for _ in 0..2000 {
+        let q = 2.0 * Vec3::from(rng.unit_vector());
+        assert!(covered(q, &s.disks, 0.05), "cloud point {q} is in a hole");
+    }
+}
+
+#[test]
+fn degenerate_faces_drop_unused_vertices() {
+    // Two triangles, one of zero area; the vertex only it uses is dropped, not NaN.
+    let text = "v 0 0 0\nv 1 0 0\nv 0 1 0\nv 2 2 2\nf 1 2 3\nf 4 4 4\n";
+    let m = model::load(&tmp("degenerate.obj", text.as_bytes())).unwrap();
+    let s = model::to_splats(&m, Path::new("degenerate.obj")).unwrap();
+    assert_eq!((s.disks.len(), s.dropped), (3, 1));
+    assert!(
+        s.disks
+            .iter()
+            .all(|d| d.radius.is_finite() && d.normal.is_finite())
+    );
+}

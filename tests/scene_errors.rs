@@ -1,0 +1,172 @@
+//! Scene files: the shipped scenes load, and malformed ones give one clear line naming the
+//! file, the line and the key. No GPU needed.
+
+use std::path::Path;
+
+use lobelight::scene;
+
+fn err(text: &str) -> String {
+    scene::parse(Path::new("scenes/bad.toml"), text)
+        .unwrap_err()
+        .to_string()
+}
+
+const MINIMAL: &str = r#"
+[[light]]
+type = "point"
+position = [0.0, 0.5, 0.0]
+power = 10.0
+
+[[object]]
+shape = "quad"
+"#;
+
+#[test]
+fn minimal_scene_uses_defaults() {
+    let s = scene::parse(Path::new("min.toml"), MINIMAL).unwrap();
+    assert_eq!(
+        s.splats.len(),
+        40 * 40,
+        "a unit quad at the default spacing"
+    );
+    assert_eq!(s.material_names, vec!["default"]);
+    assert_eq!(s.camera.resolution, [512, 512]);
+    assert_eq!(s.lights[0].power, [10.0; 3]);
+    assert!(!s.has_glossy());
+}
+
+#[test]
+fn shipped_scenes_load() {
+    for name in ["cornell", "cornell_spheres", "diffuse"] {
+        let s = scene::load(Path::new(&format!("scenes/{name}.toml"))).unwrap();
+        assert!(s.splats.len() > 30_000, "{name}: {}", s.splats.len());
+        assert_eq!(s.lights.len(), 1);
+        assert_eq!(s.has_glossy(), name != "diffuse", "{name}");
+    }
+}
+
+#[test]
+fn cornell_light_power_is_pi_radiance_area() {
+    let s = scene::load(Path::new("scenes/diffuse.toml")).unwrap();
+    let l = &s.lights[0];
+    let area = 0.46 * 0.38;
+    let expected = 18.387 * std::f32::consts::PI * area;
+    assert!(
+        (l.power[0] - expected).abs() < 1e-4 * expected,
+        "{:?}",
+        l.power
+    );
+    assert!((l.area - area).abs() < 1e-6);
+    // Corner + half edges = centre; facing down.
+    let c: Vec<f32> = (0..3)
+        .map(|i| l.position[i] + 0.5 * (l.edge_u[i] + l.edge_v[i]))
+        .collect();
+    assert!(
+        (c[0]).abs() < 1e-6 && (c[1] - 0.99).abs() < 1e-6 && (c[2] - 0.01).abs() < 1e-6,
+        "{c:?}"
+    );
+    assert_eq!(l.direction, [0.0, -1.0, 0.0]);
+}
+
+#[test]
+fn misspelt_key_names_line_and_key() {
+    let text = MINIMAL.replace("shape = \"quad\"", "shape = \"quad\"\nspacng = 0.01");
+    let msg = err(&text);
+    assert!(msg.starts_with("scenes/bad.toml: line 9:"), "{msg}");
+    assert!(msg.contains("unknown field `spacng`"), "{msg}");
+}
+
+#[test]
+fn misspelt_table_key() {
+    let msg = err(&format!("[camera]\nfvo = 40.0\n{MINIMAL}"));
+    assert!(msg.contains("line 2") && msg.contains("`fvo`"), "{msg}");
+}
+
+#[test]
+fn wrong_type_names_line() {
+    let msg = err(&format!("[camera]\nfov = \"wide\"\n{MINIMAL}"));
+    assert!(msg.contains("line 2"), "{msg}");
+}
+
+#[test]
+fn unknown_shape_and_light_type() {
+    let msg = err(&MINIMAL.replace("\"quad\"", "\"cone\""));
+    assert!(msg.contains("line 8") && msg.contains("cone"), "{msg}");
+    let msg = err(&MINIMAL.replace("\"point\"", "\"laser\""));
+    assert!(msg.contains("line 3") && msg.contains("laser"), "{msg}");
+}
+
+#[test]
+fn key_of_another_shape_is_rejected() {
+    let msg = err(&MINIMAL.replace("shape = \"quad\"", "shape = \"quad\"\nradius = 2.0"));
+    // Object-level checks point at the object's `[[object]]` line.
+    assert!(
+        msg.contains("line 7") && msg.contains("`radius` does not apply"),
+        "{msg}"
+    );
+}
+
+#[test]
+fn unknown_material() {
+    let msg = err(&MINIMAL.replace("shape = \"quad\"", "shape = \"quad\"\nmaterial = \"gold\""));
+    assert!(msg.contains("unknown material 'gold'"), "{msg}");
+}
+
+#[test]
+fn impossible_parameters() {
+    let energy = format!("[materials.default]\ndiffuse = 0.7\nspecular = 0.5\n{MINIMAL}");
+    assert!(err(&energy).contains("create energy"), "{}", err(&energy));
+    let rough = format!("[materials.default]\nroughness = 0.0\n{MINIMAL}");
+    assert!(err(&rough).contains("roughness must be positive"));
+    let power = MINIMAL.replace("power = 10.0", "power = -1.0");
+    assert!(err(&power).contains("non-negative"), "{}", err(&power));
+    let both = MINIMAL.replace("power = 10.0", "power = 1.0\nintensity = 1.0");
+    assert!(err(&both).contains("exactly one"));
+    let cam = format!("[camera]\neye = [0.0, 0.0, 0.0]\ntarget = [0.0, 0.0, 0.0]\n{MINIMAL}");
+    assert!(err(&cam).contains("coincide"));
+    let spacing = MINIMAL.replace("shape = \"quad\"", "shape = \"quad\"\nspacing = -1.0");
+    assert!(err(&spacing).contains("spacing must be positive"));
+    let lobes = format!("[bake]\nlobes = 12\n{MINIMAL}");
+    assert!(err(&lobes).contains("lobes must be within 1..=8"));
+}
+
+#[test]
+fn empty_scene_is_an_error() {
+    assert!(err("").contains("no splats"));
+    assert!(err("[[object]]\nshape = \"quad\"\n").contains("no lights"));
+}
+
+#[test]
+fn missing_model_file_names_path() {
+    let msg = err(&MINIMAL.replace("shape = \"quad\"", "shape = \"model\"\npath = \"nope.ply\""));
+    assert!(msg.contains("scenes/nope.ply"), "{msg}");
+}
+
+#[test]
+fn transforms_apply_in_order() {
+    // A box scaled 0.5 then rotated 90° about y then moved up: bounds follow.
+    let text = MINIMAL.replace(
+        "shape = \"quad\"",
+        "shape = \"box\"\nscale = [0.5, 0.25, 1.0]\nrotate = [0.0, 90.0, 0.0]\ntranslate = [0.0, 2.0, 0.0]\nspacing = 0.05",
+    );
+    let s = scene::parse(Path::new("t.toml"), &text).unwrap();
+    let centers = s.splats.iter().map(|s| glam::Vec3::from(s.center));
+    let (lo, hi) = centers.fold(
+        (glam::Vec3::INFINITY, glam::Vec3::NEG_INFINITY),
+        |(l, h), c| (l.min(c), h.max(c)),
+    );
+    // After the rotation the x extent is the old z extent (1) and z is the old x (0.5).
+    assert!(
+        (hi.x - 1.0).abs() < 1e-4 && (lo.x + 1.0).abs() < 1e-4,
+        "{lo} {hi}"
+    );
+    assert!(
+        (hi.z - 0.5).abs() < 1e-4 && (hi.y - 2.25).abs() < 1e-4,
+        "{lo} {hi}"
+    );
+    // Normals point outwards.
+    for sp in &s.splats {
+        let d = glam::Vec3::from(sp.center) - glam::Vec3::new(0.0, 2.0, 0.0);
+        assert!(d.dot(sp.normal.into()) > 0.0);
+    }
+}
