@@ -35,8 +35,10 @@ pub mod light_kind {
 
 /// One light. Which fields matter depends on `kind`:
 /// point: position, power; spot: also direction and the cosines of the cone;
-/// area: position is a corner, `edge_u`/`edge_v` span the rectangle, direction its normal;
-/// directional: direction (the way light travels), power.
+/// area: position is a corner, `edge_u`/`edge_v` span the rectangle (`edge_u × edge_v` points
+/// along `direction`, its normal), `area` its area;
+/// directional: direction (the way light travels); photons start on a disk of area `area`
+/// centred at `position`, perpendicular to the direction, that covers the scene's bounds.
 /// `power` is total emitted RGB power (W) for every kind; emission sampling shares photons by it.
 #[repr(C)]
 #[derive(Clone, Copy, Debug, Default, PartialEq, Pod, Zeroable)]
