@@ -51,8 +51,8 @@ pub struct GridInfo {
 pub struct Memory {
     pub splats: u64,
     pub grid: u64,
-    /// Stored photons if every emitted photon is stored once (a rough upper estimate at the
-    /// thesis's ~0.7 stored per emitted plus bounces).
+    /// One stored photon per emitted photon: a rough estimate (the thesis stored ~0.7 per
+    /// emitted; longer paths store more).
     pub photons: u64,
     pub lobes: u64,
     pub total: u64,

@@ -204,14 +204,30 @@ fn validate_camera(c: &CameraDesc) -> std::result::Result<(), String> {
     Ok(())
 }
 
+/// `x` when it is finite and above zero, else the error "`what` must be positive, got x".
+fn positive(x: f32, what: &str) -> std::result::Result<f32, String> {
+    if x > 0.0 && x.is_finite() {
+        Ok(x)
+    } else {
+        Err(format!("{what} must be positive, got {x}"))
+    }
+}
+
+/// A rectangle's [width, height], both positive.
+fn positive_size(size: [f32; 2]) -> std::result::Result<[f32; 2], String> {
+    if size.iter().all(|&s| positive(s, "").is_ok()) {
+        Ok(size)
+    } else {
+        Err(format!("size must be positive, got {size:?}"))
+    }
+}
+
 fn validate_bake(b: &BakeDesc) -> std::result::Result<(), String> {
     if b.photons == 0 {
         return Err("photons must be at least 1".into());
     }
-    if let Some(r) = b.radius
-        && !(r > 0.0 && r.is_finite())
-    {
-        return Err(format!("radius must be positive, got {r}"));
+    if let Some(r) = b.radius {
+        positive(r, "radius")?;
     }
     if !(1..=8).contains(&b.lobes) {
         return Err(format!("lobes must be within 1..=8, got {}", b.lobes));
@@ -245,12 +261,9 @@ fn material(m: &MaterialDesc) -> std::result::Result<Material, String> {
             "diffuse + specular exceeds 1 ({d:?} + {s:?}): the surface would create energy"
         ));
     }
-    if !(m.roughness > 0.0 && m.roughness.is_finite()) {
-        return Err(format!("roughness must be positive, got {}", m.roughness));
-    }
     Ok(Material {
         specular: s,
-        roughness: m.roughness,
+        roughness: positive(m.roughness, "roughness")?,
     })
 }
 
@@ -337,9 +350,7 @@ fn light(l: &LightDesc, (lo, hi): (Vec3, Vec3)) -> std::result::Result<Light, St
             power,
         } => {
             let n = unit(*normal, "normal")?;
-            if !(size[0] > 0.0 && size[1] > 0.0 && size[0].is_finite() && size[1].is_finite()) {
-                return Err(format!("size must be positive, got {size:?}"));
-            }
+            positive_size(*size)?;
             let u_hint = match u_axis {
                 Some(u) => unit(*u, "u_axis")?,
                 None => least_aligned_axis(n),
@@ -470,10 +481,7 @@ fn build_object(
         }
     }
     let m = transform(o).map_err(at)?;
-    let spacing = o.spacing.unwrap_or(DEFAULT_SPACING);
-    if !(spacing > 0.0 && spacing.is_finite()) {
-        return Err(at(format!("spacing must be positive, got {spacing}")));
-    }
+    let spacing = positive(o.spacing.unwrap_or(DEFAULT_SPACING), "spacing").map_err(at)?;
     let material = material_index(o.material.as_ref()).map_err(at)?;
     let diffuse_of = |mat: u32| material_descs[mat as usize].diffuse.rgb();
     let before = splats.len();
@@ -515,18 +523,12 @@ fn build_object(
             push(&disks, material, None);
         }
         ShapeKind::Sphere => {
-            let r = o.radius.unwrap_or(1.0);
-            if !(r > 0.0 && r.is_finite()) {
-                return Err(at(format!("radius must be positive, got {r}")));
-            }
+            let r = positive(o.radius.unwrap_or(1.0), "radius").map_err(at)?;
             shapes::sphere(&m, r, spacing, &mut disks);
             push(&disks, material, None);
         }
         ShapeKind::Quad => {
-            let size = o.size.unwrap_or([1.0, 1.0]);
-            if !(size[0] > 0.0 && size[1] > 0.0 && size[0].is_finite() && size[1].is_finite()) {
-                return Err(at(format!("size must be positive, got {size:?}")));
-            }
+            let size = positive_size(o.size.unwrap_or([1.0, 1.0])).map_err(at)?;
             shapes::quad(&m, size, spacing, &mut disks);
             push(&disks, material, None);
         }
@@ -537,12 +539,7 @@ fn build_object(
                 .ok_or_else(|| at("a model needs `path`".into()))?;
             let file = base_dir.join(rel);
             let mesh = model::load(&file)?;
-            let fit = match o.fit {
-                Some(f) if !(f > 0.0 && f.is_finite()) => {
-                    return Err(at(format!("fit must be positive, got {f}")));
-                }
-                f => f,
-            };
+            let fit = o.fit.map(|f| positive(f, "fit")).transpose().map_err(at)?;
             let splat_set = model::to_splats(&mesh, &file)?;
             dropped = splat_set.dropped;
             let placed = model::place(
@@ -551,9 +548,11 @@ fn build_object(
                 o.anchor.unwrap_or(Anchor::Center),
                 &m,
             );
-            let colors = (o.vertex_colors.unwrap_or(true) && splat_set.colors.is_some())
-                .then(|| splat_set.colors.clone().unwrap_or_default());
-            push(&placed, material, colors.as_deref());
+            let colors = splat_set
+                .colors
+                .as_deref()
+                .filter(|_| o.vertex_colors.unwrap_or(true));
+            push(&placed, material, colors);
             source = Some(rel.clone());
         }
     }
