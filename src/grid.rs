@@ -57,6 +57,9 @@ pub fn cell_index(c: UVec3, g: &GridParams) -> u32 {
 /// splats coincide, which is a broken scene rather than a large one.
 pub const MAX_CELL_LEN: u32 = 4096;
 
+/// Cap of the grid's distance field (in cells), as `DIST_CAP` in `wgsl/shared/grid.wgsl`.
+pub const DIST_CAP: u32 = 16;
+
 pub fn check_cell_len(max_cell_len: u32) -> Result<()> {
     if max_cell_len > MAX_CELL_LEN {
         return Err(Error::Invalid(format!(
@@ -149,11 +152,14 @@ pub fn grid_params(splats: &[Splat], cfg: &GridConfig) -> Result<GridParams> {
 
 /// A built grid: `cell_splats[cell_start[c]..cell_start[c + 1]]` lists the splats touching
 /// cell `c`, in increasing splat index. `cell_start` has `cell_count + 1` entries.
+/// `cell_dist[c]` is the Chebyshev distance in cells from `c` to the nearest cell with a
+/// non-empty list, capped at `DIST_CAP` (0 for such cells): rays skip empty space with it.
 #[derive(Clone, Debug, PartialEq)]
 pub struct SplatGrid {
     pub params: GridParams,
     pub cell_start: Vec<u32>,
     pub cell_splats: Vec<u32>,
+    pub cell_dist: Vec<u32>,
 }
 
 impl SplatGrid {

@@ -3,13 +3,18 @@
 //! Every stage runs as a WGSL compute or render pass (`gpu`), and has a CPU mirror (`cpu`) used
 //! as the reference in tests. See README.md for the command line and DESIGN notes for the math.
 
+pub mod bench;
+pub mod camera;
 pub mod cpu;
 pub mod error;
 pub mod gpu;
 pub mod grid;
 pub mod info;
 pub mod model;
+pub mod photons;
+pub mod render;
 pub mod scene;
+pub mod shared;
 pub mod types;
 
 pub use error::{Error, Result};

@@ -3,9 +3,11 @@
 use std::path::PathBuf;
 use std::process::ExitCode;
 
-use clap::{Parser, Subcommand};
+use clap::{Args, Parser, Subcommand, ValueEnum};
 use lobelight::gpu::{BackendChoice, Gpu};
-use lobelight::{Result, info, scene};
+use lobelight::photons::PhotonConfig;
+use lobelight::scene::file::StoreRange;
+use lobelight::{Error, Result, bench, info, render, scene};
 
 #[derive(Parser)]
 #[command(
@@ -18,6 +20,55 @@ struct Cli {
     command: Command,
 }
 
+/// Where stages run, shared by the subcommands.
+#[derive(Args, Clone, Copy)]
+struct DeviceArgs {
+    /// Run the CPU mirror instead of the GPU.
+    #[arg(long)]
+    cpu: bool,
+    /// Graphics API (default: WGPU_BACKEND, else Vulkan, else GL).
+    #[arg(long, value_enum, default_value_t = BackendChoice::Auto)]
+    backend: BackendChoice,
+}
+
+impl DeviceArgs {
+    fn gpu(&self) -> Result<Option<Gpu>> {
+        if self.cpu {
+            Ok(None)
+        } else {
+            Gpu::new(self.backend).map(Some)
+        }
+    }
+}
+
+/// Bake settings that override the scene file's `[bake]`.
+#[derive(Args, Clone)]
+struct BakeArgs {
+    /// Photons to emit.
+    #[arg(long)]
+    photons: Option<u64>,
+    #[arg(long)]
+    seed: Option<u32>,
+    /// Which hits store photons.
+    #[arg(long, value_enum)]
+    store: Option<StoreRange>,
+}
+
+impl BakeArgs {
+    fn apply(&self, scene: &mut scene::Scene) -> Result<()> {
+        if let Some(n) = self.photons {
+            scene.bake.photons = n;
+        }
+        if let Some(s) = self.seed {
+            scene.bake.seed = s;
+        }
+        if let Some(s) = self.store {
+            scene.bake.store = s;
+        }
+        PhotonConfig::from_scene(scene).validate()
+    }
+}
+
 #[derive(Subcommand)]
 enum Command {
     /// Splats, lights, materials, bounds, grid and memory of a scene, and the device in use.
@@ -26,13 +77,59 @@ enum Command {
         /// Print one JSON object on stdout.
         #[arg(long)]
         json: bool,
-        /// Build the grid with the CPU mirror instead of the GPU.
-        #[arg(long)]
-        cpu: bool,
-        /// Graphics API (default: WGPU_BACKEND, else Vulkan, else GL).
-        #[arg(long, value_enum, default_value_t = BackendChoice::Auto)]
-        backend: BackendChoice,
+        #[command(flatten)]
+        device: DeviceArgs,
     },
+    /// Render a scene to an image (PNG).
+    Render {
+        scene: PathBuf,
+        /// Output image.
+        #[arg(short, long)]
+        output: PathBuf,
+        /// What to draw: `photons` shows the stored photons as points.
+        #[arg(long, value_enum, default_value_t = render::Method::Photons)]
+        method: render::Method,
+        #[arg(long)]
+        width: Option<u32>,
+        #[arg(long)]
+        height: Option<u32>,
+        #[command(flatten)]
+        bake: BakeArgs,
+        #[command(flatten)]
+        device: DeviceArgs,
+        /// Print per-stage figures on stderr.
+        #[arg(long)]
+        stats: bool,
+        /// Print the figures as one JSON object on stdout.
+        #[arg(long)]
+        json: bool,
+    },
+    /// Measure a stage: throughput and the figures that show it did the right work.
+    Bench {
+        #[arg(value_enum)]
+        what: BenchKind,
+        #[arg(required = true)]
+        scenes: Vec<PathBuf>,
+        #[command(flatten)]
+        bake: BakeArgs,
+        #[command(flatten)]
+        device: DeviceArgs,
+        /// Print one JSON object per scene on stdout (an array for several scenes).
+        #[arg(long)]
+        json: bool,
+    },
+}
+
+#[derive(Clone, Copy, ValueEnum)]
+enum BenchKind {
+    /// Photon emission and tracing: photons_per_s, stored count, per-stage ms.
+    Photons,
+}
+
+fn print_json<T: serde::Serialize>(value: &T) -> Result<()> {
+    let text = serde_json::to_string_pretty(value).map_err(|e| Error::Invalid(e.to_string()))?;
+    println!("{text}");
+    Ok(())
 }
 
 fn run(cli: Cli) -> Result<()> {
@@ -40,20 +137,71 @@ fn run(cli: Cli) -> Result<()> {
         Command::Info {
             scene,
             json,
-            cpu,
-            backend,
+            device,
         } => {
             let scene = scene::load(&scene)?;
-            let gpu = if cpu { None } else { Some(Gpu::new(backend)?) };
+            let gpu = device.gpu()?;
             let info = info::info(&scene, gpu.as_ref())?;
             if json {
-                println!(
-                    "{}",
-                    serde_json::to_string_pretty(&info)
-                        .map_err(|e| lobelight::Error::Invalid(e.to_string()))?
-                );
+                print_json(&info)?;
             } else {
                 println!("{info}");
+            }
+        }
+        Command::Render {
+            scene,
+            output,
+            method,
+            width,
+            height,
+            bake,
+            device,
+            stats,
+            json,
+        } => {
+            let mut scene = scene::load(&scene)?;
+            bake.apply(&mut scene)?;
+            let gpu = device.gpu()?;
+            let opts = render::Options {
+                method,
+                width,
+                height,
+                progress: !json,
+            };
+            let report = render::render(&scene, gpu.as_ref(), &opts, &output)?;
+            if json {
+                print_json(&report)?;
+            } else if stats {
+                eprintln!("{report}");
+            }
+        }
+        Command::Bench {
+            what,
+            scenes,
+            bake,
+            device,
+            json,
+        } => {
+            let gpu = device.gpu()?;
+            let mut reports = Vec::new();
+            for path in &scenes {
+                let mut scene = scene::load(path)?;
+                bake.apply(&mut scene)?;
+                let report = match what {
+                    BenchKind::Photons => {
+                        bench::photons(&scene, gpu.as_ref(), &PhotonConfig::from_scene(&scene))?
+                    }
+                };
+                if !json {
+                    println!("{report}\n");
+                }
+                reports.push(report);
+            }
+            if json {
+                match reports.len() {
+                    1 => print_json(&reports[0])?,
+                    _ => print_json(&reports)?,
+                }
             }
         }
     }

@@ -55,8 +55,11 @@ pub struct Light {
     pub _pad: u32,
 }
 
-/// A stored photon: where it landed, the direction it came from (pointing away from the
-/// surface), its RGB power and the number of bounces before it was stored.
+/// A stored photon: where it landed (on splat `splat`), the direction it came from (pointing
+/// away from the surface), its RGB power, the number of bounces before it was stored, and the
+/// index of the emitted photon (`path`) whose path it belongs to.
+/// `(path, bounce)` is unique and independent of scheduling: it is the photons' sort key, since
+/// their slots come from an atomic counter.
 #[repr(C)]
 #[derive(Clone, Copy, Debug, Default, PartialEq, Pod, Zeroable)]
 pub struct Photon {
@@ -65,7 +68,107 @@ pub struct Photon {
     pub direction: [f32; 3],
     pub splat: u32,
     pub power: [f32; 3],
+    pub path: u32,
+}
+
+impl Photon {
+    /// The scheduling-independent order of stored photons.
+    pub fn key(&self) -> (u32, u32) {
+        (self.path, self.bounce)
+    }
+}
+
+/// A light prepared for photon emission: the light, the range of emitted-photon indices
+/// (paths) it owns, and the power each of its photons carries, computed once on the host so
+/// the GPU and the CPU mirror read the same bits.
+#[repr(C)]
+#[derive(Clone, Copy, Debug, Default, PartialEq, Pod, Zeroable)]
+pub struct Emitter {
+    pub light: Light,
+    pub first: u32,
+    pub count: u32,
+    pub _pad0: u32,
+    pub _pad1: u32,
+    /// `light.power / count`.
+    pub photon_power: [f32; 3],
+    /// Spot lights: 1 / (mean of the smooth cone falloff over the sampled cone), so that
+    /// weighting each photon by its falloff keeps the total power. 1 for other kinds.
+    pub falloff_norm: f32,
+}
+
+/// Uniform of one `photon_trace` dispatch (one batch of emitted photons).
+#[repr(C)]
+#[derive(Clone, Copy, Debug, Default, PartialEq, Pod, Zeroable)]
+pub struct TraceParams {
+    pub seed: u32,
+    /// First emitted-photon index (path) of this batch, and the batch's size.
+    pub path_offset: u32,
+    pub path_count: u32,
+    pub emitter_count: u32,
+    /// Most hits a path may have.
+    pub max_depth: u32,
+    /// Photons are stored at hits whose bounce count is at least this (1: indirect only).
+    pub min_bounce: u32,
+    /// Loop iterations (cells plus disk tests) one path may spend before it is aborted and
+    /// counted; keeps every invocation far below llvmpipe's silent loop limit.
+    pub iteration_budget: u32,
+    pub _pad0: u32,
+}
+
+/// Counters of the photon store and of how paths ended, read back after each batch.
+/// `stored` counts every store attempt, also those past `capacity` (which set `overflow` and
+/// write nothing): after an overflow it is exactly the capacity the batch needs.
+#[repr(C)]
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Pod, Zeroable)]
+pub struct TraceCounters {
+    pub stored: u32,
+    pub capacity: u32,
+    pub overflow: u32,
+    /// Paths that left the grid.
+    pub escaped: u32,
+    /// Paths ended by Russian roulette (or by a specular bounce below the surface).
+    pub absorbed: u32,
+    /// Paths that reached `max_depth` hits.
+    pub depth_capped: u32,
+    /// Paths aborted because they used up `iteration_budget`.
+    pub aborted: u32,
     pub _pad: u32,
+}
+
+/// A ray for `trace_rays`: the nearest front-facing disk hit with `0 < t < t_max`, ignoring
+/// splat `skip` (the one the ray leaves; `NO_SPLAT` for none).
+#[repr(C)]
+#[derive(Clone, Copy, Debug, Default, PartialEq, Pod, Zeroable)]
+pub struct Ray {
+    pub origin: [f32; 3],
+    pub t_max: f32,
+    pub direction: [f32; 3],
+    pub skip: u32,
+}
+
+/// Result of tracing one ray: `splat` is `NO_SPLAT` on a miss; `aborted` is 1 when the
+/// iteration budget ran out before the answer was known.
+#[repr(C)]
+#[derive(Clone, Copy, Debug, Default, PartialEq, Pod, Zeroable)]
+pub struct Hit {
+    pub t: f32,
+    pub splat: u32,
+    pub aborted: u32,
+    pub _pad: u32,
+}
+
+/// `Hit::splat` and `Ray::skip` when there is no splat.
+pub const NO_SPLAT: u32 = u32::MAX;
+
+/// Uniform of one pass of the grid's distance field (`grid_distance`).
+#[repr(C)]
+#[derive(Clone, Copy, Debug, Default, PartialEq, Pod, Zeroable)]
+pub struct DistanceParams {
+    /// 0, 1, 2: the axis this pass sweeps (x reads occupancy from the cell lists).
+    pub axis: u32,
+    pub _pad0: u32,
+    pub _pad1: u32,
+    pub _pad2: u32,
 }
 
 /// One Gaussian lobe of a splat's incident light: unit axis, angular width, and the RGB
@@ -117,14 +220,4 @@ pub struct ScanParams {
     pub _pad0: u32,
     pub _pad1: u32,
     pub _pad2: u32,
-}
-
-/// Growable-buffer counters: a slot counter and an overflow flag the host reads back.
-#[repr(C)]
-#[derive(Clone, Copy, Debug, Default, PartialEq, Pod, Zeroable)]
-pub struct Counters {
-    pub count: u32,
-    pub capacity: u32,
-    pub overflow: u32,
-    pub _pad: u32,
 }

@@ -54,7 +54,54 @@ fn rust_layouts() -> Vec<RustLayout> {
             direction,
             splat,
             power,
+            path
+        }),
+        layout!(Emitter {
+            light,
+            first,
+            count,
+            _pad0,
+            _pad1,
+            photon_power,
+            falloff_norm
+        }),
+        layout!(TraceParams {
+            seed,
+            path_offset,
+            path_count,
+            emitter_count,
+            max_depth,
+            min_bounce,
+            iteration_budget,
+            _pad0
+        }),
+        layout!(TraceCounters {
+            stored,
+            capacity,
+            overflow,
+            escaped,
+            absorbed,
+            depth_capped,
+            aborted,
             _pad
+        }),
+        layout!(Ray {
+            origin,
+            t_max,
+            direction,
+            skip
+        }),
+        layout!(Hit {
+            t,
+            splat,
+            aborted,
+            _pad
+        }),
+        layout!(DistanceParams {
+            axis,
+            _pad0,
+            _pad1,
+            _pad2
         }),
         layout!(Lobe {
             axis,
@@ -85,12 +132,6 @@ fn rust_layouts() -> Vec<RustLayout> {
             _pad0,
             _pad1,
             _pad2
-        }),
-        layout!(Counters {
-            count,
-            capacity,
-            overflow,
-            _pad
         }),
     ]
 }

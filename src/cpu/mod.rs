@@ -4,14 +4,24 @@
 //! They are the reference for the parity tests and a fallback when no GPU is wanted.
 
 pub mod grid_count;
+pub mod grid_distance;
 pub mod grid_rank;
 pub mod grid_scatter;
+pub mod photon_trace;
 pub mod scan_apply;
 pub mod scan_reduce;
+pub mod trace_rays;
 
-use crate::error::Result;
+use std::time::Instant;
+
+use crate::error::{Error, Result};
 use crate::grid::{SplatGrid, check_cell_len};
-use crate::types::{GridParams, ScanParams, Splat};
+use crate::photons::{
+    PhotonConfig, PhotonMap, PhotonStats, emitters, first_capacity, grown_capacity, ms_since,
+};
+use crate::shared::trace::Geometry;
+use crate::types::{DistanceParams, GridParams, ScanParams, Splat};
+use crate::types::{Light, Material, Photon, TraceCounters};
 
 /// Number of workgroups that cover `n` items with `wg` invocations each.
 pub fn groups_for(n: u32, wg: u32) -> u32 {
@@ -37,7 +47,23 @@ pub fn exclusive_scan(values: &mut [u32]) {
     scan_apply::scan_apply(&params, values, &block_sums, blocks);
 }
 
-/// The whole grid build on the CPU: count → exclusive scan → scatter → rank.
+/// The distance field of a grid's cell lists: passes x, y, z of `grid_distance`.
+pub fn distance_field(grid: &GridParams, cell_start: &[u32]) -> Vec<u32> {
+    let cells = grid.cell_count as usize;
+    let groups = groups_for(grid.cell_count, grid_distance::WG);
+    let (mut a, mut b) = (vec![0u32; cells], vec![0u32; cells]);
+    let pass = |axis| DistanceParams {
+        axis,
+        ..Default::default()
+    };
+    grid_distance::grid_distance(&pass(0), grid, cell_start, cell_start, &mut a, groups);
+    grid_distance::grid_distance(&pass(1), grid, cell_start, &a, &mut b, groups);
+    grid_distance::grid_distance(&pass(2), grid, cell_start, &b, &mut a, groups);
+    a
+}
+
+/// The whole grid build on the CPU: count → exclusive scan → scatter → rank, then the
+/// distance field.
 pub fn build_grid(params: &GridParams, splats: &[Splat]) -> Result<SplatGrid> {
     let splat_groups = groups_for(params.splat_count, grid_count::WG);
     let mut cell_start = vec![0u32; params.cell_count as usize + 1];
@@ -77,9 +103,73 @@ pub fn build_grid(params: &GridParams, splats: &[Splat]) -> Result<SplatGrid> {
         &mut cell_splats,
         entry_groups,
     );
+    let cell_dist = distance_field(&params, &cell_start);
     Ok(SplatGrid {
         params,
         cell_start,
         cell_splats,
+        cell_dist,
     })
+}
+
+/// The photon pass on the CPU: the batch loop of `gpu::photons::trace_photons` with one
+/// growable store (host memory has no binding limit), and the same overflow-and-rerun rule.
+pub fn trace_photons(
+    lights: &[Light],
+    materials: &[Material],
+    geo: &Geometry,
+    cfg: &PhotonConfig,
+    progress: &mut dyn FnMut(u64, u64),
+) -> Result<PhotonMap> {
+    cfg.validate()?;
+    let t = Instant::now();
+    let emitters = emitters(lights, cfg.photons)?;
+    let max_page = u32::MAX as u64;
+    let mut store = vec![Photon::default(); first_capacity(cfg, max_page) as usize];
+    let mut count = 0u64;
+    let mut stats = PhotonStats::default();
+    let mut done = 0u64;
+    while done < cfg.photons {
+        let paths = (cfg.photons - done).min(cfg.batch as u64) as u32;
+        let params = cfg.params(&emitters, done as u32, paths);
+        let mut counters = TraceCounters {
+            stored: count as u32,
+            capacity: store.len() as u32,
+            ..Default::default()
+        };
+        photon_trace::photon_trace(
+            &params,
+            &emitters,
+            materials,
+            &mut store,
+            &mut counters,
+            geo,
+            groups_for(paths, photon_trace::WG),
+        );
+        if counters.overflow == 0 {
+            stats.add_batch(paths, count as u32, &counters);
+            count = counters.stored as u64;
+            done += paths as u64;
+            progress(done, cfg.photons);
+            continue;
+        }
+        stats.reruns += 1;
+        let needed = counters.stored as u64;
+        if needed > max_page {
+            return Err(Error::Invalid(format!(
+                "more than {max_page} stored photons: emit fewer photons"
+            )));
+        }
+        let capacity = grown_capacity(needed, done + paths as u64, cfg.photons, max_page);
+        store.resize(capacity as usize, Photon::default());
+    }
+    store.truncate(count as usize);
+    stats.pages = 1;
+    stats.trace_ms = ms_since(t);
+    let mut map = PhotonMap {
+        photons: store,
+        stats,
+    };
+    map.sort();
+    Ok(map)
 }

@@ -2,10 +2,10 @@
 //! `cpu::build_grid`. The result stays on the device for tracing; `download` brings it back.
 
 use super::{Gpu, scan};
-use crate::cpu::{grid_count, grid_rank, groups_for};
+use crate::cpu::{grid_count, grid_distance, grid_rank, groups_for};
 use crate::error::{Error, Result};
 use crate::grid::{SplatGrid, check_cell_len};
-use crate::types::GridParams;
+use crate::types::{DistanceParams, GridParams};
 
 /// The grid on the device.
 pub struct GpuGrid {
@@ -14,6 +14,8 @@ pub struct GpuGrid {
     /// `cell_count + 1` offsets into `cell_splats`.
     pub cell_start: wgpu::Buffer,
     pub cell_splats: wgpu::Buffer,
+    /// Distance field for empty-space skipping (see `SplatGrid::cell_dist`).
+    pub cell_dist: wgpu::Buffer,
     /// Number of (cell, splat) entries.
     pub entries: u32,
 }
@@ -84,14 +86,48 @@ pub fn build_grid(gpu: &Gpu, params: &GridParams, splats: &wgpu::Buffer) -> Resu
         ],
         groups_for(entries, grid_rank::WG),
     )?;
+    let cell_dist = distance_field(gpu, &mut encoder, &params_buf, &params, &cell_start)?;
     gpu.submit_and_wait(encoder)?;
     Ok(GpuGrid {
         params,
         params_buf,
         cell_start,
         cell_splats,
+        cell_dist,
         entries,
     })
+}
+
+/// Records passes x, y, z of `grid_distance`; returns the field's buffer.
+fn distance_field(
+    gpu: &Gpu,
+    encoder: &mut wgpu::CommandEncoder,
+    grid: &wgpu::Buffer,
+    params: &GridParams,
+    cell_start: &wgpu::Buffer,
+) -> Result<wgpu::Buffer> {
+    let bytes = params.cell_count as u64 * 4;
+    let a = gpu.storage_zeroed("cell distance", bytes)?;
+    let b = gpu.storage_zeroed("cell distance scratch", bytes)?;
+    let groups = groups_for(params.cell_count, grid_distance::WG);
+    let passes: [(u32, &wgpu::Buffer, &wgpu::Buffer); 3] =
+        [(0, cell_start, &a), (1, &a, &b), (2, &b, &a)];
+    for (axis, src, dst) in passes {
+        let pass = gpu.uniform(
+            "distance pass",
+            &DistanceParams {
+                axis,
+                ..Default::default()
+            },
+        );
+        gpu.dispatch(
+            encoder,
+            "grid_distance",
+            &[&pass, grid, cell_start, src, dst],
+            groups,
+        )?;
+    }
+    Ok(a)
 }
 
 impl GpuGrid {
@@ -100,6 +136,7 @@ impl GpuGrid {
             params: self.params,
             cell_start: gpu.read(&self.cell_start, self.params.cell_count as usize + 1)?,
             cell_splats: gpu.read(&self.cell_splats, self.entries as usize)?,
+            cell_dist: gpu.read(&self.cell_dist, self.params.cell_count as usize)?,
         })
     }
 }

@@ -2,7 +2,9 @@
 //! that records each stage's dispatches.
 
 pub mod grid;
+pub mod photons;
 pub mod scan;
+pub mod scene;
 pub mod shaders;
 
 use std::collections::HashMap;
@@ -167,30 +169,50 @@ impl Gpu {
         buffers: &[&wgpu::Buffer],
         groups: u32,
     ) -> Result<()> {
+        self.dispatch_groups(encoder, stage, &[buffers], groups)
+    }
+
+    /// Like `dispatch`, with one buffer list per bind group (group 1 is the traced geometry,
+    /// see `wgsl/shared/trace.wgsl`).
+    pub fn dispatch_groups(
+        &self,
+        encoder: &mut wgpu::CommandEncoder,
+        stage: &'static str,
+        bind_groups: &[&[&wgpu::Buffer]],
+        groups: u32,
+    ) -> Result<()> {
         if groups == 0 {
             return Ok(());
         }
         let pipeline = self.pipeline(stage)?;
-        let entries: Vec<wgpu::BindGroupEntry> = buffers
+        let bind_groups: Vec<wgpu::BindGroup> = bind_groups
             .iter()
             .enumerate()
-            .map(|(i, b)| wgpu::BindGroupEntry {
-                binding: i as u32,
-                resource: b.as_entire_binding(),
+            .map(|(g, buffers)| {
+                let entries: Vec<wgpu::BindGroupEntry> = buffers
+                    .iter()
+                    .enumerate()
+                    .map(|(i, b)| wgpu::BindGroupEntry {
+                        binding: i as u32,
+                        resource: b.as_entire_binding(),
+                    })
+                    .collect();
+                self.device.create_bind_group(&wgpu::BindGroupDescriptor {
+                    label: Some(stage),
+                    layout: &pipeline.get_bind_group_layout(g as u32),
+                    entries: &entries,
+                })
             })
             .collect();
-        let bind_group = self.device.create_bind_group(&wgpu::BindGroupDescriptor {
-            label: Some(stage),
-            layout: &pipeline.get_bind_group_layout(0),
-            entries: &entries,
-        });
         let (x, y) = self.dispatch_dims(groups)?;
         let mut pass = encoder.begin_compute_pass(&wgpu::ComputePassDescriptor {
             label: Some(stage),
             timestamp_writes: None,
         });
         pass.set_pipeline(&pipeline);
-        pass.set_bind_group(0, &bind_group, &[]);
+        for (g, bind_group) in bind_groups.iter().enumerate() {
+            pass.set_bind_group(g as u32, bind_group, &[]);
+        }
         pass.dispatch_workgroups(x, y, 1);
         Ok(())
     }

@@ -39,12 +39,23 @@ pub const STAGES: &[WgslFile] = &[
     stage!("grid_count"),
     stage!("grid_scatter"),
     stage!("grid_rank"),
+    stage!("grid_distance"),
+    stage!("trace_rays"),
+    stage!("photon_trace"),
     stage!("scan_reduce"),
     stage!("scan_apply"),
 ];
 
 /// Every shared module (`wgsl/shared/<name>.wgsl`), importable by name.
-pub const SHARED: &[WgslFile] = &[shared!("types"), shared!("dispatch"), shared!("grid")];
+pub const SHARED: &[WgslFile] = &[
+    shared!("types"),
+    shared!("dispatch"),
+    shared!("grid"),
+    shared!("rng"),
+    shared!("sampling"),
+    shared!("ward"),
+    shared!("trace"),
+];
 
 pub fn stage(name: &str) -> Option<&'static WgslFile> {
     STAGES.iter().find(|s| s.name == name)

@@ -104,6 +104,29 @@ pub struct BakeDesc {
     pub seed: u32,
     /// Maximum photon path length (bounces).
     pub max_depth: u32,
+    /// Which photon hits are stored: "indirect" (bounce >= 1, the thesis's choice: direct
+    /// light comes from shadow rays) or "all".
+    pub store: StoreRange,
+}
+
+#[derive(
+    Clone, Copy, Debug, Default, PartialEq, Eq, Deserialize, serde::Serialize, clap::ValueEnum,
+)]
+#[serde(rename_all = "lowercase")]
+pub enum StoreRange {
+    #[default]
+    Indirect,
+    All,
+}
+
+impl StoreRange {
+    /// The smallest stored bounce count.
+    pub fn min_bounce(self) -> u32 {
+        match self {
+            StoreRange::Indirect => 1,
+            StoreRange::All => 0,
+        }
+    }
 }
 
 impl Default for BakeDesc {
@@ -115,6 +138,7 @@ impl Default for BakeDesc {
             iterations: 10,
             seed: 1,
             max_depth: 8,
+            store: StoreRange::Indirect,
         }
     }
 }

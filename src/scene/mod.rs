@@ -223,8 +223,12 @@ fn positive_size(size: [f32; 2]) -> std::result::Result<[f32; 2], String> {
 }
 
 fn validate_bake(b: &BakeDesc) -> std::result::Result<(), String> {
-    if b.photons == 0 {
-        return Err("photons must be at least 1".into());
+    if b.photons == 0 || b.photons > crate::photons::MAX_PHOTONS {
+        return Err(format!(
+            "photons must be within 1..={}, got {}",
+            crate::photons::MAX_PHOTONS,
+            b.photons
+        ));
     }
     if let Some(r) = b.radius {
         positive(r, "radius")?;

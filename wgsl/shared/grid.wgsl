@@ -23,3 +23,7 @@ fn disk_cell_range(s: Splat, g: GridParams) -> CellRange {
 fn cell_index(c: vec3<u32>, g: GridParams) -> u32 {
     return c.x + g.dims.x * (c.y + g.dims.y * c.z);
 }
+
+// The distance field saturates here (in cells): a ray in an empty cell at distance d from the
+// nearest listed cell may skip the (2d - 1)^3 empty cells around it in one step.
+const DIST_CAP: u32 = 16u;

@@ -39,7 +39,63 @@ struct Photon {
     direction: vec3<f32>,
     splat: u32,
     power: vec3<f32>,
+    path: u32,
+}
+
+struct Emitter {
+    light: Light,
+    first: u32,
+    count: u32,
+    _pad0: u32,
+    _pad1: u32,
+    photon_power: vec3<f32>,
+    falloff_norm: f32,
+}
+
+struct TraceParams {
+    seed: u32,
+    path_offset: u32,
+    path_count: u32,
+    emitter_count: u32,
+    max_depth: u32,
+    min_bounce: u32,
+    iteration_budget: u32,
+    _pad0: u32,
+}
+
+// Atomic twin of TraceCounters; `capacity` is written by the host only.
+struct TraceCounters {
+    stored: atomic<u32>,
+    capacity: u32,
+    overflow: atomic<u32>,
+    escaped: atomic<u32>,
+    absorbed: atomic<u32>,
+    depth_capped: atomic<u32>,
+    aborted: atomic<u32>,
     _pad: u32,
+}
+
+struct Ray {
+    origin: vec3<f32>,
+    t_max: f32,
+    direction: vec3<f32>,
+    skip: u32,
+}
+
+struct Hit {
+    t: f32,
+    splat: u32,
+    aborted: u32,
+    _pad: u32,
+}
+
+const NO_SPLAT: u32 = 0xffffffffu;
+
+struct DistanceParams {
+    axis: u32,
+    _pad0: u32,
+    _pad1: u32,
+    _pad2: u32,
 }
 
 struct Lobe {
@@ -74,11 +130,4 @@ struct ScanParams {
     _pad0: u32,
     _pad1: u32,
     _pad2: u32,
-}
-
-struct Counters {
-    count: atomic<u32>,
-    capacity: u32,
-    overflow: atomic<u32>,
-    _pad: u32,
 }

@@ -1,0 +1,51 @@
+//! Mirror of `wgsl/grid_distance.wgsl`: one axis pass of the capped Chebyshev distance field.
+
+use crate::grid::DIST_CAP;
+use crate::types::{DistanceParams, GridParams};
+
+pub const WG: u32 = 64;
+
+fn value_at(params: &DistanceParams, cell_start: &[u32], src: &[u32], c: usize) -> u32 {
+    if params.axis == 0 {
+        return if cell_start[c + 1] > cell_start[c] {
+            0
+        } else {
+            DIST_CAP
+        };
+    }
+    src[c]
+}
+
+pub fn grid_distance(
+    params: &DistanceParams,
+    grid: &GridParams,
+    cell_start: &[u32],
+    src: &[u32],
+    dst: &mut [u32],
+    groups: u32,
+) {
+    let [dx, dy, _] = grid.dims;
+    for wg in 0..groups {
+        for lid in 0..WG {
+            let c = wg * WG + lid;
+            if c >= grid.cell_count {
+                continue;
+            }
+            let coord = [c % dx, (c / dx) % dy, c / (dx * dy)];
+            let strides = [1, dx, dx * dy];
+            let axis = params.axis as usize;
+            let pos = coord[axis] as i32;
+            let len = grid.dims[axis] as i32;
+            let stride = strides[axis] as i32;
+            let mut best = DIST_CAP;
+            for o in -(DIST_CAP as i32)..=DIST_CAP as i32 {
+                let q = pos + o;
+                if q >= 0 && q < len {
+                    let v = value_at(params, cell_start, src, (c as i32 + o * stride) as usize);
+                    best = best.min((o.unsigned_abs()).max(v));
+                }
+            }
+            dst[c as usize] = best;
+        }
+    }
+}

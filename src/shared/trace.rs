@@ -1,0 +1,141 @@
+//! Twin of `wgsl/shared/trace.wgsl`: the nearest front-facing disk along a ray through the
+//! splat grid, with the same hit policy and the same traversal steps (see the WGSL file).
+// `!(x < y)` is meant: NaN must fail these tests, as it does in the WGSL twin.
+#![allow(clippy::neg_cmp_op_on_partial_ord)]
+
+use glam::{BVec3, IVec3, Vec3};
+
+use crate::grid::SplatGrid;
+use crate::types::{Hit, NO_SPLAT, Splat};
+
+pub const PARALLEL_COS: f32 = 1e-6;
+pub const FAR: f32 = 3.0e38;
+
+/// Bind group 1 of the tracing stages.
+#[derive(Clone, Copy, Debug)]
+pub struct Geometry<'a> {
+    pub grid: &'a SplatGrid,
+    pub splats: &'a [Splat],
+}
+
+/// Ray parameter of the hit with a disk's front face, or −1.
+pub fn intersect_disk(s: &Splat, o: Vec3, d: Vec3) -> f32 {
+    let n = Vec3::from(s.normal);
+    let c = Vec3::from(s.center);
+    let denom = n.dot(d);
+    if !(denom < -PARALLEL_COS) {
+        return -1.0;
+    }
+    let t = n.dot(c - o) / denom;
+    let q = o + t * d - c;
+    if !(q.dot(q) <= s.radius * s.radius) {
+        return -1.0;
+    }
+    t
+}
+
+pub fn miss(t_max: f32) -> Hit {
+    Hit {
+        t: t_max,
+        splat: NO_SPLAT,
+        aborted: 0,
+        _pad: 0,
+    }
+}
+
+fn select_i(f: IVec3, t: IVec3, m: BVec3) -> IVec3 {
+    IVec3::select(m, t, f)
+}
+
+/// `d` must be a unit vector; t is then a distance.
+pub fn trace_ray(geo: &Geometry, o: Vec3, d: Vec3, skip: u32, t_max: f32, budget: &mut u32) -> Hit {
+    let g = &geo.grid.params;
+    let mut hit = miss(t_max);
+    let lo = Vec3::from(g.origin);
+    let cs = g.cell_size;
+    let dims = IVec3::new(g.dims[0] as i32, g.dims[1] as i32, g.dims[2] as i32);
+    let hi = lo + dims.as_vec3() * cs;
+    let moving = d.abs().cmpgt(Vec3::splat(1e-30));
+    let inv = 1.0 / Vec3::select(moving, d, Vec3::ONE);
+    let outside = o.cmplt(lo) | o.cmpgt(hi);
+    if (!moving & outside).any() {
+        return hit;
+    }
+    let ta = (lo - o) * inv;
+    let tb = (hi - o) * inv;
+    let near = Vec3::select(moving, ta.min(tb), Vec3::splat(-FAR));
+    let far = Vec3::select(moving, ta.max(tb), Vec3::splat(FAR));
+    let t_enter = 0f32.max(near.x.max(near.y.max(near.z)));
+    let t_leave = t_max.min(far.x.min(far.y.min(far.z)));
+    if !(t_enter <= t_leave) {
+        return hit;
+    }
+    let positive = d.cmpgt(Vec3::ZERO);
+    let negative = d.cmplt(Vec3::ZERO);
+    let step = select_i(
+        IVec3::ZERO,
+        select_i(IVec3::NEG_ONE, IVec3::ONE, positive),
+        moving,
+    );
+    let p0 = o + t_enter * d;
+    let mut c = ((p0 - lo) * g.inv_cell_size)
+        .floor()
+        .as_ivec3()
+        .clamp(IVec3::ZERO, dims - 1);
+    let mut t = t_enter;
+    loop {
+        if *budget == 0 {
+            hit.aborted = 1;
+            return hit;
+        }
+        *budget -= 1;
+        let ci = (c.x + dims.x * (c.y + dims.y * c.z)) as usize;
+        let dist = geo.grid.cell_dist[ci];
+        let k = (dist.max(1) - 1) as i32;
+        let face = select_i(c - k, c + k + 1, step.cmpgt(IVec3::ZERO));
+        let tf = Vec3::select(
+            moving,
+            (lo + face.as_vec3() * cs - o) * inv,
+            Vec3::splat(FAR),
+        );
+        let t_exit = tf.x.min(tf.y.min(tf.z));
+        if dist == 0 {
+            let limit = t_exit + 1e-4 * cs;
+            let end = geo.grid.cell_start[ci + 1];
+            for e in geo.grid.cell_start[ci]..end {
+                if *budget == 0 {
+                    hit.aborted = 1;
+                    return hit;
+                }
+                *budget -= 1;
+                let s = geo.grid.cell_splats[e as usize];
+                if s == skip {
+                    continue;
+                }
+                let th = intersect_disk(&geo.splats[s as usize], o, d);
+                if th > 0.0 && th < hit.t && th <= limit {
+                    hit.t = th;
+                    hit.splat = s;
+                }
+            }
+            if hit.splat != NO_SPLAT {
+                return hit;
+            }
+        }
+        if t_exit >= t_leave {
+            return hit;
+        }
+        t = t.max(t_exit);
+        let at = ((o + t * d - lo) * g.inv_cell_size).floor().as_ivec3();
+        let mut n = select_i(at.clamp(c, c + k), at.clamp(c - k, c), negative & moving);
+        n = select_i(n, c, !moving);
+        let exit_x = tf.x <= tf.y && tf.x <= tf.z;
+        let exit_y = !exit_x && tf.y <= tf.z;
+        let exit_axis = BVec3::new(exit_x, exit_y, !exit_x && !exit_y);
+        n = select_i(n, select_i(face - 1, face, positive & moving), exit_axis);
+        if n.cmplt(IVec3::ZERO).any() || n.cmpge(dims).any() {
+            return hit;
+        }
+        c = n;
+    }
+}
