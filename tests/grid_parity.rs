@@ -4,7 +4,7 @@ mod common;
 
 use lobelight::cpu;
 use lobelight::gpu::grid::build_grid;
-use lobelight::grid::{GridConfig, SplatGrid, cell_index, disk_cell_range, grid_params};
+use lobelight::grid::{DIST_CAP, GridConfig, SplatGrid, cell_index, disk_cell_range, grid_params};
 use lobelight::types::Splat;
 
 fn gpu_grid(
@@ -38,6 +38,13 @@ fn assert_same(a: &SplatGrid, b: &SplatGrid, what: &str) {
             b.cell_start.get(i)
         );
     }
+    if let Some(i) = first_diff(&a.cell_dist, &b.cell_dist) {
+        panic!(
+            "{what}: cell_dist differs first at cell {i}: {:?} vs {:?}",
+            a.cell_dist.get(i),
+            b.cell_dist.get(i)
+        );
+    }
     if let Some(i) = first_diff(&a.cell_splats, &b.cell_splats) {
         let lo = i.saturating_sub(3);
         panic!(
@@ -65,6 +72,38 @@ fn check_grid(grid: &SplatGrid, splats: &[Splat]) {
     }
     for (c, list) in expected.iter().enumerate() {
         assert_eq!(grid.cell(c as u32), &list[..], "cell {c}");
+    }
+    check_distance(grid);
+}
+
+/// Independent check of the distance field: for each cell, the Chebyshev distance to the
+/// nearest non-empty cell, capped, by brute force over the cube of radius DIST_CAP.
+fn check_distance(grid: &SplatGrid) {
+    let g = &grid.params;
+    let [dx, dy, dz] = g.dims.map(|d| d as i32);
+    let cap = DIST_CAP as i32;
+    let occupied = |x: i32, y: i32, z: i32| {
+        let inside = (0..dx).contains(&x) && (0..dy).contains(&y) && (0..dz).contains(&z);
+        inside && !grid.cell((x + dx * (y + dy * z)) as u32).is_empty()
+    };
+    // Every 7th cell keeps the brute force affordable on the larger grids.
+    for c in (0..g.cell_count as i32).step_by(7) {
+        let (x, y, z) = (c % dx, (c / dx) % dy, c / (dx * dy));
+        let mut best = cap;
+        for oz in -cap..=cap {
+            for oy in -cap..=cap {
+                for ox in -cap..=cap {
+                    let d = ox.abs().max(oy.abs()).max(oz.abs());
+                    if d < best && occupied(x + ox, y + oy, z + oz) {
+                        best = d;
+                    }
+                }
+            }
+        }
+        assert_eq!(
+            grid.cell_dist[c as usize], best as u32,
+            "distance of cell {c}"
+        );
     }
 }
 
