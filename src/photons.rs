@@ -31,6 +31,9 @@ pub struct PhotonConfig {
     /// Photon-store capacity of the first batch, in photons (0: about two per emitted photon).
     /// Tests set it small to exercise growth.
     pub initial_capacity: u64,
+    /// Largest store page in photons (0: what the device's largest binding holds). Tests set
+    /// it small to exercise new pages and smaller batches.
+    pub page_limit: u64,
 }
 
 impl PhotonConfig {
@@ -43,6 +46,7 @@ impl PhotonConfig {
             batch: DEFAULT_BATCH,
             iteration_budget: ITERATION_BUDGET,
             initial_capacity: 0,
+            page_limit: 0,
         }
     }
 
@@ -190,6 +194,14 @@ impl PhotonMap {
     /// Sorts by `Photon::key`: the GPU's slot order depends on scheduling, this order does not.
     pub fn sort(&mut self) {
         self.photons.sort_unstable_by_key(|p| p.key());
+    }
+}
+
+/// Photons one store page may hold: the device's limit, or the configured one if smaller.
+pub fn page_photons(cfg: &PhotonConfig, device_limit: u64) -> u64 {
+    match cfg.page_limit {
+        0 => device_limit,
+        n => n.min(device_limit),
     }
 }
 

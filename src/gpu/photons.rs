@@ -12,6 +12,7 @@ use crate::cpu::{groups_for, photon_trace};
 use crate::error::{Error, Result};
 use crate::photons::{
     PhotonConfig, PhotonMap, PhotonStats, emitters, first_capacity, grown_capacity, ms_since,
+    page_photons,
 };
 use crate::scene::Scene;
 use crate::types::{Photon, TraceCounters};
@@ -68,7 +69,7 @@ pub fn trace_photons(
     let emitters = emitters(&scene.lights, cfg.photons)?;
     let emitter_buf = gpu.storage("emitters", &emitters)?;
     let counters_buf = gpu.storage_zeroed("trace counters", 32)?;
-    let max_page = gpu.max_binding_bytes() / PHOTON_BYTES;
+    let max_page = page_photons(cfg, gpu.max_binding_bytes() / PHOTON_BYTES);
     let mut pages = Vec::new();
     let mut page = new_page(gpu, first_capacity(cfg, max_page))?;
     let mut stats = PhotonStats::default();
