@@ -215,12 +215,98 @@ pub fn first_capacity(cfg: &PhotonConfig, max_page: u64) -> u64 {
     guess.clamp(1, max_page.max(1))
 }
 
-/// Capacity to grow to after an overflow that needed `needed` slots, `done` of `total` paths
-/// traced (this batch included): room for the rest at the rate seen so far, so one growth
-/// usually suffices.
-pub fn grown_capacity(needed: u64, done: u64, total: u64, max_page: u64) -> u64 {
-    let projected = (needed as f64 * total as f64 / done.max(1) as f64 * 1.05).ceil() as u64;
-    projected.max(needed).min(max_page)
+/// What the batch loop does with the photon store.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum StoreAction {
+    Keep,
+    /// Grow the current page to this many photons, keeping its contents.
+    Grow(u64),
+    /// Close the current page and start one of this many photons.
+    NewPage(u64),
+    /// Even an empty page cannot hold the batch: trace half as many paths at a time.
+    HalveBatch,
+}
+
+/// Sizes the store from the rate of stores per path seen so far, so that batches rarely
+/// overflow: before each batch it makes room for what the batch will likely store, and after
+/// an overflow (which tells exactly what the batch needed) it makes room for that.
+#[derive(Clone, Debug)]
+pub struct StorePlanner {
+    /// Largest page, in photons.
+    pub max_page: u64,
+    pub total_paths: u64,
+    paths_seen: u64,
+    stores_seen: u64,
+}
+
+impl StorePlanner {
+    pub fn new(max_page: u64, total_paths: u64) -> StorePlanner {
+        StorePlanner {
+            max_page,
+            total_paths,
+            paths_seen: 0,
+            stores_seen: 0,
+        }
+    }
+
+    /// A batch of `paths` paths stored `stores` photons.
+    pub fn record(&mut self, paths: u32, stores: u64) {
+        self.paths_seen += paths as u64;
+        self.stores_seen += stores;
+    }
+
+    /// Photons the paths from `done` on will store, with 5 % to spare.
+    fn projected_rest(&self, done: u64) -> Option<u64> {
+        (self.paths_seen > 0).then(|| {
+            let rate = self.stores_seen as f64 / self.paths_seen as f64;
+            (rate * (self.total_paths - done) as f64 * 1.05).ceil() as u64
+        })
+    }
+
+    fn room_for(&self, count: u64, capacity: u64, need: u64, rest: u64) -> Option<StoreAction> {
+        if count + need <= capacity {
+            Some(StoreAction::Keep)
+        } else if count + need <= self.max_page {
+            Some(StoreAction::Grow(
+                (count + rest.max(need)).min(self.max_page),
+            ))
+        } else if count > 0 {
+            Some(StoreAction::NewPage(rest.max(need).min(self.max_page)))
+        } else {
+            None
+        }
+    }
+
+    /// Before a batch of `paths` starting at path `done`, into a page holding `count` of
+    /// `capacity` photons.
+    pub fn before(&self, count: u64, capacity: u64, paths: u32, done: u64) -> StoreAction {
+        let Some(rest) = self.projected_rest(done) else {
+            return StoreAction::Keep;
+        };
+        let rate = self.stores_seen as f64 / self.paths_seen as f64;
+        let need = (rate * paths as f64 * 1.1).ceil() as u64;
+        self.room_for(count, capacity, need, rest)
+            .unwrap_or(StoreAction::Keep)
+    }
+
+    /// After a batch of `paths` starting at `done` overflowed, needing `need` slots.
+    pub fn after_overflow(
+        &self,
+        count: u64,
+        capacity: u64,
+        need: u64,
+        paths: u32,
+        done: u64,
+    ) -> StoreAction {
+        let rest = self.projected_rest(done).unwrap_or_else(|| {
+            let per_path = need as f64 / paths as f64;
+            (per_path * (self.total_paths - done) as f64 * 1.05).ceil() as u64
+        });
+        match self.room_for(count, capacity, need, rest) {
+            Some(action) => action,
+            None => StoreAction::HalveBatch,
+        }
+    }
 }
 
 /// Milliseconds since `t`.

@@ -55,8 +55,8 @@ fn on_gpu(gpu: &Gpu, scene: &Scene, cfg: &PhotonConfig) -> PhotonMap {
 fn power_at(map: &PhotonMap, bounce: u32) -> [f64; 3] {
     let mut sum = [0.0f64; 3];
     for p in map.photons.iter().filter(|p| p.bounce == bounce) {
-        for c in 0..3 {
-            sum[c] += p.power[c] as f64;
+        for (s, &x) in sum.iter_mut().zip(&p.power) {
+            *s += x as f64;
         }
     }
     sum
@@ -110,7 +110,10 @@ fn first_bounces_match_the_cpu_mirror_photon_by_photon() {
         let p0 = power_at(map, 0);
         for c in 0..3 {
             let emitted = scene.lights[0].power[c] as f64;
-            assert!((p0[c] / (emitted * hit) - 1.0).abs() < 1e-5, "bounce 0 power {p0:?}");
+            assert!(
+                (p0[c] / (emitted * hit) - 1.0).abs() < 1e-5,
+                "bounce 0 power {p0:?}"
+            );
         }
     }
     let by_key: HashMap<(u32, u32), &Photon> = b.photons.iter().map(|p| (p.key(), p)).collect();

@@ -17,7 +17,8 @@ use std::time::Instant;
 use crate::error::{Error, Result};
 use crate::grid::{SplatGrid, check_cell_len};
 use crate::photons::{
-    PhotonConfig, PhotonMap, PhotonStats, emitters, first_capacity, grown_capacity, ms_since,
+    PhotonConfig, PhotonMap, PhotonStats, StoreAction, StorePlanner, emitters, first_capacity,
+    ms_since,
 };
 use crate::shared::trace::Geometry;
 use crate::types::{DistanceParams, GridParams, ScanParams, Splat};
@@ -113,7 +114,7 @@ pub fn build_grid(params: &GridParams, splats: &[Splat]) -> Result<SplatGrid> {
 }
 
 /// The photon pass on the CPU: the batch loop of `gpu::photons::trace_photons` with one
-/// growable store (host memory has no binding limit), and the same overflow-and-rerun rule.
+/// growable store (host memory has no binding limit) and the same store planning.
 pub fn trace_photons(
     lights: &[Light],
     materials: &[Material],
@@ -125,12 +126,16 @@ pub fn trace_photons(
     let t = Instant::now();
     let emitters = emitters(lights, cfg.photons)?;
     let max_page = u32::MAX as u64;
+    let mut planner = StorePlanner::new(max_page, cfg.photons);
     let mut store = vec![Photon::default(); first_capacity(cfg, max_page) as usize];
     let mut count = 0u64;
     let mut stats = PhotonStats::default();
     let mut done = 0u64;
     while done < cfg.photons {
         let paths = (cfg.photons - done).min(cfg.batch as u64) as u32;
+        if let StoreAction::Grow(c) = planner.before(count, store.len() as u64, paths, done) {
+            store.resize(c as usize, Photon::default());
+        }
         let params = cfg.params(&emitters, done as u32, paths);
         let mut counters = TraceCounters {
             stored: count as u32,
@@ -146,22 +151,24 @@ pub fn trace_photons(
             geo,
             groups_for(paths, photon_trace::WG),
         );
+        let need = counters.stored as u64 - count;
         if counters.overflow == 0 {
             stats.add_batch(paths, count as u32, &counters);
+            planner.record(paths, need);
             count = counters.stored as u64;
             done += paths as u64;
             progress(done, cfg.photons);
             continue;
         }
         stats.reruns += 1;
-        let needed = counters.stored as u64;
-        if needed > max_page {
-            return Err(Error::Invalid(format!(
-                "more than {max_page} stored photons: emit fewer photons"
-            )));
+        match planner.after_overflow(count, store.len() as u64, need, paths, done) {
+            StoreAction::Grow(c) => store.resize(c as usize, Photon::default()),
+            _ => {
+                return Err(Error::Invalid(format!(
+                    "more than {max_page} stored photons: emit fewer photons"
+                )));
+            }
         }
-        let capacity = grown_capacity(needed, done + paths as u64, cfg.photons, max_page);
-        store.resize(capacity as usize, Photon::default());
     }
     store.truncate(count as usize);
     stats.pages = 1;

@@ -11,11 +11,11 @@ use super::scene::GpuScene;
 use crate::cpu::{groups_for, photon_trace};
 use crate::error::{Error, Result};
 use crate::photons::{
-    PhotonConfig, PhotonMap, PhotonStats, emitters, first_capacity, grown_capacity, ms_since,
-    page_photons,
+    PhotonConfig, PhotonMap, PhotonStats, StoreAction, StorePlanner, emitters, first_capacity,
+    ms_since, page_photons,
 };
 use crate::scene::Scene;
-use crate::types::{Photon, TraceCounters};
+use crate::types::{Emitter, Photon, TraceCounters};
 
 const PHOTON_BYTES: u64 = std::mem::size_of::<Photon>() as u64;
 
@@ -70,91 +70,130 @@ pub fn trace_photons(
     let emitter_buf = gpu.storage("emitters", &emitters)?;
     let counters_buf = gpu.storage_zeroed("trace counters", 32)?;
     let max_page = page_photons(cfg, gpu.max_binding_bytes() / PHOTON_BYTES);
-    let mut pages = Vec::new();
-    let mut page = new_page(gpu, first_capacity(cfg, max_page))?;
+    let mut planner = StorePlanner::new(max_page, cfg.photons);
+    let mut store = Store {
+        pages: Vec::new(),
+        page: new_page(gpu, first_capacity(cfg, max_page))?,
+    };
     let mut stats = PhotonStats::default();
     let mut batch = cfg.batch;
     let mut done = 0u64;
     while done < cfg.photons {
         let paths = (cfg.photons - done).min(batch as u64) as u32;
-        let params = cfg.params(&emitters, done as u32, paths);
-        let params_buf = gpu.uniform("trace params", &params);
-        let before = page.count as u32;
-        let start = TraceCounters {
-            stored: before,
-            capacity: page.capacity as u32,
-            ..Default::default()
-        };
-        gpu.queue
-            .write_buffer(&counters_buf, 0, bytemuck::bytes_of(&start));
-        let mut encoder = gpu.encoder("photon trace");
-        gpu.dispatch_groups(
-            &mut encoder,
-            "photon_trace",
-            &[
-                &[
-                    &params_buf,
-                    &emitter_buf,
-                    &on_gpu.materials,
-                    &page.buffer,
-                    &counters_buf,
-                ],
-                &on_gpu.geometry(),
-            ],
-            groups_for(paths, photon_trace::WG),
+        let page = &store.page;
+        store.apply(gpu, planner.before(page.count, page.capacity, paths, done))?;
+        let before = store.page.count as u32;
+        let counters = run_batch(
+            gpu,
+            cfg,
+            &emitters,
+            &emitter_buf,
+            &counters_buf,
+            on_gpu,
+            &store.page,
+            done,
+            paths,
         )?;
-        gpu.submit_and_wait(encoder)?;
-        let counters = gpu
-            .read::<TraceCounters>(&counters_buf, 1)?
-            .pop()
-            .ok_or_else(|| Error::Gpu("trace counters readback was short".into()))?;
         if counters.overflow == 0 {
-            page.count = counters.stored as u64;
+            store.page.count = counters.stored as u64;
             stats.add_batch(paths, before, &counters);
+            planner.record(paths, (counters.stored - before) as u64);
             done += paths as u64;
             progress(done, cfg.photons);
             continue;
         }
         stats.reruns += 1;
-        let needed = counters.stored as u64;
-        if needed <= max_page {
-            // Room in one binding: grow this page, keeping what it holds.
-            let capacity = grown_capacity(needed, done + paths as u64, cfg.photons, max_page);
-            let grown = new_page(gpu, capacity)?;
-            let mut encoder = gpu.encoder("grow photon store");
-            encoder.copy_buffer_to_buffer(
-                &page.buffer,
-                0,
-                &grown.buffer,
-                0,
-                page.count * PHOTON_BYTES,
-            );
-            gpu.submit_and_wait(encoder)?;
-            page = PhotonPage {
-                count: page.count,
-                ..grown
-            };
-        } else if page.count > 0 {
-            // This page is full enough: close it and run the batch into a fresh one.
-            let rest = needed - page.count;
-            pages.push(std::mem::replace(
-                &mut page,
-                new_page(gpu, rest.min(max_page))?,
-            ));
-        } else if paths > 1 {
-            // One batch alone overflows a whole binding: trace fewer paths at a time.
-            batch = paths / 2;
-        } else {
-            return Err(Error::Invalid(format!(
-                "one photon path stores more photons than the device's largest buffer binding \
-                 holds ({max_page})"
-            )));
+        let need = (counters.stored - before) as u64;
+        let page = &store.page;
+        match planner.after_overflow(page.count, page.capacity, need, paths, done) {
+            StoreAction::HalveBatch if paths > 1 => batch = paths / 2,
+            StoreAction::HalveBatch => {
+                return Err(Error::Invalid(format!(
+                    "one photon path stores more photons than the device's largest buffer \
+                     binding holds ({max_page})"
+                )));
+            }
+            action => store.apply(gpu, action)?,
         }
     }
-    if page.count > 0 || pages.is_empty() {
-        pages.push(page);
+    let mut pages = store.pages;
+    if store.page.count > 0 || pages.is_empty() {
+        pages.push(store.page);
     }
     stats.pages = pages.len() as u32;
     stats.trace_ms = ms_since(t);
     Ok(GpuPhotons { pages, stats })
+}
+
+/// The pages closed so far and the one being filled.
+struct Store {
+    pages: Vec<PhotonPage>,
+    page: PhotonPage,
+}
+
+impl Store {
+    fn apply(&mut self, gpu: &Gpu, action: StoreAction) -> Result<()> {
+        match action {
+            StoreAction::Keep | StoreAction::HalveBatch => {}
+            StoreAction::Grow(capacity) => {
+                let grown = new_page(gpu, capacity)?;
+                let mut encoder = gpu.encoder("grow photon store");
+                let bytes = self.page.count * PHOTON_BYTES;
+                encoder.copy_buffer_to_buffer(&self.page.buffer, 0, &grown.buffer, 0, bytes);
+                gpu.submit_and_wait(encoder)?;
+                self.page = PhotonPage {
+                    count: self.page.count,
+                    ..grown
+                };
+            }
+            StoreAction::NewPage(capacity) => {
+                let full = std::mem::replace(&mut self.page, new_page(gpu, capacity)?);
+                self.pages.push(full);
+            }
+        }
+        Ok(())
+    }
+}
+
+/// One `photon_trace` dispatch of `paths` paths from path `done`; returns the counters.
+#[allow(clippy::too_many_arguments)]
+fn run_batch(
+    gpu: &Gpu,
+    cfg: &PhotonConfig,
+    emitters: &[Emitter],
+    emitter_buf: &wgpu::Buffer,
+    counters_buf: &wgpu::Buffer,
+    on_gpu: &GpuScene,
+    page: &PhotonPage,
+    done: u64,
+    paths: u32,
+) -> Result<TraceCounters> {
+    let params_buf = gpu.uniform("trace params", &cfg.params(emitters, done as u32, paths));
+    let start = TraceCounters {
+        stored: page.count as u32,
+        capacity: page.capacity as u32,
+        ..Default::default()
+    };
+    gpu.queue
+        .write_buffer(counters_buf, 0, bytemuck::bytes_of(&start));
+    let mut encoder = gpu.encoder("photon trace");
+    gpu.dispatch_groups(
+        &mut encoder,
+        "photon_trace",
+        &[
+            &[
+                &params_buf,
+                emitter_buf,
+                &on_gpu.materials,
+                &page.buffer,
+                counters_buf,
+            ],
+            &on_gpu.geometry(),
+        ],
+        groups_for(paths, photon_trace::WG),
+    )?;
+    gpu.submit_and_wait(encoder)?;
+    gpu.read::<TraceCounters>(counters_buf, 1)?
+        .pop()
+        .ok_or_else(|| Error::Gpu("trace counters readback was short".into()))
 }
