@@ -96,3 +96,121 @@ fn errors_are_one_line_with_non_zero_exit() {
     assert_eq!(lines.len(), 1, "{err}");
     assert!(lines[0].contains("scenes/does_not_exist.toml"), "{err}");
 }
+
+#[test]
+fn bench_photons_json_has_the_documented_keys() {
+    let args = [
+        "bench",
+        "photons",
+        "scenes/cornell.toml",
+        "--photons",
+        "20000",
+        "--json",
+    ];
+    let gpu = json(&args);
+    for key in [
+        "photons_per_s",
+        "emitted",
+        "stored",
+        "stored_ratio",
+        "photons_per_splat",
+        "search_radius",
+        "stats",
+        "stages",
+    ] {
+        assert!(gpu.get(key).is_some(), "missing key {key}: {gpu}");
+    }
+    for key in ["grid_ms", "trace_ms", "download_ms"] {
+        assert!(
+            gpu["stages"][key].as_f64().is_some(),
+            "missing stages.{key}: {gpu}"
+        );
+    }
+    assert_eq!(gpu["emitted"], 20000);
+    assert!(gpu["photons_per_s"].as_f64().unwrap() > 0.0);
+    let mut cpu_args = args.to_vec();
+    cpu_args.push("--cpu");
+    let cpu = json(&cpu_args);
+    assert_eq!(cpu["backend"], "cpu");
+    // Same random numbers, same paths: the counts agree up to rare rounding-sized differences.
+    let (g, c) = (
+        gpu["stored"].as_f64().unwrap(),
+        cpu["stored"].as_f64().unwrap(),
+    );
+    assert!((g - c).abs() <= 1e-3 * c, "stored: GPU {g}, CPU {c}");
+}
+
+#[test]
+fn gl_backend_traces_the_same_photons() {
+    let args = [
+        "bench",
+        "photons",
+        "scenes/diffuse.toml",
+        "--photons",
+        "20000",
+        "--json",
+    ];
+    let mut gl_args = args.to_vec();
+    gl_args.extend(["--backend", "gl"]);
+    let gl = json(&gl_args);
+    assert_eq!(gl["backend"], "gl");
+    let mut cpu_args = args.to_vec();
+    cpu_args.push("--cpu");
+    let cpu = json(&cpu_args);
+    let (g, c) = (
+        gl["stored"].as_f64().unwrap(),
+        cpu["stored"].as_f64().unwrap(),
+    );
+    assert!((g - c).abs() <= 1e-3 * c, "stored: GL {g}, CPU {c}");
+}
+
+#[test]
+fn render_photons_writes_a_png() {
+    let dir = std::env::temp_dir().join(format!("lobelight-cli-{}", std::process::id()));
+    std::fs::create_dir_all(&dir).unwrap();
+    let out = dir.join("photons.png");
+    let v = json(&[
+        "render",
+        "scenes/cornell.toml",
+        "--method",
+        "photons",
+        "--photons",
+        "20000",
+        "--width",
+        "64",
+        "--height",
+        "48",
+        "-o",
+        out.to_str().unwrap(),
+        "--json",
+    ]);
+    assert_eq!(v["stages"]["photons"]["ran"], true);
+    assert_eq!(v["stages"]["photons"]["emitted"], 20000);
+    assert_eq!(v["stages"]["em"]["ran"], false);
+    assert!(v["stages"]["em"]["skipped_reason"].is_string());
+    let img = image::open(&out).unwrap().to_rgb8();
+    assert_eq!(img.dimensions(), (64, 48));
+    let lit = img.pixels().filter(|p| p.0.iter().any(|&c| c > 0)).count();
+    assert!(lit > 64 * 48 / 4, "only {lit} pixels show photons");
+    std::fs::remove_dir_all(&dir).ok();
+}
+
+#[test]
+fn impossible_photon_counts_are_clear_errors() {
+    for n in ["0", "5000000000"] {
+        let out = lobelight(
+            &[
+                "bench",
+                "photons",
+                "scenes/cornell.toml",
+                "--photons",
+                n,
+                "--cpu",
+            ],
+            &[],
+        );
+        assert_eq!(out.status.code(), Some(1));
+        let err = String::from_utf8_lossy(&out.stderr);
+        assert!(err.contains("photons must be within 1..="), "{err}");
+    }
+}
