@@ -9,10 +9,8 @@ use crate::error::Result;
 use crate::gpu::Gpu;
 use crate::gpu::photons::trace_photons;
 use crate::gpu::scene::GpuScene;
-use crate::grid::grid_params;
 use crate::photons::{PhotonConfig, PhotonMap, PhotonStats, ms_since, photons_within};
 use crate::scene::Scene;
-use crate::shared::trace::Geometry;
 
 #[derive(Debug, Serialize)]
 pub struct PhotonBench {
@@ -62,15 +60,7 @@ pub fn photons(scene: &Scene, gpu: Option<&Gpu>, cfg: &PhotonConfig) -> Result<P
             )
         }
         None => {
-            let t = Instant::now();
-            let grid = cpu::build_grid(&grid_params(&scene.splats, &scene.grid)?, &scene.splats)?;
-            let grid_ms = ms_since(t);
-            let geo = Geometry {
-                grid: &grid,
-                splats: &scene.splats,
-            };
-            let map =
-                cpu::trace_photons(&scene.lights, &scene.materials, &geo, cfg, &mut |_, _| {})?;
+            let (map, _, grid_ms) = cpu::trace_scene(scene, cfg, &mut |_, _| {})?;
             let threads = rayon::current_num_threads();
             (
                 map,

@@ -14,7 +14,7 @@ use crate::error::{Error, Result};
 use crate::gpu::Gpu;
 use crate::gpu::photons::trace_photons;
 use crate::gpu::scene::GpuScene;
-use crate::grid::{SplatGrid, grid_params};
+use crate::grid::SplatGrid;
 use crate::photons::{PhotonConfig, PhotonMap, ms_since};
 use crate::scene::Scene;
 use crate::shared::trace::{Geometry, trace_ray};
@@ -152,18 +152,7 @@ fn bake_photons(
                 on_gpu.grid_ms,
             )
         }
-        None => {
-            let t = Instant::now();
-            let grid = cpu::build_grid(&grid_params(&scene.splats, &scene.grid)?, &scene.splats)?;
-            let grid_ms = ms_since(t);
-            let geo = Geometry {
-                grid: &grid,
-                splats: &scene.splats,
-            };
-            let map =
-                cpu::trace_photons(&scene.lights, &scene.materials, &geo, &cfg, &mut progress)?;
-            (map, grid, grid_ms)
-        }
+        None => cpu::trace_scene(scene, &cfg, &mut progress)?,
     };
     bar.finish_and_clear();
     Ok(out)

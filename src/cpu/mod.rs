@@ -180,3 +180,24 @@ pub fn trace_photons(
     map.sort();
     Ok(map)
 }
+
+/// The scene's grid and photons on the CPU: what the GPU path keeps on the device, here on
+/// the host. Returns the photons, the grid and the grid build time in ms.
+pub fn trace_scene(
+    scene: &crate::scene::Scene,
+    cfg: &PhotonConfig,
+    progress: &mut dyn FnMut(u64, u64),
+) -> Result<(PhotonMap, SplatGrid, f64)> {
+    let t = Instant::now();
+    let grid = build_grid(
+        &crate::grid::grid_params(&scene.splats, &scene.grid)?,
+        &scene.splats,
+    )?;
+    let grid_ms = ms_since(t);
+    let geo = Geometry {
+        grid: &grid,
+        splats: &scene.splats,
+    };
+    let map = trace_photons(&scene.lights, &scene.materials, &geo, cfg, progress)?;
+    Ok((map, grid, grid_ms))
+}

@@ -32,16 +32,14 @@ pub fn ward_specular(n: Vec3, wi: Vec3, wo: Vec3, alpha: f32) -> f32 {
 /// The Dür form `exp(−tan²θh/α²) / (4π α² cosθi cosθo)` without ρs, which the thesis used;
 /// kept to measure against (its albedo passes 1 at grazing incidence).
 pub fn ward_specular_dur(n: Vec3, wi: Vec3, wo: Vec3, alpha: f32) -> f32 {
-    let ci = n.dot(wi);
-    let co = n.dot(wo);
+    // The two differ only in the denominator: (h·wi)² cos⁴θh here, cosθi cosθo there.
+    let h = (wi + wo).normalize();
+    let (hi, ch) = (h.dot(wi), n.dot(h));
+    let (ci, co) = (n.dot(wi), n.dot(wo));
     if ci <= 0.0 || co <= 0.0 {
         return 0.0;
     }
-    let h = (wi + wo).normalize();
-    let ch = n.dot(h);
-    let a2 = alpha * alpha;
-    let tan2 = tan2_to_normal(n, h, ch);
-    (-tan2 / a2).exp() / (4.0 * PI * a2 * ci * co)
+    ward_specular(n, wi, wo, alpha) * (hi * hi * ch * ch * ch * ch) / (ci * co)
 }
 
 /// Half-vector in the local frame (z = normal): tan²θh = −α² ln(1 − u1), φ = 2π u2.
