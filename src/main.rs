@@ -173,6 +173,8 @@ fn run(cli: Cli) -> Result<()> {
                 print_json(&report)?;
             } else if stats {
                 eprintln!("{report}");
+            } else {
+                eprintln!("wrote {} ({}×{})", report.output, report.width, report.height);
             }
         }
         Command::Bench {
