@@ -174,7 +174,10 @@ fn run(cli: Cli) -> Result<()> {
             } else if stats {
                 eprintln!("{report}");
             } else {
-                eprintln!("wrote {} ({}×{})", report.output, report.width, report.height);
+                eprintln!(
+                    "wrote {} ({}×{})",
+                    report.output, report.width, report.height
+                );
             }
         }
         Command::Bench {
