@@ -11,6 +11,16 @@ use crate::types::{Emitter, Light, Photon, TraceCounters, TraceParams, light_kin
 /// Most photons one bake may emit: path indices are u32.
 pub const MAX_PHOTONS: u64 = u32::MAX as u64;
 
+/// Photon counts a bake accepts, for scene files and command-line overrides.
+pub fn check_photon_count(photons: u64) -> std::result::Result<(), String> {
+    if photons == 0 || photons > MAX_PHOTONS {
+        return Err(format!(
+            "photons must be within 1..={MAX_PHOTONS}, got {photons}"
+        ));
+    }
+    Ok(())
+}
+
 /// Loop iterations (grid cells plus disk tests, summed over a path's bounces) one path may
 /// spend. A path in a sane scene spends a few hundred; llvmpipe silently stops loops of an
 /// invocation after about 65k iterations, so the budget keeps far below that and counts the
@@ -51,12 +61,7 @@ impl PhotonConfig {
     }
 
     pub fn validate(&self) -> Result<()> {
-        if self.photons == 0 || self.photons > MAX_PHOTONS {
-            return Err(Error::Invalid(format!(
-                "photons must be within 1..={MAX_PHOTONS}, got {}",
-                self.photons
-            )));
-        }
+        check_photon_count(self.photons).map_err(Error::Invalid)?;
         if self.max_depth == 0 || self.batch == 0 || self.iteration_budget == 0 {
             return Err(Error::Invalid(
                 "max_depth, batch and iteration budget must be positive".into(),

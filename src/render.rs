@@ -166,11 +166,7 @@ pub fn render(
 ) -> Result<RenderReport> {
     let [w0, h0] = scene.camera.resolution;
     let (width, height) = (opts.width.unwrap_or(w0), opts.height.unwrap_or(h0));
-    if width == 0 || height == 0 || width > 16384 || height > 16384 {
-        return Err(Error::Invalid(format!(
-            "image size must be within 1..=16384 pixels per side, got {width}×{height}"
-        )));
-    }
+    crate::scene::check_resolution(width, height).map_err(Error::Invalid)?;
     let (map, grid, grid_ms) = bake_photons(scene, gpu, opts.progress)?;
     let t = Instant::now();
     let view = View::new(&scene.camera, width, height);

@@ -196,6 +196,11 @@ fn validate_camera(c: &CameraDesc) -> std::result::Result<(), String> {
         ));
     }
     let [w, h] = c.resolution;
+    check_resolution(w, h)
+}
+
+/// Image sizes the renderer accepts, for the scene's camera and for command-line overrides.
+pub fn check_resolution(w: u32, h: u32) -> std::result::Result<(), String> {
     if w == 0 || h == 0 || w > 16384 || h > 16384 {
         return Err(format!(
             "resolution must be within 1..=16384 per side, got {w}x{h}"
@@ -223,13 +228,7 @@ fn positive_size(size: [f32; 2]) -> std::result::Result<[f32; 2], String> {
 }
 
 fn validate_bake(b: &BakeDesc) -> std::result::Result<(), String> {
-    if b.photons == 0 || b.photons > crate::photons::MAX_PHOTONS {
-        return Err(format!(
-            "photons must be within 1..={}, got {}",
-            crate::photons::MAX_PHOTONS,
-            b.photons
-        ));
-    }
+    crate::photons::check_photon_count(b.photons)?;
     if let Some(r) = b.radius {
         positive(r, "radius")?;
     }
