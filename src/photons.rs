@@ -260,12 +260,14 @@ impl StorePlanner {
         self.stores_seen += stores;
     }
 
+    /// Stores per path so far, once a batch has completed.
+    fn rate(&self) -> Option<f64> {
+        (self.paths_seen > 0).then(|| self.stores_seen as f64 / self.paths_seen as f64)
+    }
+
     /// Photons the paths from `done` on will store, with 5 % to spare.
-    fn projected_rest(&self, done: u64) -> Option<u64> {
-        (self.paths_seen > 0).then(|| {
-            let rate = self.stores_seen as f64 / self.paths_seen as f64;
-            (rate * (self.total_paths - done) as f64 * 1.05).ceil() as u64
-        })
+    fn projected_rest(&self, rate: f64, done: u64) -> u64 {
+        (rate * (self.total_paths - done) as f64 * 1.05).ceil() as u64
     }
 
     fn room_for(&self, count: u64, capacity: u64, need: u64, rest: u64) -> Option<StoreAction> {
@@ -285,10 +287,10 @@ impl StorePlanner {
     /// Before a batch of `paths` starting at path `done`, into a page holding `count` of
     /// `capacity` photons.
     pub fn before(&self, count: u64, capacity: u64, paths: u32, done: u64) -> StoreAction {
-        let Some(rest) = self.projected_rest(done) else {
+        let Some(rate) = self.rate() else {
             return StoreAction::Keep;
         };
-        let rate = self.stores_seen as f64 / self.paths_seen as f64;
+        let rest = self.projected_rest(rate, done);
         let need = (rate * paths as f64 * 1.1).ceil() as u64;
         self.room_for(count, capacity, need, rest)
             .unwrap_or(StoreAction::Keep)
@@ -303,10 +305,9 @@ impl StorePlanner {
         paths: u32,
         done: u64,
     ) -> StoreAction {
-        let rest = self.projected_rest(done).unwrap_or_else(|| {
-            let per_path = need as f64 / paths as f64;
-            (per_path * (self.total_paths - done) as f64 * 1.05).ceil() as u64
-        });
+        // Before any batch completed, the overflowing batch's own rate is the best guess.
+        let rate = self.rate().unwrap_or(need as f64 / paths as f64);
+        let rest = self.projected_rest(rate, done);
         match self.room_for(count, capacity, need, rest) {
             Some(action) => action,
             None => StoreAction::HalveBatch,

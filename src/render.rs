@@ -194,10 +194,8 @@ pub fn render(
             },
             binning: StageReport::skipped(not_built),
             em: StageReport::skipped(not_built),
-            shade: StageReport {
-                // Drawing the photons, on the CPU.
-                ..StageReport::ran(ms_since(t))
-            },
+            // Drawing the photons, on the CPU.
+            shade: StageReport::ran(ms_since(t)),
             tonemap: StageReport::skipped("photon view is scaled by its 99.5th percentile"),
         },
     })

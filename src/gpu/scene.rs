@@ -14,7 +14,6 @@ pub struct GpuScene {
     pub splats: wgpu::Buffer,
     pub materials: wgpu::Buffer,
     pub grid: GpuGrid,
-    pub splat_count: u32,
     /// Time to upload the splats and build the grid.
     pub grid_ms: f64,
 }
@@ -30,7 +29,6 @@ impl GpuScene {
             splats,
             materials,
             grid,
-            splat_count: scene.splats.len() as u32,
             grid_ms: ms_since(t),
         })
     }
