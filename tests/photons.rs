@@ -12,10 +12,8 @@ use lobelight::cpu;
 use lobelight::gpu::Gpu;
 use lobelight::gpu::photons::trace_photons;
 use lobelight::gpu::scene::GpuScene;
-use lobelight::grid::grid_params;
 use lobelight::photons::{PhotonConfig, PhotonMap};
 use lobelight::scene::{self, Scene, file::StoreRange};
-use lobelight::shared::trace::Geometry;
 use lobelight::types::Photon;
 
 fn parse(text: &str) -> Scene {
@@ -31,16 +29,7 @@ fn config(scene: &Scene, photons: u64, store: StoreRange) -> PhotonConfig {
 }
 
 fn on_cpu(scene: &Scene, cfg: &PhotonConfig) -> PhotonMap {
-    let grid = cpu::build_grid(
-        &grid_params(&scene.splats, &scene.grid).unwrap(),
-        &scene.splats,
-    )
-    .unwrap();
-    let geo = Geometry {
-        grid: &grid,
-        splats: &scene.splats,
-    };
-    cpu::trace_photons(&scene.lights, &scene.materials, &geo, cfg, &mut |_, _| {}).unwrap()
+    cpu::trace_scene(scene, cfg, &mut |_, _| {}).unwrap().0
 }
 
 fn on_gpu(gpu: &Gpu, scene: &Scene, cfg: &PhotonConfig) -> PhotonMap {
