@@ -4,6 +4,7 @@
 //! as the reference in tests. See README.md for the command line and DESIGN notes for the math.
 
 pub mod bench;
+pub mod bins;
 pub mod camera;
 pub mod cpu;
 pub mod error;

@@ -171,15 +171,85 @@ pub struct DistanceParams {
     pub _pad2: u32,
 }
 
-/// One Gaussian lobe of a splat's incident light: unit axis, angular width, and the RGB
-/// irradiance it carries.
+/// One lobe of a splat's incident light (DESIGN.md §6): unit `axis`, `sharpness` in the
+/// family's own exponent (vMF: κ in `exp(κ(ω·μ − 1))`; Ward-like: 1/β² in `exp(−tan²δ/β²)`),
+/// the RGB irradiance it carries and its mixture weight λ.
 #[repr(C)]
 #[derive(Clone, Copy, Debug, Default, PartialEq, Pod, Zeroable)]
 pub struct Lobe {
     pub axis: [f32; 3],
-    pub width: f32,
+    pub sharpness: f32,
     pub irradiance: [f32; 3],
     pub weight: f32,
+}
+
+/// What the lobe fit keeps per splat besides its lobes: total RGB irradiance of the gathered
+/// photons, how many were gathered, and the fit's weighted log-likelihood with the photons'
+/// summed weight (so `-log_likelihood / weight` is the negative log-likelihood per unit of
+/// photon weight, the fit error).
+#[repr(C)]
+#[derive(Clone, Copy, Debug, Default, PartialEq, Pod, Zeroable)]
+pub struct SplatLight {
+    pub irradiance: [f32; 3],
+    pub photons: u32,
+    pub log_likelihood: f32,
+    pub weight: f32,
+    /// Lobes written for this splat (0: no photons, or a splat that needs no lobes).
+    pub lobes: u32,
+    pub _pad: u32,
+}
+
+/// A binned photon's geometry: position and the octahedral-encoded incident direction
+/// (two snorm16, see `wgsl/shared/octahedral.wgsl`). Its power lives in a parallel
+/// `vec4` array (RGB, then the EM weight `mean(RGB)`), so each array is 16 bytes a photon.
+#[repr(C)]
+#[derive(Clone, Copy, Debug, Default, PartialEq, Pod, Zeroable)]
+pub struct BinnedPhoton {
+    pub position: [f32; 3],
+    pub direction: u32,
+}
+
+/// The photon binning grid (cells at least the search radius, x-fastest like `GridParams`)
+/// and the extent of one binning dispatch.
+#[repr(C)]
+#[derive(Clone, Copy, Debug, Default, PartialEq, Pod, Zeroable)]
+pub struct BinParams {
+    pub origin: [f32; 3],
+    pub cell_size: f32,
+    pub dims: [u32; 3],
+    pub cell_count: u32,
+    /// `1 / cell_size`, computed once on the host so GPU and CPU round cell indices alike.
+    pub inv_cell_size: f32,
+    /// Photons this dispatch covers: one page for `bin_count`/`bin_scatter`, all binned
+    /// photons for `bin_rank`/`bin_place`.
+    pub photon_count: u32,
+    /// `bin_rank`: the chunk of every cell list this dispatch compares against.
+    pub rank_chunk: u32,
+    pub _pad0: u32,
+}
+
+/// Uniform of the lobe fit (`em_select`, `em_fit`).
+#[repr(C)]
+#[derive(Clone, Copy, Debug, Default, PartialEq, Pod, Zeroable)]
+pub struct EmParams {
+    /// Lobes per splat K (1..=8) and EM iterations.
+    pub lobes: u32,
+    pub iterations: u32,
+    /// `em::family::VMF` or `em::family::WARD`.
+    pub family: u32,
+    /// `em::flags::*`.
+    pub flags: u32,
+    /// Search radius R, R², and half the thickness of the slab around a splat's plane.
+    pub radius: f32,
+    pub radius2: f32,
+    pub slab: f32,
+    /// 1 / (π R²): photon power to irradiance.
+    pub inv_area: f32,
+    pub splat_count: u32,
+    /// Entries of the active-splat list (`em_fit`'s workgroup count).
+    pub active_count: u32,
+    pub _pad0: u32,
+    pub _pad1: u32,
 }
 
 /// Per-frame camera uniform.

@@ -105,9 +105,45 @@ fn rust_layouts() -> Vec<RustLayout> {
         }),
         layout!(Lobe {
             axis,
-            width,
+            sharpness,
             irradiance,
             weight
+        }),
+        layout!(SplatLight {
+            irradiance,
+            photons,
+            log_likelihood,
+            weight,
+            lobes,
+            _pad
+        }),
+        layout!(BinnedPhoton {
+            position,
+            direction
+        }),
+        layout!(BinParams {
+            origin,
+            cell_size,
+            dims,
+            cell_count,
+            inv_cell_size,
+            photon_count,
+            rank_chunk,
+            _pad0
+        }),
+        layout!(EmParams {
+            lobes,
+            iterations,
+            family,
+            flags,
+            radius,
+            radius2,
+            slab,
+            inv_area,
+            splat_count,
+            active_count,
+            _pad0,
+            _pad1
         }),
         layout!(Camera {
             view_proj,

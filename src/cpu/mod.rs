@@ -3,6 +3,10 @@
 //! local invocations), so that a difference between the two points at one line.
 //! They are the reference for the parity tests and a fallback when no GPU is wanted.
 
+pub mod bin_count;
+pub mod bin_place;
+pub mod bin_rank;
+pub mod bin_scatter;
 pub mod grid_count;
 pub mod grid_distance;
 pub mod grid_rank;
@@ -14,6 +18,7 @@ pub mod trace_rays;
 
 use std::time::Instant;
 
+use crate::bins::PhotonBins;
 use crate::error::{Error, Result};
 use crate::grid::{SplatGrid, check_cell_len};
 use crate::photons::{
@@ -21,7 +26,7 @@ use crate::photons::{
     ms_since,
 };
 use crate::shared::trace::Geometry;
-use crate::types::{DistanceParams, GridParams, ScanParams, Splat};
+use crate::types::{BinParams, BinnedPhoton, DistanceParams, GridParams, ScanParams, Splat};
 use crate::types::{Light, Material, Photon, TraceCounters};
 
 /// Number of workgroups that cover `n` items with `wg` invocations each.
@@ -200,4 +205,72 @@ pub fn trace_scene(
     };
     let map = trace_photons(&scene.lights, &scene.materials, &geo, cfg, progress)?;
     Ok((map, grid, grid_ms))
+}
+
+/// Photon binning on the CPU: the passes of `gpu::bins::bin_photons` over one page holding
+/// every photon.
+pub fn bin_photons(params: &BinParams, photons: &[Photon]) -> Result<PhotonBins> {
+    let n = u32::try_from(photons.len())
+        .map_err(|_| Error::Invalid("too many photons to bin".into()))?;
+    let params = BinParams {
+        photon_count: n,
+        ..*params
+    };
+    let cells = params.cell_count as usize;
+    let groups = groups_for(n, bin_count::WG);
+    let mut cell_start = vec![0u32; cells + 1];
+    let mut chunks = 0;
+    bin_count::bin_count(&params, photons, &mut cell_start, &mut chunks, groups);
+    exclusive_scan(&mut cell_start);
+    let len = n as usize;
+    let mut cursor = vec![0u32; cells];
+    let mut scratch_keys = vec![[0u32; 2]; len];
+    let mut scratch_cells = vec![0u32; len];
+    let mut scratch_geom = vec![BinnedPhoton::default(); len];
+    let mut scratch_power = vec![[0f32; 4]; len];
+    bin_scatter::bin_scatter(
+        &params,
+        photons,
+        &cell_start,
+        &mut cursor,
+        &mut scratch_keys,
+        &mut scratch_cells,
+        &mut scratch_geom,
+        &mut scratch_power,
+        groups,
+    );
+    let mut slots = vec![0u32; len];
+    for chunk in 0..chunks {
+        let pass = BinParams {
+            rank_chunk: chunk,
+            ..params
+        };
+        bin_rank::bin_rank(
+            &pass,
+            &cell_start,
+            &scratch_keys,
+            &scratch_cells,
+            &mut slots,
+            groups,
+        );
+    }
+    let mut bins = PhotonBins {
+        params,
+        cell_start,
+        keys: vec![[0u32; 2]; len],
+        geom: vec![BinnedPhoton::default(); len],
+        power: vec![[0f32; 4]; len],
+    };
+    bin_place::bin_place(
+        &params,
+        &slots,
+        &scratch_keys,
+        &scratch_geom,
+        &scratch_power,
+        &mut bins.keys,
+        &mut bins.geom,
+        &mut bins.power,
+        groups,
+    );
+    Ok(bins)
 }

@@ -1,6 +1,7 @@
 //! The GPU side: a headless device, compiled stage pipelines, buffer helpers, and the host code
 //! that records each stage's dispatches.
 
+pub mod bins;
 pub mod grid;
 pub mod photons;
 pub mod scan;

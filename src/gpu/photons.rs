@@ -49,6 +49,21 @@ impl GpuPhotons {
     }
 }
 
+impl GpuPhotons {
+    /// One page holding `photons` (for tests and for binning photons traced elsewhere).
+    pub fn upload(gpu: &Gpu, map: &PhotonMap) -> Result<GpuPhotons> {
+        let count = map.photons.len() as u64;
+        Ok(GpuPhotons {
+            pages: vec![PhotonPage {
+                buffer: gpu.storage("photons", &map.photons)?,
+                capacity: count,
+                count,
+            }],
+            stats: map.stats.clone(),
+        })
+    }
+}
+
 fn new_page(gpu: &Gpu, capacity: u64) -> Result<PhotonPage> {
     Ok(PhotonPage {
         buffer: gpu.storage_zeroed("photons", capacity * PHOTON_BYTES)?,

@@ -42,6 +42,10 @@ pub const STAGES: &[WgslFile] = &[
     stage!("grid_distance"),
     stage!("trace_rays"),
     stage!("photon_trace"),
+    stage!("bin_count"),
+    stage!("bin_scatter"),
+    stage!("bin_rank"),
+    stage!("bin_place"),
     stage!("scan_reduce"),
     stage!("scan_apply"),
 ];
@@ -55,6 +59,8 @@ pub const SHARED: &[WgslFile] = &[
     shared!("sampling"),
     shared!("ward"),
     shared!("trace"),
+    shared!("bins"),
+    shared!("octahedral"),
 ];
 
 pub fn stage(name: &str) -> Option<&'static WgslFile> {

@@ -100,9 +100,49 @@ struct DistanceParams {
 
 struct Lobe {
     axis: vec3<f32>,
-    width: f32,
+    sharpness: f32,
     irradiance: vec3<f32>,
     weight: f32,
+}
+
+struct SplatLight {
+    irradiance: vec3<f32>,
+    photons: u32,
+    log_likelihood: f32,
+    weight: f32,
+    lobes: u32,
+    _pad: u32,
+}
+
+struct BinnedPhoton {
+    position: vec3<f32>,
+    direction: u32,
+}
+
+struct BinParams {
+    origin: vec3<f32>,
+    cell_size: f32,
+    dims: vec3<u32>,
+    cell_count: u32,
+    inv_cell_size: f32,
+    photon_count: u32,
+    rank_chunk: u32,
+    _pad0: u32,
+}
+
+struct EmParams {
+    lobes: u32,
+    iterations: u32,
+    family: u32,
+    flags: u32,
+    radius: f32,
+    radius2: f32,
+    slab: f32,
+    inv_area: f32,
+    splat_count: u32,
+    active_count: u32,
+    _pad0: u32,
+    _pad1: u32,
 }
 
 struct Camera {

@@ -1,0 +1,78 @@
+//! Photon binning (DESIGN.md §5): stored photons sorted into a uniform grid whose cells are a
+//! little over half the search radius, each cell's list in photon-key order `(path, bounce)`.
+//! Count → exclusive scan → scatter → rank → place, on the GPU (`gpu::bins`) and in the CPU
+//! mirror (`cpu::bin_photons`), which give identical lists.
+//!
+//! Half-radius cells keep lists short (the rank pass costs the square of a list's length)
+//! and bound the gather tighter than radius-sized cells: the 2R box around a splat covers at
+//! most 5 cells per axis, 25 contiguous rows of the binned list.
+
+use glam::Vec3;
+
+use crate::error::{Error, Result};
+use crate::types::{BinParams, BinnedPhoton, GridParams};
+
+/// Bin cells per search radius along an axis.
+pub const CELLS_PER_RADIUS: f32 = 2.0;
+/// Most bin cells along an axis; larger radii ratios coarsen the cells (still at least R/2).
+pub const MAX_BIN_DIM: u32 = 256;
+/// Bytes of one binned photon across the binned arrays (geometry, power, key).
+pub const BINNED_BYTES: u64 = 16 + 16 + 8;
+
+/// The binning grid over the splat grid's box for search radius `radius`.
+pub fn bin_params(grid: &GridParams, radius: f32) -> Result<BinParams> {
+    if !(radius > 0.0 && radius.is_finite()) {
+        return Err(Error::Invalid(format!(
+            "the search radius must be a positive number, got {radius}"
+        )));
+    }
+    let extent = *grid.dims.iter().max().unwrap_or(&1) as f32 * grid.cell_size;
+    // A hair over R/2, so that rounding never stretches a 2R box past 5 cells.
+    let cell = (radius / CELLS_PER_RADIUS * 1.001).max(extent / MAX_BIN_DIM as f32);
+    let size = glam::UVec3::from(grid.dims).as_vec3() * grid.cell_size;
+    let dims = (size / cell)
+        .ceil()
+        .clamp(Vec3::ONE, Vec3::splat(MAX_BIN_DIM as f32))
+        .as_uvec3();
+    Ok(BinParams {
+        origin: grid.origin,
+        cell_size: cell,
+        dims: dims.into(),
+        cell_count: dims.x * dims.y * dims.z,
+        inv_cell_size: 1.0 / cell,
+        ..Default::default()
+    })
+}
+
+/// Binned photons on the host: `cell_start` has `cell_count + 1` offsets into the parallel
+/// arrays, each cell's run sorted by key.
+#[derive(Clone, Debug, Default, PartialEq)]
+pub struct PhotonBins {
+    pub params: BinParams,
+    pub cell_start: Vec<u32>,
+    pub keys: Vec<[u32; 2]>,
+    pub geom: Vec<BinnedPhoton>,
+    pub power: Vec<[f32; 4]>,
+}
+
+impl PhotonBins {
+    pub fn len(&self) -> usize {
+        self.keys.len()
+    }
+
+    pub fn is_empty(&self) -> bool {
+        self.keys.is_empty()
+    }
+}
+
+/// Checks that `photons` binned photons fit the device's largest binding.
+pub fn check_binned(photons: u64, max_binding: u64) -> Result<()> {
+    if photons * 16 > max_binding {
+        return Err(Error::Invalid(format!(
+            "{photons} stored photons exceed what one buffer binding holds for binning \
+             ({} photons on this device): emit fewer photons",
+            max_binding / 16
+        )));
+    }
+    Ok(())
+}

@@ -1,0 +1,43 @@
+//! Mirror of `wgsl/bin_scatter.wgsl`. Sequential, so each cell's scratch list is in input
+//! order; the GPU's depends on scheduling until `bin_rank` and `bin_place`.
+
+use crate::shared::bins::bin_of;
+use crate::shared::octahedral::oct_encode;
+use crate::types::{BinParams, BinnedPhoton, Photon};
+use glam::Vec3;
+
+pub const WG: u32 = 64;
+
+#[allow(clippy::too_many_arguments)]
+pub fn bin_scatter(
+    bins: &BinParams,
+    photons: &[Photon],
+    cell_start: &[u32],
+    cell_cursor: &mut [u32],
+    scratch_keys: &mut [[u32; 2]],
+    scratch_cells: &mut [u32],
+    scratch_geom: &mut [BinnedPhoton],
+    scratch_power: &mut [[f32; 4]],
+    groups: u32,
+) {
+    for wg in 0..groups {
+        for lid in 0..WG {
+            let i = wg * WG + lid;
+            if i >= bins.photon_count {
+                continue;
+            }
+            let p = &photons[i as usize];
+            let c = bin_of(Vec3::from(p.position), bins) as usize;
+            let slot = (cell_start[c] + cell_cursor[c]) as usize;
+            cell_cursor[c] += 1;
+            scratch_keys[slot] = [p.path, p.bounce];
+            scratch_cells[slot] = c as u32;
+            scratch_geom[slot] = BinnedPhoton {
+                position: p.position,
+                direction: oct_encode(Vec3::from(p.direction)),
+            };
+            let weight = (p.power[0] + p.power[1] + p.power[2]) * (1.0 / 3.0);
+            scratch_power[slot] = [p.power[0], p.power[1], p.power[2], weight];
+        }
+    }
+}
