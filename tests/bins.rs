@@ -28,7 +28,7 @@ fn assert_same_bins(gpu: &PhotonBins, cpu: &PhotonBins) {
     for (i, (g, c)) in gpu.geom.iter().zip(&cpu.geom).enumerate() {
         assert_eq!(g.position, c.position, "position of binned photon {i}");
         let step = |a: u32, b: u32| {
-            let d = |s: u32| (((a >> s) as u16 as i16) as i32 - ((b >> s) as u16 as i16) as i32);
+            let d = |s: u32| ((a >> s) as u16 as i16) as i32 - ((b >> s) as u16 as i16) as i32;
             d(0).abs().max(d(16).abs())
         };
         assert!(

@@ -22,7 +22,7 @@ pub fn bin_count(
             let c = bin_of(Vec3::from(photons[i as usize].position), bins) as usize;
             let before = cell_count[c];
             cell_count[c] += 1;
-            if before % RANK_CHUNK == 0 {
+            if before.is_multiple_of(RANK_CHUNK) {
                 *chunks = (*chunks).max(before / RANK_CHUNK + 1);
             }
         }
