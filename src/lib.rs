@@ -7,6 +7,7 @@ pub mod bench;
 pub mod bins;
 pub mod camera;
 pub mod cpu;
+pub mod em;
 pub mod error;
 pub mod gpu;
 pub mod grid;

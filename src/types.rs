@@ -248,8 +248,11 @@ pub struct EmParams {
     pub splat_count: u32,
     /// Entries of the active-splat list (`em_fit`'s workgroup count).
     pub active_count: u32,
-    pub _pad0: u32,
-    pub _pad1: u32,
+    /// The EM iterations `[iteration_begin, iteration_end)` of this `em_fit` dispatch: a
+    /// dispatch that does not start at 0 resumes from the mixture the previous one left in
+    /// the lobe buffer; the one that ends at `iterations` also runs the final pass.
+    pub iteration_begin: u32,
+    pub iteration_end: u32,
 }
 
 /// Per-frame camera uniform.

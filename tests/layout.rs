@@ -142,8 +142,8 @@ fn rust_layouts() -> Vec<RustLayout> {
             inv_area,
             splat_count,
             active_count,
-            _pad0,
-            _pad1
+            iteration_begin,
+            iteration_end
         }),
         layout!(Camera {
             view_proj,

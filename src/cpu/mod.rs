@@ -7,6 +7,8 @@ pub mod bin_count;
 pub mod bin_place;
 pub mod bin_rank;
 pub mod bin_scatter;
+pub mod em_fit;
+pub mod em_select;
 pub mod grid_count;
 pub mod grid_distance;
 pub mod grid_rank;
@@ -19,6 +21,7 @@ pub mod trace_rays;
 use std::time::Instant;
 
 use crate::bins::PhotonBins;
+use crate::em::{EmConfig, EmStats, LobeMap};
 use crate::error::{Error, Result};
 use crate::grid::{SplatGrid, check_cell_len};
 use crate::photons::{
@@ -26,7 +29,10 @@ use crate::photons::{
     ms_since,
 };
 use crate::shared::trace::Geometry;
-use crate::types::{BinParams, BinnedPhoton, DistanceParams, GridParams, ScanParams, Splat};
+use crate::types::{
+    BinParams, BinnedPhoton, DistanceParams, EmParams, GridParams, Lobe, ScanParams, Splat,
+    SplatLight,
+};
 use crate::types::{Light, Material, Photon, TraceCounters};
 
 /// Number of workgroups that cover `n` items with `wg` invocations each.
@@ -273,4 +279,73 @@ pub fn bin_photons(params: &BinParams, photons: &[Photon]) -> Result<PhotonBins>
         groups,
     );
     Ok(bins)
+}
+
+/// The lobe fit on the CPU: `em_select`, then `em_fit` over the same dispatch ranges as the
+/// GPU path on a device with (`loop_limited`) or without llvmpipe's loop limit.
+pub fn fit_lobes(
+    cfg: &EmConfig,
+    bins: &PhotonBins,
+    splats: &[Splat],
+    materials: &[Material],
+    loop_limited: bool,
+) -> Result<LobeMap> {
+    cfg.validate()?;
+    let t = Instant::now();
+    let splat_count = u32::try_from(splats.len())
+        .map_err(|_| Error::Invalid("too many splats for the lobe fit".into()))?;
+    let n = splats.len();
+    let mut fit_list = vec![0u32; n];
+    let mut counters = [0u32; 3];
+    em_select::em_select(
+        &cfg.params(splat_count, 0),
+        &bins.params,
+        splats,
+        materials,
+        &bins.cell_start,
+        &mut fit_list,
+        &mut counters,
+        groups_for(splat_count, em_select::WG),
+    );
+    let [listed, max_candidates, fitted] = counters;
+    let chunk = crate::em::iterations_per_dispatch(cfg, max_candidates, loop_limited)?;
+    let mut map = LobeMap {
+        lobes_per_splat: cfg.lobes,
+        lobes: vec![Lobe::default(); n * cfg.lobes as usize],
+        light: vec![SplatLight::default(); n],
+        stats: EmStats {
+            listed,
+            fitted,
+            max_candidates,
+            ..Default::default()
+        },
+    };
+    for (begin, end) in crate::em::dispatch_ranges(cfg.iterations, chunk) {
+        let params = EmParams {
+            iteration_begin: begin,
+            iteration_end: end,
+            ..cfg.params(splat_count, listed)
+        };
+        em_fit::em_fit(
+            &params,
+            &bins.params,
+            splats,
+            &fit_list,
+            &bins.cell_start,
+            &bins.geom,
+            &bins.power,
+            &mut map.lobes,
+            &mut map.light,
+            listed,
+        );
+        map.stats.dispatches += 1;
+    }
+    map.stats.photons = map
+        .light
+        .iter()
+        .filter(|l| l.lobes > 0)
+        .map(|l| l.photons as u64)
+        .sum();
+    map.stats.ms = ms_since(t);
+    Ok(map)
 }

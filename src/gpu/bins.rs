@@ -23,6 +23,19 @@ pub struct GpuBins {
 }
 
 impl GpuBins {
+    /// Binned photons made elsewhere (the CPU mirror), for fitting on the device.
+    pub fn upload(gpu: &Gpu, bins: &PhotonBins) -> Result<GpuBins> {
+        Ok(GpuBins {
+            params: bins.params,
+            params_buf: gpu.uniform("bin params", &bins.params),
+            cell_start: gpu.storage("bin cell start", &bins.cell_start)?,
+            keys: gpu.storage("binned keys", &bins.keys)?,
+            geom: gpu.storage("binned geometry", &bins.geom)?,
+            power: gpu.storage("binned power", &bins.power)?,
+            rank_chunks: 0,
+        })
+    }
+
     pub fn download(&self, gpu: &Gpu) -> Result<PhotonBins> {
         let n = self.params.photon_count as usize;
         Ok(PhotonBins {

@@ -2,6 +2,7 @@
 //! that records each stage's dispatches.
 
 pub mod bins;
+pub mod em;
 pub mod grid;
 pub mod photons;
 pub mod scan;

@@ -46,6 +46,8 @@ pub const STAGES: &[WgslFile] = &[
     stage!("bin_scatter"),
     stage!("bin_rank"),
     stage!("bin_place"),
+    stage!("em_select"),
+    stage!("em_fit"),
     stage!("scan_reduce"),
     stage!("scan_apply"),
 ];
@@ -61,6 +63,7 @@ pub const SHARED: &[WgslFile] = &[
     shared!("trace"),
     shared!("bins"),
     shared!("octahedral"),
+    shared!("lobes"),
 ];
 
 pub fn stage(name: &str) -> Option<&'static WgslFile> {

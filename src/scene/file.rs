@@ -107,6 +107,12 @@ pub struct BakeDesc {
     /// Which photon hits are stored: "indirect" (bounce >= 1, the thesis's choice: direct
     /// light comes from shadow rays) or "all".
     pub store: StoreRange,
+    /// Lobe family: "vmf" or "ward" (the thesis's).
+    pub family: crate::em::LobeFamily,
+    /// Sparse EM (thesis §3.5).
+    pub sparse: bool,
+    /// Photons count for a splat within this many splat radii of its plane.
+    pub slab: f32,
 }
 
 #[derive(
@@ -139,6 +145,9 @@ impl Default for BakeDesc {
             seed: 1,
             max_depth: 8,
             store: StoreRange::Indirect,
+            family: crate::em::LobeFamily::Vmf,
+            sparse: false,
+            slab: 2.0,
         }
     }
 }

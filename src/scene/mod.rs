@@ -241,6 +241,7 @@ fn validate_bake(b: &BakeDesc) -> std::result::Result<(), String> {
             b.iterations
         ));
     }
+    positive(b.slab, "slab")?;
     if b.max_depth == 0 || b.max_depth > 64 {
         return Err(format!(
             "max_depth must be within 1..=64, got {}",

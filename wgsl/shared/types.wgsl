@@ -141,8 +141,8 @@ struct EmParams {
     inv_area: f32,
     splat_count: u32,
     active_count: u32,
-    _pad0: u32,
-    _pad1: u32,
+    iteration_begin: u32,
+    iteration_end: u32,
 }
 
 struct Camera {

@@ -1,0 +1,470 @@
+//! Mirror of `wgsl/em_fit.wgsl`: each workgroup's invocations run one after another between
+//! its two barriers, with their private state in `Invocation`; workgroups run in parallel
+//! (each writes only its own splat).
+
+use glam::Vec3;
+use rayon::prelude::*;
+
+use crate::shared::bins::{BinBox, bin_box, bin_row, bin_row_count};
+use crate::shared::lobes::*;
+use crate::shared::octahedral::oct_decode;
+use crate::shared::sampling::frame_of;
+use crate::types::{BinParams, BinnedPhoton, EmParams, Lobe, Splat, SplatLight};
+
+pub const WG: u32 = 32;
+pub const CACHE: u32 = 8;
+pub const FIT_BIT: u32 = 0x8000_0000;
+const SUM_LOG: usize = 0;
+const SUM_WEIGHT: usize = 1;
+const SUM_COUNT: usize = 2;
+const SUM_RGB: usize = 3;
+const LOBE_SUMS: usize = 6;
+const SUMS: usize = 46;
+const PASS_EM: u32 = 0;
+const PASS_FINAL: u32 = 1;
+const L: usize = MAX_LOBES as usize;
+const C: usize = CACHE as usize;
+
+/// The read-only inputs of a dispatch (bindings 0–6).
+struct Inputs<'a> {
+    em: &'a EmParams,
+    bins: &'a BinParams,
+    cell_start: &'a [u32],
+    bin_geom: &'a [BinnedPhoton],
+    bin_power: &'a [[f32; 4]],
+}
+
+/// The splat and the mixture: the same in every invocation of a workgroup.
+#[derive(Clone, Copy, Default)]
+struct Splat1 {
+    center: Vec3,
+    normal: Vec3,
+    slab: f32,
+    lobe_count: u32,
+    mix_axis: [Vec3; L],
+    mix_sharpness: [f32; L],
+    mix_weight: [f32; L],
+    mix_mirror: [Vec3; L],
+    mix_log: [f32; L],
+}
+
+/// One invocation's private state.
+#[derive(Clone, Copy)]
+struct Invocation {
+    resp: [f32; L],
+    stat: [f32; L],
+    acc: [f32; SUMS],
+    cache_dir: [[f32; 4]; C],
+    cache_index: [u32; C],
+    frozen_h: [[f32; L]; C],
+    frozen_hx: [[f32; L]; C],
+    frozen_mask: u32,
+    cached: u32,
+    streaming: bool,
+    resume_row: u32,
+    resume_j: u32,
+    resume_offset: u32,
+}
+
+impl Default for Invocation {
+    fn default() -> Self {
+        Invocation {
+            resp: [0.0; L],
+            stat: [0.0; L],
+            acc: [0.0; SUMS],
+            cache_dir: [[0.0; 4]; C],
+            cache_index: [0; C],
+            frozen_h: [[0.0; L]; C],
+            frozen_hx: [[0.0; L]; C],
+            frozen_mask: 0,
+            cached: 0,
+            streaming: false,
+            resume_row: 0,
+            resume_j: 0,
+            resume_offset: 0,
+        }
+    }
+}
+
+fn first_in_row(begin: u32, offset: u32, lid: u32) -> u32 {
+    begin + (lid + WG - offset % WG) % WG
+}
+
+struct Candidate {
+    ok: bool,
+    dir: Vec3,
+    weight: f32,
+}
+
+fn accept(inp: &Inputs, sp: &Splat1, j: u32) -> Candidate {
+    let g = inp.bin_geom[j as usize];
+    let d = Vec3::from(g.position) - sp.center;
+    let dir = oct_decode(g.direction);
+    let weight = inp.bin_power[j as usize][3];
+    let ok =
+        d.dot(d) <= inp.em.radius2 && d.dot(sp.normal).abs() <= sp.slab && dir.dot(sp.normal) > 0.0;
+    Candidate { ok, dir, weight }
+}
+
+fn prepare_mixture(em: &EmParams, sp: &mut Splat1) {
+    for k in 0..sp.lobe_count as usize {
+        sp.mix_mirror[k] = mirror_axis(sp.normal, sp.mix_axis[k]);
+        sp.mix_log[k] = sp.mix_weight[k].max(1e-35).ln().max(LOG_WEIGHT_MIN)
+            + lobe_log_norm(em.family, sp.normal, sp.mix_axis[k], sp.mix_sharpness[k]);
+    }
+}
+
+fn e_step(
+    em: &EmParams,
+    sp: &Splat1,
+    v: &mut Invocation,
+    w: Vec3,
+    slot: u32,
+    sparse: bool,
+    full: bool,
+) -> f32 {
+    let use_frozen = sparse && !full && slot < CACHE;
+    let s_ = slot as usize;
+    v.frozen_mask = 0;
+    let mut frozen_sum = 0.0;
+    let mut m = -3.0e38f32;
+    for k in 0..sp.lobe_count as usize {
+        if use_frozen && v.frozen_h[s_][k] < SPARSE_THRESHOLD {
+            v.frozen_mask |= 1 << k;
+            frozen_sum += v.frozen_h[s_][k];
+            continue;
+        }
+        v.stat[k] = lobe_stat(em.family, sp.normal, sp.mix_axis[k], sp.mix_mirror[k], w);
+        v.resp[k] = sp.mix_log[k] + lobe_exponent(em.family, sp.mix_sharpness[k], v.stat[k]);
+        m = m.max(v.resp[k]);
+    }
+    let mut s = 0.0;
+    for k in 0..sp.lobe_count as usize {
+        if v.frozen_mask & (1 << k) == 0 {
+            v.resp[k] = (v.resp[k] - m).exp();
+            s += v.resp[k];
+        }
+    }
+    let scale = (1.0 - frozen_sum) / s;
+    for k in 0..sp.lobe_count as usize {
+        if v.frozen_mask & (1 << k) != 0 {
+            v.resp[k] = v.frozen_h[s_][k];
+            v.stat[k] = v.frozen_hx[s_][k];
+        } else {
+            v.resp[k] *= scale;
+            if sparse && slot < CACHE {
+                v.frozen_h[s_][k] = v.resp[k];
+                v.frozen_hx[s_][k] = v.resp[k] * v.stat[k];
+            }
+        }
+    }
+    m + s.ln()
+}
+
+#[allow(clippy::too_many_arguments)]
+fn absorb(
+    inp: &Inputs,
+    sp: &Splat1,
+    v: &mut Invocation,
+    w: Vec3,
+    weight: f32,
+    index: u32,
+    slot: u32,
+    kind: u32,
+    sparse: bool,
+    full: bool,
+) {
+    v.acc[SUM_WEIGHT] += weight;
+    v.acc[SUM_COUNT] += 1.0;
+    if kind == PASS_FINAL {
+        let p = inp.bin_power[index as usize];
+        v.acc[SUM_RGB] += p[0];
+        v.acc[SUM_RGB + 1] += p[1];
+        v.acc[SUM_RGB + 2] += p[2];
+        if sp.lobe_count == 0 {
+            return;
+        }
+        v.acc[SUM_LOG] += weight * e_step(inp.em, sp, v, w, slot, false, true);
+        for k in 0..sp.lobe_count as usize {
+            let o = LOBE_SUMS + 5 * k;
+            v.acc[o] += v.resp[k] * p[0];
+            v.acc[o + 1] += v.resp[k] * p[1];
+            v.acc[o + 2] += v.resp[k] * p[2];
+        }
+        return;
+    }
+    let log_p = e_step(inp.em, sp, v, w, slot, sparse, full);
+    v.acc[SUM_LOG] += weight * log_p;
+    for k in 0..sp.lobe_count as usize {
+        let o = LOBE_SUMS + 5 * k;
+        let wh = weight * v.resp[k];
+        let frozen = v.frozen_mask & (1 << k) != 0;
+        v.acc[o] += wh;
+        v.acc[o + 1] += if frozen {
+            weight * v.stat[k]
+        } else {
+            wh * v.stat[k]
+        };
+        v.acc[o + 2] += wh * w.x;
+        v.acc[o + 3] += wh * w.y;
+        v.acc[o + 4] += wh * w.z;
+    }
+}
+
+fn gather(inp: &Inputs, sp: &Splat1, v: &mut Invocation, lid: u32, bx: &BinBox) {
+    v.cached = 0;
+    v.streaming = false;
+    let mut offset = 0;
+    for r in 0..bin_row_count(bx) {
+        let row = bin_row(bx, r, inp.bins);
+        let begin = inp.cell_start[row.x as usize];
+        let end = inp.cell_start[row.y as usize];
+        let mut j = first_in_row(begin, offset, lid);
+        while j < end {
+            let c = accept(inp, sp, j);
+            if c.ok {
+                if v.cached == CACHE {
+                    v.streaming = true;
+                    v.resume_row = r;
+                    v.resume_j = j;
+                    v.resume_offset = offset;
+                    return;
+                }
+                v.cache_dir[v.cached as usize] = [c.dir.x, c.dir.y, c.dir.z, c.weight];
+                v.cache_index[v.cached as usize] = j;
+                v.cached += 1;
+            }
+            j += WG;
+        }
+        offset += end - begin;
+    }
+}
+
+#[allow(clippy::too_many_arguments)]
+fn photon_pass(
+    inp: &Inputs,
+    sp: &Splat1,
+    v: &mut Invocation,
+    lid: u32,
+    bx: &BinBox,
+    kind: u32,
+    sparse: bool,
+    full: bool,
+) {
+    v.acc = [0.0; SUMS];
+    for c in 0..v.cached {
+        let d = v.cache_dir[c as usize];
+        let index = v.cache_index[c as usize];
+        absorb(
+            inp,
+            sp,
+            v,
+            Vec3::new(d[0], d[1], d[2]),
+            d[3],
+            index,
+            c,
+            kind,
+            sparse,
+            full,
+        );
+    }
+    if !v.streaming {
+        return;
+    }
+    let mut offset = v.resume_offset;
+    for r in v.resume_row..bin_row_count(bx) {
+        let row = bin_row(bx, r, inp.bins);
+        let begin = inp.cell_start[row.x as usize];
+        let end = inp.cell_start[row.y as usize];
+        let mut j = if r == v.resume_row {
+            v.resume_j
+        } else {
+            first_in_row(begin, offset, lid)
+        };
+        while j < end {
+            let c = accept(inp, sp, j);
+            if c.ok {
+                absorb(inp, sp, v, c.dir, c.weight, j, CACHE, kind, sparse, full);
+            }
+            j += WG;
+        }
+        offset += end - begin;
+    }
+}
+
+/// The fixed-order sum of `reduce` in WGSL: column q over the invocations 0, 1, …, WG − 1.
+fn reduce(invocations: &[Invocation], count: usize) -> [f32; SUMS] {
+    let mut total = [0.0; SUMS];
+    for (q, t) in total.iter_mut().enumerate().take(count) {
+        let mut s = 0.0;
+        for v in invocations {
+            s += v.acc[q];
+        }
+        *t = s;
+    }
+    total
+}
+
+#[allow(clippy::too_many_arguments)]
+pub fn em_fit(
+    em: &EmParams,
+    bins: &BinParams,
+    splats: &[Splat],
+    fit_list: &[u32],
+    cell_start: &[u32],
+    bin_geom: &[BinnedPhoton],
+    bin_power: &[[f32; 4]],
+    lobes: &mut [Lobe],
+    light: &mut [SplatLight],
+    groups: u32,
+) {
+    let inp = Inputs {
+        em,
+        bins,
+        cell_start,
+        bin_geom,
+        bin_power,
+    };
+    let k = em.lobes as usize;
+    let results: Vec<Written> = (0..groups)
+        .into_par_iter()
+        .filter(|&index| index < em.active_count)
+        .filter_map(|index| {
+            let entry = fit_list[index as usize];
+            let base = ((entry & !FIT_BIT) as usize) * k;
+            fit_splat(&inp, splats, entry, &lobes[base..base + k])
+        })
+        .collect();
+    for (splat_index, written, out) in results {
+        let base = splat_index as usize * k;
+        lobes[base..base + written.len()].copy_from_slice(&written);
+        if let Some(out) = out {
+            light[splat_index as usize] = out;
+        }
+    }
+}
+
+/// Lobe k of the mixture, with no irradiance yet.
+fn mixture(sp: &Splat1, k: usize) -> Lobe {
+    Lobe {
+        axis: sp.mix_axis[k].into(),
+        sharpness: sp.mix_sharpness[k],
+        irradiance: [0.0; 3],
+        weight: sp.mix_weight[k],
+    }
+}
+
+/// What one workgroup writes: its splat, the lobes, and the splat's light (last dispatch).
+type Written = (u32, Vec<Lobe>, Option<SplatLight>);
+
+/// The body of `main` for one workgroup; `resume` is the splat's slice of the lobe buffer.
+fn fit_splat(inp: &Inputs, splats: &[Splat], entry: u32, resume: &[Lobe]) -> Option<Written> {
+    let em = inp.em;
+    let splat_index = entry & !FIT_BIT;
+    let fit = entry & FIT_BIT != 0;
+    let s = &splats[splat_index as usize];
+    let mut sp = Splat1 {
+        center: Vec3::from(s.center),
+        normal: Vec3::from(s.normal),
+        slab: em.slab * s.radius,
+        lobe_count: if fit { em.lobes } else { 0 },
+        ..Default::default()
+    };
+    let begin = if fit {
+        em.iteration_begin
+    } else {
+        em.iterations
+    };
+    let end = if fit { em.iteration_end } else { em.iterations };
+    let last = em.iteration_end == em.iterations;
+    if !last && !fit {
+        return None;
+    }
+    let f = frame_of(sp.normal);
+    #[allow(clippy::needless_range_loop)] // the loop shape of the WGSL
+    for k in 0..sp.lobe_count as usize {
+        if begin == 0 {
+            sp.mix_axis[k] = initial_axis(&f, k as u32, sp.lobe_count);
+            sp.mix_sharpness[k] = initial_sharpness(em.family);
+            sp.mix_weight[k] = 1.0 / sp.lobe_count as f32;
+        } else {
+            let l = &resume[k];
+            sp.mix_axis[k] = Vec3::from(l.axis);
+            sp.mix_sharpness[k] = l.sharpness;
+            sp.mix_weight[k] = l.weight;
+        }
+    }
+    let bx = bin_box(sp.center, em.radius, inp.bins);
+    let mut inv = vec![Invocation::default(); WG as usize];
+    for (lid, v) in inv.iter_mut().enumerate() {
+        gather(inp, &sp, v, lid as u32, &bx);
+    }
+    let sparse = em.flags & EM_SPARSE != 0;
+    let sums = LOBE_SUMS + 5 * sp.lobe_count as usize;
+
+    for it in begin..end {
+        prepare_mixture(em, &mut sp);
+        let full = it % SPARSE_PERIOD == 0 || it == begin;
+        for (lid, v) in inv.iter_mut().enumerate() {
+            photon_pass(inp, &sp, v, lid as u32, &bx, PASS_EM, sparse, full);
+        }
+        let total = reduce(&inv, sums);
+        for k in 0..sp.lobe_count as usize {
+            let o = LOBE_SUMS + 5 * k;
+            let old = LobeFit {
+                axis: sp.mix_axis[k],
+                sharpness: sp.mix_sharpness[k],
+                weight: sp.mix_weight[k],
+            };
+            let s2 = Vec3::new(total[o + 2], total[o + 3], total[o + 4]);
+            let next = m_step(
+                em.family,
+                em.flags,
+                sp.lobe_count,
+                total[o],
+                total[o + 1],
+                s2,
+                total[SUM_WEIGHT],
+                total[SUM_COUNT],
+                old,
+            );
+            sp.mix_axis[k] = next.axis;
+            sp.mix_sharpness[k] = next.sharpness;
+            sp.mix_weight[k] = next.weight;
+        }
+    }
+
+    if !last {
+        let kept = (0..sp.lobe_count as usize)
+            .map(|k| mixture(&sp, k))
+            .collect();
+        return Some((splat_index, kept, None));
+    }
+    prepare_mixture(em, &mut sp);
+    for (lid, v) in inv.iter_mut().enumerate() {
+        photon_pass(inp, &sp, v, lid as u32, &bx, PASS_FINAL, false, true);
+    }
+    let total = reduce(&inv, sums);
+    let photons = total[SUM_COUNT] as u32;
+    let written = if photons > 0 { sp.lobe_count } else { 0 };
+    let fitted = (0..written as usize)
+        .map(|k| {
+            let o = LOBE_SUMS + 5 * k;
+            let e = Vec3::new(total[o], total[o + 1], total[o + 2]) * em.inv_area;
+            Lobe {
+                irradiance: e.into(),
+                ..mixture(&sp, k)
+            }
+        })
+        .collect();
+    let rgb = Vec3::new(total[SUM_RGB], total[SUM_RGB + 1], total[SUM_RGB + 2]) * em.inv_area;
+    let out = SplatLight {
+        irradiance: rgb.into(),
+        photons,
+        log_likelihood: total[SUM_LOG],
+        weight: total[SUM_WEIGHT],
+        lobes: written,
+        _pad: 0,
+    };
+    Some((splat_index, fitted, Some(out)))
+}

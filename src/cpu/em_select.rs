@@ -1,0 +1,53 @@
+//! Mirror of `wgsl/em_select.wgsl`. Sequential, so the list is in splat order.
+
+use glam::Vec3;
+
+use crate::shared::bins::{bin_box, bin_row, bin_row_count};
+use crate::shared::lobes::EM_FIT_ALL;
+use crate::types::{BinParams, EmParams, Material, Splat};
+
+pub const WG: u32 = 64;
+pub const FIT_BIT: u32 = 0x8000_0000;
+
+#[allow(clippy::too_many_arguments)]
+pub fn em_select(
+    em: &EmParams,
+    bins: &BinParams,
+    splats: &[Splat],
+    materials: &[Material],
+    cell_start: &[u32],
+    active: &mut [u32],
+    counters: &mut [u32; 3],
+    groups: u32,
+) {
+    for wg in 0..groups {
+        for lid in 0..WG {
+            let i = wg * WG + lid;
+            if i >= em.splat_count {
+                continue;
+            }
+            let s = &splats[i as usize];
+            let bx = bin_box(Vec3::from(s.center), em.radius, bins);
+            let mut candidates = 0;
+            for r in 0..bin_row_count(&bx) {
+                let row = bin_row(&bx, r, bins);
+                candidates += cell_start[row.y as usize] - cell_start[row.x as usize];
+            }
+            if candidates == 0 {
+                continue;
+            }
+            let glossy = materials[s.material as usize]
+                .specular
+                .iter()
+                .any(|&x| x > 0.0);
+            let fit = glossy || em.flags & EM_FIT_ALL != 0;
+            let slot = counters[0] as usize;
+            counters[0] += 1;
+            active[slot] = i | if fit { FIT_BIT } else { 0 };
+            counters[1] = counters[1].max(candidates);
+            if fit {
+                counters[2] += 1;
+            }
+        }
+    }
+}

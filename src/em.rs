@@ -1,0 +1,217 @@
+//! The lobe fit (DESIGN.md §6): settings, the plan of `em_fit` dispatches, and the result.
+//! The passes are `em_select` (list the splats with photons near them) and `em_fit` (one
+//! workgroup per listed splat); `gpu::em::fit_lobes` and `cpu::fit_lobes` run them alike.
+
+use serde::{Deserialize, Serialize};
+
+use crate::error::{Error, Result};
+use crate::shared::lobes::{EM_FIT_ALL, EM_PRIORS, EM_SPARSE, FAMILY_VMF, FAMILY_WARD};
+use crate::types::{EmParams, Lobe, SplatLight};
+
+/// The lobe family fitted to each splat's photon directions.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Deserialize, Serialize, clap::ValueEnum)]
+#[serde(rename_all = "lowercase")]
+pub enum LobeFamily {
+    /// von Mises–Fisher lobes, closed-form M-step with light priors.
+    #[default]
+    Vmf,
+    /// The thesis's Ward-like lobe with its heuristic axis update.
+    Ward,
+}
+
+impl LobeFamily {
+    pub fn code(self) -> u32 {
+        match self {
+            LobeFamily::Vmf => FAMILY_VMF,
+            LobeFamily::Ward => FAMILY_WARD,
+        }
+    }
+}
+
+/// Settings of the lobe fit.
+#[derive(Clone, Debug, PartialEq)]
+pub struct EmConfig {
+    pub lobes: u32,
+    pub iterations: u32,
+    pub family: LobeFamily,
+    /// Sparse EM (thesis §3.5): responsibilities under 0.02 stay frozen between full updates
+    /// every 8 iterations.
+    pub sparse: bool,
+    /// MAP priors on weights and sharpness (vMF).
+    pub priors: bool,
+    /// Fit lobes on every splat with photons, not only on glossy ones (benchmarks).
+    pub fit_all: bool,
+    /// Photon search radius R.
+    pub radius: f32,
+    /// Half thickness of the slab around a splat's plane, in splat radii.
+    pub slab: f32,
+}
+
+impl EmConfig {
+    pub fn from_scene(scene: &crate::scene::Scene) -> EmConfig {
+        let b = &scene.bake;
+        EmConfig {
+            lobes: b.lobes,
+            iterations: b.iterations,
+            family: b.family,
+            sparse: b.sparse,
+            priors: true,
+            fit_all: false,
+            radius: scene.search_radius(),
+            slab: b.slab,
+        }
+    }
+
+    pub fn validate(&self) -> Result<()> {
+        if !(1..=crate::shared::lobes::MAX_LOBES).contains(&self.lobes) {
+            return Err(Error::Invalid(format!(
+                "lobes must be within 1..=8, got {}",
+                self.lobes
+            )));
+        }
+        if self.iterations > 1000 {
+            return Err(Error::Invalid(format!(
+                "iterations must be within 0..=1000, got {}",
+                self.iterations
+            )));
+        }
+        if !(self.radius > 0.0 && self.radius.is_finite()) {
+            return Err(Error::Invalid(format!(
+                "the search radius must be a positive number, got {}",
+                self.radius
+            )));
+        }
+        if !(self.slab > 0.0 && self.slab.is_finite()) {
+            return Err(Error::Invalid(format!(
+                "slab must be a positive number of splat radii, got {}",
+                self.slab
+            )));
+        }
+        Ok(())
+    }
+
+    /// The uniform of a dispatch over `active` listed splats (iterations filled in per
+    /// dispatch).
+    pub fn params(&self, splat_count: u32, active: u32) -> EmParams {
+        let flags = if self.sparse { EM_SPARSE } else { 0 }
+            | if self.priors { EM_PRIORS } else { 0 }
+            | if self.fit_all { EM_FIT_ALL } else { 0 };
+        let r = self.radius;
+        EmParams {
+            lobes: self.lobes,
+            iterations: self.iterations,
+            family: self.family.code(),
+            flags,
+            radius: r,
+            radius2: r * r,
+            slab: self.slab,
+            inv_area: 1.0 / (std::f32::consts::PI * r * r),
+            splat_count,
+            active_count: active,
+            iteration_begin: 0,
+            iteration_end: self.iterations,
+        }
+    }
+}
+
+/// Loop iterations one invocation may spend in a dispatch on a device with llvmpipe's silent
+/// limit (about 65k), with a margin.
+pub const LOOP_BUDGET: u64 = 48_000;
+
+/// EM iterations per `em_fit` dispatch. On a loop-limited device (llvmpipe) the iterations
+/// are split so that one invocation's loops stay under `LOOP_BUDGET`, estimated from the
+/// splat with the most candidate photons; elsewhere one dispatch runs them all.
+pub fn iterations_per_dispatch(
+    cfg: &EmConfig,
+    max_candidates: u32,
+    loop_limited: bool,
+) -> Result<u32> {
+    let all = cfg.iterations.max(1);
+    if !loop_limited {
+        return Ok(all);
+    }
+    let wg = crate::cpu::em_fit::WG as u64;
+    // Per pass: each candidate once, each accepted one four loops over the lobes, plus the
+    // rows, the sums and the reduction.
+    let per_pass = (max_candidates as u64).div_ceil(wg) * (1 + 4 * cfg.lobes as u64) + 200;
+    let passes = LOOP_BUDGET / per_pass;
+    if passes < 3 {
+        return Err(Error::Invalid(format!(
+            "a splat has {max_candidates} candidate photons within the search radius, too many \
+             for this software device's loop limit: lower the radius or the photon count"
+        )));
+    }
+    // Two passes go to the gather and to the final (or hand-over) pass.
+    Ok(((passes - 2) as u32).min(all))
+}
+
+/// The iteration ranges of the `em_fit` dispatches: `chunk` at a time, at least one range
+/// (the last one runs the final pass, also with no iterations).
+pub fn dispatch_ranges(iterations: u32, chunk: u32) -> Vec<(u32, u32)> {
+    let mut ranges = Vec::new();
+    let mut begin = 0;
+    loop {
+        let end = (begin + chunk.max(1)).min(iterations);
+        ranges.push((begin, end));
+        if end == iterations {
+            return ranges;
+        }
+        begin = end;
+    }
+}
+
+/// Counts of a lobe fit.
+#[derive(Clone, Debug, Default, Serialize)]
+pub struct EmStats {
+    /// Splats with candidate photons (listed by `em_select`).
+    pub listed: u32,
+    /// Listed splats whose lobes were fitted (glossy, or all with `fit_all`).
+    pub fitted: u32,
+    pub max_candidates: u32,
+    /// Photons gathered, summed over fitted splats.
+    pub photons: u64,
+    pub dispatches: u32,
+    pub ms: f64,
+}
+
+/// The fit's output: `lobes_per_splat` lobes per splat (zero where none were written) and the
+/// light of every splat.
+#[derive(Clone, Debug, Default)]
+pub struct LobeMap {
+    pub lobes_per_splat: u32,
+    pub lobes: Vec<Lobe>,
+    pub light: Vec<SplatLight>,
+    pub stats: EmStats,
+}
+
+impl LobeMap {
+    /// The lobes of splat `i` that were written.
+    pub fn splat_lobes(&self, i: usize) -> &[Lobe] {
+        let k = self.lobes_per_splat as usize;
+        &self.lobes[i * k..i * k + self.light[i].lobes as usize]
+    }
+
+    /// Mean photons gathered per fitted splat.
+    pub fn mean_photons(&self) -> f64 {
+        let (sum, n) = self
+            .fitted()
+            .fold((0u64, 0u64), |(s, n), l| (s + l.photons as u64, n + 1));
+        sum as f64 / n.max(1) as f64
+    }
+
+    /// The fit error: negative log-likelihood per unit photon weight, averaged over fitted
+    /// splats.
+    pub fn nll(&self) -> f64 {
+        let (sum, n) = self
+            .fitted()
+            .filter(|l| l.weight > 0.0)
+            .fold((0.0f64, 0u64), |(s, n), l| {
+                (s - l.log_likelihood as f64 / l.weight as f64, n + 1)
+            });
+        sum / n.max(1) as f64
+    }
+
+    fn fitted(&self) -> impl Iterator<Item = &SplatLight> {
+        self.light.iter().filter(|l| l.lobes > 0)
+    }
+}

@@ -1,0 +1,130 @@
+//! The lobe fit on the device: `em_select` lists the splats with photons near them, the host
+//! reads the list's length (and the most candidates any splat has, which sizes the dispatches
+//! on a loop-limited device), then `em_fit` runs one workgroup per listed splat, in one
+//! dispatch or in several that hand the mixture over through the lobe buffer.
+
+use std::time::Instant;
+
+use super::Gpu;
+use super::bins::GpuBins;
+use crate::cpu::{em_select, groups_for};
+use crate::em::{EmConfig, EmStats, LobeMap, dispatch_ranges, iterations_per_dispatch};
+use crate::error::{Error, Result};
+use crate::photons::ms_since;
+use crate::types::{EmParams, Lobe, SplatLight};
+
+/// The fit's output on the device.
+pub struct GpuLobes {
+    pub lobes_per_splat: u32,
+    pub lobes: wgpu::Buffer,
+    pub light: wgpu::Buffer,
+    pub splat_count: u32,
+    pub stats: EmStats,
+}
+
+impl GpuLobes {
+    pub fn download(&self, gpu: &Gpu) -> Result<LobeMap> {
+        let n = self.splat_count as usize;
+        let mut map = LobeMap {
+            lobes_per_splat: self.lobes_per_splat,
+            lobes: gpu.read::<Lobe>(&self.lobes, n * self.lobes_per_splat as usize)?,
+            light: gpu.read::<SplatLight>(&self.light, n)?,
+            stats: self.stats.clone(),
+        };
+        map.stats.photons = map
+            .light
+            .iter()
+            .filter(|l| l.lobes > 0)
+            .map(|l| l.photons as u64)
+            .sum();
+        Ok(map)
+    }
+}
+
+/// True on devices that silently cut long shader loops (llvmpipe).
+pub fn loop_limited(gpu: &Gpu) -> bool {
+    gpu.info.device_type == wgpu::DeviceType::Cpu
+}
+
+/// Fits lobes to the binned photons around each of the `splat_count` splats in `splats`
+/// (with their `materials`).
+pub fn fit_lobes(
+    gpu: &Gpu,
+    splats: &wgpu::Buffer,
+    materials: &wgpu::Buffer,
+    splat_count: u32,
+    bins: &GpuBins,
+    cfg: &EmConfig,
+) -> Result<GpuLobes> {
+    cfg.validate()?;
+    let t = Instant::now();
+    let n = splat_count as u64;
+    let lobes = gpu.storage_zeroed("lobes", (n * cfg.lobes as u64).max(1) * 32)?;
+    let light = gpu.storage_zeroed("splat light", n.max(1) * 32)?;
+    let fit_list = gpu.storage_zeroed("fit list", n.max(1) * 4)?;
+    let counters = gpu.storage_zeroed("em counters", 12)?;
+    let select = gpu.uniform("em select params", &cfg.params(splat_count, 0));
+    let mut encoder = gpu.encoder("em select");
+    gpu.dispatch(
+        &mut encoder,
+        "em_select",
+        &[
+            &select,
+            &bins.params_buf,
+            splats,
+            materials,
+            &bins.cell_start,
+            &fit_list,
+            &counters,
+        ],
+        groups_for(splat_count, em_select::WG),
+    )?;
+    gpu.submit_and_wait(encoder)?;
+    let (listed, max_candidates, fitted) = match gpu.read::<u32>(&counters, 3)?[..] {
+        [a, b, c] => (a, b, c),
+        _ => return Err(Error::Gpu("em counters readback was short".into())),
+    };
+    let chunk = iterations_per_dispatch(cfg, max_candidates, loop_limited(gpu))?;
+    let mut encoder = gpu.encoder("em fit");
+    let mut dispatches = 0;
+    for (begin, end) in dispatch_ranges(cfg.iterations, chunk) {
+        let params = EmParams {
+            iteration_begin: begin,
+            iteration_end: end,
+            ..cfg.params(splat_count, listed)
+        };
+        let uniform = gpu.uniform("em params", &params);
+        gpu.dispatch(
+            &mut encoder,
+            "em_fit",
+            &[
+                &uniform,
+                &bins.params_buf,
+                splats,
+                &fit_list,
+                &bins.cell_start,
+                &bins.geom,
+                &bins.power,
+                &lobes,
+                &light,
+            ],
+            listed,
+        )?;
+        dispatches += 1;
+    }
+    gpu.submit_and_wait(encoder)?;
+    Ok(GpuLobes {
+        lobes_per_splat: cfg.lobes,
+        lobes,
+        light,
+        splat_count,
+        stats: EmStats {
+            listed,
+            fitted,
+            max_candidates,
+            photons: 0,
+            dispatches,
+            ms: ms_since(t),
+        },
+    })
+}

@@ -1,0 +1,124 @@
+//! Twin of `wgsl/shared/lobes.wgsl`: the vMF and Ward-like lobe families, their constant
+//! initial mixture and the M-step of one lobe (see the WGSL file for the math).
+
+use glam::Vec3;
+
+use super::sampling::{Frame, PI, polar, to_world};
+use super::ward::tan2_to_normal;
+
+pub const MAX_LOBES: u32 = 8;
+pub const FAMILY_VMF: u32 = 0;
+pub const FAMILY_WARD: u32 = 1;
+pub const EM_SPARSE: u32 = 1;
+pub const EM_PRIORS: u32 = 2;
+pub const EM_FIT_ALL: u32 = 4;
+
+pub const SPARSE_THRESHOLD: f32 = 0.02;
+pub const SPARSE_PERIOD: u32 = 8;
+
+pub const SHARPNESS_MIN: f32 = 0.01;
+pub const SHARPNESS_MAX: f32 = 32000.0;
+pub const WARD_B2_MIN: f32 = 1.5625e-5;
+pub const WARD_B2_MAX: f32 = 1.0;
+pub const LOG_WEIGHT_MIN: f32 = -80.0;
+pub const PRIOR_WEIGHT: f32 = 0.01;
+pub const PRIOR_RESULTANT: f32 = 0.02;
+
+pub const INITIAL_COS: f32 = 0.5;
+pub const INITIAL_VMF: f32 = 4.0;
+pub const INITIAL_WARD: f32 = 8.0;
+
+pub fn initial_axis(f: &Frame, k: u32, count: u32) -> Vec3 {
+    if k == 0 {
+        return f.n;
+    }
+    to_world(f, polar(INITIAL_COS, (k - 1) as f32 / (count - 1) as f32))
+}
+
+pub fn initial_sharpness(family: u32) -> f32 {
+    if family == FAMILY_WARD {
+        INITIAL_WARD
+    } else {
+        INITIAL_VMF
+    }
+}
+
+pub fn ward_kappa(b2: f32) -> f32 {
+    let x = b2;
+    let num = 0.999_993_6 + x * (7.573_939 + x * (12.464_892 + x * 3.690_723_2));
+    let den = 1.0 + x * (9.573_322 + x * (25.632_956 + x * (21.099_653 + x * 3.958_497)));
+    num / den
+}
+
+pub fn lobe_log_norm(family: u32, n: Vec3, axis: Vec3, sharpness: f32) -> f32 {
+    if family == FAMILY_WARD {
+        let b2 = 1.0 / sharpness;
+        let cos_axis = n.dot(axis).max(0.01);
+        return -(4.0 * PI * b2 * cos_axis * ward_kappa(b2)).ln();
+    }
+    let k = sharpness;
+    (k / (2.0 * PI * (1.0 - (-2.0 * k).exp()))).ln()
+}
+
+pub fn lobe_stat(family: u32, n: Vec3, axis: Vec3, mirror: Vec3, w: Vec3) -> f32 {
+    if family == FAMILY_WARD {
+        let h = w + mirror;
+        let ch = n.dot(h).max(1e-12);
+        return tan2_to_normal(n, h, ch).min(1e12);
+    }
+    w.dot(axis)
+}
+
+pub fn lobe_exponent(family: u32, sharpness: f32, stat: f32) -> f32 {
+    if family == FAMILY_WARD {
+        return -stat * sharpness;
+    }
+    sharpness * (stat - 1.0)
+}
+
+pub fn mirror_axis(n: Vec3, axis: Vec3) -> Vec3 {
+    2.0 * n.dot(axis) * n - axis
+}
+
+#[derive(Clone, Copy, Debug, Default, PartialEq)]
+pub struct LobeFit {
+    pub axis: Vec3,
+    pub sharpness: f32,
+    pub weight: f32,
+}
+
+#[allow(clippy::too_many_arguments)]
+pub fn m_step(
+    family: u32,
+    flags: u32,
+    lobes: u32,
+    s0: f32,
+    s1: f32,
+    s2: Vec3,
+    total: f32,
+    count: f32,
+    old: LobeFit,
+) -> LobeFit {
+    let mut fit = old;
+    let priors = flags & EM_PRIORS != 0;
+    let mean_w = total / count.max(1.0);
+    let prior_w = if priors { PRIOR_WEIGHT * mean_w } else { 0.0 };
+    fit.weight = (s0 + prior_w) / (total + lobes as f32 * prior_w).max(1e-30);
+    let len = s2.length();
+    if !(s0 > 0.0 && len > 0.0) {
+        return fit;
+    }
+    fit.axis = s2 / len;
+    if family == FAMILY_WARD {
+        fit.sharpness = 1.0 / (s1 / s0).clamp(WARD_B2_MIN, WARD_B2_MAX);
+        return fit;
+    }
+    let prior_r = if priors {
+        PRIOR_RESULTANT * mean_w
+    } else {
+        0.0
+    };
+    let r = (len / (s0 + prior_r)).min(0.999_999);
+    fit.sharpness = (r * (3.0 - r * r) / (1.0 - r * r)).clamp(SHARPNESS_MIN, SHARPNESS_MAX);
+    fit
+}

@@ -1,0 +1,356 @@
+//! The lobe fit: GPU against the CPU mirror on identical binned photons, recovery of known
+//! mixtures for both lobe families, EM's log-likelihood over iterations, and degenerate
+//! inputs.
+
+mod common;
+
+use std::path::Path;
+
+use glam::Vec3;
+use lobelight::bins::{PhotonBins, bin_params};
+use lobelight::cpu;
+use lobelight::em::{EmConfig, LobeFamily, LobeMap};
+use lobelight::gpu::Gpu;
+use lobelight::gpu::bins::GpuBins;
+use lobelight::gpu::em::{fit_lobes, loop_limited};
+use lobelight::grid::grid_params;
+use lobelight::photons::PhotonConfig;
+use lobelight::scene::{self, file::StoreRange};
+use lobelight::shared::sampling::{frame_of, polar, to_world};
+use lobelight::shared::ward::ward_half_vector;
+use lobelight::types::{Material, Photon, Splat};
+
+use common::Rng;
+
+const R: f32 = 0.1;
+
+/// A test scene: splats far apart, each with its own photons at its center.
+struct Fixture {
+    splats: Vec<Splat>,
+    materials: Vec<Material>,
+    photons: Vec<Photon>,
+}
+
+impl Fixture {
+    /// Splat i sits at (i, 0, 0) with normal +z; `sets[i]` are its photons (direction,
+    /// power), spread over a disk of radius R/2 in its plane.
+    fn new(sets: &[Vec<(Vec3, [f32; 3])>]) -> Fixture {
+        let mut rng = Rng(99);
+        let mut photons = Vec::new();
+        let splats = sets
+            .iter()
+            .enumerate()
+            .map(|(i, set)| {
+                let c = Vec3::new(i as f32, 0.0, 0.0);
+                for (dir, power) in set {
+                    let a = rng.f32() * std::f32::consts::TAU;
+                    let r = 0.5 * R * rng.f32().sqrt();
+                    photons.push(Photon {
+                        position: (c + Vec3::new(r * a.cos(), r * a.sin(), 0.0)).into(),
+                        bounce: 1,
+                        direction: (*dir).into(),
+                        splat: i as u32,
+                        power: *power,
+                        path: photons.len() as u32,
+                    });
+                }
+                Splat {
+                    center: c.into(),
+                    radius: R,
+                    normal: [0.0, 0.0, 1.0],
+                    material: 0,
+                    diffuse: [0.3; 3],
+                    _pad: 0,
+                }
+            })
+            .collect();
+        Fixture {
+            splats,
+            materials: vec![Material {
+                specular: [0.5; 3],
+                roughness: 0.1,
+            }],
+            photons,
+        }
+    }
+
+    fn bins(&self) -> PhotonBins {
+        let grid = grid_params(&self.splats, &Default::default()).unwrap();
+        cpu::bin_photons(&bin_params(&grid, R).unwrap(), &self.photons).unwrap()
+    }
+}
+
+fn config(family: LobeFamily, lobes: u32, iterations: u32) -> EmConfig {
+    EmConfig {
+        lobes,
+        iterations,
+        family,
+        sparse: false,
+        priors: false,
+        fit_all: true,
+        radius: R,
+        slab: 2.0,
+    }
+}
+
+fn on_cpu(cfg: &EmConfig, bins: &PhotonBins, splats: &[Splat], materials: &[Material]) -> LobeMap {
+    cpu::fit_lobes(cfg, bins, splats, materials, false).unwrap()
+}
+
+fn on_gpu(
+    gpu: &Gpu,
+    cfg: &EmConfig,
+    bins: &PhotonBins,
+    splats: &[Splat],
+    materials: &[Material],
+) -> LobeMap {
+    let uploaded = GpuBins::upload(gpu, bins).unwrap();
+    let s = gpu.storage("splats", splats).unwrap();
+    let m = gpu.storage("materials", materials).unwrap();
+    fit_lobes(gpu, &s, &m, splats.len() as u32, &uploaded, cfg)
+        .unwrap()
+        .download(gpu)
+        .unwrap()
+}
+
+/// A direction from the vMF lobe (axis, κ), by inverting its cosine's distribution.
+fn sample_vmf(rng: &mut Rng, axis: Vec3, kappa: f32) -> Vec3 {
+    let u = rng.f32().max(1e-7);
+    let c = 1.0 + (u + (1.0 - u) * (-2.0 * kappa).exp()).ln() / kappa;
+    to_world(&frame_of(axis), polar(c.clamp(-1.0, 1.0), rng.f32()))
+}
+
+/// A direction from the thesis's lobe g(ω; L, β) about normal +z: a Ward half-vector h
+/// reflects the mirrored axis, accepted with probability (h·ω) cos³δ, which turns Ward's
+/// sampling density into g.
+fn sample_ward_lobe(rng: &mut Rng, axis: Vec3, beta: f32) -> Vec3 {
+    let n = Vec3::Z;
+    let mirror = 2.0 * n.dot(axis) * n - axis;
+    loop {
+        let h = ward_half_vector(rng.f32(), rng.f32(), beta);
+        let w = 2.0 * h.dot(mirror) * h - mirror;
+        let accept = h.dot(w) * h.z.powi(3);
+        if w.z > 0.0 && rng.f32() < accept {
+            return w;
+        }
+    }
+}
+
+fn dir(theta_deg: f32, phi_deg: f32) -> Vec3 {
+    let (t, p) = (theta_deg.to_radians(), phi_deg.to_radians());
+    Vec3::new(t.sin() * p.cos(), t.sin() * p.sin(), t.cos())
+}
+
+/// Photons from a known mixture; returns them and the lobes (axis, width parameter, weight).
+fn mixture(
+    rng: &mut Rng,
+    family: LobeFamily,
+    lobes: &[(Vec3, f32, f32)],
+    n: usize,
+) -> Vec<(Vec3, [f32; 3])> {
+    let mut out = Vec::new();
+    for &(axis, width, weight) in lobes {
+        let count = (weight * n as f32).round() as usize;
+        for _ in 0..count {
+            let d = match family {
+                LobeFamily::Vmf => loop {
+                    let d = sample_vmf(rng, axis, width);
+                    if d.z > 0.0 {
+                        break d;
+                    }
+                },
+                LobeFamily::Ward => sample_ward_lobe(rng, axis, width),
+            };
+            out.push((d, [1.0, 0.8, 0.6]));
+        }
+    }
+    out
+}
+
+/// The fitted lobe closest in axis to `axis`.
+fn closest(fit: &[lobelight::types::Lobe], axis: Vec3) -> lobelight::types::Lobe {
+    *fit.iter()
+        .max_by(|a, b| {
+            let da = Vec3::from(a.axis).dot(axis);
+            let db = Vec3::from(b.axis).dot(axis);
+            da.total_cmp(&db)
+        })
+        .unwrap()
+}
+
+fn check_recovery(family: LobeFamily, truth: &[(Vec3, f32, f32)], on: &str, map: &LobeMap) {
+    let fit = map.splat_lobes(0);
+    assert_eq!(fit.len(), truth.len());
+    for &(axis, width, weight) in truth {
+        let l = closest(fit, axis);
+        let angle = Vec3::from(l.axis).angle_between(axis).to_degrees();
+        // Width as an angle: 1/√κ for vMF, β for Ward (sharpness is 1/β²).
+        let (true_w, fit_w) = match family {
+            LobeFamily::Vmf => (1.0 / width.sqrt(), 1.0 / l.sharpness.sqrt()),
+            LobeFamily::Ward => (width, 1.0 / l.sharpness.sqrt()),
+        };
+        let width_err = (fit_w - true_w).abs() / true_w;
+        eprintln!(
+            "{family:?} on {on}: axis error {angle:.3}°, width {fit_w:.4} vs {true_w:.4} \
+             ({:.1} %), weight {:.3} vs {weight:.3}",
+            100.0 * width_err,
+            l.weight
+        );
+        assert!(angle <= 2.0, "{family:?} {on}: axis off by {angle}°");
+        assert!(
+            width_err <= 0.10,
+            "{family:?} {on}: width off by {width_err}"
+        );
+        assert!(
+            (l.weight - weight).abs() <= 0.05,
+            "{family:?} {on}: weight {}",
+            l.weight
+        );
+    }
+}
+
+#[test]
+fn known_mixtures_are_recovered() {
+    let gpu = common::gpu();
+    let cases = [
+        (
+            LobeFamily::Vmf,
+            vec![
+                (dir(10.0, 30.0), 60.0, 0.5),
+                (dir(45.0, 200.0), 150.0, 0.3),
+                (dir(50.0, 320.0), 400.0, 0.2),
+            ],
+        ),
+        (
+            LobeFamily::Ward,
+            vec![
+                (dir(10.0, 30.0), 0.09, 0.5),
+                (dir(45.0, 200.0), 0.06, 0.3),
+                (dir(50.0, 320.0), 0.035, 0.2),
+            ],
+        ),
+    ];
+    for (family, truth) in cases {
+        let mut rng = Rng(5);
+        let fixture = Fixture::new(&[mixture(&mut rng, family, &truth, 1500)]);
+        let bins = fixture.bins();
+        let cfg = config(family, 3, 40);
+        let cpu_map = on_cpu(&cfg, &bins, &fixture.splats, &fixture.materials);
+        assert_eq!(cpu_map.light[0].photons, 1500);
+        check_recovery(family, &truth, "CPU", &cpu_map);
+        let gpu_map = on_gpu(&gpu, &cfg, &bins, &fixture.splats, &fixture.materials);
+        check_recovery(family, &truth, "GPU", &gpu_map);
+    }
+}
+
+#[test]
+fn gpu_fit_equals_cpu_fit_on_the_same_photons() {
+    let gpu = common::gpu();
+    let scene = scene::load(Path::new("scenes/cornell.toml")).unwrap();
+    let cfg = PhotonConfig {
+        photons: 40_000,
+        store: StoreRange::All,
+        ..PhotonConfig::from_scene(&scene)
+    };
+    let (map, grid, _) = cpu::trace_scene(&scene, &cfg, &mut |_, _| {}).unwrap();
+    let bins = cpu::bin_photons(
+        &bin_params(&grid.params, scene.search_radius()).unwrap(),
+        &map.photons,
+    )
+    .unwrap();
+    for (family, sparse) in [
+        (LobeFamily::Vmf, false),
+        (LobeFamily::Ward, false),
+        (LobeFamily::Vmf, true),
+    ] {
+        // EM amplifies rounding: where lobes compete for one cluster, a difference in the last
+        // bits of exp/log (the GPU's are not the CPU's) grows about threefold per iteration
+        // (measured on this scene: largest weight difference 6.5e-7 after 1 iteration, 3e-4
+        // after 5, 2e-3 after 10, 0.2 after 20). Parity of the passes is checked at 5
+        // iterations, where that growth stays under the tolerance; README, "Lobe fit".
+        let em = EmConfig {
+            family,
+            sparse,
+            fit_all: true,
+            iterations: 5,
+            ..EmConfig::from_scene(&scene)
+        };
+        let limited = loop_limited(&gpu);
+        let c = cpu::fit_lobes(&em, &bins, &scene.splats, &scene.materials, limited).unwrap();
+        let g = on_gpu(&gpu, &em, &bins, &scene.splats, &scene.materials);
+        assert!(c.stats.fitted > 1000, "{} splats fitted", c.stats.fitted);
+        assert_eq!(c.stats.fitted, g.stats.fitted);
+        let mut worst = (0.0f32, 0.0f32, 0.0f32);
+        let (mut compared, mut faint, mut off) = (0usize, 0usize, 0usize);
+        for i in 0..scene.splats.len() {
+            let (cl, gl) = (&c.light[i], &g.light[i]);
+            assert_eq!(cl.photons, gl.photons, "splat {i}");
+            assert_eq!(cl.lobes, gl.lobes, "splat {i}");
+            close(
+                gl.irradiance,
+                cl.irradiance,
+                1e-4,
+                &format!("splat {i} irradiance"),
+            );
+            for (a, b) in g.splat_lobes(i).iter().zip(c.splat_lobes(i)) {
+                // 2 asin(|a - b| / 2): acos of the dot product cannot resolve below 5e-4 in f32.
+                let chord = (Vec3::from(a.axis) - Vec3::from(b.axis)).length();
+                let angle = 2.0 * (0.5 * chord).asin();
+                let sharp = (a.sharpness - b.sharpness).abs() / b.sharpness;
+                let weight = (a.weight - b.weight).abs() / b.weight.max(1e-3);
+                if weight > 1e-3 {
+                    eprintln!("splat {i}: weights {} vs {}", a.weight, b.weight);
+                    off += 1;
+                }
+                let what = format!("{family:?} sparse {sparse}: splat {i} lobe {a:?} vs {b:?}");
+                // A lobe that carries almost no weight has an ill-conditioned axis and width
+                // (a near-zero resultant of nearly cancelling directions): f32 rounding alone
+                // moves them. Such lobes shade nothing; their weights and irradiance are still
+                // compared above and below.
+                if b.weight < 0.01 {
+                    faint += 1;
+                    continue;
+                }
+                compared += 1;
+                if angle > 1e-3 || sharp > 1e-3 {
+                    eprintln!("{what}: axes {angle} rad apart, sharpness {sharp} relative");
+                    off += 1;
+                }
+                worst = (worst.0.max(angle), worst.1.max(sharp), worst.2.max(weight));
+                // Lobe irradiance within 1e-3 of the splat's total.
+                let total = Vec3::from(cl.irradiance).max_element();
+                let diff = (Vec3::from(a.irradiance) - Vec3::from(b.irradiance))
+                    .abs()
+                    .max_element();
+                if diff > 1e-3 * total {
+                    eprintln!("{what}: irradiance");
+                    off += 1;
+                }
+            }
+        }
+        eprintln!(
+            "{family:?} sparse {sparse}: {compared} lobes compared, {faint} faint, {off} apart; \
+             worst axis {:.2e} rad, sharpness {:.2e}, weight {:.2e}",
+            worst.0, worst.1, worst.2
+        );
+        assert!(
+            faint * 4 < compared,
+            "{faint} faint lobes, {compared} compared"
+        );
+        // Sparse EM has a threshold: a responsibility within rounding of 0.02 freezes on one
+        // side and not on the other, and the splat's lobes then part by more than rounding.
+        // Allowed on one lobe in 1,000; plain EM must match everywhere.
+        let allowed = if sparse { compared / 1_000 } else { 0 };
+        assert!(off <= allowed, "{off} lobes apart (allowed {allowed})");
+    }
+}
+
+fn close(a: [f32; 3], b: [f32; 3], rel: f32, what: &str) {
+    let scale = b.iter().fold(0.0f32, |m, x| m.max(x.abs()));
+    for (x, y) in a.iter().zip(&b) {
+        assert!(
+            (x - y).abs() <= rel * scale + 1e-12,
+            "{what}: {a:?} vs {b:?}"
+        );
+    }
+}

@@ -1,0 +1,350 @@
+// Lobe fit, pass 2 of 2 (DESIGN.md section 6): one workgroup per listed splat fits K lobes to
+// the directions of the photons within R of its center, on its front side and inside a slab
+// around its plane, by weighted EM with a fixed iteration count from constant initial lobes.
+//
+// Work split: the splat's candidates are the rows of bin cells around it (wgsl/shared/bins);
+// invocation t takes every WG-th candidate, t first, in row order. The first CACHE photons it
+// accepts stay in private memory (direction, weight, and for sparse EM their responsibilities);
+// any further ones are re-read and re-tested from the binned list on every pass, so a splat
+// may have any number of photons and none is dropped. Each pass adds the invocation's photons
+// into private sums in that fixed order; the sums of the invocations then add up in a fixed
+// order too (one column per invocation, two barriers), so the result is deterministic.
+// Every invocation then runs the same M-step on the same totals.
+//
+// Passes: `iterations` EM passes (E-step + sums for the M-step), then one final pass with the
+// fitted lobes: RGB irradiance per lobe, total irradiance, and the log-likelihood.
+// Splats listed without the fit bit (not glossy) run only the final pass with no lobes.
+// The host may split the iterations over several dispatches (see EmParams) to keep each
+// invocation's loops under llvmpipe's limit; the mixture waits in the lobe buffer between.
+// CPU mirror: src/cpu/em_fit.rs.
+
+// #import types
+// #import dispatch
+// #import bins
+// #import octahedral
+// #import lobes
+
+@group(0) @binding(0) var<uniform> em: EmParams;
+@group(0) @binding(1) var<uniform> bins: BinParams;
+@group(0) @binding(2) var<storage, read> splats: array<Splat>;
+@group(0) @binding(3) var<storage, read> fit_list: array<u32>;
+@group(0) @binding(4) var<storage, read> cell_start: array<u32>;
+@group(0) @binding(5) var<storage, read> bin_geom: array<BinnedPhoton>;
+@group(0) @binding(6) var<storage, read> bin_power: array<vec4<f32>>;
+@group(0) @binding(7) var<storage, read_write> lobes: array<Lobe>;
+@group(0) @binding(8) var<storage, read_write> light: array<SplatLight>;
+
+const WG: u32 = 32u;
+const CACHE: u32 = 8u;
+const FIT_BIT: u32 = 0x80000000u;
+// Sums: [0] sum w log p, [1] sum w, [2] photon count, [3..6) sum of RGB power, then five per
+// lobe from LOBE_SUMS: EM passes sum w h, w h stat, w h w (3); the final pass sums h RGB (3).
+const SUM_LOG: u32 = 0u;
+const SUM_WEIGHT: u32 = 1u;
+const SUM_COUNT: u32 = 2u;
+const SUM_RGB: u32 = 3u;
+const LOBE_SUMS: u32 = 6u;
+const SUMS: u32 = 46u;
+const PASS_EM: u32 = 0u;
+const PASS_FINAL: u32 = 1u;
+
+var<workgroup> partial: array<array<f32, SUMS>, WG>;
+var<workgroup> total: array<f32, SUMS>;
+var<workgroup> shared_entry: u32;
+
+// The splat (the same in every invocation).
+var<private> center: vec3<f32>;
+var<private> normal: vec3<f32>;
+var<private> slab: f32;
+var<private> lobe_count: u32;
+// The mixture (identical in every invocation) and what the E-step derives from it.
+var<private> mix_axis: array<vec3<f32>, MAX_LOBES>;
+var<private> mix_sharpness: array<f32, MAX_LOBES>;
+var<private> mix_weight: array<f32, MAX_LOBES>;
+var<private> mix_mirror: array<vec3<f32>, MAX_LOBES>;
+var<private> mix_log: array<f32, MAX_LOBES>;
+// One photon's responsibilities and per-lobe statistics (for frozen lobes: h * stat).
+var<private> resp: array<f32, MAX_LOBES>;
+var<private> stat: array<f32, MAX_LOBES>;
+var<private> acc: array<f32, SUMS>;
+// This invocation's photons: the cached ones, then where streaming resumes.
+var<private> cache_dir: array<vec4<f32>, CACHE>;
+var<private> cache_index: array<u32, CACHE>;
+var<private> frozen_h: array<array<f32, MAX_LOBES>, CACHE>;
+var<private> frozen_hx: array<array<f32, MAX_LOBES>, CACHE>;
+// Lobes the last e_step left frozen, one bit each.
+var<private> frozen_mask: u32;
+var<private> cached: u32;
+var<private> streaming: bool;
+var<private> resume_row: u32;
+var<private> resume_j: u32;
+var<private> resume_offset: u32;
+
+// First candidate of row [begin, ..) for invocation `lid`, whose candidates are those with
+// (offset + position in row) = lid mod WG.
+fn first_in_row(begin: u32, offset: u32, lid: u32) -> u32 {
+    return begin + (lid + WG - offset % WG) % WG;
+}
+
+struct Candidate {
+    ok: bool,
+    dir: vec3<f32>,
+    weight: f32,
+}
+
+fn accept(j: u32) -> Candidate {
+    var c: Candidate;
+    let g = bin_geom[j];
+    let d = g.position - center;
+    c.dir = oct_decode(g.direction);
+    c.weight = bin_power[j].w;
+    c.ok = dot(d, d) <= em.radius2 && abs(dot(d, normal)) <= slab && dot(c.dir, normal) > 0.0;
+    return c;
+}
+
+fn prepare_mixture() {
+    for (var k = 0u; k < lobe_count; k++) {
+        mix_mirror[k] = mirror_axis(normal, mix_axis[k]);
+        mix_log[k] = max(log(max(mix_weight[k], 1e-35)), LOG_WEIGHT_MIN)
+            + lobe_log_norm(em.family, normal, mix_axis[k], mix_sharpness[k]);
+    }
+}
+
+// Responsibilities of photon `w` into `resp` (and `stat`); returns log p(w) of the mixture
+// when every lobe was evaluated. With `sparse`, lobes whose frozen responsibility for cached
+// photon `slot` is under the threshold keep it (and h * stat), and the others share the rest.
+fn e_step(w: vec3<f32>, slot: u32, sparse: bool, full: bool) -> f32 {
+    let use_frozen = sparse && !full && slot < CACHE;
+    frozen_mask = 0u;
+    var frozen_sum = 0.0;
+    var m = -3.0e38;
+    for (var k = 0u; k < lobe_count; k++) {
+        if use_frozen && frozen_h[slot][k] < SPARSE_THRESHOLD {
+            frozen_mask |= 1u << k;
+            frozen_sum += frozen_h[slot][k];
+            continue;
+        }
+        stat[k] = lobe_stat(em.family, normal, mix_axis[k], mix_mirror[k], w);
+        resp[k] = mix_log[k] + lobe_exponent(em.family, mix_sharpness[k], stat[k]);
+        m = max(m, resp[k]);
+    }
+    var s = 0.0;
+    for (var k = 0u; k < lobe_count; k++) {
+        if (frozen_mask & (1u << k)) == 0u {
+            resp[k] = exp(resp[k] - m);
+            s += resp[k];
+        }
+    }
+    let scale = (1.0 - frozen_sum) / s;
+    for (var k = 0u; k < lobe_count; k++) {
+        if (frozen_mask & (1u << k)) != 0u {
+            resp[k] = frozen_h[slot][k];
+            stat[k] = frozen_hx[slot][k];
+        } else {
+            resp[k] *= scale;
+            if sparse && slot < CACHE {
+                frozen_h[slot][k] = resp[k];
+                frozen_hx[slot][k] = resp[k] * stat[k];
+            }
+        }
+    }
+    return m + log(s);
+}
+
+// Adds one photon to this invocation's sums.
+fn absorb(w: vec3<f32>, weight: f32, index: u32, slot: u32, kind: u32, sparse: bool, full: bool) {
+    acc[SUM_WEIGHT] += weight;
+    acc[SUM_COUNT] += 1.0;
+    if kind == PASS_FINAL {
+        let power = bin_power[index].xyz;
+        acc[SUM_RGB] += power.x;
+        acc[SUM_RGB + 1u] += power.y;
+        acc[SUM_RGB + 2u] += power.z;
+        if lobe_count == 0u {
+            return;
+        }
+        acc[SUM_LOG] += weight * e_step(w, slot, false, true);
+        for (var k = 0u; k < lobe_count; k++) {
+            let o = LOBE_SUMS + 5u * k;
+            acc[o] += resp[k] * power.x;
+            acc[o + 1u] += resp[k] * power.y;
+            acc[o + 2u] += resp[k] * power.z;
+        }
+        return;
+    }
+    let log_p = e_step(w, slot, sparse, full);
+    acc[SUM_LOG] += weight * log_p;
+    for (var k = 0u; k < lobe_count; k++) {
+        let o = LOBE_SUMS + 5u * k;
+        let wh = weight * resp[k];
+        let frozen = (frozen_mask & (1u << k)) != 0u;
+        acc[o] += wh;
+        acc[o + 1u] += select(wh * stat[k], weight * stat[k], frozen);
+        acc[o + 2u] += wh * w.x;
+        acc[o + 3u] += wh * w.y;
+        acc[o + 4u] += wh * w.z;
+    }
+}
+
+// The invocation's first CACHE accepted photons into the cache; notes where the rest begin.
+fn gather(lid: u32, box: BinBox) {
+    cached = 0u;
+    streaming = false;
+    var offset = 0u;
+    for (var r = 0u; r < bin_row_count(box); r++) {
+        let row = bin_row(box, r, bins);
+        let begin = cell_start[row.x];
+        let end = cell_start[row.y];
+        for (var j = first_in_row(begin, offset, lid); j < end; j += WG) {
+            let c = accept(j);
+            if !c.ok {
+                continue;
+            }
+            if cached == CACHE {
+                streaming = true;
+                resume_row = r;
+                resume_j = j;
+                resume_offset = offset;
+                return;
+            }
+            cache_dir[cached] = vec4<f32>(c.dir, c.weight);
+            cache_index[cached] = j;
+            cached += 1u;
+        }
+        offset += end - begin;
+    }
+}
+
+// One pass over this invocation's photons, cached ones first, into fresh private sums.
+fn photon_pass(lid: u32, box: BinBox, kind: u32, sparse: bool, full: bool) {
+    for (var q = 0u; q < SUMS; q++) {
+        acc[q] = 0.0;
+    }
+    for (var c = 0u; c < cached; c++) {
+        absorb(cache_dir[c].xyz, cache_dir[c].w, cache_index[c], c, kind, sparse, full);
+    }
+    if !streaming {
+        return;
+    }
+    var offset = resume_offset;
+    for (var r = resume_row; r < bin_row_count(box); r++) {
+        let row = bin_row(box, r, bins);
+        let begin = cell_start[row.x];
+        let end = cell_start[row.y];
+        var j = select(first_in_row(begin, offset, lid), resume_j, r == resume_row);
+        for (; j < end; j += WG) {
+            let c = accept(j);
+            if c.ok {
+                absorb(c.dir, c.weight, j, CACHE, kind, sparse, full);
+            }
+        }
+        offset += end - begin;
+    }
+}
+
+// Fixed-order sum of the first `count` sums over the invocations into `total`.
+fn reduce(lid: u32, count: u32) {
+    for (var q = 0u; q < count; q++) {
+        partial[lid][q] = acc[q];
+    }
+    workgroupBarrier();
+    for (var q = lid; q < count; q += WG) {
+        var s = 0.0;
+        for (var t = 0u; t < WG; t++) {
+            s += partial[t][q];
+        }
+        total[q] = s;
+    }
+    workgroupBarrier();
+}
+
+@compute @workgroup_size(32)
+fn main(@builtin(workgroup_id) wg: vec3<u32>, @builtin(num_workgroups) num_wg: vec3<u32>,
+        @builtin(local_invocation_index) lid: u32) {
+    let index = linear_workgroup(wg, num_wg);
+    if index >= em.active_count {
+        return;
+    }
+    if lid == 0u {
+        shared_entry = fit_list[index];
+    }
+    let entry = workgroupUniformLoad(&shared_entry);
+    let splat_index = entry & ~FIT_BIT;
+    let fit = (entry & FIT_BIT) != 0u;
+    let s = splats[splat_index];
+    center = s.center;
+    normal = s.normal;
+    slab = em.slab * s.radius;
+    lobe_count = select(0u, em.lobes, fit);
+    // Diffuse splats run no iterations; their only pass comes with the last dispatch.
+    let begin = select(em.iterations, em.iteration_begin, fit);
+    let end = select(em.iterations, em.iteration_end, fit);
+    let last = em.iteration_end == em.iterations;
+    if !last && !fit {
+        return;
+    }
+    let f = frame_of(normal);
+    for (var k = 0u; k < lobe_count; k++) {
+        if begin == 0u {
+            mix_axis[k] = initial_axis(f, k, lobe_count);
+            mix_sharpness[k] = initial_sharpness(em.family);
+            mix_weight[k] = 1.0 / f32(lobe_count);
+        } else {
+            let l = lobes[splat_index * em.lobes + k];
+            mix_axis[k] = l.axis;
+            mix_sharpness[k] = l.sharpness;
+            mix_weight[k] = l.weight;
+        }
+    }
+    let box = bin_box(center, em.radius, bins);
+    gather(lid, box);
+    let sparse = (em.flags & EM_SPARSE) != 0u;
+    let sums = LOBE_SUMS + 5u * lobe_count;
+
+    for (var it = begin; it < end; it++) {
+        prepare_mixture();
+        // A dispatch starts with no frozen responsibilities, hence a full update.
+        let full = it % SPARSE_PERIOD == 0u || it == begin;
+        photon_pass(lid, box, PASS_EM, sparse, full);
+        reduce(lid, sums);
+        for (var k = 0u; k < lobe_count; k++) {
+            let o = LOBE_SUMS + 5u * k;
+            let old = LobeFit(mix_axis[k], mix_sharpness[k], mix_weight[k]);
+            let s2 = vec3<f32>(total[o + 2u], total[o + 3u], total[o + 4u]);
+            let next = m_step(em.family, em.flags, lobe_count, total[o], total[o + 1u], s2,
+                              total[SUM_WEIGHT], total[SUM_COUNT], old);
+            mix_axis[k] = next.axis;
+            mix_sharpness[k] = next.sharpness;
+            mix_weight[k] = next.weight;
+        }
+    }
+
+    if !last {
+        if lid < lobe_count {
+            lobes[splat_index * em.lobes + lid] =
+                Lobe(mix_axis[lid], mix_sharpness[lid], vec3<f32>(0.0), mix_weight[lid]);
+        }
+        return;
+    }
+    prepare_mixture();
+    photon_pass(lid, box, PASS_FINAL, false, true);
+    reduce(lid, sums);
+    let photons = u32(total[SUM_COUNT]);
+    let written = select(0u, lobe_count, photons > 0u);
+    if lid < written {
+        let o = LOBE_SUMS + 5u * lid;
+        let irradiance = vec3<f32>(total[o], total[o + 1u], total[o + 2u]) * em.inv_area;
+        lobes[splat_index * em.lobes + lid] =
+            Lobe(mix_axis[lid], mix_sharpness[lid], irradiance, mix_weight[lid]);
+    }
+    if lid == 0u {
+        var out: SplatLight;
+        out.irradiance = vec3<f32>(total[SUM_RGB], total[SUM_RGB + 1u], total[SUM_RGB + 2u])
+            * em.inv_area;
+        out.photons = photons;
+        out.log_likelihood = total[SUM_LOG];
+        out.weight = total[SUM_WEIGHT];
+        out.lobes = written;
+        light[splat_index] = out;
+    }
+}

@@ -1,0 +1,50 @@
+// Lobe fit, pass 1 of 2: list the splats that have binned photons near them, so em_fit spends
+// no workgroup on the others (their outputs stay zero). An entry is the splat index, with the
+// top bit set when the splat's lobes are fitted (a glossy material, or EM_FIT_ALL); other
+// listed splats only gather their total irradiance. The list's order depends on scheduling,
+// but each em_fit workgroup writes only its own splat, so the results do not.
+// counters = [listed splats, most candidate photons of a listed splat, splats fitted].
+// CPU mirror: src/cpu/em_select.rs.
+
+// #import types
+// #import dispatch
+// #import bins
+// #import lobes
+
+@group(0) @binding(0) var<uniform> em: EmParams;
+@group(0) @binding(1) var<uniform> bins: BinParams;
+@group(0) @binding(2) var<storage, read> splats: array<Splat>;
+@group(0) @binding(3) var<storage, read> materials: array<Material>;
+@group(0) @binding(4) var<storage, read> cell_start: array<u32>;
+@group(0) @binding(5) var<storage, read_write> fit_list: array<u32>;
+@group(0) @binding(6) var<storage, read_write> counters: array<atomic<u32>, 3>;
+
+const WG: u32 = 64u;
+const FIT_BIT: u32 = 0x80000000u;
+
+@compute @workgroup_size(64)
+fn main(@builtin(workgroup_id) wg: vec3<u32>, @builtin(num_workgroups) num_wg: vec3<u32>,
+        @builtin(local_invocation_index) lid: u32) {
+    let i = linear_workgroup(wg, num_wg) * WG + lid;
+    if i >= em.splat_count {
+        return;
+    }
+    let s = splats[i];
+    let box = bin_box(s.center, em.radius, bins);
+    var candidates = 0u;
+    for (var r = 0u; r < bin_row_count(box); r++) {
+        let row = bin_row(box, r, bins);
+        candidates += cell_start[row.y] - cell_start[row.x];
+    }
+    if candidates == 0u {
+        return;
+    }
+    let glossy = any(materials[s.material].specular > vec3<f32>(0.0));
+    let fit = glossy || (em.flags & EM_FIT_ALL) != 0u;
+    let slot = atomicAdd(&counters[0], 1u);
+    fit_list[slot] = i | select(0u, FIT_BIT, fit);
+    atomicMax(&counters[1], candidates);
+    if fit {
+        atomicAdd(&counters[2], 1u);
+    }
+}
