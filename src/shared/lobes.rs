@@ -104,11 +104,15 @@ pub fn m_step(
     let mean_w = total / count.max(1.0);
     let prior_w = if priors { PRIOR_WEIGHT * mean_w } else { 0.0 };
     fit.weight = (s0 + prior_w) / (total + lobes as f32 * prior_w).max(1e-30);
-    let len = s2.length();
-    if !(s0 > 0.0 && len > 0.0) {
+    // Scaled by its largest component first: the squares of an emptied lobe's tiny sums
+    // would underflow. Sums near the float's subnormal range give no reliable direction.
+    let big = s2.x.abs().max(s2.y.abs().max(s2.z.abs()));
+    if !(s0 > 1e-30 && big > 1e-30) {
         return fit;
     }
-    fit.axis = s2 / len;
+    let v = s2 / big;
+    let v_len = v.length();
+    fit.axis = v / v_len;
     if family == FAMILY_WARD {
         fit.sharpness = 1.0 / (s1 / s0).clamp(WARD_B2_MIN, WARD_B2_MAX);
         return fit;
@@ -118,7 +122,7 @@ pub fn m_step(
     } else {
         0.0
     };
-    let r = (len / (s0 + prior_r)).min(0.999_999);
+    let r = (v_len * (big / (s0 + prior_r))).min(0.999_999);
     fit.sharpness = (r * (3.0 - r * r) / (1.0 - r * r)).clamp(SHARPNESS_MIN, SHARPNESS_MAX);
     fit
 }

@@ -114,17 +114,21 @@ fn m_step(family: u32, flags: u32, lobes: u32, s0: f32, s1: f32, s2: vec3<f32>, 
     let mean_w = total / max(count, 1.0);
     let prior_w = select(0.0, PRIOR_WEIGHT * mean_w, priors);
     fit.weight = (s0 + prior_w) / max(total + f32(lobes) * prior_w, 1e-30);
-    let len = length(s2);
-    if !(s0 > 0.0 && len > 0.0) {
+    // Scaled by its largest component first: the squares of an emptied lobe's tiny sums
+    // would underflow. Sums near the float's subnormal range give no reliable direction.
+    let big = max(abs(s2.x), max(abs(s2.y), abs(s2.z)));
+    if !(s0 > 1e-30 && big > 1e-30) {
         return fit;
     }
-    fit.axis = s2 / len;
+    let v = s2 / big;
+    let v_len = length(v);
+    fit.axis = v / v_len;
     if family == FAMILY_WARD {
         fit.sharpness = 1.0 / clamp(s1 / s0, WARD_B2_MIN, WARD_B2_MAX);
         return fit;
     }
     let prior_r = select(0.0, PRIOR_RESULTANT * mean_w, priors);
-    let r = min(len / (s0 + prior_r), 0.999999);
+    let r = min(v_len * (big / (s0 + prior_r)), 0.999999);
     fit.sharpness = clamp(r * (3.0 - r * r) / (1.0 - r * r), SHARPNESS_MIN, SHARPNESS_MAX);
     return fit;
 }
