@@ -4,6 +4,7 @@ use std::path::PathBuf;
 use std::process::ExitCode;
 
 use clap::{Args, Parser, Subcommand, ValueEnum};
+use lobelight::em::{EmConfig, LobeFamily};
 use lobelight::gpu::{BackendChoice, Gpu};
 use lobelight::photons::PhotonConfig;
 use lobelight::scene::file::StoreRange;
@@ -52,6 +53,21 @@ struct BakeArgs {
     /// Which hits store photons.
     #[arg(long, value_enum)]
     store: Option<StoreRange>,
+    /// EM iterations of the lobe fit.
+    #[arg(long)]
+    iterations: Option<u32>,
+    /// Lobes per splat (1–8).
+    #[arg(long)]
+    lobes: Option<u32>,
+    /// Photon search radius (scene units).
+    #[arg(long)]
+    radius: Option<f32>,
+    /// Lobe family.
+    #[arg(long, value_enum)]
+    family: Option<LobeFamily>,
+    /// Sparse EM (responsibilities under 0.02 frozen between full updates).
+    #[arg(long)]
+    sparse: bool,
 }
 
 impl BakeArgs {
@@ -65,7 +81,21 @@ impl BakeArgs {
         if let Some(s) = self.store {
             scene.bake.store = s;
         }
-        PhotonConfig::from_scene(scene).validate()
+        if let Some(i) = self.iterations {
+            scene.bake.iterations = i;
+        }
+        if let Some(k) = self.lobes {
+            scene.bake.lobes = k;
+        }
+        if let Some(r) = self.radius {
+            scene.bake.radius = Some(r);
+        }
+        if let Some(f) = self.family {
+            scene.bake.family = f;
+        }
+        scene.bake.sparse |= self.sparse;
+        PhotonConfig::from_scene(scene).validate()?;
+        EmConfig::from_scene(scene).validate()
     }
 }
 
@@ -124,6 +154,12 @@ enum Command {
 enum BenchKind {
     /// Photon emission and tracing: photons_per_s, stored count, per-stage ms.
     Photons,
+    /// Photon binning and the lobe fit: fits_per_s, em_ms, mean photons, fit error.
+    Em,
+}
+
+fn to_json<T: serde::Serialize>(value: &T) -> Result<serde_json::Value> {
+    serde_json::to_value(value).map_err(|e| Error::Invalid(e.to_string()))
 }
 
 fn print_json<T: serde::Serialize>(value: &T) -> Result<()> {
@@ -192,15 +228,22 @@ fn run(cli: Cli) -> Result<()> {
             for path in &scenes {
                 let mut scene = scene::load(path)?;
                 bake.apply(&mut scene)?;
-                let report = match what {
+                let photons = PhotonConfig::from_scene(&scene);
+                let (text, value) = match what {
                     BenchKind::Photons => {
-                        bench::photons(&scene, gpu.as_ref(), &PhotonConfig::from_scene(&scene))?
+                        let r = bench::photons(&scene, gpu.as_ref(), &photons)?;
+                        (r.to_string(), to_json(&r)?)
+                    }
+                    BenchKind::Em => {
+                        let em = EmConfig::from_scene(&scene);
+                        let r = bench::em(&scene, gpu.as_ref(), &photons, &em)?;
+                        (r.to_string(), to_json(&r)?)
                     }
                 };
                 if !json {
-                    println!("{report}\n");
+                    println!("{text}\n");
                 }
-                reports.push(report);
+                reports.push(value);
             }
             if json {
                 match reports.len() {

@@ -34,6 +34,12 @@
 @group(0) @binding(7) var<storage, read_write> lobes: array<Lobe>;
 @group(0) @binding(8) var<storage, read_write> light: array<SplatLight>;
 
+// Lobes per splat and lobe family, fixed when the pipeline is made (the host passes
+// EmParams.lobes and .family): loops over the lobes then have a known count, unroll, and keep
+// the per-lobe arrays in registers; on llvmpipe that is several times faster.
+override LOBES: u32 = 5u;
+override FAMILY: u32 = 0u;
+
 const WG: u32 = 32u;
 const CACHE: u32 = 8u;
 const FIT_BIT: u32 = 0x80000000u;
@@ -56,7 +62,8 @@ var<workgroup> shared_entry: u32;
 var<private> center: vec3<f32>;
 var<private> normal: vec3<f32>;
 var<private> slab: f32;
-var<private> lobe_count: u32;
+// False for a splat that only gathers its irradiance.
+var<private> fitting: bool;
 // The mixture (identical in every invocation) and what the E-step derives from it.
 var<private> mix_axis: array<vec3<f32>, MAX_LOBES>;
 var<private> mix_sharpness: array<f32, MAX_LOBES>;
@@ -103,10 +110,10 @@ fn accept(j: u32) -> Candidate {
 }
 
 fn prepare_mixture() {
-    for (var k = 0u; k < lobe_count; k++) {
+    for (var k = 0u; k < LOBES; k++) {
         mix_mirror[k] = mirror_axis(normal, mix_axis[k]);
         mix_log[k] = max(log(max(mix_weight[k], 1e-35)), LOG_WEIGHT_MIN)
-            + lobe_log_norm(em.family, normal, mix_axis[k], mix_sharpness[k]);
+            + lobe_log_norm(FAMILY, normal, mix_axis[k], mix_sharpness[k]);
     }
 }
 
@@ -118,25 +125,25 @@ fn e_step(w: vec3<f32>, slot: u32, sparse: bool, full: bool) -> f32 {
     frozen_mask = 0u;
     var frozen_sum = 0.0;
     var m = -3.0e38;
-    for (var k = 0u; k < lobe_count; k++) {
+    for (var k = 0u; k < LOBES; k++) {
         if use_frozen && frozen_h[slot][k] < SPARSE_THRESHOLD {
             frozen_mask |= 1u << k;
             frozen_sum += frozen_h[slot][k];
             continue;
         }
-        stat[k] = lobe_stat(em.family, normal, mix_axis[k], mix_mirror[k], w);
-        resp[k] = mix_log[k] + lobe_exponent(em.family, mix_sharpness[k], stat[k]);
+        stat[k] = lobe_stat(FAMILY, normal, mix_axis[k], mix_mirror[k], w);
+        resp[k] = mix_log[k] + lobe_exponent(FAMILY, mix_sharpness[k], stat[k]);
         m = max(m, resp[k]);
     }
     var s = 0.0;
-    for (var k = 0u; k < lobe_count; k++) {
+    for (var k = 0u; k < LOBES; k++) {
         if (frozen_mask & (1u << k)) == 0u {
             resp[k] = exp(resp[k] - m);
             s += resp[k];
         }
     }
     let scale = (1.0 - frozen_sum) / s;
-    for (var k = 0u; k < lobe_count; k++) {
+    for (var k = 0u; k < LOBES; k++) {
         if (frozen_mask & (1u << k)) != 0u {
             resp[k] = frozen_h[slot][k];
             stat[k] = frozen_hx[slot][k];
@@ -160,11 +167,11 @@ fn absorb(w: vec3<f32>, weight: f32, index: u32, slot: u32, kind: u32, sparse: b
         acc[SUM_RGB] += power.x;
         acc[SUM_RGB + 1u] += power.y;
         acc[SUM_RGB + 2u] += power.z;
-        if lobe_count == 0u {
+        if !fitting {
             return;
         }
         acc[SUM_LOG] += weight * e_step(w, slot, false, true);
-        for (var k = 0u; k < lobe_count; k++) {
+        for (var k = 0u; k < LOBES; k++) {
             let o = LOBE_SUMS + 5u * k;
             acc[o] += resp[k] * power.x;
             acc[o + 1u] += resp[k] * power.y;
@@ -172,9 +179,8 @@ fn absorb(w: vec3<f32>, weight: f32, index: u32, slot: u32, kind: u32, sparse: b
         }
         return;
     }
-    let log_p = e_step(w, slot, sparse, full);
-    acc[SUM_LOG] += weight * log_p;
-    for (var k = 0u; k < lobe_count; k++) {
+    e_step(w, slot, sparse, full);
+    for (var k = 0u; k < LOBES; k++) {
         let o = LOBE_SUMS + 5u * k;
         let wh = weight * resp[k];
         let frozen = (frozen_mask & (1u << k)) != 0u;
@@ -275,7 +281,7 @@ fn main(@builtin(workgroup_id) wg: vec3<u32>, @builtin(num_workgroups) num_wg: v
     center = s.center;
     normal = s.normal;
     slab = em.slab * s.radius;
-    lobe_count = select(0u, em.lobes, fit);
+    fitting = fit;
     // Diffuse splats run no iterations; their only pass comes with the last dispatch.
     let begin = select(em.iterations, em.iteration_begin, fit);
     let end = select(em.iterations, em.iteration_end, fit);
@@ -284,11 +290,11 @@ fn main(@builtin(workgroup_id) wg: vec3<u32>, @builtin(num_workgroups) num_wg: v
         return;
     }
     let f = frame_of(normal);
-    for (var k = 0u; k < lobe_count; k++) {
+    for (var k = 0u; k < LOBES; k++) {
         if begin == 0u {
-            mix_axis[k] = initial_axis(f, k, lobe_count);
-            mix_sharpness[k] = initial_sharpness(em.family);
-            mix_weight[k] = 1.0 / f32(lobe_count);
+            mix_axis[k] = initial_axis(f, k, LOBES);
+            mix_sharpness[k] = initial_sharpness(FAMILY);
+            mix_weight[k] = 1.0 / f32(LOBES);
         } else {
             let l = lobes[splat_index * em.lobes + k];
             mix_axis[k] = l.axis;
@@ -299,7 +305,7 @@ fn main(@builtin(workgroup_id) wg: vec3<u32>, @builtin(num_workgroups) num_wg: v
     let box = bin_box(center, em.radius, bins);
     gather(lid, box);
     let sparse = (em.flags & EM_SPARSE) != 0u;
-    let sums = LOBE_SUMS + 5u * lobe_count;
+    let sums = LOBE_SUMS + 5u * LOBES;
 
     for (var it = begin; it < end; it++) {
         prepare_mixture();
@@ -307,11 +313,11 @@ fn main(@builtin(workgroup_id) wg: vec3<u32>, @builtin(num_workgroups) num_wg: v
         let full = it % SPARSE_PERIOD == 0u || it == begin;
         photon_pass(lid, box, PASS_EM, sparse, full);
         reduce(lid, sums);
-        for (var k = 0u; k < lobe_count; k++) {
+        for (var k = 0u; k < LOBES; k++) {
             let o = LOBE_SUMS + 5u * k;
             let old = LobeFit(mix_axis[k], mix_sharpness[k], mix_weight[k]);
             let s2 = vec3<f32>(total[o + 2u], total[o + 3u], total[o + 4u]);
-            let next = m_step(em.family, em.flags, lobe_count, total[o], total[o + 1u], s2,
+            let next = m_step(FAMILY, em.flags, LOBES, total[o], total[o + 1u], s2,
                               total[SUM_WEIGHT], total[SUM_COUNT], old);
             mix_axis[k] = next.axis;
             mix_sharpness[k] = next.sharpness;
@@ -320,7 +326,7 @@ fn main(@builtin(workgroup_id) wg: vec3<u32>, @builtin(num_workgroups) num_wg: v
     }
 
     if !last {
-        if lid < lobe_count {
+        if lid < LOBES && fit {
             lobes[splat_index * em.lobes + lid] =
                 Lobe(mix_axis[lid], mix_sharpness[lid], vec3<f32>(0.0), mix_weight[lid]);
         }
@@ -330,7 +336,7 @@ fn main(@builtin(workgroup_id) wg: vec3<u32>, @builtin(num_workgroups) num_wg: v
     photon_pass(lid, box, PASS_FINAL, false, true);
     reduce(lid, sums);
     let photons = u32(total[SUM_COUNT]);
-    let written = select(0u, lobe_count, photons > 0u);
+    let written = select(0u, LOBES, photons > 0u && fit);
     if lid < written {
         let o = LOBE_SUMS + 5u * lid;
         let irradiance = vec3<f32>(total[o], total[o + 1u], total[o + 2u]) * em.inv_area;

@@ -193,8 +193,7 @@ fn absorb(
         }
         return;
     }
-    let log_p = e_step(inp.em, sp, v, w, slot, sparse, full);
-    v.acc[SUM_LOG] += weight * log_p;
+    e_step(inp.em, sp, v, w, slot, sparse, full);
     for k in 0..sp.lobe_count as usize {
         let o = LOBE_SUMS + 5 * k;
         let wh = weight * v.resp[k];

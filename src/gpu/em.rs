@@ -85,6 +85,11 @@ pub fn fit_lobes(
         _ => return Err(Error::Gpu("em counters readback was short".into())),
     };
     let chunk = iterations_per_dispatch(cfg, max_candidates, loop_limited(gpu))?;
+    let constants = [
+        ("LOBES", cfg.lobes as f64),
+        ("FAMILY", cfg.family.code() as f64),
+    ];
+    let pipeline = gpu.specialized("em_fit", &constants)?;
     let mut encoder = gpu.encoder("em fit");
     let mut dispatches = 0;
     for (begin, end) in dispatch_ranges(cfg.iterations, chunk) {
@@ -94,10 +99,11 @@ pub fn fit_lobes(
             ..cfg.params(splat_count, listed)
         };
         let uniform = gpu.uniform("em params", &params);
-        gpu.dispatch(
+        gpu.dispatch_pipeline(
             &mut encoder,
             "em_fit",
-            &[
+            &pipeline,
+            &[&[
                 &uniform,
                 &bins.params_buf,
                 splats,
@@ -107,7 +113,7 @@ pub fn fit_lobes(
                 &bins.power,
                 &lobes,
                 &light,
-            ],
+            ]],
             listed,
         )?;
         dispatches += 1;

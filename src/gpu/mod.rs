@@ -38,7 +38,7 @@ pub struct Gpu {
     pub queue: wgpu::Queue,
     pub info: wgpu::AdapterInfo,
     pub limits: wgpu::Limits,
-    pipelines: Mutex<HashMap<&'static str, wgpu::ComputePipeline>>,
+    pipelines: Mutex<HashMap<String, wgpu::ComputePipeline>>,
     /// First uncaptured device error, surfaced as an `Error` after the next wait
     /// (wgpu's default handler panics).
     error: Arc<Mutex<Option<String>>>,
@@ -133,11 +133,24 @@ impl Gpu {
 
     /// The compiled pipeline of a stage of `shaders::STAGES`, compiled on first use.
     pub fn pipeline(&self, name: &'static str) -> Result<wgpu::ComputePipeline> {
+        self.specialized(name, &[])
+    }
+
+    /// The pipeline of a stage with values for its pipeline-overridable constants (the
+    /// compiler then sees them as literals: fixed loop counts unroll), compiled on first use.
+    pub fn specialized(
+        &self,
+        name: &'static str,
+        constants: &[(&str, f64)],
+    ) -> Result<wgpu::ComputePipeline> {
+        let key = constants
+            .iter()
+            .fold(name.to_string(), |k, (c, v)| format!("{k} {c}={v}"));
         let mut cache = self
             .pipelines
             .lock()
             .map_err(|_| Error::Gpu("pipeline cache poisoned".into()))?;
-        if let Some(p) = cache.get(name) {
+        if let Some(p) = cache.get(&key) {
             return Ok(p.clone());
         }
         let source = shaders::resolve_stage(name)?;
@@ -154,11 +167,14 @@ impl Gpu {
                 layout: None,
                 module: &module,
                 entry_point: Some("main"),
-                compilation_options: Default::default(),
+                compilation_options: wgpu::PipelineCompilationOptions {
+                    constants,
+                    ..Default::default()
+                },
                 cache: None,
             });
         self.check()?;
-        cache.insert(name, pipeline.clone());
+        cache.insert(key, pipeline.clone());
         Ok(pipeline)
     }
 
@@ -186,7 +202,21 @@ impl Gpu {
         if groups == 0 {
             return Ok(());
         }
-        let pipeline = self.pipeline(stage)?;
+        self.dispatch_pipeline(encoder, stage, &self.pipeline(stage)?, bind_groups, groups)
+    }
+
+    /// Records one dispatch of an already compiled (e.g. specialized) pipeline.
+    pub fn dispatch_pipeline(
+        &self,
+        encoder: &mut wgpu::CommandEncoder,
+        stage: &'static str,
+        pipeline: &wgpu::ComputePipeline,
+        bind_groups: &[&[&wgpu::Buffer]],
+        groups: u32,
+    ) -> Result<()> {
+        if groups == 0 {
+            return Ok(());
+        }
         let bind_groups: Vec<wgpu::BindGroup> = bind_groups
             .iter()
             .enumerate()
