@@ -91,8 +91,8 @@ impl EmConfig {
     }
 
     /// The uniform of a dispatch over `active` listed splats (iterations filled in per
-    /// dispatch).
-    pub fn params(&self, splat_count: u32, active: u32) -> EmParams {
+    /// dispatch), for a device with or without llvmpipe's loop limit.
+    pub fn params(&self, splat_count: u32, active: u32, loop_limited: bool) -> EmParams {
         let flags = if self.sparse { EM_SPARSE } else { 0 }
             | if self.priors { EM_PRIORS } else { 0 }
             | if self.fit_all { EM_FIT_ALL } else { 0 };
@@ -110,8 +110,16 @@ impl EmConfig {
             active_count: active,
             iteration_begin: 0,
             iteration_end: self.iterations,
+            workgroup_size: workgroup_size(loop_limited),
+            ..Default::default()
         }
     }
+}
+
+/// Invocations per `em_fit` workgroup: 8 on llvmpipe, whose subgroups are 8 wide (a barrier
+/// within one subgroup is nearly free; 32 invocations ran at half the speed), 32 elsewhere.
+pub fn workgroup_size(loop_limited: bool) -> u32 {
+    if loop_limited { 8 } else { 32 }
 }
 
 /// Loop iterations one invocation may spend in a dispatch on a device with llvmpipe's silent
@@ -130,7 +138,7 @@ pub fn iterations_per_dispatch(
     if !loop_limited {
         return Ok(all);
     }
-    let wg = crate::cpu::em_fit::WG as u64;
+    let wg = workgroup_size(loop_limited) as u64;
     // Per pass: each candidate once, each accepted one four loops over the lobes, plus the
     // rows, the sums and the reduction.
     let per_pass = (max_candidates as u64).div_ceil(wg) * (1 + 4 * cfg.lobes as u64) + 200;

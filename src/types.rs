@@ -253,6 +253,11 @@ pub struct EmParams {
     /// the lobe buffer; the one that ends at `iterations` also runs the final pass.
     pub iteration_begin: u32,
     pub iteration_end: u32,
+    /// Invocations per `em_fit` workgroup (the shader's `WG`, fixed with its pipeline).
+    pub workgroup_size: u32,
+    pub _pad0: u32,
+    pub _pad1: u32,
+    pub _pad2: u32,
 }
 
 /// Per-frame camera uniform.

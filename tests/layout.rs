@@ -143,7 +143,11 @@ fn rust_layouts() -> Vec<RustLayout> {
             splat_count,
             active_count,
             iteration_begin,
-            iteration_end
+            iteration_end,
+            workgroup_size,
+            _pad0,
+            _pad1,
+            _pad2
         }),
         layout!(Camera {
             view_proj,

@@ -40,7 +40,11 @@
 override LOBES: u32 = 5u;
 override FAMILY: u32 = 0u;
 
-const WG: u32 = 32u;
+// Invocations per splat: the host picks 8 on llvmpipe (one SIMD8 subgroup, so barriers cost
+// almost nothing; 32 ran at half the speed) and 32 elsewhere (a warp), and passes the same in
+// EmParams.workgroup_size for the CPU mirror. Sums then run in a fixed order per device.
+override WG: u32 = 32u;
+const MAX_WG: u32 = 32u;
 const CACHE: u32 = 8u;
 const FIT_BIT: u32 = 0x80000000u;
 // Sums: [0] sum w log p, [1] sum w, [2] photon count, [3..6) sum of RGB power, then five per
@@ -54,7 +58,7 @@ const SUMS: u32 = 46u;
 const PASS_EM: u32 = 0u;
 const PASS_FINAL: u32 = 1u;
 
-var<workgroup> partial: array<array<f32, SUMS>, WG>;
+var<workgroup> partial: array<array<f32, SUMS>, MAX_WG>;
 var<workgroup> total: array<f32, SUMS>;
 var<workgroup> shared_entry: u32;
 
@@ -264,7 +268,7 @@ fn reduce(lid: u32, count: u32) {
     workgroupBarrier();
 }
 
-@compute @workgroup_size(32)
+@compute @workgroup_size(WG)
 fn main(@builtin(workgroup_id) wg: vec3<u32>, @builtin(num_workgroups) num_wg: vec3<u32>,
         @builtin(local_invocation_index) lid: u32) {
     let index = linear_workgroup(wg, num_wg);

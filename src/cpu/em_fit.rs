@@ -11,7 +11,6 @@ use crate::shared::octahedral::oct_decode;
 use crate::shared::sampling::frame_of;
 use crate::types::{BinParams, BinnedPhoton, EmParams, Lobe, Splat, SplatLight};
 
-pub const WG: u32 = 32;
 pub const CACHE: u32 = 8;
 pub const FIT_BIT: u32 = 0x8000_0000;
 const SUM_LOG: usize = 0;
@@ -86,8 +85,8 @@ impl Default for Invocation {
     }
 }
 
-fn first_in_row(begin: u32, offset: u32, lid: u32) -> u32 {
-    begin + (lid + WG - offset % WG) % WG
+fn first_in_row(wg: u32, begin: u32, offset: u32, lid: u32) -> u32 {
+    begin + (lid + wg - offset % wg) % wg
 }
 
 struct Candidate {
@@ -218,7 +217,7 @@ fn gather(inp: &Inputs, sp: &Splat1, v: &mut Invocation, lid: u32, bx: &BinBox) 
         let row = bin_row(bx, r, inp.bins);
         let begin = inp.cell_start[row.x as usize];
         let end = inp.cell_start[row.y as usize];
-        let mut j = first_in_row(begin, offset, lid);
+        let mut j = first_in_row(inp.em.workgroup_size, begin, offset, lid);
         while j < end {
             let c = accept(inp, sp, j);
             if c.ok {
@@ -233,7 +232,7 @@ fn gather(inp: &Inputs, sp: &Splat1, v: &mut Invocation, lid: u32, bx: &BinBox) 
                 v.cache_index[v.cached as usize] = j;
                 v.cached += 1;
             }
-            j += WG;
+            j += inp.em.workgroup_size;
         }
         offset += end - begin;
     }
@@ -278,20 +277,20 @@ fn photon_pass(
         let mut j = if r == v.resume_row {
             v.resume_j
         } else {
-            first_in_row(begin, offset, lid)
+            first_in_row(inp.em.workgroup_size, begin, offset, lid)
         };
         while j < end {
             let c = accept(inp, sp, j);
             if c.ok {
                 absorb(inp, sp, v, c.dir, c.weight, j, CACHE, kind, sparse, full);
             }
-            j += WG;
+            j += inp.em.workgroup_size;
         }
         offset += end - begin;
     }
 }
 
-/// The fixed-order sum of `reduce` in WGSL: column q over the invocations 0, 1, …, WG − 1.
+/// The fixed-order sum of `reduce` in WGSL: column q over the invocations 0, 1, …, `workgroup_size` − 1.
 fn reduce(invocations: &[Invocation], count: usize) -> [f32; SUMS] {
     let mut total = [0.0; SUMS];
     for (q, t) in total.iter_mut().enumerate().take(count) {
@@ -394,7 +393,7 @@ fn fit_splat(inp: &Inputs, splats: &[Splat], entry: u32, resume: &[Lobe]) -> Opt
         }
     }
     let bx = bin_box(sp.center, em.radius, inp.bins);
-    let mut inv = vec![Invocation::default(); WG as usize];
+    let mut inv = vec![Invocation::default(); em.workgroup_size as usize];
     for (lid, v) in inv.iter_mut().enumerate() {
         gather(inp, &sp, v, lid as u32, &bx);
     }

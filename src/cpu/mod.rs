@@ -298,7 +298,7 @@ pub fn fit_lobes(
     let mut fit_list = vec![0u32; n];
     let mut counters = [0u32; 3];
     em_select::em_select(
-        &cfg.params(splat_count, 0),
+        &cfg.params(splat_count, 0, loop_limited),
         &bins.params,
         splats,
         materials,
@@ -324,7 +324,7 @@ pub fn fit_lobes(
         let params = EmParams {
             iteration_begin: begin,
             iteration_end: end,
-            ..cfg.params(splat_count, listed)
+            ..cfg.params(splat_count, listed, loop_limited)
         };
         em_fit::em_fit(
             &params,

@@ -8,7 +8,9 @@ use std::time::Instant;
 use super::Gpu;
 use super::bins::GpuBins;
 use crate::cpu::{em_select, groups_for};
-use crate::em::{EmConfig, EmStats, LobeMap, dispatch_ranges, iterations_per_dispatch};
+use crate::em::{
+    EmConfig, EmStats, LobeMap, dispatch_ranges, iterations_per_dispatch, workgroup_size,
+};
 use crate::error::{Error, Result};
 use crate::photons::ms_since;
 use crate::types::{EmParams, Lobe, SplatLight};
@@ -63,7 +65,8 @@ pub fn fit_lobes(
     let light = gpu.storage_zeroed("splat light", n.max(1) * 32)?;
     let fit_list = gpu.storage_zeroed("fit list", n.max(1) * 4)?;
     let counters = gpu.storage_zeroed("em counters", 12)?;
-    let select = gpu.uniform("em select params", &cfg.params(splat_count, 0));
+    let limited = loop_limited(gpu);
+    let select = gpu.uniform("em select params", &cfg.params(splat_count, 0, limited));
     let mut encoder = gpu.encoder("em select");
     gpu.dispatch(
         &mut encoder,
@@ -84,10 +87,11 @@ pub fn fit_lobes(
         [a, b, c] => (a, b, c),
         _ => return Err(Error::Gpu("em counters readback was short".into())),
     };
-    let chunk = iterations_per_dispatch(cfg, max_candidates, loop_limited(gpu))?;
+    let chunk = iterations_per_dispatch(cfg, max_candidates, limited)?;
     let constants = [
         ("LOBES", cfg.lobes as f64),
         ("FAMILY", cfg.family.code() as f64),
+        ("WG", workgroup_size(limited) as f64),
     ];
     let pipeline = gpu.specialized("em_fit", &constants)?;
     let mut encoder = gpu.encoder("em fit");
@@ -96,7 +100,7 @@ pub fn fit_lobes(
         let params = EmParams {
             iteration_begin: begin,
             iteration_end: end,
-            ..cfg.params(splat_count, listed)
+            ..cfg.params(splat_count, listed, limited)
         };
         let uniform = gpu.uniform("em params", &params);
         gpu.dispatch_pipeline(

@@ -241,7 +241,7 @@ impl Gpu {
             label: Some(stage),
             timestamp_writes: None,
         });
-        pass.set_pipeline(&pipeline);
+        pass.set_pipeline(pipeline);
         for (g, bind_group) in bind_groups.iter().enumerate() {
             pass.set_bind_group(g as u32, bind_group, &[]);
         }

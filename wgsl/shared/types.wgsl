@@ -143,6 +143,10 @@ struct EmParams {
     active_count: u32,
     iteration_begin: u32,
     iteration_end: u32,
+    workgroup_size: u32,
+    _pad0: u32,
+    _pad1: u32,
+    _pad2: u32,
 }
 
 struct Camera {
