@@ -107,7 +107,7 @@ pub struct BakeDesc {
     /// Which photon hits are stored: "indirect" (bounce >= 1, the thesis's choice: direct
     /// light comes from shadow rays) or "all".
     pub store: StoreRange,
-    /// Lobe family: "vmf" or "ward" (the thesis's).
+    /// Lobe family: "ward" (the thesis's, default) or "vmf".
     pub family: crate::em::LobeFamily,
     /// Sparse EM (thesis §3.5).
     pub sparse: bool,
@@ -145,7 +145,7 @@ impl Default for BakeDesc {
             seed: 1,
             max_depth: 8,
             store: StoreRange::Indirect,
-            family: crate::em::LobeFamily::Vmf,
+            family: crate::em::LobeFamily::Ward,
             sparse: false,
             slab: 2.0,
         }
