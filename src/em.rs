@@ -220,7 +220,8 @@ impl LobeMap {
         sum / n.max(1) as f64
     }
 
-    fn fitted(&self) -> impl Iterator<Item = &SplatLight> {
+    /// The light of the splats whose lobes were fitted.
+    pub fn fitted(&self) -> impl Iterator<Item = &SplatLight> {
         self.light.iter().filter(|l| l.lobes > 0)
     }
 }

@@ -340,12 +340,7 @@ pub fn fit_lobes(
         );
         map.stats.dispatches += 1;
     }
-    map.stats.photons = map
-        .light
-        .iter()
-        .filter(|l| l.lobes > 0)
-        .map(|l| l.photons as u64)
-        .sum();
+    map.stats.photons = map.fitted().map(|l| l.photons as u64).sum();
     map.stats.ms = ms_since(t);
     Ok(map)
 }

@@ -33,12 +33,7 @@ impl GpuLobes {
             light: gpu.read::<SplatLight>(&self.light, n)?,
             stats: self.stats.clone(),
         };
-        map.stats.photons = map
-            .light
-            .iter()
-            .filter(|l| l.lobes > 0)
-            .map(|l| l.photons as u64)
-            .sum();
+        map.stats.photons = map.fitted().map(|l| l.photons as u64).sum();
         Ok(map)
     }
 }
