@@ -98,6 +98,49 @@ fn errors_are_one_line_with_non_zero_exit() {
 }
 
 #[test]
+fn bench_em_json_has_the_documented_keys() {
+    let args = [
+        "bench",
+        "em",
+        "scenes/cornell.toml",
+        "--photons",
+        "20000",
+        "--iterations",
+        "3",
+        "--json",
+    ];
+    let gpu = json(&args);
+    for key in [
+        "fits_per_s",
+        "em_ms",
+        "binning_ms",
+        "photons_ms",
+        "splats_fitted",
+        "mean_photons",
+        "nll",
+        "family",
+        "lobes",
+        "iterations",
+        "search_radius",
+        "stats",
+    ] {
+        assert!(gpu.get(key).is_some(), "missing key {key}: {gpu}");
+    }
+    assert_eq!(gpu["family"], "ward", "the default family");
+    assert_eq!(gpu["iterations"], 3);
+    assert!(gpu["fits_per_s"].as_f64().unwrap() > 0.0);
+    assert!(gpu["splats_fitted"].as_u64().unwrap() > 1000);
+    let mut cpu_args = args.to_vec();
+    cpu_args.push("--cpu");
+    let cpu = json(&cpu_args);
+    assert_eq!(cpu["backend"], "cpu");
+    // Different photons (the traces differ by rare rounding) and a different workgroup size:
+    // the fit errors agree closely, not bit for bit.
+    let (g, c) = (gpu["nll"].as_f64().unwrap(), cpu["nll"].as_f64().unwrap());
+    assert!((g - c).abs() <= 0.01 * c.abs(), "nll: GPU {g}, CPU {c}");
+}
+
+#[test]
 fn bench_photons_json_has_the_documented_keys() {
     let args = [
         "bench",
