@@ -21,11 +21,7 @@ pub const BINNED_BYTES: u64 = 16 + 16 + 8;
 
 /// The binning grid over the splat grid's box for search radius `radius`.
 pub fn bin_params(grid: &GridParams, radius: f32) -> Result<BinParams> {
-    if !(radius > 0.0 && radius.is_finite()) {
-        return Err(Error::Invalid(format!(
-            "the search radius must be a positive number, got {radius}"
-        )));
-    }
+    crate::em::check_radius(radius).map_err(Error::Invalid)?;
     let extent = *grid.dims.iter().max().unwrap_or(&1) as f32 * grid.cell_size;
     // A hair over R/2, so that rounding never stretches a 2R box past 5 cells.
     let cell = (radius / CELLS_PER_RADIUS * 1.001).max(extent / MAX_BIN_DIM as f32);

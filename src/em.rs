@@ -64,31 +64,18 @@ impl EmConfig {
     }
 
     pub fn validate(&self) -> Result<()> {
-        if !(1..=crate::shared::lobes::MAX_LOBES).contains(&self.lobes) {
-            return Err(Error::Invalid(format!(
-                "lobes must be within 1..=8, got {}",
-                self.lobes
-            )));
-        }
-        if self.iterations > 1000 {
-            return Err(Error::Invalid(format!(
-                "iterations must be within 0..=1000, got {}",
-                self.iterations
-            )));
-        }
-        if !(self.radius > 0.0 && self.radius.is_finite()) {
-            return Err(Error::Invalid(format!(
-                "the search radius must be a positive number, got {}",
-                self.radius
-            )));
-        }
-        if !(self.slab > 0.0 && self.slab.is_finite()) {
-            return Err(Error::Invalid(format!(
-                "slab must be a positive number of splat radii, got {}",
-                self.slab
-            )));
-        }
-        Ok(())
+        let check = || -> std::result::Result<(), String> {
+            check_lobes(self.lobes)?;
+            if self.iterations > 1000 {
+                return Err(format!(
+                    "iterations must be within 0..=1000, got {}",
+                    self.iterations
+                ));
+            }
+            check_radius(self.radius)?;
+            check_slab(self.slab)
+        };
+        check().map_err(Error::Invalid)
     }
 
     /// The uniform of a dispatch over `active` listed splats (iterations filled in per
@@ -115,6 +102,32 @@ impl EmConfig {
             ..Default::default()
         }
     }
+}
+
+/// The checks of the fit's settings that scene files and command-line overrides share.
+pub fn check_lobes(lobes: u32) -> std::result::Result<(), String> {
+    if !(1..=crate::shared::lobes::MAX_LOBES).contains(&lobes) {
+        return Err(format!("lobes must be within 1..=8, got {lobes}"));
+    }
+    Ok(())
+}
+
+pub fn check_radius(radius: f32) -> std::result::Result<(), String> {
+    if !(radius > 0.0 && radius.is_finite()) {
+        return Err(format!(
+            "the search radius must be a positive number, got {radius}"
+        ));
+    }
+    Ok(())
+}
+
+pub fn check_slab(slab: f32) -> std::result::Result<(), String> {
+    if !(slab > 0.0 && slab.is_finite()) {
+        return Err(format!(
+            "slab must be a positive number of splat radii, got {slab}"
+        ));
+    }
+    Ok(())
 }
 
 /// Invocations per `em_fit` workgroup: 8 on llvmpipe, whose subgroups are 8 wide (a barrier

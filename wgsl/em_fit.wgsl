@@ -46,7 +46,6 @@ override FAMILY: u32 = 0u;
 override WG: u32 = 32u;
 const MAX_WG: u32 = 32u;
 const CACHE: u32 = 8u;
-const FIT_BIT: u32 = 0x80000000u;
 // Sums: [0] sum w log p, [1] sum w, [2] photon count, [3..6) sum of RGB power, then five per
 // lobe from LOBE_SUMS: EM passes sum w h, w h stat, w h w (3); the final pass sums h RGB (3).
 const SUM_LOG: u32 = 0u;

@@ -20,7 +20,6 @@
 @group(0) @binding(6) var<storage, read_write> counters: array<atomic<u32>, 3>;
 
 const WG: u32 = 64u;
-const FIT_BIT: u32 = 0x80000000u;
 
 @compute @workgroup_size(64)
 fn main(@builtin(workgroup_id) wg: vec3<u32>, @builtin(num_workgroups) num_wg: vec3<u32>,

@@ -5,6 +5,7 @@
 use glam::Vec3;
 use rayon::prelude::*;
 
+use super::em_select::FIT_BIT;
 use crate::shared::bins::{BinBox, bin_box, bin_row, bin_row_count};
 use crate::shared::lobes::*;
 use crate::shared::octahedral::oct_decode;
@@ -12,7 +13,6 @@ use crate::shared::sampling::frame_of;
 use crate::types::{BinParams, BinnedPhoton, EmParams, Lobe, Splat, SplatLight};
 
 pub const CACHE: u32 = 8;
-pub const FIT_BIT: u32 = 0x8000_0000;
 const SUM_LOG: usize = 0;
 const SUM_WEIGHT: usize = 1;
 const SUM_COUNT: usize = 2;

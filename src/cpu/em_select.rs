@@ -7,6 +7,7 @@ use crate::shared::lobes::EM_FIT_ALL;
 use crate::types::{BinParams, EmParams, Material, Splat};
 
 pub const WG: u32 = 64;
+/// The fit-list entry's flag: fit this splat's lobes (see `wgsl/em_select.wgsl`).
 pub const FIT_BIT: u32 = 0x8000_0000;
 
 #[allow(clippy::too_many_arguments)]

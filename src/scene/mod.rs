@@ -230,18 +230,16 @@ fn positive_size(size: [f32; 2]) -> std::result::Result<[f32; 2], String> {
 fn validate_bake(b: &BakeDesc) -> std::result::Result<(), String> {
     crate::photons::check_photon_count(b.photons)?;
     if let Some(r) = b.radius {
-        positive(r, "radius")?;
+        crate::em::check_radius(r)?;
     }
-    if !(1..=8).contains(&b.lobes) {
-        return Err(format!("lobes must be within 1..=8, got {}", b.lobes));
-    }
+    crate::em::check_lobes(b.lobes)?;
     if b.iterations == 0 || b.iterations > 1000 {
         return Err(format!(
             "iterations must be within 1..=1000, got {}",
             b.iterations
         ));
     }
-    positive(b.slab, "slab")?;
+    crate::em::check_slab(b.slab)?;
     if b.max_depth == 0 || b.max_depth > 64 {
         return Err(format!(
             "max_depth must be within 1..=64, got {}",

@@ -23,6 +23,9 @@ const EM_SPARSE: u32 = 1u;
 const EM_PRIORS: u32 = 2u;
 const EM_FIT_ALL: u32 = 4u;
 
+// A fit-list entry is a splat index with this bit set when the splat's lobes are fitted.
+const FIT_BIT: u32 = 0x80000000u;
+
 // Sparse EM (thesis 3.5): responsibilities under this stay frozen between full updates.
 const SPARSE_THRESHOLD: f32 = 0.02;
 const SPARSE_PERIOD: u32 = 8u;
