@@ -78,12 +78,13 @@ pub fn bin_photons(gpu: &Gpu, photons: &GpuPhotons, params: &BinParams) -> Resul
     }
     scan::exclusive_scan(gpu, &mut encoder, &cell_start, params.cell_count + 1)?;
 
-    let bytes = total.max(1);
+    // Entries to allocate (at least one: empty bindings are invalid).
+    let len = total.max(1);
     let cursor = gpu.storage_zeroed("bin cursor", cells * 4)?;
-    let scratch_keys = gpu.storage_zeroed("bin scratch keys", bytes * 8)?;
-    let scratch_cells = gpu.storage_zeroed("bin scratch cells", bytes * 4)?;
-    let scratch_geom = gpu.storage_zeroed("bin scratch geometry", bytes * 16)?;
-    let scratch_power = gpu.storage_zeroed("bin scratch power", bytes * 16)?;
+    let scratch_keys = gpu.storage_zeroed("bin scratch keys", len * 8)?;
+    let scratch_cells = gpu.storage_zeroed("bin scratch cells", len * 4)?;
+    let scratch_geom = gpu.storage_zeroed("bin scratch geometry", len * 16)?;
+    let scratch_power = gpu.storage_zeroed("bin scratch power", len * 16)?;
     for (page, (uniform, count)) in photons.pages.iter().zip(&page_params) {
         gpu.dispatch(
             &mut encoder,
@@ -112,7 +113,7 @@ pub fn bin_photons(gpu: &Gpu, photons: &GpuPhotons, params: &BinParams) -> Resul
         ..*params
     };
     let groups = groups_for(n, bin_count::WG);
-    let slots = gpu.storage_zeroed("bin slots", bytes * 4)?;
+    let slots = gpu.storage_zeroed("bin slots", len * 4)?;
     let mut encoder = gpu.encoder("bin rank");
     for chunk in 0..rank_chunks {
         let pass = gpu.uniform(
@@ -130,9 +131,9 @@ pub fn bin_photons(gpu: &Gpu, photons: &GpuPhotons, params: &BinParams) -> Resul
         )?;
     }
     let params_buf = gpu.uniform("bin params", &params);
-    let keys = gpu.storage_zeroed("binned keys", bytes * 8)?;
-    let geom = gpu.storage_zeroed("binned geometry", bytes * 16)?;
-    let power = gpu.storage_zeroed("binned power", bytes * 16)?;
+    let keys = gpu.storage_zeroed("binned keys", len * 8)?;
+    let geom = gpu.storage_zeroed("binned geometry", len * 16)?;
+    let power = gpu.storage_zeroed("binned power", len * 16)?;
     gpu.dispatch(
         &mut encoder,
         "bin_place",
