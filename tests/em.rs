@@ -280,69 +280,100 @@ fn gpu_fit_equals_cpu_fit_on_the_same_photons() {
         let g = on_gpu(&gpu, &em, &bins, &scene.splats, &scene.materials);
         assert!(c.stats.fitted > 1000, "{} splats fitted", c.stats.fitted);
         assert_eq!(c.stats.fitted, g.stats.fitted);
-        let mut worst = (0.0f32, 0.0f32, 0.0f32);
-        let (mut compared, mut faint, mut off) = (0usize, 0usize, 0usize);
-        for i in 0..scene.splats.len() {
-            let (cl, gl) = (&c.light[i], &g.light[i]);
-            assert_eq!(cl.photons, gl.photons, "splat {i}");
-            assert_eq!(cl.lobes, gl.lobes, "splat {i}");
-            close(
-                gl.irradiance,
-                cl.irradiance,
-                1e-4,
-                &format!("splat {i} irradiance"),
-            );
-            for (a, b) in g.splat_lobes(i).iter().zip(c.splat_lobes(i)) {
-                // 2 asin(|a - b| / 2): acos of the dot product cannot resolve below 5e-4 in f32.
-                let chord = (Vec3::from(a.axis) - Vec3::from(b.axis)).length();
-                let angle = 2.0 * (0.5 * chord).asin();
-                let sharp = (a.sharpness - b.sharpness).abs() / b.sharpness;
-                let weight = (a.weight - b.weight).abs() / b.weight.max(1e-3);
-                if weight > 1e-3 {
-                    eprintln!("splat {i}: weights {} vs {}", a.weight, b.weight);
-                    off += 1;
-                }
-                let what = format!("{family:?} sparse {sparse}: splat {i} lobe {a:?} vs {b:?}");
-                // A lobe that carries almost no weight has an ill-conditioned axis and width
-                // (a near-zero resultant of nearly cancelling directions): f32 rounding alone
-                // moves them. Such lobes shade nothing; their weights and irradiance are still
-                // compared above and below.
-                if b.weight < 0.01 {
-                    faint += 1;
-                    continue;
-                }
-                compared += 1;
-                if angle > 1e-3 || sharp > 1e-3 {
-                    eprintln!("{what}: axes {angle} rad apart, sharpness {sharp} relative");
-                    off += 1;
-                }
-                worst = (worst.0.max(angle), worst.1.max(sharp), worst.2.max(weight));
-                // Lobe irradiance within 1e-3 of the splat's total.
-                let total = Vec3::from(cl.irradiance).max_element();
-                let diff = (Vec3::from(a.irradiance) - Vec3::from(b.irradiance))
-                    .abs()
-                    .max_element();
-                if diff > 1e-3 * total {
-                    eprintln!("{what}: irradiance");
-                    off += 1;
-                }
+        assert_parity(&format!("{family:?} sparse {sparse}"), sparse, &c, &g);
+    }
+}
+
+/// Splats with more photons than the workgroup caches (512) stream the rest from the binned
+/// list on every pass: the same sums in the same order as the CPU mirror.
+#[test]
+fn streamed_photons_fit_as_cached_ones() {
+    let gpu = common::gpu();
+    let mut rng = Rng(17);
+    let truth = [(dir(20.0, 40.0), 0.08, 0.6), (dir(50.0, 250.0), 0.05, 0.4)];
+    let sets: Vec<_> = [40, 600, 1500, 3000]
+        .iter()
+        .map(|&n| mixture(&mut rng, LobeFamily::Ward, &truth, n))
+        .collect();
+    let fixture = Fixture::new(&sets);
+    let bins = fixture.bins();
+    for family in [LobeFamily::Ward, LobeFamily::Vmf] {
+        let cfg = config(family, 2, 5);
+        let c = on_cpu(&cfg, &bins, &fixture.splats, &fixture.materials);
+        let g = on_gpu(&gpu, &cfg, &bins, &fixture.splats, &fixture.materials);
+        for (i, set) in sets.iter().enumerate() {
+            assert_eq!(g.light[i].photons as usize, set.len(), "GPU, splat {i}");
+            assert_eq!(c.light[i].photons as usize, set.len(), "CPU, splat {i}");
+        }
+        assert_parity(&format!("{family:?} streamed"), false, &c, &g);
+    }
+}
+
+/// GPU lobes against the CPU mirror's, splat by splat (tolerances in the comments); `sparse`
+/// allows one lobe in 1,000 to part.
+fn assert_parity(label: &str, sparse: bool, c: &LobeMap, g: &LobeMap) {
+    let mut worst = (0.0f32, 0.0f32, 0.0f32);
+    let (mut compared, mut faint, mut off) = (0usize, 0usize, 0usize);
+    for i in 0..c.light.len() {
+        let (cl, gl) = (&c.light[i], &g.light[i]);
+        assert_eq!(cl.photons, gl.photons, "splat {i}");
+        assert_eq!(cl.lobes, gl.lobes, "splat {i}");
+        close(
+            gl.irradiance,
+            cl.irradiance,
+            1e-4,
+            &format!("splat {i} irradiance"),
+        );
+        for (a, b) in g.splat_lobes(i).iter().zip(c.splat_lobes(i)) {
+            // 2 asin(|a - b| / 2): acos of the dot product cannot resolve below 5e-4 in f32.
+            let chord = (Vec3::from(a.axis) - Vec3::from(b.axis)).length();
+            let angle = 2.0 * (0.5 * chord).asin();
+            let sharp = (a.sharpness - b.sharpness).abs() / b.sharpness;
+            let weight = (a.weight - b.weight).abs() / b.weight.max(1e-3);
+            if weight > 1e-3 {
+                eprintln!("splat {i}: weights {} vs {}", a.weight, b.weight);
+                off += 1;
+            }
+            let what = format!("{label}: splat {i} lobe {a:?} vs {b:?}");
+            // A lobe that carries almost no weight has an ill-conditioned axis and width
+            // (a near-zero resultant of nearly cancelling directions): f32 rounding alone
+            // moves them. Such lobes shade nothing; their weights and irradiance are still
+            // compared above and below.
+            if b.weight < 0.01 {
+                faint += 1;
+                continue;
+            }
+            compared += 1;
+            if angle > 1e-3 || sharp > 1e-3 {
+                eprintln!("{what}: axes {angle} rad apart, sharpness {sharp} relative");
+                off += 1;
+            }
+            worst = (worst.0.max(angle), worst.1.max(sharp), worst.2.max(weight));
+            // Lobe irradiance within 1e-3 of the splat's total.
+            let total = Vec3::from(cl.irradiance).max_element();
+            let diff = (Vec3::from(a.irradiance) - Vec3::from(b.irradiance))
+                .abs()
+                .max_element();
+            if diff > 1e-3 * total {
+                eprintln!("{what}: irradiance");
+                off += 1;
             }
         }
-        eprintln!(
-            "{family:?} sparse {sparse}: {compared} lobes compared, {faint} faint, {off} apart; \
-             worst axis {:.2e} rad, sharpness {:.2e}, weight {:.2e}",
-            worst.0, worst.1, worst.2
-        );
-        assert!(
-            faint * 4 < compared,
-            "{faint} faint lobes, {compared} compared"
-        );
-        // Sparse EM has a threshold: a responsibility within rounding of 0.02 freezes on one
-        // side and not on the other, and the splat's lobes then part by more than rounding.
-        // Allowed on one lobe in 1,000; plain EM must match everywhere.
-        let allowed = if sparse { compared / 1_000 } else { 0 };
-        assert!(off <= allowed, "{off} lobes apart (allowed {allowed})");
     }
+    eprintln!(
+        "{label}: {compared} lobes compared, {faint} faint, {off} apart; \
+         worst axis {:.2e} rad, sharpness {:.2e}, weight {:.2e}",
+        worst.0, worst.1, worst.2
+    );
+    assert!(
+        faint * 4 < compared,
+        "{faint} faint lobes, {compared} compared"
+    );
+    // Sparse EM has a threshold: a responsibility within rounding of 0.02 freezes on one
+    // side and not on the other, and the splat's lobes then part by more than rounding.
+    // Allowed on one lobe in 1,000; plain EM must match everywhere.
+    let allowed = if sparse { compared / 1_000 } else { 0 };
+    assert!(off <= allowed, "{off} lobes apart (allowed {allowed})");
 }
 
 fn close(a: [f32; 3], b: [f32; 3], rel: f32, what: &str) {

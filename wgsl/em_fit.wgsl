@@ -3,10 +3,11 @@
 // around its plane, by weighted EM with a fixed iteration count from constant initial lobes.
 //
 // Work split: the splat's candidates are the rows of bin cells around it (wgsl/shared/bins);
-// invocation t takes every WG-th candidate, t first, in row order. The first CACHE photons it
-// accepts stay in private memory (direction, weight, and for sparse EM their responsibilities);
-// any further ones are re-read and re-tested from the binned list on every pass, so a splat
-// may have any number of photons and none is dropped. Each pass adds the invocation's photons
+// invocation t takes every WG-th candidate, t first, in row order. The first CACHE_SLOTS / WG
+// photons it accepts stay in workgroup memory (direction, weight; for sparse EM the first
+// FROZEN also keep their responsibilities in private memory); any further ones are re-read
+// and re-tested from the binned list on every pass, so a splat may have any number of
+// photons and none is dropped. Each pass adds the invocation's photons
 // into private sums in that fixed order; the sums of the invocations then add up in a fixed
 // order too (one column per invocation, two barriers), so the result is deterministic.
 // Every invocation then runs the same M-step on the same totals.
@@ -39,13 +40,24 @@
 // the per-lobe arrays in registers; on llvmpipe that is several times faster.
 override LOBES: u32 = 5u;
 override FAMILY: u32 = 0u;
+// Sparse EM (the EM_SPARSE flag), fixed per pipeline too: without it the frozen
+// responsibilities and their stores vanish from the compiled code (13 % on llvmpipe).
+override SPARSE: bool = false;
 
 // Invocations per splat: the host picks 8 on llvmpipe (one SIMD8 subgroup, so barriers cost
 // almost nothing; 32 ran at half the speed) and 32 elsewhere (a warp), and passes the same in
 // EmParams.workgroup_size for the CPU mirror. Sums then run in a fixed order per device.
 override WG: u32 = 32u;
 const MAX_WG: u32 = 32u;
-const CACHE: u32 = 8u;
+// Accepted photons kept per workgroup, CACHE_SLOTS / WG per invocation (slot c of invocation
+// t at c * WG + t), in what `partial` leaves of WebGPU's 16 KiB. Workgroup memory, because
+// llvmpipe turns a private array indexed per invocation into a select over every element;
+// this cache made the fit 2x faster there than 8 private slots did.
+const CACHE_SLOTS: u32 = 512u;
+// Cached photons per invocation whose responsibilities sparse EM keeps (private memory).
+const FROZEN: u32 = 8u;
+// The slot of a photon that is not cached.
+const NOT_CACHED: u32 = 0xffffffffu;
 // Sums: [0] sum w log p, [1] sum w, [2] photon count, [3..6) sum of RGB power, then five per
 // lobe from LOBE_SUMS: EM passes sum w h, w h stat, w h w (3); the final pass sums h RGB (3).
 const SUM_LOG: u32 = 0u;
@@ -60,6 +72,8 @@ const PASS_FINAL: u32 = 1u;
 var<workgroup> partial: array<array<f32, SUMS>, MAX_WG>;
 var<workgroup> total: array<f32, SUMS>;
 var<workgroup> shared_entry: u32;
+var<workgroup> cache_dir: array<vec4<f32>, CACHE_SLOTS>;
+var<workgroup> cache_index: array<u32, CACHE_SLOTS>;
 
 // The splat (the same in every invocation).
 var<private> center: vec3<f32>;
@@ -77,11 +91,9 @@ var<private> mix_log: array<f32, MAX_LOBES>;
 var<private> resp: array<f32, MAX_LOBES>;
 var<private> stat: array<f32, MAX_LOBES>;
 var<private> acc: array<f32, SUMS>;
-// This invocation's photons: the cached ones, then where streaming resumes.
-var<private> cache_dir: array<vec4<f32>, CACHE>;
-var<private> cache_index: array<u32, CACHE>;
-var<private> frozen_h: array<array<f32, MAX_LOBES>, CACHE>;
-var<private> frozen_hx: array<array<f32, MAX_LOBES>, CACHE>;
+// This invocation's photons: how many are cached, then where streaming resumes.
+var<private> frozen_h: array<array<f32, MAX_LOBES>, FROZEN>;
+var<private> frozen_hx: array<array<f32, MAX_LOBES>, FROZEN>;
 // Lobes the last e_step left frozen, one bit each.
 var<private> frozen_mask: u32;
 var<private> cached: u32;
@@ -106,9 +118,13 @@ fn accept(j: u32) -> Candidate {
     var c: Candidate;
     let g = bin_geom[j];
     let d = g.position - center;
-    c.dir = oct_decode(g.direction);
-    c.weight = bin_power[j].w;
-    c.ok = dot(d, d) <= em.radius2 && abs(dot(d, normal)) <= slab && dot(c.dir, normal) > 0.0;
+    // Most candidates fail on position: the direction and the weight only load for the rest.
+    c.ok = dot(d, d) <= em.radius2 && abs(dot(d, normal)) <= slab;
+    if c.ok {
+        c.dir = oct_decode(g.direction);
+        c.ok = dot(c.dir, normal) > 0.0;
+        c.weight = bin_power[j].w;
+    }
     return c;
 }
 
@@ -122,9 +138,10 @@ fn prepare_mixture() {
 
 // Responsibilities of photon `w` into `resp` (and `stat`); returns log p(w) of the mixture
 // when every lobe was evaluated. With `sparse`, lobes whose frozen responsibility for cached
-// photon `slot` is under the threshold keep it (and h * stat), and the others share the rest.
+// photon `slot` (if under FROZEN) is under the threshold keep it (and h * stat), and the
+// others share the rest.
 fn e_step(w: vec3<f32>, slot: u32, sparse: bool, full: bool) -> f32 {
-    let use_frozen = sparse && !full && slot < CACHE;
+    let use_frozen = sparse && !full && slot < FROZEN;
     frozen_mask = 0u;
     var frozen_sum = 0.0;
     var m = -3.0e38;
@@ -152,7 +169,7 @@ fn e_step(w: vec3<f32>, slot: u32, sparse: bool, full: bool) -> f32 {
             stat[k] = frozen_hx[slot][k];
         } else {
             resp[k] *= scale;
-            if sparse && slot < CACHE {
+            if sparse && slot < FROZEN {
                 frozen_h[slot][k] = resp[k];
                 frozen_hx[slot][k] = resp[k] * stat[k];
             }
@@ -195,8 +212,10 @@ fn absorb(w: vec3<f32>, weight: f32, index: u32, slot: u32, kind: u32, sparse: b
     }
 }
 
-// The invocation's first CACHE accepted photons into the cache; notes where the rest begin.
+// The invocation's first `CACHE_SLOTS / WG` accepted photons into the cache; notes where the
+// rest begin.
 fn gather(lid: u32, box: BinBox) {
+    let capacity = CACHE_SLOTS / WG;
     cached = 0u;
     streaming = false;
     var offset = 0u;
@@ -209,15 +228,15 @@ fn gather(lid: u32, box: BinBox) {
             if !c.ok {
                 continue;
             }
-            if cached == CACHE {
+            if cached == capacity {
                 streaming = true;
                 resume_row = r;
                 resume_j = j;
                 resume_offset = offset;
                 return;
             }
-            cache_dir[cached] = vec4<f32>(c.dir, c.weight);
-            cache_index[cached] = j;
+            cache_dir[cached * WG + lid] = vec4<f32>(c.dir, c.weight);
+            cache_index[cached * WG + lid] = j;
             cached += 1u;
         }
         offset += end - begin;
@@ -230,7 +249,8 @@ fn photon_pass(lid: u32, box: BinBox, kind: u32, sparse: bool, full: bool) {
         acc[q] = 0.0;
     }
     for (var c = 0u; c < cached; c++) {
-        absorb(cache_dir[c].xyz, cache_dir[c].w, cache_index[c], c, kind, sparse, full);
+        let d = cache_dir[c * WG + lid];
+        absorb(d.xyz, d.w, cache_index[c * WG + lid], c, kind, sparse, full);
     }
     if !streaming {
         return;
@@ -244,7 +264,7 @@ fn photon_pass(lid: u32, box: BinBox, kind: u32, sparse: bool, full: bool) {
         for (; j < end; j += WG) {
             let c = accept(j);
             if c.ok {
-                absorb(c.dir, c.weight, j, CACHE, kind, sparse, full);
+                absorb(c.dir, c.weight, j, NOT_CACHED, kind, sparse, full);
             }
         }
         offset += end - begin;
@@ -307,7 +327,7 @@ fn main(@builtin(workgroup_id) wg: vec3<u32>, @builtin(num_workgroups) num_wg: v
     }
     let box = bin_box(center, em.radius, bins);
     gather(lid, box);
-    let sparse = (em.flags & EM_SPARSE) != 0u;
+    let sparse = SPARSE;
     let sums = LOBE_SUMS + 5u * LOBES;
 
     for (var it = begin; it < end; it++) {

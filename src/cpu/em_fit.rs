@@ -12,7 +12,12 @@ use crate::shared::octahedral::oct_decode;
 use crate::shared::sampling::frame_of;
 use crate::types::{BinParams, BinnedPhoton, EmParams, Lobe, Splat, SplatLight};
 
-pub const CACHE: u32 = 8;
+/// Photons cached per workgroup (`CACHE_SLOTS / workgroup_size` per invocation).
+pub const CACHE_SLOTS: u32 = 512;
+/// Cached photons per invocation whose responsibilities sparse EM keeps.
+const FROZEN: u32 = 8;
+/// The slot of a photon that is not cached.
+const NOT_CACHED: u32 = u32::MAX;
 const SUM_LOG: usize = 0;
 const SUM_WEIGHT: usize = 1;
 const SUM_COUNT: usize = 2;
@@ -22,7 +27,7 @@ const SUMS: usize = 46;
 const PASS_EM: u32 = 0;
 const PASS_FINAL: u32 = 1;
 const L: usize = MAX_LOBES as usize;
-const C: usize = CACHE as usize;
+const F: usize = FROZEN as usize;
 
 /// The read-only inputs of a dispatch (bindings 0–6).
 struct Inputs<'a> {
@@ -48,15 +53,16 @@ struct Splat1 {
 }
 
 /// One invocation's private state.
-#[derive(Clone, Copy)]
+#[derive(Clone)]
 struct Invocation {
     resp: [f32; L],
     stat: [f32; L],
     acc: [f32; SUMS],
-    cache_dir: [[f32; 4]; C],
-    cache_index: [u32; C],
-    frozen_h: [[f32; L]; C],
-    frozen_hx: [[f32; L]; C],
+    /// This invocation's column of the workgroup's photon cache.
+    cache_dir: Vec<[f32; 4]>,
+    cache_index: Vec<u32>,
+    frozen_h: [[f32; L]; F],
+    frozen_hx: [[f32; L]; F],
     frozen_mask: u32,
     cached: u32,
     streaming: bool,
@@ -65,16 +71,16 @@ struct Invocation {
     resume_offset: u32,
 }
 
-impl Default for Invocation {
-    fn default() -> Self {
+impl Invocation {
+    fn new(capacity: usize) -> Self {
         Invocation {
             resp: [0.0; L],
             stat: [0.0; L],
             acc: [0.0; SUMS],
-            cache_dir: [[0.0; 4]; C],
-            cache_index: [0; C],
-            frozen_h: [[0.0; L]; C],
-            frozen_hx: [[0.0; L]; C],
+            cache_dir: vec![[0.0; 4]; capacity],
+            cache_index: vec![0; capacity],
+            frozen_h: [[0.0; L]; F],
+            frozen_hx: [[0.0; L]; F],
             frozen_mask: 0,
             cached: 0,
             streaming: false,
@@ -98,11 +104,17 @@ struct Candidate {
 fn accept(inp: &Inputs, sp: &Splat1, j: u32) -> Candidate {
     let g = inp.bin_geom[j as usize];
     let d = Vec3::from(g.position) - sp.center;
-    let dir = oct_decode(g.direction);
-    let weight = inp.bin_power[j as usize][3];
-    let ok =
-        d.dot(d) <= inp.em.radius2 && d.dot(sp.normal).abs() <= sp.slab && dir.dot(sp.normal) > 0.0;
-    Candidate { ok, dir, weight }
+    let mut c = Candidate {
+        ok: d.dot(d) <= inp.em.radius2 && d.dot(sp.normal).abs() <= sp.slab,
+        dir: Vec3::ZERO,
+        weight: 0.0,
+    };
+    if c.ok {
+        c.dir = oct_decode(g.direction);
+        c.ok = c.dir.dot(sp.normal) > 0.0;
+        c.weight = inp.bin_power[j as usize][3];
+    }
+    c
 }
 
 fn prepare_mixture(em: &EmParams, sp: &mut Splat1) {
@@ -122,7 +134,7 @@ fn e_step(
     sparse: bool,
     full: bool,
 ) -> f32 {
-    let use_frozen = sparse && !full && slot < CACHE;
+    let use_frozen = sparse && !full && slot < FROZEN;
     let s_ = slot as usize;
     v.frozen_mask = 0;
     let mut frozen_sum = 0.0;
@@ -151,7 +163,7 @@ fn e_step(
             v.stat[k] = v.frozen_hx[s_][k];
         } else {
             v.resp[k] *= scale;
-            if sparse && slot < CACHE {
+            if sparse && slot < FROZEN {
                 v.frozen_h[s_][k] = v.resp[k];
                 v.frozen_hx[s_][k] = v.resp[k] * v.stat[k];
             }
@@ -221,7 +233,7 @@ fn gather(inp: &Inputs, sp: &Splat1, v: &mut Invocation, lid: u32, bx: &BinBox) 
         while j < end {
             let c = accept(inp, sp, j);
             if c.ok {
-                if v.cached == CACHE {
+                if v.cached as usize == v.cache_dir.len() {
                     v.streaming = true;
                     v.resume_row = r;
                     v.resume_j = j;
@@ -282,7 +294,9 @@ fn photon_pass(
         while j < end {
             let c = accept(inp, sp, j);
             if c.ok {
-                absorb(inp, sp, v, c.dir, c.weight, j, CACHE, kind, sparse, full);
+                absorb(
+                    inp, sp, v, c.dir, c.weight, j, NOT_CACHED, kind, sparse, full,
+                );
             }
             j += inp.em.workgroup_size;
         }
@@ -393,7 +407,8 @@ fn fit_splat(inp: &Inputs, splats: &[Splat], entry: u32, resume: &[Lobe]) -> Opt
         }
     }
     let bx = bin_box(sp.center, em.radius, inp.bins);
-    let mut inv = vec![Invocation::default(); em.workgroup_size as usize];
+    let capacity = (CACHE_SLOTS / em.workgroup_size) as usize;
+    let mut inv = vec![Invocation::new(capacity); em.workgroup_size as usize];
     for (lid, v) in inv.iter_mut().enumerate() {
         gather(inp, &sp, v, lid as u32, &bx);
     }

@@ -87,6 +87,7 @@ pub fn fit_lobes(
         ("LOBES", cfg.lobes as f64),
         ("FAMILY", cfg.family.code() as f64),
         ("WG", workgroup_size(limited) as f64),
+        ("SPARSE", f64::from(u8::from(cfg.sparse))),
     ];
     let pipeline = gpu.specialized("em_fit", &constants)?;
     let mut encoder = gpu.encoder("em fit");

@@ -27,18 +27,31 @@ pub fn bin_of(p: Vec3, b: &BinParams) -> u32 {
     bin_index(bin_coord(p, b), b)
 }
 
+/// Relative margin on a box's reach (`BIN_REACH_MARGIN` in WGSL): a cell a rounding error
+/// too far still counts, so rows never depend on the last bit of a distance.
+pub const BIN_REACH_MARGIN: f32 = 1.0001;
+
+/// The cells within `r` of a point: a box whose rows along x are trimmed to the cells within
+/// reach (see `bin_row`).
 #[derive(Clone, Copy, Debug)]
 pub struct BinBox {
     pub lo: UVec3,
     pub size: UVec3,
+    /// The point in cell units from the grid's origin.
+    pub center: Vec3,
+    /// (r in cell units)², with the margin.
+    pub reach2: f32,
 }
 
 pub fn bin_box(c: Vec3, r: f32, b: &BinParams) -> BinBox {
     let lo = bin_coord(c - Vec3::splat(r), b);
     let hi = bin_coord(c + Vec3::splat(r), b).min(lo + UVec3::splat(BIN_SPAN));
+    let reach = r * b.inv_cell_size * BIN_REACH_MARGIN;
     BinBox {
         lo,
         size: hi - lo + UVec3::ONE,
+        center: (c - Vec3::from(b.origin)) * b.inv_cell_size,
+        reach2: reach * reach,
     }
 }
 
@@ -46,9 +59,38 @@ pub fn bin_row_count(b: &BinBox) -> u32 {
     b.size.y * b.size.z
 }
 
+/// Distance in cell units from `q` to cell `i` along an axis of `dim` cells; the outer cells
+/// reach to infinity, since points outside the grid clamp into them.
+pub fn bin_axis_gap(i: u32, q: f32, dim: u32) -> f32 {
+    let below = if i == 0 { -1.0 } else { i as f32 - q };
+    let above = if i + 1 == dim {
+        -1.0
+    } else {
+        q - (i + 1) as f32
+    };
+    below.max(above).max(0.0)
+}
+
+/// Row `row` of the box: cells [x, y) of the binned grid, trimmed at both ends to the cells
+/// within reach (the rest is contiguous: the ball is convex); possibly empty.
 pub fn bin_row(bx: &BinBox, row: u32, b: &BinParams) -> UVec2 {
     let y = bx.lo.y + row % bx.size.y;
     let z = bx.lo.z + row / bx.size.y;
+    let gy = bin_axis_gap(y, bx.center.y, b.dims[1]);
+    let gz = bin_axis_gap(z, bx.center.z, b.dims[2]);
+    let left = bx.reach2 - gy * gy - gz * gz;
+    let within = |x: u32| {
+        let g = bin_axis_gap(x, bx.center.x, b.dims[0]);
+        g * g <= left
+    };
+    let mut x0 = bx.lo.x;
+    let mut x1 = bx.lo.x + bx.size.x;
+    while x0 < x1 && !within(x0) {
+        x0 += 1;
+    }
+    while x1 > x0 && !within(x1 - 1) {
+        x1 -= 1;
+    }
     let first = bin_index(UVec3::new(bx.lo.x, y, z), b);
-    UVec2::new(first, first + bx.size.x)
+    UVec2::new(first + x0 - bx.lo.x, first + x1 - bx.lo.x)
 }

@@ -24,18 +24,30 @@ fn bin_of(p: vec3<f32>, b: BinParams) -> u32 {
 // so the 2R-wide box around a point never spans more than 5 cells, rounding included.
 const BIN_SPAN: u32 = 4u;
 
-// The cells within `r` of `c`. Its rows along x are contiguous
-// runs of the binned list: row k covers cells [bin_row(box, k).x, bin_row(box, k).y).
+// The cells within `r` of `c`: the box of cells around it, whose rows along x are contiguous
+// runs of the binned list, each trimmed to the cells that reach within `r` of `c` (a sphere
+// fills half its box, so this halves the photons tested). Row k covers cells
+// [bin_row(box, k).x, bin_row(box, k).y), possibly none.
 struct BinBox {
     lo: vec3<u32>,
     size: vec3<u32>,
+    // `c` in cell units from the grid's origin, and (r in cell units)^2 with a margin.
+    center: vec3<f32>,
+    reach2: f32,
 }
+
+// Relative margin on the reach: a cell a rounding error too far still counts (the photons'
+// own distance test is exact), so rows never depend on the last bit of a distance.
+const BIN_REACH_MARGIN: f32 = 1.0001;
 
 fn bin_box(c: vec3<f32>, r: f32, b: BinParams) -> BinBox {
     var box: BinBox;
     box.lo = bin_coord(c - vec3<f32>(r), b);
     let hi = min(bin_coord(c + vec3<f32>(r), b), box.lo + vec3<u32>(BIN_SPAN));
     box.size = hi - box.lo + vec3<u32>(1u);
+    box.center = (c - b.origin) * b.inv_cell_size;
+    let reach = r * b.inv_cell_size * BIN_REACH_MARGIN;
+    box.reach2 = reach * reach;
     return box;
 }
 
@@ -43,9 +55,35 @@ fn bin_row_count(box: BinBox) -> u32 {
     return box.size.y * box.size.z;
 }
 
+// Distance in cell units from `q` to cell `i` along one axis of `dim` cells; the outer cells
+// reach to infinity, since points outside the grid clamp into them.
+fn bin_axis_gap(i: u32, q: f32, dim: u32) -> f32 {
+    let below = select(f32(i) - q, -1.0, i == 0u);
+    let above = select(q - f32(i + 1u), -1.0, i + 1u == dim);
+    return max(max(below, above), 0.0);
+}
+
 fn bin_row(box: BinBox, row: u32, b: BinParams) -> vec2<u32> {
     let y = box.lo.y + row % box.size.y;
     let z = box.lo.z + row / box.size.y;
+    let gy = bin_axis_gap(y, box.center.y, b.dims.y);
+    let gz = bin_axis_gap(z, box.center.z, b.dims.z);
+    let left = box.reach2 - gy * gy - gz * gz;
+    var x0 = box.lo.x;
+    var x1 = box.lo.x + box.size.x;
+    // Trim cells out of reach from both ends; the rest is contiguous (the ball is convex).
+    for (; x0 < x1; x0++) {
+        let g = bin_axis_gap(x0, box.center.x, b.dims.x);
+        if g * g <= left {
+            break;
+        }
+    }
+    for (; x1 > x0; x1--) {
+        let g = bin_axis_gap(x1 - 1u, box.center.x, b.dims.x);
+        if g * g <= left {
+            break;
+        }
+    }
     let first = bin_index(vec3<u32>(box.lo.x, y, z), b);
-    return vec2<u32>(first, first + box.size.x);
+    return vec2<u32>(first + x0 - box.lo.x, first + x1 - box.lo.x);
 }
