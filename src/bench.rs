@@ -6,7 +6,7 @@ use serde::Serialize;
 
 use crate::bins::bin_params;
 use crate::cpu;
-use crate::em::{EmConfig, EmStats, LobeFamily};
+use crate::em::{EmConfig, EmStats, FitShape, LobeFamily};
 use crate::error::Result;
 use crate::gpu::Gpu;
 use crate::gpu::bins as gpu_bins;
@@ -222,7 +222,13 @@ pub fn em(
             let t = Instant::now();
             let bins = cpu::bin_photons(&params, &traced.photons)?;
             let binning_ms = ms_since(t);
-            let map = cpu::fit_lobes(&cfg, &bins, &scene.splats, &scene.materials, false)?;
+            let map = cpu::fit_lobes(
+                &cfg,
+                &bins,
+                &scene.splats,
+                &scene.materials,
+                FitShape::default(),
+            )?;
             let threads = rayon::current_num_threads();
             let adapter = format!("CPU mirror ({threads} threads)");
             (map, traced.stats, binning_ms, adapter, "cpu".into())

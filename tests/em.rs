@@ -9,10 +9,11 @@ use std::path::Path;
 use glam::Vec3;
 use lobelight::bins::{PhotonBins, bin_params};
 use lobelight::cpu;
+use lobelight::em::FitShape;
 use lobelight::em::{EmConfig, LobeFamily, LobeMap};
 use lobelight::gpu::Gpu;
 use lobelight::gpu::bins::GpuBins;
-use lobelight::gpu::em::{fit_lobes, loop_limited};
+use lobelight::gpu::em::{fit_lobes_shaped, fit_shape};
 use lobelight::grid::grid_params;
 use lobelight::photons::PhotonConfig;
 use lobelight::scene::{self, file::StoreRange};
@@ -94,7 +95,7 @@ fn config(family: LobeFamily, lobes: u32, iterations: u32) -> EmConfig {
 }
 
 fn on_cpu(cfg: &EmConfig, bins: &PhotonBins, splats: &[Splat], materials: &[Material]) -> LobeMap {
-    cpu::fit_lobes(cfg, bins, splats, materials, false).unwrap()
+    cpu::fit_lobes(cfg, bins, splats, materials, FitShape::default()).unwrap()
 }
 
 fn on_gpu(
@@ -104,13 +105,38 @@ fn on_gpu(
     splats: &[Splat],
     materials: &[Material],
 ) -> LobeMap {
+    on_gpu_shaped(gpu, cfg, bins, splats, materials, fit_shape(gpu))
+}
+
+fn on_gpu_shaped(
+    gpu: &Gpu,
+    cfg: &EmConfig,
+    bins: &PhotonBins,
+    splats: &[Splat],
+    materials: &[Material],
+    shape: FitShape,
+) -> LobeMap {
     let uploaded = GpuBins::upload(gpu, bins).unwrap();
     let s = gpu.storage("splats", splats).unwrap();
     let m = gpu.storage("materials", materials).unwrap();
-    fit_lobes(gpu, &s, &m, splats.len() as u32, &uploaded, cfg)
+    fit_lobes_shaped(gpu, &s, &m, splats.len() as u32, &uploaded, cfg, shape)
         .unwrap()
         .download(gpu)
         .unwrap()
+}
+
+/// The device's fit shape, and the portable reduction too where it uses subgroups: parity
+/// tests run both.
+fn shapes(gpu: &Gpu) -> Vec<FitShape> {
+    let own = fit_shape(gpu);
+    let mut all = vec![own];
+    if own.subgroup_reduce {
+        all.push(FitShape {
+            subgroup_reduce: false,
+            ..own
+        });
+    }
+    all
 }
 
 /// A direction from the vMF lobe (axis, κ), by inverting its cosine's distribution.
@@ -275,12 +301,18 @@ fn gpu_fit_equals_cpu_fit_on_the_same_photons() {
             iterations: 5,
             ..EmConfig::from_scene(&scene)
         };
-        let limited = loop_limited(&gpu);
-        let c = cpu::fit_lobes(&em, &bins, &scene.splats, &scene.materials, limited).unwrap();
-        let g = on_gpu(&gpu, &em, &bins, &scene.splats, &scene.materials);
-        assert!(c.stats.fitted > 1000, "{} splats fitted", c.stats.fitted);
-        assert_eq!(c.stats.fitted, g.stats.fitted);
-        assert_parity(&format!("{family:?} sparse {sparse}"), sparse, &c, &g);
+        for shape in shapes(&gpu) {
+            let c = cpu::fit_lobes(&em, &bins, &scene.splats, &scene.materials, shape).unwrap();
+            let g = on_gpu_shaped(&gpu, &em, &bins, &scene.splats, &scene.materials, shape);
+            assert!(c.stats.fitted > 1000, "{} splats fitted", c.stats.fitted);
+            assert_eq!(c.stats.fitted, g.stats.fitted);
+            assert_parity(
+                &format!("{family:?} sparse {sparse} {shape:?}"),
+                sparse,
+                &c,
+                &g,
+            );
+        }
     }
 }
 
@@ -299,13 +331,16 @@ fn streamed_photons_fit_as_cached_ones() {
     let bins = fixture.bins();
     for family in [LobeFamily::Ward, LobeFamily::Vmf] {
         let cfg = config(family, 2, 5);
-        let c = on_cpu(&cfg, &bins, &fixture.splats, &fixture.materials);
-        let g = on_gpu(&gpu, &cfg, &bins, &fixture.splats, &fixture.materials);
-        for (i, set) in sets.iter().enumerate() {
-            assert_eq!(g.light[i].photons as usize, set.len(), "GPU, splat {i}");
-            assert_eq!(c.light[i].photons as usize, set.len(), "CPU, splat {i}");
+        for shape in shapes(&gpu) {
+            let (splats, materials) = (&fixture.splats, &fixture.materials);
+            let c = cpu::fit_lobes(&cfg, &bins, splats, materials, shape).unwrap();
+            let g = on_gpu_shaped(&gpu, &cfg, &bins, splats, materials, shape);
+            for (i, set) in sets.iter().enumerate() {
+                assert_eq!(g.light[i].photons as usize, set.len(), "GPU, splat {i}");
+                assert_eq!(c.light[i].photons as usize, set.len(), "CPU, splat {i}");
+            }
+            assert_parity(&format!("{family:?} streamed {shape:?}"), false, &c, &g);
         }
-        assert_parity(&format!("{family:?} streamed"), false, &c, &g);
     }
 }
 

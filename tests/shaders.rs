@@ -102,3 +102,39 @@ fn malformed_import_is_an_error() {
     let err = shaders::resolve("wgsl/x.wgsl", "// #import a b\n", &lookup).unwrap_err();
     assert!(err.to_string().contains("line 1"), "{err}");
 }
+
+#[test]
+fn every_subgroup_variant_validates_with_naga() {
+    let mut variants = 0;
+    for stage in STAGES
+        .iter()
+        .filter(|s| s.text.contains("// #ifdef subgroups"))
+    {
+        let source = shaders::resolve_stage_with(stage.name, &["subgroups"]).unwrap();
+        shaders::validate_subgroups(stage.name, &source).unwrap_or_else(|e| panic!("{e}"));
+        assert!(
+            source.contains("subgroup"),
+            "{}: variant not taken",
+            stage.name
+        );
+        variants += 1;
+    }
+    assert!(variants >= 1, "em_fit has a subgroup variant");
+}
+
+#[test]
+fn ifdef_keeps_the_defined_branch() {
+    let text = "a\n// #ifdef x\nb\n// #else\nc\n// #endif\nd\n";
+    let none = shaders::resolve_with("wgsl/x.wgsl", text, &lookup, &[]).unwrap();
+    assert_eq!(none, "a\nc\nd\n");
+    let x = shaders::resolve_with("wgsl/x.wgsl", text, &lookup, &["x"]).unwrap();
+    assert_eq!(x, "a\nb\nd\n");
+}
+
+#[test]
+fn unbalanced_ifdef_names_file_and_line() {
+    let err = shaders::resolve("wgsl/x.wgsl", "a\n// #ifdef x\nb\n", &lookup).unwrap_err();
+    assert!(err.to_string().contains("wgsl/x.wgsl: line 2"), "{err}");
+    let err = shaders::resolve("wgsl/x.wgsl", "a\n// #endif\n", &lookup).unwrap_err();
+    assert!(err.to_string().contains("wgsl/x.wgsl: line 2"), "{err}");
+}

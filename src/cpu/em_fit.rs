@@ -1,6 +1,7 @@
 //! Mirror of `wgsl/em_fit.wgsl`: each workgroup's invocations run one after another between
-//! its two barriers, with their private state in `Invocation`; workgroups run in parallel
-//! (each writes only its own splat).
+//! its reductions, with their private state in `Invocation`; workgroups run in parallel
+//! (each writes only its own splat). `EM_SUBGROUP_REDUCE` in the flags selects the sum order
+//! of the `subgroups` variant.
 
 use glam::Vec3;
 use rayon::prelude::*;
@@ -304,15 +305,23 @@ fn photon_pass(
     }
 }
 
-/// The fixed-order sum of `reduce` in WGSL: column q over the invocations 0, 1, …, `workgroup_size` − 1.
-fn reduce(invocations: &[Invocation], count: usize) -> [f32; SUMS] {
+/// The fixed-order sums of `reduce` in WGSL. With `butterfly` (the `subgroups` variant),
+/// invocation i adds the value of invocation i ^ step for step = n/2, n/4, …, 1, and the
+/// result is invocation 0's; else column q over the invocations 0, 1, …, n − 1.
+fn reduce(invocations: &[Invocation], count: usize, butterfly: bool) -> [f32; SUMS] {
     let mut total = [0.0; SUMS];
     for (q, t) in total.iter_mut().enumerate().take(count) {
-        let mut s = 0.0;
-        for v in invocations {
-            s += v.acc[q];
+        let mut v: Vec<f32> = invocations.iter().map(|inv| inv.acc[q]).collect();
+        if butterfly {
+            let mut step = v.len() / 2;
+            while step > 0 {
+                v = (0..v.len()).map(|i| v[i] + v[i ^ step]).collect();
+                step /= 2;
+            }
+            *t = v[0];
+        } else {
+            *t = v.iter().fold(0.0, |s, x| s + x);
         }
-        *t = s;
     }
     total
 }
@@ -413,6 +422,7 @@ fn fit_splat(inp: &Inputs, splats: &[Splat], entry: u32, resume: &[Lobe]) -> Opt
         gather(inp, &sp, v, lid as u32, &bx);
     }
     let sparse = em.flags & EM_SPARSE != 0;
+    let butterfly = em.flags & EM_SUBGROUP_REDUCE != 0;
     let sums = LOBE_SUMS + 5 * sp.lobe_count as usize;
 
     for it in begin..end {
@@ -421,7 +431,7 @@ fn fit_splat(inp: &Inputs, splats: &[Splat], entry: u32, resume: &[Lobe]) -> Opt
         for (lid, v) in inv.iter_mut().enumerate() {
             photon_pass(inp, &sp, v, lid as u32, &bx, PASS_EM, sparse, full);
         }
-        let total = reduce(&inv, sums);
+        let total = reduce(&inv, sums, butterfly);
         for k in 0..sp.lobe_count as usize {
             let o = LOBE_SUMS + 5 * k;
             let old = LobeFit {
@@ -457,7 +467,7 @@ fn fit_splat(inp: &Inputs, splats: &[Splat], entry: u32, resume: &[Lobe]) -> Opt
     for (lid, v) in inv.iter_mut().enumerate() {
         photon_pass(inp, &sp, v, lid as u32, &bx, PASS_FINAL, false, true);
     }
-    let total = reduce(&inv, sums);
+    let total = reduce(&inv, sums, butterfly);
     let photons = total[SUM_COUNT] as u32;
     let written = if photons > 0 { sp.lobe_count } else { 0 };
     let fitted = (0..written as usize)

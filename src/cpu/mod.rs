@@ -21,7 +21,7 @@ pub mod trace_rays;
 use std::time::Instant;
 
 use crate::bins::PhotonBins;
-use crate::em::{EmConfig, EmStats, LobeMap};
+use crate::em::{EmConfig, EmStats, FitShape, LobeMap};
 use crate::error::{Error, Result};
 use crate::grid::{SplatGrid, check_cell_len};
 use crate::photons::{
@@ -281,14 +281,14 @@ pub fn bin_photons(params: &BinParams, photons: &[Photon]) -> Result<PhotonBins>
     Ok(bins)
 }
 
-/// The lobe fit on the CPU: `em_select`, then `em_fit` over the same dispatch ranges as the
-/// GPU path on a device with (`loop_limited`) or without llvmpipe's loop limit.
+/// The lobe fit on the CPU: `em_select`, then `em_fit` over the same dispatch ranges and
+/// with the same sum order as the GPU path on a device of the given shape.
 pub fn fit_lobes(
     cfg: &EmConfig,
     bins: &PhotonBins,
     splats: &[Splat],
     materials: &[Material],
-    loop_limited: bool,
+    shape: FitShape,
 ) -> Result<LobeMap> {
     cfg.validate()?;
     let t = Instant::now();
@@ -298,7 +298,7 @@ pub fn fit_lobes(
     let mut fit_list = vec![0u32; n];
     let mut counters = [0u32; 3];
     em_select::em_select(
-        &cfg.params(splat_count, 0, loop_limited),
+        &cfg.params(splat_count, 0, shape),
         &bins.params,
         splats,
         materials,
@@ -308,7 +308,7 @@ pub fn fit_lobes(
         groups_for(splat_count, em_select::WG),
     );
     let [listed, max_candidates, fitted] = counters;
-    let chunk = crate::em::iterations_per_dispatch(cfg, max_candidates, loop_limited)?;
+    let chunk = crate::em::iterations_per_dispatch(cfg, max_candidates, shape.loop_limited)?;
     let mut map = LobeMap {
         lobes_per_splat: cfg.lobes,
         lobes: vec![Lobe::default(); n * cfg.lobes as usize],
@@ -324,7 +324,7 @@ pub fn fit_lobes(
         let params = EmParams {
             iteration_begin: begin,
             iteration_end: end,
-            ..cfg.params(splat_count, listed, loop_limited)
+            ..cfg.params(splat_count, listed, shape)
         };
         em_fit::em_fit(
             &params,

@@ -9,7 +9,7 @@ use super::Gpu;
 use super::bins::GpuBins;
 use crate::cpu::{em_select, groups_for};
 use crate::em::{
-    EmConfig, EmStats, LobeMap, dispatch_ranges, iterations_per_dispatch, workgroup_size,
+    EmConfig, EmStats, FitShape, LobeMap, dispatch_ranges, iterations_per_dispatch, workgroup_size,
 };
 use crate::error::{Error, Result};
 use crate::photons::ms_since;
@@ -38,13 +38,20 @@ impl GpuLobes {
     }
 }
 
-/// True on devices that silently cut long shader loops (llvmpipe).
-pub fn loop_limited(gpu: &Gpu) -> bool {
-    gpu.info.device_type == wgpu::DeviceType::Cpu
+/// The fit's shape on this device: loop-limited on llvmpipe (which silently cuts long shader
+/// loops); a subgroup reduction where subgroup operations are enabled and a subgroup always
+/// holds the whole workgroup.
+pub fn fit_shape(gpu: &Gpu) -> FitShape {
+    let loop_limited = gpu.info.device_type == wgpu::DeviceType::Cpu;
+    FitShape {
+        loop_limited,
+        subgroup_reduce: gpu.subgroups
+            && gpu.info.subgroup_min_size >= workgroup_size(loop_limited),
+    }
 }
 
 /// Fits lobes to the binned photons around each of the `splat_count` splats in `splats`
-/// (with their `materials`).
+/// (with their `materials`), in the device's shape.
 pub fn fit_lobes(
     gpu: &Gpu,
     splats: &wgpu::Buffer,
@@ -53,15 +60,40 @@ pub fn fit_lobes(
     bins: &GpuBins,
     cfg: &EmConfig,
 ) -> Result<GpuLobes> {
+    fit_lobes_shaped(
+        gpu,
+        splats,
+        materials,
+        splat_count,
+        bins,
+        cfg,
+        fit_shape(gpu),
+    )
+}
+
+/// `fit_lobes` in a given shape (tests run both reductions on one device).
+pub fn fit_lobes_shaped(
+    gpu: &Gpu,
+    splats: &wgpu::Buffer,
+    materials: &wgpu::Buffer,
+    splat_count: u32,
+    bins: &GpuBins,
+    cfg: &EmConfig,
+    shape: FitShape,
+) -> Result<GpuLobes> {
     cfg.validate()?;
+    if shape.subgroup_reduce && !fit_shape(gpu).subgroup_reduce {
+        return Err(Error::Invalid(
+            "this device cannot reduce the fit's sums with subgroup operations".into(),
+        ));
+    }
     let t = Instant::now();
     let n = splat_count as u64;
     let lobes = gpu.storage_zeroed("lobes", (n * cfg.lobes as u64).max(1) * 32)?;
     let light = gpu.storage_zeroed("splat light", n.max(1) * 32)?;
     let fit_list = gpu.storage_zeroed("fit list", n.max(1) * 4)?;
     let counters = gpu.storage_zeroed("em counters", 12)?;
-    let limited = loop_limited(gpu);
-    let select = gpu.uniform("em select params", &cfg.params(splat_count, 0, limited));
+    let select = gpu.uniform("em select params", &cfg.params(splat_count, 0, shape));
     let mut encoder = gpu.encoder("em select");
     gpu.dispatch(
         &mut encoder,
@@ -82,21 +114,26 @@ pub fn fit_lobes(
         [a, b, c] => (a, b, c),
         _ => return Err(Error::Gpu("em counters readback was short".into())),
     };
-    let chunk = iterations_per_dispatch(cfg, max_candidates, limited)?;
+    let chunk = iterations_per_dispatch(cfg, max_candidates, shape.loop_limited)?;
     let constants = [
         ("LOBES", cfg.lobes as f64),
         ("FAMILY", cfg.family.code() as f64),
-        ("WG", workgroup_size(limited) as f64),
+        ("WG", workgroup_size(shape.loop_limited) as f64),
         ("SPARSE", f64::from(u8::from(cfg.sparse))),
     ];
-    let pipeline = gpu.specialized("em_fit", &constants)?;
+    let defines: &[&str] = if shape.subgroup_reduce {
+        &["subgroups"]
+    } else {
+        &[]
+    };
+    let pipeline = gpu.variant("em_fit", defines, &constants)?;
     let mut encoder = gpu.encoder("em fit");
     let mut dispatches = 0;
     for (begin, end) in dispatch_ranges(cfg.iterations, chunk) {
         let params = EmParams {
             iteration_begin: begin,
             iteration_end: end,
-            ..cfg.params(splat_count, listed, limited)
+            ..cfg.params(splat_count, listed, shape)
         };
         let uniform = gpu.uniform("em params", &params);
         gpu.dispatch_pipeline(

@@ -38,6 +38,8 @@ pub struct Gpu {
     pub queue: wgpu::Queue,
     pub info: wgpu::AdapterInfo,
     pub limits: wgpu::Limits,
+    /// Subgroup operations are enabled (`wgpu::Features::SUBGROUP`, where the device has it).
+    pub subgroups: bool,
     pipelines: Mutex<HashMap<String, wgpu::ComputePipeline>>,
     /// First uncaptured device error, surfaced as an `Error` after the next wait
     /// (wgpu's default handler panics).
@@ -91,7 +93,9 @@ impl Gpu {
         let limits = required_limits(&adapter.limits());
         let (device, queue) = pollster::block_on(adapter.request_device(&wgpu::DeviceDescriptor {
             label: Some("lobelight"),
-            required_features: wgpu::Features::empty(),
+            // Subgroup operations where the device has them: stages then use a variant
+            // (`// #ifdef subgroups`), with a portable one for the rest.
+            required_features: adapter.features() & wgpu::Features::SUBGROUP,
             required_limits: limits.clone(),
             experimental_features: wgpu::ExperimentalFeatures::disabled(),
             memory_hints: wgpu::MemoryHints::Performance,
@@ -110,11 +114,13 @@ impl Gpu {
                 s.get_or_insert_with(|| e.to_string());
             }
         }));
+        let subgroups = device.features().contains(wgpu::Features::SUBGROUP);
         Ok(Some(Gpu {
             device,
             queue,
             info,
             limits,
+            subgroups,
             pipelines: Mutex::new(HashMap::new()),
             error,
         }))
@@ -143,9 +149,21 @@ impl Gpu {
         name: &'static str,
         constants: &[(&str, f64)],
     ) -> Result<wgpu::ComputePipeline> {
+        self.variant(name, &[], constants)
+    }
+
+    /// `specialized`, from the stage's source with `defines` defined (see `shaders`).
+    pub fn variant(
+        &self,
+        name: &'static str,
+        defines: &[&str],
+        constants: &[(&str, f64)],
+    ) -> Result<wgpu::ComputePipeline> {
         let key = constants
             .iter()
-            .fold(name.to_string(), |k, (c, v)| format!("{k} {c}={v}"));
+            .fold(format!("{name} [{}]", defines.join(",")), |k, (c, v)| {
+                format!("{k} {c}={v}")
+            });
         let mut cache = self
             .pipelines
             .lock()
@@ -153,7 +171,7 @@ impl Gpu {
         if let Some(p) = cache.get(&key) {
             return Ok(p.clone());
         }
-        let source = shaders::resolve_stage(name)?;
+        let source = shaders::resolve_stage_with(name, defines)?;
         let module = self
             .device
             .create_shader_module(wgpu::ShaderModuleDescriptor {

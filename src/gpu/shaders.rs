@@ -2,7 +2,9 @@
 //!
 //! A line `// #import name` splices in `wgsl/shared/name.wgsl` (recursively), each module at
 //! most once per shader, so stages can import `types` and a shared module that also imports
-//! it. Errors name the importing file and line.
+//! it. `// #ifdef name`, `// #else` and `// #endif` keep or drop lines by the defines a
+//! pipeline is built with (a variant that uses an optional device feature, such as
+//! subgroups). Errors name the file and line.
 
 use std::collections::HashSet;
 use std::path::Path;
@@ -70,13 +72,21 @@ pub fn stage(name: &str) -> Option<&'static WgslFile> {
     STAGES.iter().find(|s| s.name == name)
 }
 
-/// The full source of a stage with its imports resolved.
+/// The full source of a stage with its imports resolved, nothing defined.
 pub fn resolve_stage(name: &str) -> Result<String> {
+    resolve_stage_with(name, &[])
+}
+
+/// The full source of a stage with its imports resolved and `defines` defined.
+pub fn resolve_stage_with(name: &str, defines: &[&str]) -> Result<String> {
     let file =
         stage(name).ok_or_else(|| Error::Invalid(format!("no shader stage named '{name}'")))?;
-    resolve(&format!("wgsl/{name}.wgsl"), file.text, &|m| {
-        SHARED.iter().find(|s| s.name == m).map(|s| s.text)
-    })
+    resolve_with(
+        &format!("wgsl/{name}.wgsl"),
+        file.text,
+        &|m| SHARED.iter().find(|s| s.name == m).map(|s| s.text),
+        defines,
+    )
 }
 
 /// Resolves `// #import` lines of `text` (named `path` in errors) using `lookup` for modules.
@@ -85,28 +95,70 @@ pub fn resolve(
     text: &str,
     lookup: &dyn Fn(&str) -> Option<&'static str>,
 ) -> Result<String> {
-    let mut out = String::with_capacity(text.len() * 2);
-    let mut done = HashSet::new();
-    let mut active = vec![path.to_owned()];
-    splice(path, text, lookup, &mut done, &mut active, &mut out)?;
-    Ok(out)
+    resolve_with(path, text, lookup, &[])
 }
 
-fn splice(
+/// `resolve`, keeping the `// #ifdef` branches of `defines`.
+pub fn resolve_with(
     path: &str,
     text: &str,
     lookup: &dyn Fn(&str) -> Option<&'static str>,
-    done: &mut HashSet<String>,
-    active: &mut Vec<String>,
-    out: &mut String,
-) -> Result<()> {
+    defines: &[&str],
+) -> Result<String> {
+    let mut out = String::with_capacity(text.len() * 2);
+    let mut ctx = Splice {
+        lookup,
+        defines,
+        done: HashSet::new(),
+        active: vec![path.to_owned()],
+    };
+    splice(path, text, &mut ctx, &mut out)?;
+    Ok(out)
+}
+
+struct Splice<'a> {
+    lookup: &'a dyn Fn(&str) -> Option<&'static str>,
+    defines: &'a [&'a str],
+    /// Modules already spliced.
+    done: HashSet<String>,
+    /// The chain of files being spliced (for cycles).
+    active: Vec<String>,
+}
+
+/// A `// #` directive other than `#import`: its kind and argument.
+fn directive(line: &str) -> Option<(&str, &str)> {
+    let rest = line.trim_start().strip_prefix("// #")?;
+    let (kind, arg) = rest.split_once(' ').unwrap_or((rest, ""));
+    matches!(kind, "ifdef" | "else" | "endif").then_some((kind, arg.trim()))
+}
+
+fn splice(path: &str, text: &str, ctx: &mut Splice, out: &mut String) -> Result<()> {
+    // One entry per open `#ifdef`: whether its current branch is kept, and its line.
+    let mut branches: Vec<(bool, usize)> = Vec::new();
     for (n, line) in text.lines().enumerate() {
+        let err = |msg: String| Error::at_line(Path::new(path), n + 1, msg);
+        let kept = branches.iter().all(|b| b.0);
+        if let Some((kind, arg)) = directive(line) {
+            match (kind, branches.last_mut()) {
+                ("ifdef", _) if !arg.is_empty() => {
+                    branches.push((ctx.defines.contains(&arg), n + 1));
+                }
+                ("else", Some(top)) => top.0 = !top.0,
+                ("endif", Some(_)) => {
+                    branches.pop();
+                }
+                _ => return Err(err(format!("unmatched or malformed `{}`", line.trim()))),
+            }
+            continue;
+        }
+        if !kept {
+            continue;
+        }
         let Some(rest) = line.trim_start().strip_prefix("// #import") else {
             out.push_str(line);
             out.push('\n');
             continue;
         };
-        let err = |msg: String| Error::at_line(Path::new(path), n + 1, msg);
         let name = rest.trim();
         if name.is_empty() || !name.chars().all(|c| c.is_ascii_alphanumeric() || c == '_') {
             return Err(err(format!(
@@ -115,28 +167,49 @@ fn splice(
             )));
         }
         let module_path = format!("wgsl/shared/{name}.wgsl");
-        if active.contains(&module_path) {
+        if ctx.active.contains(&module_path) {
             return Err(err(format!(
                 "import cycle: {} -> {module_path}",
-                active.join(" -> ")
+                ctx.active.join(" -> ")
             )));
         }
-        if !done.insert(name.to_owned()) {
+        if !ctx.done.insert(name.to_owned()) {
             continue;
         }
-        let module = lookup(name)
+        let module = (ctx.lookup)(name)
             .ok_or_else(|| err(format!("unknown import '{name}' (no {module_path})")))?;
         out.push_str(&format!("// ---- begin {module_path}\n"));
-        active.push(module_path.clone());
-        splice(&module_path, module, lookup, done, active, out)?;
-        active.pop();
+        ctx.active.push(module_path.clone());
+        splice(&module_path, module, ctx, out)?;
+        ctx.active.pop();
         out.push_str(&format!("// ---- end {module_path}\n"));
     }
-    Ok(())
+    match branches.last() {
+        Some(&(_, line)) => Err(Error::at_line(
+            Path::new(path),
+            line,
+            "`// #ifdef` without `// #endif`",
+        )),
+        None => Ok(()),
+    }
 }
 
-/// Parses and validates a resolved shader with naga, as wgpu would.
+/// Parses and validates a resolved shader with naga, as wgpu would on a device without
+/// optional features.
 pub fn validate(name: &str, source: &str) -> Result<naga::Module> {
+    validate_with(name, source, naga::valid::Capabilities::default())
+}
+
+/// `validate` on a device with subgroup operations in compute shaders.
+pub fn validate_subgroups(name: &str, source: &str) -> Result<naga::Module> {
+    validate_with(name, source, naga::valid::Capabilities::SUBGROUP)
+}
+
+fn validate_with(
+    name: &str,
+    source: &str,
+    capabilities: naga::valid::Capabilities,
+) -> Result<naga::Module> {
     let module = naga::front::wgsl::parse_str(source).map_err(|e| {
         Error::parse(
             Path::new(&format!("wgsl/{name}.wgsl")),
@@ -144,10 +217,13 @@ pub fn validate(name: &str, source: &str) -> Result<naga::Module> {
             e.emit_to_string(source),
         )
     })?;
-    let mut validator = naga::valid::Validator::new(
-        naga::valid::ValidationFlags::all(),
-        naga::valid::Capabilities::default(),
-    );
+    let mut validator =
+        naga::valid::Validator::new(naga::valid::ValidationFlags::all(), capabilities);
+    if capabilities.contains(naga::valid::Capabilities::SUBGROUP) {
+        validator
+            .subgroup_stages(naga::valid::ShaderStages::COMPUTE)
+            .subgroup_operations(naga::valid::SubgroupOperationSet::all());
+    }
     validator.validate(&module).map_err(|e| {
         Error::parse(
             Path::new(&format!("wgsl/{name}.wgsl")),

@@ -12,6 +12,9 @@ pub const FAMILY_WARD: u32 = 1;
 pub const EM_SPARSE: u32 = 1;
 pub const EM_PRIORS: u32 = 2;
 pub const EM_FIT_ALL: u32 = 4;
+/// The invocations' sums combine by a subgroup butterfly (the `subgroups` variant of
+/// `em_fit`); the CPU mirror then adds in that order.
+pub const EM_SUBGROUP_REDUCE: u32 = 8;
 
 pub const SPARSE_THRESHOLD: f32 = 0.02;
 pub const SPARSE_PERIOD: u32 = 8;
