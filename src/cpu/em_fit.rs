@@ -29,6 +29,8 @@ const PASS_EM: u32 = 0;
 const PASS_FINAL: u32 = 1;
 const L: usize = MAX_LOBES as usize;
 const F: usize = FROZEN as usize;
+/// Most invocations per workgroup (`MAX_WG` in WGSL).
+const MAX_WG: usize = 32;
 
 /// The read-only inputs of a dispatch (bindings 0–6).
 struct Inputs<'a> {
@@ -311,16 +313,23 @@ fn photon_pass(
 fn reduce(invocations: &[Invocation], count: usize, butterfly: bool) -> [f32; SUMS] {
     let mut total = [0.0; SUMS];
     for (q, t) in total.iter_mut().enumerate().take(count) {
-        let mut v: Vec<f32> = invocations.iter().map(|inv| inv.acc[q]).collect();
+        let n = invocations.len();
+        let mut v = [0.0f32; MAX_WG];
+        for (x, inv) in v.iter_mut().zip(invocations) {
+            *x = inv.acc[q];
+        }
         if butterfly {
-            let mut step = v.len() / 2;
+            let mut step = n / 2;
             while step > 0 {
-                v = (0..v.len()).map(|i| v[i] + v[i ^ step]).collect();
+                let before = v;
+                for (i, x) in v.iter_mut().enumerate().take(n) {
+                    *x = before[i] + before[i ^ step];
+                }
                 step /= 2;
             }
             *t = v[0];
         } else {
-            *t = v.iter().fold(0.0, |s, x| s + x);
+            *t = v[..n].iter().fold(0.0, |s, x| s + x);
         }
     }
     total
