@@ -17,6 +17,7 @@ pub mod photons;
 pub mod render;
 pub mod scene;
 pub mod shared;
+pub mod tone;
 pub mod types;
 
 pub use error::{Error, Result};

@@ -299,3 +299,24 @@ pub struct ScanParams {
     pub _pad1: u32,
     pub _pad2: u32,
 }
+
+/// Tone mapping (DESIGN.md §9): one level of the log-average reduction, and the operator.
+#[repr(C)]
+#[derive(Clone, Copy, Debug, Default, PartialEq, Pod, Zeroable)]
+pub struct ToneParams {
+    /// Values at this level of the reduction (pixels at level 0); pixels for `tonemap_apply`.
+    pub count: u32,
+    /// 0: the reduction reads HDR pixels; above: the previous level's partial sums.
+    pub level: u32,
+    /// `TONE_REINHARD` or `TONE_LINEAR` (`wgsl/shared/tone.wgsl`).
+    pub mode: u32,
+    pub _pad0: u32,
+    /// The key `a` that the log-average luminance maps to.
+    pub key: f32,
+    /// A multiplier after the operator: 2^EV.
+    pub exposure: f32,
+    /// cd/m² per unit of radiance, for the scotopic blend.
+    pub luminance_scale: f32,
+    /// ε of log(ε + Y).
+    pub epsilon: f32,
+}

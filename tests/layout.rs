@@ -173,6 +173,16 @@ fn rust_layouts() -> Vec<RustLayout> {
             _pad1,
             _pad2
         }),
+        layout!(ToneParams {
+            count,
+            level,
+            mode,
+            _pad0,
+            key,
+            exposure,
+            luminance_scale,
+            epsilon
+        }),
     ]
 }
 

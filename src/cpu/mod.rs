@@ -16,6 +16,8 @@ pub mod grid_scatter;
 pub mod photon_trace;
 pub mod scan_apply;
 pub mod scan_reduce;
+pub mod tonemap_apply;
+pub mod tonemap_reduce;
 pub mod trace_rays;
 
 use std::time::Instant;
@@ -38,6 +40,25 @@ use crate::types::{Light, Material, Photon, TraceCounters};
 /// Number of workgroups that cover `n` items with `wg` invocations each.
 pub fn groups_for(n: u32, wg: u32) -> u32 {
     n.div_ceil(wg)
+}
+
+/// Tone mapping as `gpu::tone::tone_map` records it: the reduction level by level, then the
+/// operator; returns RGBA8 pixels and (Σ log(ε + Y), count).
+pub fn tone_map(cfg: &crate::tone::ToneConfig, hdr: &[[f32; 4]]) -> Result<(Vec<u32>, [f32; 2])> {
+    cfg.validate()?;
+    let pixels = u32::try_from(hdr.len())
+        .map_err(|_| Error::Invalid("too many pixels to tone-map".into()))?;
+    let mut sums_in = vec![[0.0f32; 2]];
+    for (level, &count) in crate::tone::reduce_levels(pixels).iter().enumerate() {
+        let blocks = groups_for(count, tonemap_reduce::BLOCK).max(1);
+        let mut sums_out = vec![[0.0f32; 2]; blocks as usize];
+        let params = cfg.params(count, level as u32);
+        tonemap_reduce::tonemap_reduce(&params, hdr, &sums_in, &mut sums_out, blocks);
+        sums_in = sums_out;
+    }
+    let mut rgba = vec![0u32; hdr.len()];
+    tonemap_apply::tonemap_apply(&cfg.params(pixels, 0), hdr, &sums_in, &mut rgba);
+    Ok((rgba, sums_in[0]))
 }
 
 /// Exclusive scan of `values` in place, level by level exactly as `gpu::scan` records it:

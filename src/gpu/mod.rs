@@ -8,6 +8,7 @@ pub mod photons;
 pub mod scan;
 pub mod scene;
 pub mod shaders;
+pub mod tone;
 
 use std::collections::HashMap;
 use std::sync::{Arc, Mutex};

@@ -52,6 +52,8 @@ pub const STAGES: &[WgslFile] = &[
     stage!("em_fit"),
     stage!("scan_reduce"),
     stage!("scan_apply"),
+    stage!("tonemap_reduce"),
+    stage!("tonemap_apply"),
 ];
 
 /// Every shared module (`wgsl/shared/<name>.wgsl`), importable by name.
@@ -66,6 +68,7 @@ pub const SHARED: &[WgslFile] = &[
     shared!("bins"),
     shared!("octahedral"),
     shared!("lobes"),
+    shared!("tone"),
 ];
 
 pub fn stage(name: &str) -> Option<&'static WgslFile> {

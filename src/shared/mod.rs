@@ -6,5 +6,6 @@ pub mod lobes;
 pub mod octahedral;
 pub mod rng;
 pub mod sampling;
+pub mod tone;
 pub mod trace;
 pub mod ward;

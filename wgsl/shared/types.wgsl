@@ -175,3 +175,14 @@ struct ScanParams {
     _pad1: u32,
     _pad2: u32,
 }
+
+struct ToneParams {
+    count: u32,
+    level: u32,
+    mode: u32,
+    _pad0: u32,
+    key: f32,
+    exposure: f32,
+    luminance_scale: f32,
+    epsilon: f32,
+}
