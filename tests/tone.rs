@@ -150,8 +150,8 @@ fn operator_maps_the_average_to_the_key() {
     let hdr = vec![[0.1f32, 0.2, 0.4, 1.0], [0.6, 2.0, 0.0, 1.0]];
     let (rgba, _) = on_gpu(&gpu, &linear, &hdr);
     for (p, c) in rgba.iter().zip(&hdr) {
-        for k in 0..3 {
-            let expected = srgb_byte(c[k] * 2.0) as i32;
+        for (k, v) in c.iter().take(3).enumerate() {
+            let expected = srgb_byte(v * 2.0) as i32;
             let got = ((p >> (8 * k)) & 255) as i32;
             assert!((got - expected).abs() <= 1, "{got} vs {expected}");
         }
