@@ -7,12 +7,11 @@
 // photons it accepts stay in workgroup memory (direction, weight; for sparse EM the first
 // FROZEN also keep their responsibilities in private memory); any further ones are re-read
 // and re-tested from the binned list on every pass, so a splat may have any number of
-// photons and none is dropped. Each pass adds the invocation's photons
-// into private sums in that fixed order; the sums of the invocations then add up in a fixed
-// order too, so the result is deterministic: by a butterfly of subgroup shuffles where the
-// device has subgroups that hold the workgroup (`// #ifdef subgroups`: no workgroup memory,
-// no barrier; llvmpipe fits 1.3x faster), else one column per invocation in workgroup memory
-// and two barriers. Every invocation then runs the same M-step on the same totals.
+// photons and none is dropped. Each pass adds the invocation's photons into private sums in
+// that fixed order; the sums of the invocations then add up in a fixed order too, so the
+// result is deterministic: by a butterfly of subgroup shuffles where the device has subgroups
+// that hold the workgroup (the `subgroups` variant: no workgroup memory, no barrier; llvmpipe
+// fits 1.3x faster), else one column per invocation in workgroup memory and two barriers. Every invocation then runs the same M-step on the same totals.
 //
 // Passes: `iterations` EM passes (E-step + sums for the M-step), then one final pass with the
 // fitted lobes: RGB irradiance per lobe, total irradiance, and the log-likelihood.
@@ -91,11 +90,12 @@ var<private> mix_log: array<f32, MAX_LOBES>;
 var<private> resp: array<f32, MAX_LOBES>;
 var<private> stat: array<f32, MAX_LOBES>;
 var<private> acc: array<f32, SUMS>;
-// This invocation's photons: how many are cached, then where streaming resumes.
+// Sparse EM: the frozen responsibilities (and h * stat) of the first FROZEN cached photons,
+// and the lobes the last e_step left frozen, one bit each.
 var<private> frozen_h: array<array<f32, MAX_LOBES>, FROZEN>;
 var<private> frozen_hx: array<array<f32, MAX_LOBES>, FROZEN>;
-// Lobes the last e_step left frozen, one bit each.
 var<private> frozen_mask: u32;
+// This invocation's photons: how many are cached, then where streaming resumes.
 var<private> cached: u32;
 var<private> streaming: bool;
 var<private> resume_row: u32;
