@@ -1,7 +1,7 @@
 //! Mirror of `wgsl/em_fit.wgsl`: each workgroup's invocations run one after another between
-//! its reductions, with their private state in `Invocation`; workgroups run in parallel
-//! (each writes only its own splat). `EM_SUBGROUP_REDUCE` in the flags selects the sum order
-//! of the `subgroups` variant.
+//! its reductions, with their private state in `Invocation` and the workgroup's photon cache
+//! in `Cache`; workgroups run in parallel (each writes only its own splat).
+//! `EM_SUBGROUP_REDUCE` in the flags selects the sum order of the `subgroups` variant.
 
 use glam::Vec3;
 use rayon::prelude::*;
@@ -55,15 +55,19 @@ struct Splat1 {
     mix_log: [f32; L],
 }
 
+/// The workgroup's photon cache (workgroup memory in WGSL): slot c of invocation t at
+/// c · workgroup_size + t.
+struct Cache {
+    dir: Vec<[f32; 4]>,
+    index: Vec<u32>,
+}
+
 /// One invocation's private state.
-#[derive(Clone)]
+#[derive(Clone, Copy)]
 struct Invocation {
     resp: [f32; L],
     stat: [f32; L],
     acc: [f32; SUMS],
-    /// This invocation's column of the workgroup's photon cache.
-    cache_dir: Vec<[f32; 4]>,
-    cache_index: Vec<u32>,
     frozen_h: [[f32; L]; F],
     frozen_hx: [[f32; L]; F],
     frozen_mask: u32,
@@ -74,14 +78,12 @@ struct Invocation {
     resume_offset: u32,
 }
 
-impl Invocation {
-    fn new(capacity: usize) -> Self {
+impl Default for Invocation {
+    fn default() -> Self {
         Invocation {
             resp: [0.0; L],
             stat: [0.0; L],
             acc: [0.0; SUMS],
-            cache_dir: vec![[0.0; 4]; capacity],
-            cache_index: vec![0; capacity],
             frozen_h: [[0.0; L]; F],
             frozen_hx: [[0.0; L]; F],
             frozen_mask: 0,
@@ -224,7 +226,9 @@ fn absorb(
     }
 }
 
-fn gather(inp: &Inputs, sp: &Splat1, v: &mut Invocation, lid: u32, bx: &BinBox) {
+fn gather(inp: &Inputs, sp: &Splat1, v: &mut Invocation, cache: &mut Cache, lid: u32, bx: &BinBox) {
+    let wg = inp.em.workgroup_size;
+    let capacity = CACHE_SLOTS / wg;
     v.cached = 0;
     v.streaming = false;
     let mut offset = 0;
@@ -236,15 +240,16 @@ fn gather(inp: &Inputs, sp: &Splat1, v: &mut Invocation, lid: u32, bx: &BinBox) 
         while j < end {
             let c = accept(inp, sp, j);
             if c.ok {
-                if v.cached as usize == v.cache_dir.len() {
+                if v.cached == capacity {
                     v.streaming = true;
                     v.resume_row = r;
                     v.resume_j = j;
                     v.resume_offset = offset;
                     return;
                 }
-                v.cache_dir[v.cached as usize] = [c.dir.x, c.dir.y, c.dir.z, c.weight];
-                v.cache_index[v.cached as usize] = j;
+                let slot = (v.cached * wg + lid) as usize;
+                cache.dir[slot] = [c.dir.x, c.dir.y, c.dir.z, c.weight];
+                cache.index[slot] = j;
                 v.cached += 1;
             }
             j += inp.em.workgroup_size;
@@ -258,6 +263,7 @@ fn photon_pass(
     inp: &Inputs,
     sp: &Splat1,
     v: &mut Invocation,
+    cache: &Cache,
     lid: u32,
     bx: &BinBox,
     kind: u32,
@@ -266,8 +272,9 @@ fn photon_pass(
 ) {
     v.acc = [0.0; SUMS];
     for c in 0..v.cached {
-        let d = v.cache_dir[c as usize];
-        let index = v.cache_index[c as usize];
+        let slot = (c * inp.em.workgroup_size + lid) as usize;
+        let d = cache.dir[slot];
+        let index = cache.index[slot];
         absorb(
             inp,
             sp,
@@ -425,10 +432,13 @@ fn fit_splat(inp: &Inputs, splats: &[Splat], entry: u32, resume: &[Lobe]) -> Opt
         }
     }
     let bx = bin_box(sp.center, em.radius, inp.bins);
-    let capacity = (CACHE_SLOTS / em.workgroup_size) as usize;
-    let mut inv = vec![Invocation::new(capacity); em.workgroup_size as usize];
+    let mut cache = Cache {
+        dir: vec![[0.0; 4]; CACHE_SLOTS as usize],
+        index: vec![0; CACHE_SLOTS as usize],
+    };
+    let mut inv = vec![Invocation::default(); em.workgroup_size as usize];
     for (lid, v) in inv.iter_mut().enumerate() {
-        gather(inp, &sp, v, lid as u32, &bx);
+        gather(inp, &sp, v, &mut cache, lid as u32, &bx);
     }
     let sparse = em.flags & EM_SPARSE != 0;
     let butterfly = em.flags & EM_SUBGROUP_REDUCE != 0;
@@ -438,7 +448,7 @@ fn fit_splat(inp: &Inputs, splats: &[Splat], entry: u32, resume: &[Lobe]) -> Opt
         prepare_mixture(em, &mut sp);
         let full = it % SPARSE_PERIOD == 0 || it == begin;
         for (lid, v) in inv.iter_mut().enumerate() {
-            photon_pass(inp, &sp, v, lid as u32, &bx, PASS_EM, sparse, full);
+            photon_pass(inp, &sp, v, &cache, lid as u32, &bx, PASS_EM, sparse, full);
         }
         let total = reduce(&inv, sums, butterfly);
         for k in 0..sp.lobe_count as usize {
@@ -474,7 +484,9 @@ fn fit_splat(inp: &Inputs, splats: &[Splat], entry: u32, resume: &[Lobe]) -> Opt
     }
     prepare_mixture(em, &mut sp);
     for (lid, v) in inv.iter_mut().enumerate() {
-        photon_pass(inp, &sp, v, lid as u32, &bx, PASS_FINAL, false, true);
+        photon_pass(
+            inp, &sp, v, &cache, lid as u32, &bx, PASS_FINAL, false, true,
+        );
     }
     let total = reduce(&inv, sums, butterfly);
     let photons = total[SUM_COUNT] as u32;
