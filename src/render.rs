@@ -17,6 +17,7 @@ use crate::gpu::scene::GpuScene;
 use crate::grid::SplatGrid;
 use crate::photons::{PhotonConfig, PhotonMap, ms_since};
 use crate::scene::Scene;
+use crate::shared::tone::srgb_byte;
 use crate::shared::trace::{Geometry, trace_ray};
 use crate::types::{Material, NO_SPLAT, Photon};
 
@@ -253,25 +254,10 @@ pub fn write_png(path: &Path, image: &[[f32; 3]], width: u32, height: u32) -> Re
         .unwrap_or(1.0);
     let bytes: Vec<u8> = image
         .iter()
-        .flat_map(|c| c.map(|v| srgb_byte(v / white)))
+        .flat_map(|c| c.map(|v| srgb_byte(v / white) as u8))
         .collect();
     let img = image::RgbImage::from_raw(width, height, bytes)
         .ok_or_else(|| Error::Invalid("image buffer has the wrong size".into()))?;
     img.save(path)
         .map_err(|e| Error::Invalid(format!("{}: cannot write image: {e}", path.display())))
-}
-
-/// Linear [0, 1] → 8-bit sRGB.
-pub fn srgb_byte(v: f32) -> u8 {
-    let v = if v.is_finite() {
-        v.clamp(0.0, 1.0)
-    } else {
-        0.0
-    };
-    let s = if v <= 0.003_130_8 {
-        12.92 * v
-    } else {
-        1.055 * v.powf(1.0 / 2.4) - 0.055
-    };
-    (s * 255.0 + 0.5) as u8
 }
