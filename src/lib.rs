@@ -3,12 +3,15 @@
 //! Every stage runs as a WGSL compute or render pass (`gpu`), and has a CPU mirror (`cpu`) used
 //! as the reference in tests. See README.md for the command line and DESIGN notes for the math.
 
+pub mod bake;
 pub mod bench;
 pub mod bins;
+pub mod cache;
 pub mod camera;
 pub mod cpu;
 pub mod em;
 pub mod error;
+pub mod frame;
 pub mod gpu;
 pub mod grid;
 pub mod info;

@@ -5,6 +5,8 @@ use std::process::ExitCode;
 
 use clap::{Args, Parser, Subcommand, ValueEnum};
 use lobelight::em::{EmConfig, LobeFamily};
+use lobelight::frame::FrameConfig;
+use lobelight::tone::{ToneConfig, ToneMode};
 use lobelight::gpu::{BackendChoice, Gpu};
 use lobelight::photons::PhotonConfig;
 use lobelight::scene::file::StoreRange;
@@ -99,6 +101,41 @@ impl BakeArgs {
     }
 }
 
+/// Settings of a frame: shading and tone mapping; none of them needs a new bake.
+#[derive(Args, Clone)]
+struct LookArgs {
+    /// Tone mapping of PNG output (EXR keeps linear radiance).
+    #[arg(long, value_enum, default_value_t = ToneMode::Reinhard)]
+    tonemap: ToneMode,
+    /// The display value the log-average luminance maps to.
+    #[arg(long, default_value_t = 0.18)]
+    key: f32,
+    /// Exposure in stops, after the operator.
+    #[arg(long, default_value_t = 0.0, allow_negative_numbers = true)]
+    exposure: f32,
+    /// Area lights: shadow-ray samples per pixel along each edge (N² in all).
+    #[arg(long, default_value_t = 4)]
+    area_samples: u32,
+}
+
+impl LookArgs {
+    fn frame(&self) -> FrameConfig {
+        FrameConfig {
+            area_samples: self.area_samples,
+            ..FrameConfig::default()
+        }
+    }
+
+    fn tone(&self) -> ToneConfig {
+        ToneConfig {
+            mode: self.tonemap,
+            key: self.key,
+            exposure: self.exposure,
+            ..ToneConfig::default()
+        }
+    }
+}
+
 #[derive(Subcommand)]
 enum Command {
     /// Splats, lights, materials, bounds, grid and memory of a scene, and the device in use.
@@ -110,21 +147,27 @@ enum Command {
         #[command(flatten)]
         device: DeviceArgs,
     },
-    /// Render a scene to an image (PNG).
+    /// Render a scene to an image: PNG (tone-mapped) or EXR (linear HDR).
     Render {
         scene: PathBuf,
-        /// Output image.
+        /// Output image, .png or .exr.
         #[arg(short, long)]
         output: PathBuf,
-        /// What to draw: `photons` shows the stored photons as points.
-        #[arg(long, value_enum, default_value_t = render::Method::Photons)]
+        /// What to draw: `lobes` renders; `photons` shows the stored photons as points.
+        #[arg(long, value_enum, default_value_t = render::Method::Lobes)]
         method: render::Method,
         #[arg(long)]
         width: Option<u32>,
         #[arg(long)]
         height: Option<u32>,
+        /// Load the bake from FILE when it was made for this scene and these bake settings;
+        /// else bake and save it there.
+        #[arg(long, value_name = "FILE")]
+        cache: Option<PathBuf>,
         #[command(flatten)]
         bake: BakeArgs,
+        #[command(flatten)]
+        look: LookArgs,
         #[command(flatten)]
         device: DeviceArgs,
         /// Print per-stage figures on stderr.
@@ -190,7 +233,9 @@ fn run(cli: Cli) -> Result<()> {
             method,
             width,
             height,
+            cache,
             bake,
+            look,
             device,
             stats,
             json,
@@ -203,6 +248,9 @@ fn run(cli: Cli) -> Result<()> {
                 width,
                 height,
                 progress: !json,
+                frame: look.frame(),
+                tone: look.tone(),
+                cache,
             };
             let report = render::render(&scene, gpu.as_ref(), &opts, &output)?;
             if json {

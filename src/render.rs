@@ -1,40 +1,53 @@
-//! `lobelight render`: bake and draw a scene to an image, with per-stage figures.
-//! So far one method: `photons`, the stored photons seen from the camera (thesis Fig. 3.1).
+//! `lobelight render`: bake (or load the bake) and draw a scene to an image, with per-stage
+//! figures. Methods: `lobes`, the renderer; `photons`, the stored photons seen from the camera.
 
-use std::path::Path;
+use std::path::{Path, PathBuf};
 use std::time::Instant;
 
 use glam::Vec3;
 use rayon::prelude::*;
 use serde::Serialize;
 
+use crate::bake::{BakeDevice, Baked, Progress, bake};
+use crate::cache::{self, Miss};
 use crate::camera::View;
 use crate::cpu;
 use crate::error::{Error, Result};
+use crate::frame::{FrameConfig, camera_uniform, cpu_frame, shade_params};
 use crate::gpu::Gpu;
+use crate::gpu::frame::{SceneBuffers, SplatPipelines};
 use crate::gpu::photons::trace_photons;
 use crate::gpu::scene::GpuScene;
-use crate::grid::SplatGrid;
+use crate::gpu::tone::tone_map;
+use crate::grid::{SplatGrid, grid_params};
 use crate::photons::{PhotonConfig, PhotonMap, ms_since};
 use crate::scene::Scene;
 use crate::shared::tone::srgb_byte;
 use crate::shared::trace::{Geometry, trace_ray};
+use crate::tone::ToneConfig;
 use crate::types::{Material, NO_SPLAT, Photon};
 
-#[derive(Clone, Copy, Debug, PartialEq, Eq, clap::ValueEnum, Serialize)]
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, clap::ValueEnum, Serialize)]
 #[serde(rename_all = "lowercase")]
 pub enum Method {
-    /// Stored photons drawn as points where the camera sees them.
+    /// The bake's lobes shaded on splats, with direct light by shadow rays (the renderer).
+    #[default]
+    Lobes,
+    /// Stored photons drawn as points where the camera sees them (a view of the bake).
     Photons,
 }
 
-#[derive(Clone, Debug)]
+#[derive(Clone, Debug, Default)]
 pub struct Options {
     pub method: Method,
     pub width: Option<u32>,
     pub height: Option<u32>,
     /// Show a progress bar on stderr.
     pub progress: bool,
+    pub frame: FrameConfig,
+    pub tone: ToneConfig,
+    /// Load the bake from this file when it matches the scene, else bake and save it there.
+    pub cache: Option<PathBuf>,
 }
 
 /// One stage's line of `--stats` / `--json` (DESIGN.md §12).
@@ -47,11 +60,17 @@ pub struct StageReport {
     pub emitted: Option<u64>,
     #[serde(skip_serializing_if = "Option::is_none")]
     pub stored: Option<u64>,
+    /// EM: splats whose lobes were fitted (glossy, with photons).
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub splats_fitted: Option<u32>,
+    /// EM: splats with photons near them (their irradiance was gathered).
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub splats_lit: Option<u32>,
     pub skipped_reason: Option<String>,
 }
 
 impl StageReport {
-    fn ran(ms: f64) -> StageReport {
+    pub fn ran(ms: f64) -> StageReport {
         StageReport {
             ran: true,
             ms: Some(ms),
@@ -59,7 +78,7 @@ impl StageReport {
         }
     }
 
-    fn skipped(reason: &str) -> StageReport {
+    pub fn skipped(reason: &str) -> StageReport {
         StageReport {
             skipped_reason: Some(reason.into()),
             ..Default::default()
@@ -86,6 +105,10 @@ pub struct RenderReport {
     pub output: String,
     pub width: u32,
     pub height: u32,
+    /// The bake came from the `--cache` file.
+    pub cache_hit: bool,
+    /// The log-average luminance the tone map keyed on (0 when it did not run).
+    pub log_average: f32,
     pub stages: Stages,
 }
 
@@ -115,6 +138,239 @@ impl std::fmt::Display for RenderReport {
             self.output, self.width, self.height
         )
     }
+}
+
+/// The image formats `render` writes, by file extension.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum ImageFormat {
+    /// Tone-mapped 8-bit sRGB.
+    Png,
+    /// Linear HDR radiance, 32-bit float RGBA.
+    Exr,
+}
+
+impl ImageFormat {
+    pub fn of(path: &Path) -> Result<ImageFormat> {
+        let ext = path
+            .extension()
+            .and_then(|e| e.to_str())
+            .map(str::to_ascii_lowercase);
+        match ext.as_deref() {
+            Some("png") => Ok(ImageFormat::Png),
+            Some("exr") => Ok(ImageFormat::Exr),
+            _ => Err(Error::Invalid(format!(
+                "{}: the output must end in .png (tone-mapped) or .exr (linear HDR)",
+                path.display()
+            ))),
+        }
+    }
+}
+
+fn adapter_names(gpu: Option<&Gpu>) -> (String, String) {
+    (
+        gpu.map_or_else(|| "CPU mirror".to_string(), |g| g.info.name.clone()),
+        gpu.map_or("cpu", |g| g.backend_name()).to_string(),
+    )
+}
+
+pub fn render(
+    scene: &Scene,
+    gpu: Option<&Gpu>,
+    opts: &Options,
+    output: &Path,
+) -> Result<RenderReport> {
+    let [w0, h0] = scene.camera.resolution;
+    let (width, height) = (opts.width.unwrap_or(w0), opts.height.unwrap_or(h0));
+    crate::scene::check_resolution(width, height).map_err(Error::Invalid)?;
+    let format = ImageFormat::of(output)?;
+    opts.frame.validate()?;
+    opts.tone.validate()?;
+    let view = View::new(&scene.camera, width, height);
+    let (adapter, backend) = adapter_names(gpu);
+    let (stages, cache_hit, log_average) = match opts.method {
+        Method::Lobes => render_lobes(scene, gpu, opts, &view, format, output)?,
+        Method::Photons => (render_photons(scene, gpu, opts, &view, output)?, false, 0.0),
+    };
+    Ok(RenderReport {
+        adapter,
+        backend,
+        splats: scene.splats.len(),
+        method: opts.method,
+        output: output.display().to_string(),
+        width,
+        height,
+        cache_hit,
+        log_average,
+        stages,
+    })
+}
+
+/// The bake from the cache file when it matches, else baked (and saved when asked).
+fn bake_or_load(
+    scene: &Scene,
+    device: BakeDevice,
+    opts: &Options,
+    progress: &Progress,
+) -> Result<(Baked, bool)> {
+    let key = cache::bake_key(scene);
+    if let Some(path) = &opts.cache {
+        match cache::load(path, key, scene.splats.len())? {
+            Ok(lobes) => {
+                let why = format!("bake loaded from {}", path.display());
+                if opts.progress {
+                    eprintln!("{why}");
+                }
+                let skipped = StageReport::skipped(&why);
+                let baked = Baked {
+                    lobes,
+                    photons: skipped.clone(),
+                    binning: skipped.clone(),
+                    em: skipped,
+                };
+                return Ok((baked, true));
+            }
+            Err(Miss::Stale) if opts.progress => eprintln!(
+                "{}: the scene or a bake setting changed since it was written; baking again",
+                path.display()
+            ),
+            Err(_) => {}
+        }
+    }
+    let baked = bake(scene, device, progress)?;
+    if let Some(path) = &opts.cache {
+        cache::save(path, key, &baked.lobes)?;
+    }
+    Ok((baked, false))
+}
+
+/// The renderer: bake (or load), splat passes, tone map, write.
+fn render_lobes(
+    scene: &Scene,
+    gpu: Option<&Gpu>,
+    opts: &Options,
+    view: &View,
+    format: ImageFormat,
+    output: &Path,
+) -> Result<(Stages, bool, f32)> {
+    let progress = Progress::new(opts.progress);
+    let cam = camera_uniform(view, scene.bounds(), &opts.frame);
+    let tone_skipped = || StageReport::skipped("EXR output keeps linear radiance");
+    let (baked, hit, hdr, rgba, grid, shade, tonemap, log_sum) = match gpu {
+        Some(gpu) => {
+            let on_gpu = GpuScene::upload(gpu, scene)?;
+            let (baked, hit) = bake_or_load(scene, BakeDevice::Gpu(gpu, &on_gpu), opts, &progress)?;
+            let params = shade_params(scene, &baked.lobes, &opts.frame, view);
+            let t = Instant::now();
+            let pipelines = SplatPipelines::new(gpu)?;
+            let targets = pipelines.targets(gpu, view.width, view.height)?;
+            let light = gpu.storage("splat light", &baked.lobes.light)?;
+            let lobes = gpu.storage("lobes", &baked.lobes.lobes)?;
+            let lights = gpu.storage("lights", &scene.lights)?;
+            let buffers = SceneBuffers {
+                splats: &on_gpu.splats,
+                splat_count: scene.splats.len() as u32,
+                materials: &on_gpu.materials,
+                splat_light: &light,
+                lobes: &lobes,
+                lights: &lights,
+                geometry: on_gpu.geometry(),
+            };
+            let mut encoder = gpu.encoder("frame");
+            pipelines.draw(gpu, &mut encoder, &buffers, &cam, &params, &targets)?;
+            gpu.submit_and_wait(encoder)?;
+            let shade = StageReport::ran(ms_since(t));
+            let pixels = view.width * view.height;
+            let (rgba, tonemap, log_sum) = if format == ImageFormat::Png {
+                let t = Instant::now();
+                let mut encoder = gpu.encoder("tone map");
+                let toned = tone_map(gpu, &mut encoder, &targets.hdr, pixels, &opts.tone)?;
+                gpu.submit_and_wait(encoder)?;
+                let ms = ms_since(t);
+                let rgba = gpu.read::<u32>(&toned.rgba, pixels as usize)?;
+                let sum = gpu.read::<[f32; 2]>(&toned.log_sum, 1)?;
+                (rgba, StageReport::ran(ms), sum.first().copied())
+            } else {
+                (Vec::new(), tone_skipped(), None)
+            };
+            let hdr = if format == ImageFormat::Exr {
+                gpu.read::<[f32; 4]>(&targets.hdr, pixels as usize)?
+            } else {
+                Vec::new()
+            };
+            let grid = StageReport::ran(on_gpu.grid_ms);
+            (baked, hit, hdr, rgba, grid, shade, tonemap, log_sum)
+        }
+        None => {
+            let t = Instant::now();
+            let host_grid = cpu::build_grid(&grid_params(&scene.splats, &scene.grid)?, &scene.splats)?;
+            let grid = StageReport::ran(ms_since(t));
+            let (baked, hit) = bake_or_load(scene, BakeDevice::Cpu(&host_grid), opts, &progress)?;
+            let params = shade_params(scene, &baked.lobes, &opts.frame, view);
+            let t = Instant::now();
+            let hdr = cpu_frame(scene, &host_grid, &baked.lobes, &cam, &params);
+            let shade = StageReport::ran(ms_since(t));
+            let (rgba, tonemap, log_sum) = if format == ImageFormat::Png {
+                let t = Instant::now();
+                let (rgba, sum) = cpu::tone_map(&opts.tone, &hdr)?;
+                (rgba, StageReport::ran(ms_since(t)), Some(sum))
+            } else {
+                (Vec::new(), tone_skipped(), None)
+            };
+            (baked, hit, hdr, rgba, grid, shade, tonemap, log_sum)
+        }
+    };
+    progress.done("shade", shade.ms.unwrap_or(0.0), "");
+    match format {
+        ImageFormat::Png => write_rgba8(output, &rgba, view.width, view.height)?,
+        ImageFormat::Exr => write_exr(output, &hdr, view.width, view.height)?,
+    }
+    let stages = Stages {
+        grid,
+        photons: baked.photons,
+        binning: baked.binning,
+        em: baked.em,
+        shade,
+        tonemap,
+    };
+    Ok((stages, hit, log_sum.map_or(0.0, crate::tone::log_average)))
+}
+
+/// `--method photons`: the stored photons seen from the camera (thesis Fig. 3.1).
+fn render_photons(
+    scene: &Scene,
+    gpu: Option<&Gpu>,
+    opts: &Options,
+    view: &View,
+    output: &Path,
+) -> Result<Stages> {
+    if ImageFormat::of(output)? != ImageFormat::Png {
+        return Err(Error::Invalid(
+            "--method photons writes PNG only (it shows where photons landed, not radiance)"
+                .into(),
+        ));
+    }
+    let (map, grid, grid_ms) = bake_photons(scene, gpu, opts.progress)?;
+    let t = Instant::now();
+    let geo = Geometry {
+        grid: &grid,
+        splats: &scene.splats,
+    };
+    let image = draw_photons(view, &geo, &scene.materials, &map.photons);
+    write_png(output, &image, view.width, view.height)?;
+    let not_built = "not part of --method photons";
+    Ok(Stages {
+        grid: StageReport::ran(grid_ms),
+        photons: StageReport {
+            emitted: Some(map.stats.emitted),
+            stored: Some(map.stats.stored),
+            ..StageReport::ran(map.stats.trace_ms)
+        },
+        binning: StageReport::skipped(not_built),
+        em: StageReport::skipped(not_built),
+        // Drawing the photons, on the CPU.
+        shade: StageReport::ran(ms_since(t)),
+        tonemap: StageReport::skipped("photon view is scaled by its 99.5th percentile"),
+    })
 }
 
 fn progress_bar(show: bool, total: u64) -> indicatif::ProgressBar {
@@ -157,49 +413,6 @@ fn bake_photons(
     };
     bar.finish_and_clear();
     Ok(out)
-}
-
-pub fn render(
-    scene: &Scene,
-    gpu: Option<&Gpu>,
-    opts: &Options,
-    output: &Path,
-) -> Result<RenderReport> {
-    let [w0, h0] = scene.camera.resolution;
-    let (width, height) = (opts.width.unwrap_or(w0), opts.height.unwrap_or(h0));
-    crate::scene::check_resolution(width, height).map_err(Error::Invalid)?;
-    let (map, grid, grid_ms) = bake_photons(scene, gpu, opts.progress)?;
-    let t = Instant::now();
-    let view = View::new(&scene.camera, width, height);
-    let geo = Geometry {
-        grid: &grid,
-        splats: &scene.splats,
-    };
-    let image = draw_photons(&view, &geo, &scene.materials, &map.photons);
-    write_png(output, &image, width, height)?;
-    let not_built = "not part of --method photons";
-    Ok(RenderReport {
-        adapter: gpu.map_or_else(|| "CPU mirror".to_string(), |g| g.info.name.clone()),
-        backend: gpu.map_or("cpu", |g| g.backend_name()).to_string(),
-        splats: scene.splats.len(),
-        method: opts.method,
-        output: output.display().to_string(),
-        width,
-        height,
-        stages: Stages {
-            grid: StageReport::ran(grid_ms),
-            photons: StageReport {
-                emitted: Some(map.stats.emitted),
-                stored: Some(map.stats.stored),
-                ..StageReport::ran(map.stats.trace_ms)
-            },
-            binning: StageReport::skipped(not_built),
-            em: StageReport::skipped(not_built),
-            // Drawing the photons, on the CPU.
-            shade: StageReport::ran(ms_since(t)),
-            tonemap: StageReport::skipped("photon view is scaled by its 99.5th percentile"),
-        },
-    })
 }
 
 /// Sums the power of the photons the camera sees (on the front of their splat, with nothing
@@ -257,6 +470,24 @@ pub fn write_png(path: &Path, image: &[[f32; 3]], width: u32, height: u32) -> Re
         .flat_map(|c| c.map(|v| srgb_byte(v / white) as u8))
         .collect();
     let img = image::RgbImage::from_raw(width, height, bytes)
+        .ok_or_else(|| Error::Invalid("image buffer has the wrong size".into()))?;
+    img.save(path)
+        .map_err(|e| Error::Invalid(format!("{}: cannot write image: {e}", path.display())))
+}
+
+/// Writes packed RGBA8 pixels (red in the low byte, as `pack_srgb` packs them) as PNG.
+pub fn write_rgba8(path: &Path, rgba: &[u32], width: u32, height: u32) -> Result<()> {
+    let bytes: Vec<u8> = rgba.iter().flat_map(|p| p.to_le_bytes()).collect();
+    let img = image::RgbaImage::from_raw(width, height, bytes)
+        .ok_or_else(|| Error::Invalid("image buffer has the wrong size".into()))?;
+    img.save(path)
+        .map_err(|e| Error::Invalid(format!("{}: cannot write image: {e}", path.display())))
+}
+
+/// Writes linear HDR pixels as 32-bit float OpenEXR.
+pub fn write_exr(path: &Path, hdr: &[[f32; 4]], width: u32, height: u32) -> Result<()> {
+    let floats: Vec<f32> = hdr.iter().flatten().copied().collect();
+    let img = image::Rgba32FImage::from_raw(width, height, floats)
         .ok_or_else(|| Error::Invalid("image buffer has the wrong size".into()))?;
     img.save(path)
         .map_err(|e| Error::Invalid(format!("{}: cannot write image: {e}", path.display())))

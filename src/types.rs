@@ -260,16 +260,45 @@ pub struct EmParams {
     pub _pad2: u32,
 }
 
-/// Per-frame camera uniform.
+/// Per-frame camera uniform of the splat passes: a pinhole at `eye` looking along `forward`,
+/// with `right`/`up` unit vectors and the tangents of the half fields of view. A pixel's ray
+/// and the depth mapping are `wgsl/shared/splat.wgsl`'s `pixel_ray` and `view_depth`.
 #[repr(C)]
 #[derive(Clone, Copy, Debug, Default, PartialEq, Pod, Zeroable)]
 pub struct Camera {
-    pub view_proj: [[f32; 4]; 4],
-    pub inv_view_proj: [[f32; 4]; 4],
     pub eye: [f32; 3],
-    pub fov_y: f32,
-    pub resolution: [u32; 2],
-    pub _pad: [u32; 2],
+    /// The near plane (view-space z). Depth is reversed, `near / z`: 1 at the near plane,
+    /// towards 0 at infinity, with the same relative precision at every distance.
+    pub near: f32,
+    pub forward: [f32; 3],
+    /// How far behind the visible surface (in radii of the splat that made it, along view z)
+    /// a splat still blends into the pixel.
+    pub depth_tolerance: f32,
+    pub right: [f32; 3],
+    pub tan_x: f32,
+    pub up: [f32; 3],
+    pub tan_y: f32,
+    /// Image width and height in pixels.
+    pub size: [f32; 2],
+    pub _pad0: u32,
+    pub _pad1: u32,
+}
+
+/// Uniform of the shading passes (`splat_attributes`, `shade`).
+#[repr(C)]
+#[derive(Clone, Copy, Debug, Default, PartialEq, Pod, Zeroable)]
+pub struct ShadeParams {
+    /// Lobe slots per splat in the lobe buffer, and their family (`em::family`).
+    pub lobes_per_splat: u32,
+    pub family: u32,
+    pub light_count: u32,
+    /// Area lights are sampled on an `area_samples`² stratified grid per pixel.
+    pub area_samples: u32,
+    /// Shadow rays start this far off the surface, along its normal (scene units).
+    pub shadow_bias: f32,
+    pub seed: u32,
+    pub width: u32,
+    pub height: u32,
 }
 
 /// The uniform grid over the splats: `cell = floor((p - origin) / cell_size)`, cells numbered

@@ -150,12 +150,27 @@ fn rust_layouts() -> Vec<RustLayout> {
             _pad2
         }),
         layout!(Camera {
-            view_proj,
-            inv_view_proj,
             eye,
-            fov_y,
-            resolution,
-            _pad
+            near,
+            forward,
+            depth_tolerance,
+            right,
+            tan_x,
+            up,
+            tan_y,
+            size,
+            _pad0,
+            _pad1
+        }),
+        layout!(ShadeParams {
+            lobes_per_splat,
+            family,
+            light_count,
+            area_samples,
+            shadow_bias,
+            seed,
+            width,
+            height
         }),
         layout!(GridParams {
             origin,

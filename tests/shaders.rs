@@ -34,9 +34,10 @@ fn every_stage_validates_with_naga() {
     for stage in STAGES {
         let source = shaders::resolve_stage(stage.name).unwrap();
         let module = shaders::validate(stage.name, &source).unwrap_or_else(|e| panic!("{e}"));
+        let has = |name: &str| module.entry_points.iter().any(|e| e.name == name);
         assert!(
-            module.entry_points.iter().any(|e| e.name == "main"),
-            "{} has no entry point `main`",
+            has("main") || (has("vs_main") && has("fs_main")),
+            "{} has neither `main` nor `vs_main` and `fs_main`",
             stage.name
         );
     }

@@ -3,6 +3,7 @@
 
 pub mod bins;
 pub mod em;
+pub mod frame;
 pub mod grid;
 pub mod photons;
 pub mod scan;
@@ -96,7 +97,10 @@ impl Gpu {
             label: Some("lobelight"),
             // Subgroup operations where the device has them: stages then use a variant
             // (`// #ifdef subgroups`), with a portable one for the rest.
-            required_features: adapter.features() & wgpu::Features::SUBGROUP,
+            // Float32 blending where the device has it: the splat passes then sum their
+            // attributes in f32 rather than f16 (see `frame::accumulation_format`).
+            required_features: adapter.features()
+                & (wgpu::Features::SUBGROUP | wgpu::Features::FLOAT32_BLENDABLE),
             required_limits: limits.clone(),
             experimental_features: wgpu::ExperimentalFeatures::disabled(),
             memory_hints: wgpu::MemoryHints::Performance,
@@ -423,6 +427,8 @@ fn required_limits(adapter: &wgpu::Limits) -> wgpu::Limits {
         max_storage_buffer_binding_size: adapter.max_storage_buffer_binding_size,
         max_storage_buffers_per_shader_stage: adapter.max_storage_buffers_per_shader_stage.min(8),
         max_compute_workgroups_per_dimension: adapter.max_compute_workgroups_per_dimension,
+        // The attribute pass writes four RGBA float targets.
+        max_color_attachment_bytes_per_sample: adapter.max_color_attachment_bytes_per_sample,
         ..base
     }
 }

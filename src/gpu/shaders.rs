@@ -36,7 +36,8 @@ macro_rules! shared {
     };
 }
 
-/// Every stage shader (`wgsl/<name>.wgsl`, entry point `main`). The stage table.
+/// Every stage shader (`wgsl/<name>.wgsl`): entry point `main` for compute stages, `vs_main`
+/// and `fs_main` for the splat raster passes. The stage table.
 pub const STAGES: &[WgslFile] = &[
     stage!("grid_count"),
     stage!("grid_scatter"),
@@ -54,6 +55,9 @@ pub const STAGES: &[WgslFile] = &[
     stage!("scan_apply"),
     stage!("tonemap_reduce"),
     stage!("tonemap_apply"),
+    stage!("splat_visibility"),
+    stage!("splat_attributes"),
+    stage!("shade"),
 ];
 
 /// Every shared module (`wgsl/shared/<name>.wgsl`), importable by name.
@@ -69,6 +73,7 @@ pub const SHARED: &[WgslFile] = &[
     shared!("octahedral"),
     shared!("lobes"),
     shared!("tone"),
+    shared!("splat"),
 ];
 
 pub fn stage(name: &str) -> Option<&'static WgslFile> {

@@ -6,6 +6,7 @@ pub mod lobes;
 pub mod octahedral;
 pub mod rng;
 pub mod sampling;
+pub mod splat;
 pub mod tone;
 pub mod trace;
 pub mod ward;

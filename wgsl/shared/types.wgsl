@@ -150,12 +150,28 @@ struct EmParams {
 }
 
 struct Camera {
-    view_proj: mat4x4<f32>,
-    inv_view_proj: mat4x4<f32>,
     eye: vec3<f32>,
-    fov_y: f32,
-    resolution: vec2<u32>,
-    _pad: vec2<u32>,
+    near: f32,
+    forward: vec3<f32>,
+    depth_tolerance: f32,
+    right: vec3<f32>,
+    tan_x: f32,
+    up: vec3<f32>,
+    tan_y: f32,
+    size: vec2<f32>,
+    _pad0: u32,
+    _pad1: u32,
+}
+
+struct ShadeParams {
+    lobes_per_splat: u32,
+    family: u32,
+    light_count: u32,
+    area_samples: u32,
+    shadow_bias: f32,
+    seed: u32,
+    width: u32,
+    height: u32,
 }
 
 struct GridParams {

@@ -1,0 +1,189 @@
+//! Mirror of `wgsl/shade.wgsl`: normalise the blended sums, add direct light by shadow rays,
+//! show area lights seen directly; linear HDR out.
+
+use glam::{Vec2, Vec3, Vec4};
+use rayon::prelude::*;
+
+use crate::shared::rng::{pcg_hash, unit_float};
+use crate::shared::sampling::{PI, smoothstep};
+use crate::shared::splat::{SHADOW_RAY_BUDGET, pixel_ray};
+use crate::shared::trace::{FAR, Geometry, trace_ray};
+use crate::shared::ward::ward_specular;
+use crate::types::{Camera, Light, NO_SPLAT, ShadeParams, light_kind};
+
+use super::splat_attributes::Attributes;
+
+pub const WG: u32 = 64;
+pub const MIN_ALPHA: f32 = 1e-3;
+
+struct Surface {
+    p: Vec3,
+    n: Vec3,
+    wo: Vec3,
+    rho_d: Vec3,
+    rho_s: Vec3,
+    alpha: f32,
+}
+
+struct LightSample {
+    wi: Vec3,
+    dist: f32,
+    e: Vec3,
+}
+
+fn spot_falloff_mean(l: &Light) -> f32 {
+    if l.cos_inner <= l.cos_outer {
+        return 1.0;
+    }
+    ((l.cos_inner - l.cos_outer) * 0.5 + (1.0 - l.cos_inner)) / (1.0 - l.cos_outer)
+}
+
+fn sample_light(l: &Light, p: Vec3, u: f32, v: f32) -> LightSample {
+    let power = Vec3::from(l.power);
+    let axis = Vec3::from(l.direction);
+    if l.kind == light_kind::DIRECTIONAL {
+        return LightSample {
+            wi: -axis,
+            dist: FAR,
+            e: power / l.area,
+        };
+    }
+    let mut q = Vec3::from(l.position);
+    if l.kind == light_kind::AREA {
+        q += u * Vec3::from(l.edge_u) + v * Vec3::from(l.edge_v);
+    }
+    let to = q - p;
+    let d2 = to.dot(to);
+    let dist = d2.sqrt();
+    let wi = to / dist;
+    let cos_l = -wi.dot(axis);
+    let e = if l.kind == light_kind::AREA {
+        power * (cos_l.max(0.0) / (PI * d2))
+    } else if l.kind == light_kind::SPOT {
+        let ramp = if l.cos_inner > l.cos_outer {
+            smoothstep(l.cos_outer, l.cos_inner, cos_l)
+        } else {
+            1.0
+        };
+        let inside = if cos_l >= l.cos_outer { ramp } else { 0.0 };
+        let solid_angle = 2.0 * PI * (1.0 - l.cos_outer);
+        power * (inside / (spot_falloff_mean(l) * solid_angle * d2))
+    } else {
+        power / (4.0 * PI * d2)
+    };
+    LightSample { wi, dist, e }
+}
+
+fn brdf(sf: &Surface, wi: Vec3) -> Vec3 {
+    let mut f = sf.rho_d / PI;
+    if sf.alpha >= MIN_ALPHA {
+        f += sf.rho_s * ward_specular(sf.n, wi, sf.wo, sf.alpha);
+    }
+    f
+}
+
+fn shade_sample(params: &ShadeParams, geo: &Geometry, sf: &Surface, ls: &LightSample) -> Vec3 {
+    let cos_i = sf.n.dot(ls.wi);
+    if !(cos_i > 0.0) || ls.e.cmple(Vec3::ZERO).all() {
+        return Vec3::ZERO;
+    }
+    let o = sf.p + params.shadow_bias * sf.n;
+    let mut budget = SHADOW_RAY_BUDGET;
+    let hit = trace_ray(
+        geo,
+        o,
+        ls.wi,
+        NO_SPLAT,
+        ls.dist - params.shadow_bias,
+        &mut budget,
+    );
+    if hit.splat != NO_SPLAT {
+        return Vec3::ZERO;
+    }
+    brdf(sf, ls.wi) * ls.e * cos_i
+}
+
+fn direct(params: &ShadeParams, geo: &Geometry, lights: &[Light], sf: &Surface, pixel: u32) -> Vec3 {
+    let mut sum = Vec3::ZERO;
+    let key = pcg_hash(pcg_hash(params.seed).wrapping_add(pixel));
+    for (li, l) in lights.iter().enumerate().take(params.light_count as usize) {
+        if l.kind != light_kind::AREA {
+            sum += shade_sample(params, geo, sf, &sample_light(l, sf.p, 0.0, 0.0));
+            continue;
+        }
+        let n = params.area_samples;
+        let inv_n = 1.0 / n as f32;
+        let mut area_sum = Vec3::ZERO;
+        for j in 0..n * n {
+            let r = key.wrapping_add((li as u32 * n * n + j).wrapping_mul(2));
+            let u = ((j % n) as f32 + unit_float(pcg_hash(r))) * inv_n;
+            let v = ((j / n) as f32 + unit_float(pcg_hash(r.wrapping_add(1)))) * inv_n;
+            area_sum += shade_sample(params, geo, sf, &sample_light(l, sf.p, u, v));
+        }
+        sum += area_sum * (inv_n * inv_n);
+    }
+    sum
+}
+
+fn emitted(cam: &Camera, params: &ShadeParams, lights: &[Light], d: Vec3, t_surface: f32) -> Option<Vec3> {
+    let eye = Vec3::from(cam.eye);
+    let mut out = None;
+    let mut t_near = t_surface;
+    for l in lights.iter().take(params.light_count as usize) {
+        let axis = Vec3::from(l.direction);
+        let denom = d.dot(axis);
+        if l.kind != light_kind::AREA || !(denom < 0.0) {
+            continue;
+        }
+        let corner = Vec3::from(l.position);
+        let (eu, ev) = (Vec3::from(l.edge_u), Vec3::from(l.edge_v));
+        let t = (corner - eye).dot(axis) / denom;
+        let q = eye + t * d - corner;
+        let u = q.dot(eu) / eu.dot(eu);
+        let v = q.dot(ev) / ev.dot(ev);
+        if t > 0.0 && t < t_near && (0.0..=1.0).contains(&u) && (0.0..=1.0).contains(&v) {
+            t_near = t;
+            out = Some(Vec3::from(l.power) / (PI * l.area));
+        }
+    }
+    out
+}
+
+pub fn shade(
+    cam: &Camera,
+    params: &ShadeParams,
+    sums: &Attributes,
+    lights: &[Light],
+    geo: &Geometry,
+) -> Vec<[f32; 4]> {
+    let eye = Vec3::from(cam.eye);
+    (0..params.width * params.height)
+        .into_par_iter()
+        .map(|i| {
+            let px = Vec2::new((i % params.width) as f32, (i / params.width) as f32);
+            let d = pixel_ray(cam, px + 0.5);
+            let acc = Vec4::from(sums.radiance[i as usize]);
+            let mut color = Vec3::ZERO;
+            let mut t_surface = FAR;
+            if acc.w > 0.0 {
+                let inv_w = 1.0 / acc.w;
+                let g = Vec4::from(sums.geometry[i as usize]);
+                let dif = Vec4::from(sums.diffuse[i as usize]);
+                let spec = Vec4::from(sums.specular[i as usize]);
+                t_surface = g.w * inv_w;
+                let gn = g.truncate();
+                let sf = Surface {
+                    p: eye + t_surface * d,
+                    n: if gn.dot(gn) > 0.0 { gn.normalize() } else { -d },
+                    wo: -d,
+                    rho_d: dif.truncate() * inv_w,
+                    rho_s: spec.truncate() * inv_w,
+                    alpha: if spec.w > 0.0 { dif.w / spec.w } else { 0.0 },
+                };
+                color = acc.truncate() * inv_w + direct(params, geo, lights, &sf, i);
+            }
+            let c = emitted(cam, params, lights, d, t_surface).unwrap_or(color);
+            [c.x, c.y, c.z, 1.0]
+        })
+        .collect()
+}

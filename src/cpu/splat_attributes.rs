@@ -1,0 +1,109 @@
+//! Mirror of `wgsl/splat_attributes.wgsl`: the splats within the depth tolerance add their
+//! weighted attributes into four targets, in draw order per pixel (as the GPU blends).
+
+use glam::{Vec3, Vec4};
+
+use super::splat_visibility::{TILE, Tiles, gather, raster};
+use crate::shared::sampling::PI;
+use crate::shared::splat::{covers, lobe_beta2, lobe_specular, pixel_ray, splat_hit, splat_weight, view_depth};
+use crate::types::{Camera, Lobe, Material, ShadeParams, Splat, SplatLight};
+
+/// The four blended targets of the attribute pass (see the WGSL file for what each holds).
+#[derive(Clone, Debug, Default)]
+pub struct Attributes {
+    pub radiance: Vec<[f32; 4]>,
+    pub geometry: Vec<[f32; 4]>,
+    pub diffuse: Vec<[f32; 4]>,
+    pub specular: Vec<[f32; 4]>,
+}
+
+#[allow(clippy::too_many_arguments)]
+fn indirect(
+    params: &ShadeParams,
+    splat_light: &[SplatLight],
+    lobes: &[Lobe],
+    i: u32,
+    s: &Splat,
+    m: &Material,
+    wo: Vec3,
+) -> Vec3 {
+    let light = &splat_light[i as usize];
+    let mut spec = Vec3::ZERO;
+    let first = i * params.lobes_per_splat;
+    for k in 0..light.lobes {
+        let lobe = &lobes[(first + k) as usize];
+        let beta2 = lobe_beta2(params.family, lobe.sharpness);
+        spec += Vec3::from(lobe.irradiance)
+            * lobe_specular(
+                Vec3::from(s.normal),
+                wo,
+                Vec3::from(lobe.axis),
+                m.roughness,
+                beta2,
+            );
+    }
+    Vec3::from(s.diffuse) * (Vec3::from(light.irradiance) / PI) + Vec3::from(m.specular) * spec
+}
+
+#[allow(clippy::too_many_arguments)]
+pub fn splat_attributes(
+    cam: &Camera,
+    splats: &[Splat],
+    params: &ShadeParams,
+    materials: &[Material],
+    splat_light: &[SplatLight],
+    lobes: &[Lobe],
+    depth: &[f32],
+    tiles: &Tiles,
+) -> Attributes {
+    let eye = Vec3::from(cam.eye);
+    let forward = Vec3::from(cam.forward);
+    let width = tiles.width as usize;
+    let blocks = raster(
+        cam,
+        splats,
+        tiles,
+        || vec![[Vec4::ZERO; 4]; (TILE * TILE) as usize],
+        |sums, tile, i, local, centre| {
+            let s = &splats[i as usize];
+            let d = pixel_ray(cam, centre);
+            let h = splat_hit(s, eye, d);
+            if !covers(cam, h, d) {
+                return;
+            }
+            // Depth test `GreaterEqual` against the visibility pass, no write.
+            let (x, y) = (
+                tile.x0 as usize + local % TILE as usize,
+                tile.y0 as usize + local / TILE as usize,
+            );
+            if !(view_depth(cam, h.t * d.dot(forward)) >= depth[y * width + x]) {
+                return;
+            }
+            let w = splat_weight(h.q);
+            let m = &materials[s.material as usize];
+            let gloss = (m.specular[0] + m.specular[1] + m.specular[2]) * (1.0 / 3.0);
+            let out = [
+                w * indirect(params, splat_light, lobes, i, s, m, -d).extend(1.0),
+                w * Vec3::from(s.normal).extend(h.t),
+                w * Vec3::from(s.diffuse).extend(gloss * m.roughness),
+                w * Vec3::from(m.specular).extend(gloss),
+            ];
+            for (sum, v) in sums[local].iter_mut().zip(out) {
+                *sum += v;
+            }
+        },
+    );
+    let target = |k: usize| {
+        let blocks: Vec<_> = blocks
+            .iter()
+            .map(|(r, b)| (*r, b.iter().map(|px| px[k].to_array()).collect()))
+            .collect();
+        gather(tiles, &blocks)
+    };
+    Attributes {
+        radiance: target(0),
+        geometry: target(1),
+        diffuse: target(2),
+        specular: target(3),
+    }
+}

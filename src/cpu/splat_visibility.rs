@@ -1,0 +1,165 @@
+//! Mirror of `wgsl/splat_visibility.wgsl`, with the rasterizer the GPU has in hardware: the
+//! image is cut into tiles, each tile lists the front-facing splats whose projected quad
+//! touches it in draw order, and each tile runs its splats over its pixels in that order, so
+//! every pixel sees the same fragments in the same order as on the GPU.
+
+use glam::{Vec2, Vec3};
+use rayon::prelude::*;
+
+use crate::shared::splat::{clip_position, covers, faces_camera, pixel_ray, quad_corner, splat_hit, view_depth};
+use crate::types::{Camera, Splat};
+
+/// Tile edge in pixels.
+pub const TILE: u32 = 32;
+
+/// The splats that may cover each tile, in draw order; tiles row by row.
+pub struct Tiles {
+    pub width: u32,
+    pub height: u32,
+    pub cols: u32,
+    pub lists: Vec<Vec<u32>>,
+}
+
+/// Pixel rectangle `[x0, x1) × [y0, y1)`.
+#[derive(Clone, Copy, Debug)]
+pub struct Rect {
+    pub x0: u32,
+    pub y0: u32,
+    pub x1: u32,
+    pub y1: u32,
+}
+
+/// The pixels a splat's quad may cover: the bounds of its projected corners, or the whole
+/// image when a corner lies behind the near plane (the GPU clips such a quad there; the
+/// per-pixel disk test decides either way). `None` for a back-facing splat.
+pub fn quad_bounds(cam: &Camera, s: &Splat) -> Option<Rect> {
+    if !faces_camera(s, Vec3::from(cam.eye)) {
+        return None;
+    }
+    let size = Vec2::from(cam.size);
+    let (mut lo, mut hi) = (Vec2::splat(f32::MAX), Vec2::splat(f32::MIN));
+    for i in 0..4 {
+        let c = clip_position(cam, quad_corner(s, i));
+        if !(c.w > cam.near) {
+            lo = Vec2::ZERO;
+            hi = size;
+            break;
+        }
+        let ndc = Vec2::new(c.x, c.y) / c.w;
+        let p = Vec2::new((ndc.x * 0.5 + 0.5) * size.x, (0.5 - ndc.y * 0.5) * size.y);
+        lo = lo.min(p);
+        hi = hi.max(p);
+    }
+    let lo = lo.max(Vec2::ZERO).floor();
+    let hi = hi.min(size).ceil();
+    (lo.x < hi.x && lo.y < hi.y).then(|| Rect {
+        x0: lo.x as u32,
+        y0: lo.y as u32,
+        x1: hi.x as u32,
+        y1: hi.y as u32,
+    })
+}
+
+pub fn bin_tiles(cam: &Camera, splats: &[Splat]) -> Tiles {
+    let (width, height) = (cam.size[0] as u32, cam.size[1] as u32);
+    let cols = width.div_ceil(TILE);
+    let rows = height.div_ceil(TILE);
+    let bounds: Vec<Option<Rect>> = splats.par_iter().map(|s| quad_bounds(cam, s)).collect();
+    let mut lists = vec![Vec::new(); (cols * rows) as usize];
+    for (i, r) in bounds.iter().enumerate() {
+        let Some(r) = r else { continue };
+        for ty in r.y0 / TILE..r.y1.div_ceil(TILE) {
+            for tx in r.x0 / TILE..r.x1.div_ceil(TILE) {
+                lists[(ty * cols + tx) as usize].push(i as u32);
+            }
+        }
+    }
+    Tiles {
+        width,
+        height,
+        cols,
+        lists,
+    }
+}
+
+/// Runs `shade(splat, pixel index, pixel centre)` for every pixel of every splat's bounds in
+/// each tile, tiles in parallel, splats in draw order; `tile_out` collects per-tile results.
+pub fn raster<T: Send>(
+    cam: &Camera,
+    splats: &[Splat],
+    tiles: &Tiles,
+    init: impl Fn() -> T + Sync,
+    shade: impl Fn(&mut T, Rect, u32, usize, Vec2) + Sync,
+) -> Vec<(Rect, T)> {
+    tiles
+        .lists
+        .par_iter()
+        .enumerate()
+        .map(|(t, list)| {
+            let t = t as u32;
+            let tile = Rect {
+                x0: (t % tiles.cols) * TILE,
+                y0: (t / tiles.cols) * TILE,
+                x1: ((t % tiles.cols + 1) * TILE).min(tiles.width),
+                y1: ((t / tiles.cols + 1) * TILE).min(tiles.height),
+            };
+            let mut out = init();
+            for &i in list {
+                let Some(r) = quad_bounds(cam, &splats[i as usize]) else {
+                    continue;
+                };
+                for y in r.y0.max(tile.y0)..r.y1.min(tile.y1) {
+                    for x in r.x0.max(tile.x0)..r.x1.min(tile.x1) {
+                        let local = ((y - tile.y0) * TILE + (x - tile.x0)) as usize;
+                        let centre = Vec2::new(x as f32 + 0.5, y as f32 + 0.5);
+                        shade(&mut out, tile, i, local, centre);
+                    }
+                }
+            }
+            (tile, out)
+        })
+        .collect()
+}
+
+/// Copies per-tile pixel blocks (`TILE` wide) into one image.
+pub fn gather<P: Copy + Default>(tiles: &Tiles, blocks: &[(Rect, Vec<P>)]) -> Vec<P> {
+    let w = tiles.width as usize;
+    let mut image = vec![P::default(); w * tiles.height as usize];
+    for (r, block) in blocks {
+        for y in r.y0..r.y1 {
+            for x in r.x0..r.x1 {
+                let local = ((y - r.y0) * TILE + (x - r.x0)) as usize;
+                image[y as usize * w + x as usize] = block[local];
+            }
+        }
+    }
+    image
+}
+
+/// The depth buffer of the visibility pass: per pixel, the greatest (nearest) reversed depth
+/// of a covering splat's hit pushed back by the tolerance; 0 where nothing covers.
+pub fn splat_visibility(cam: &Camera, splats: &[Splat], tiles: &Tiles) -> Vec<f32> {
+    let eye = Vec3::from(cam.eye);
+    let forward = Vec3::from(cam.forward);
+    let blocks = raster(
+        cam,
+        splats,
+        tiles,
+        || vec![0.0f32; (TILE * TILE) as usize],
+        |depth, _, i, local, centre| {
+            let s = &splats[i as usize];
+            let d = pixel_ray(cam, centre);
+            let h = splat_hit(s, eye, d);
+            if !covers(cam, h, d) {
+                return;
+            }
+            let z = h.t * d.dot(forward);
+            let v = view_depth(cam, z + cam.depth_tolerance * s.radius);
+            // Depth test `Greater`.
+            if v > depth[local] {
+                depth[local] = v;
+            }
+        },
+    );
+    gather(tiles, &blocks)
+}

@@ -1,0 +1,117 @@
+//! One frame of the baked scene (DESIGN.md §7–8): the camera uniform, the shading settings,
+//! and the CPU mirror of the splat passes. `gpu::frame` records the same passes on a device.
+
+use glam::{Vec2, Vec3};
+
+use crate::camera::View;
+use crate::cpu;
+use crate::em::LobeMap;
+use crate::error::{Error, Result};
+use crate::grid::SplatGrid;
+use crate::scene::Scene;
+use crate::shared::trace::Geometry;
+use crate::types::{Camera, ShadeParams, Splat};
+
+/// Settings of the splat passes.
+#[derive(Clone, Debug, PartialEq)]
+pub struct FrameConfig {
+    /// Area lights are sampled on an `area_samples`² jittered grid per pixel.
+    pub area_samples: u32,
+    /// Splats within this many of their radii behind the visible surface blend into a pixel.
+    pub depth_tolerance: f32,
+    /// Seed of the area-light jitter.
+    pub seed: u32,
+}
+
+impl Default for FrameConfig {
+    fn default() -> Self {
+        FrameConfig {
+            area_samples: 4,
+            depth_tolerance: 1.0,
+            seed: 1,
+        }
+    }
+}
+
+impl FrameConfig {
+    pub fn validate(&self) -> Result<()> {
+        if !(1..=16).contains(&self.area_samples) {
+            return Err(Error::Invalid(format!(
+                "area light samples per axis must be within 1..=16, got {}",
+                self.area_samples
+            )));
+        }
+        if !(self.depth_tolerance >= 0.0 && self.depth_tolerance.is_finite()) {
+            return Err(Error::Invalid(format!(
+                "the depth tolerance must be a non-negative number of splat radii, got {}",
+                self.depth_tolerance
+            )));
+        }
+        Ok(())
+    }
+}
+
+/// The camera uniform of `view`. The near plane sits at 1e-4 of the scene's size: with
+/// reversed depth that costs no precision further away.
+pub fn camera_uniform(view: &View, bounds: (Vec3, Vec3), cfg: &FrameConfig) -> Camera {
+    let size = (bounds.1 - bounds.0).length().max(1e-6);
+    Camera {
+        eye: view.eye.to_array(),
+        near: 1e-4 * size,
+        forward: view.forward.to_array(),
+        depth_tolerance: cfg.depth_tolerance,
+        right: view.right.to_array(),
+        tan_x: view.tan_half.x,
+        up: view.up.to_array(),
+        tan_y: view.tan_half.y,
+        size: Vec2::new(view.width as f32, view.height as f32).to_array(),
+        ..Default::default()
+    }
+}
+
+/// Shadow rays start half a mean splat radius off the blended surface: enough to clear the
+/// blend's dip below a curved surface, little enough to keep contact shadows.
+pub fn shadow_bias(splats: &[Splat]) -> f32 {
+    let sum: f64 = splats.iter().map(|s| s.radius as f64).sum();
+    (0.5 * sum / splats.len().max(1) as f64) as f32
+}
+
+pub fn shade_params(scene: &Scene, lobes: &LobeMap, cfg: &FrameConfig, view: &View) -> ShadeParams {
+    ShadeParams {
+        lobes_per_splat: lobes.lobes_per_splat,
+        family: scene.bake.family.code(),
+        light_count: scene.lights.len() as u32,
+        area_samples: cfg.area_samples,
+        shadow_bias: shadow_bias(&scene.splats),
+        seed: cfg.seed,
+        width: view.width,
+        height: view.height,
+    }
+}
+
+/// The splat passes on the CPU: visibility, attributes, shade; linear HDR pixels.
+pub fn cpu_frame(
+    scene: &Scene,
+    grid: &SplatGrid,
+    lobes: &LobeMap,
+    cam: &Camera,
+    params: &ShadeParams,
+) -> Vec<[f32; 4]> {
+    let tiles = cpu::splat_visibility::bin_tiles(cam, &scene.splats);
+    let depth = cpu::splat_visibility::splat_visibility(cam, &scene.splats, &tiles);
+    let sums = cpu::splat_attributes::splat_attributes(
+        cam,
+        &scene.splats,
+        params,
+        &scene.materials,
+        &lobes.light,
+        &lobes.lobes,
+        &depth,
+        &tiles,
+    );
+    let geo = Geometry {
+        grid,
+        splats: &scene.splats,
+    };
+    cpu::shade::shade(cam, params, &sums, &scene.lights, &geo)
+}

@@ -1,0 +1,417 @@
+//! The splat passes on the device (DESIGN.md §8): `splat_visibility` and `splat_attributes`
+//! as render passes over instanced quads, then `shade` as a compute pass over the blended
+//! targets. The pipelines are built once per device; the targets once per image size, so a
+//! viewer or a benchmark draws frame after frame with nothing but a new camera uniform.
+
+use super::Gpu;
+use crate::cpu::groups_for;
+use crate::cpu::shade::WG;
+use crate::error::{Error, Result};
+use crate::types::{Camera, ShadeParams};
+
+/// The format of the blended targets: f32 where the device can blend it, else f16.
+pub fn accumulation_format(gpu: &Gpu) -> wgpu::TextureFormat {
+    if gpu
+        .device
+        .features()
+        .contains(wgpu::Features::FLOAT32_BLENDABLE)
+    {
+        wgpu::TextureFormat::Rgba32Float
+    } else {
+        wgpu::TextureFormat::Rgba16Float
+    }
+}
+
+const DEPTH: wgpu::TextureFormat = wgpu::TextureFormat::Depth32Float;
+const TARGETS: usize = 4;
+
+/// What the splat passes read of a baked scene, all on the device.
+pub struct SceneBuffers<'a> {
+    pub splats: &'a wgpu::Buffer,
+    pub splat_count: u32,
+    pub materials: &'a wgpu::Buffer,
+    pub splat_light: &'a wgpu::Buffer,
+    pub lobes: &'a wgpu::Buffer,
+    pub lights: &'a wgpu::Buffer,
+    /// Bind group 1 of tracing stages (`GpuScene::geometry`).
+    pub geometry: [&'a wgpu::Buffer; 5],
+}
+
+/// The compiled splat passes of one device.
+pub struct SplatPipelines {
+    format: wgpu::TextureFormat,
+    visibility: wgpu::RenderPipeline,
+    attributes: wgpu::RenderPipeline,
+    shade: wgpu::ComputePipeline,
+    shade_layouts: [wgpu::BindGroupLayout; 2],
+}
+
+/// The targets of one image size, and the HDR image the frame ends in.
+pub struct FrameTargets {
+    pub width: u32,
+    pub height: u32,
+    depth: wgpu::TextureView,
+    sums: Vec<wgpu::TextureView>,
+    /// Linear HDR radiance, one `vec4<f32>` per pixel, rows from the top.
+    pub hdr: wgpu::Buffer,
+}
+
+fn module(gpu: &Gpu, name: &'static str) -> Result<wgpu::ShaderModule> {
+    let source = super::shaders::resolve_stage(name)?;
+    Ok(gpu
+        .device
+        .create_shader_module(wgpu::ShaderModuleDescriptor {
+            label: Some(name),
+            source: wgpu::ShaderSource::Wgsl(source.into()),
+        }))
+}
+
+fn raster_pipeline(
+    gpu: &Gpu,
+    name: &'static str,
+    depth: wgpu::DepthStencilState,
+    targets: &[Option<wgpu::ColorTargetState>],
+) -> Result<wgpu::RenderPipeline> {
+    let module = module(gpu, name)?;
+    Ok(gpu
+        .device
+        .create_render_pipeline(&wgpu::RenderPipelineDescriptor {
+            label: Some(name),
+            layout: None,
+            vertex: wgpu::VertexState {
+                module: &module,
+                entry_point: Some("vs_main"),
+                compilation_options: Default::default(),
+                buffers: &[],
+            },
+            primitive: wgpu::PrimitiveState {
+                topology: wgpu::PrimitiveTopology::TriangleStrip,
+                ..Default::default()
+            },
+            depth_stencil: Some(depth),
+            multisample: Default::default(),
+            fragment: Some(wgpu::FragmentState {
+                module: &module,
+                entry_point: Some("fs_main"),
+                compilation_options: Default::default(),
+                targets,
+            }),
+            multiview_mask: None,
+            cache: None,
+        }))
+}
+
+fn layout_entry(binding: u32, ty: wgpu::BindingType) -> wgpu::BindGroupLayoutEntry {
+    wgpu::BindGroupLayoutEntry {
+        binding,
+        visibility: wgpu::ShaderStages::COMPUTE,
+        ty,
+        count: None,
+    }
+}
+
+fn buffer_entry(binding: u32, ty: wgpu::BufferBindingType) -> wgpu::BindGroupLayoutEntry {
+    layout_entry(
+        binding,
+        wgpu::BindingType::Buffer {
+            ty,
+            has_dynamic_offset: false,
+            min_binding_size: None,
+        },
+    )
+}
+
+const UNIFORM: wgpu::BufferBindingType = wgpu::BufferBindingType::Uniform;
+const READ: wgpu::BufferBindingType = wgpu::BufferBindingType::Storage { read_only: true };
+const READ_WRITE: wgpu::BufferBindingType = wgpu::BufferBindingType::Storage { read_only: false };
+
+/// `shade`'s bind group layouts, spelled out: a derived layout would ask for filterable
+/// textures, which f32 targets are not.
+fn shade_layouts(gpu: &Gpu) -> [wgpu::BindGroupLayout; 2] {
+    let texture = |binding| {
+        layout_entry(
+            binding,
+            wgpu::BindingType::Texture {
+                sample_type: wgpu::TextureSampleType::Float { filterable: false },
+                view_dimension: wgpu::TextureViewDimension::D2,
+                multisampled: false,
+            },
+        )
+    };
+    let mut frame = vec![buffer_entry(0, UNIFORM), buffer_entry(1, UNIFORM)];
+    frame.extend((2..6).map(texture));
+    frame.extend([buffer_entry(6, READ), buffer_entry(7, READ_WRITE)]);
+    let mut geometry = vec![buffer_entry(0, UNIFORM)];
+    geometry.extend((1..5).map(|b| buffer_entry(b, READ)));
+    [frame, geometry].map(|entries| {
+        gpu.device
+            .create_bind_group_layout(&wgpu::BindGroupLayoutDescriptor {
+                label: Some("shade"),
+                entries: &entries,
+            })
+    })
+}
+
+impl SplatPipelines {
+    pub fn new(gpu: &Gpu) -> Result<SplatPipelines> {
+        let format = accumulation_format(gpu);
+        let need = TARGETS as u32 * format.target_pixel_byte_cost().unwrap_or(16);
+        let have = gpu.limits.max_color_attachment_bytes_per_sample;
+        if need > have {
+            return Err(Error::Gpu(format!(
+                "the splat passes write {need} bytes per pixel to their targets; this device \
+                 allows {have}"
+            )));
+        }
+        let depth = |compare, write| wgpu::DepthStencilState {
+            format: DEPTH,
+            depth_write_enabled: Some(write),
+            depth_compare: Some(compare),
+            stencil: Default::default(),
+            bias: Default::default(),
+        };
+        let add = wgpu::BlendComponent {
+            src_factor: wgpu::BlendFactor::One,
+            dst_factor: wgpu::BlendFactor::One,
+            operation: wgpu::BlendOperation::Add,
+        };
+        let target = Some(wgpu::ColorTargetState {
+            format,
+            blend: Some(wgpu::BlendState {
+                color: add,
+                alpha: add,
+            }),
+            write_mask: wgpu::ColorWrites::ALL,
+        });
+        // Reversed depth: greater is nearer.
+        let visibility = raster_pipeline(
+            gpu,
+            "splat_visibility",
+            depth(wgpu::CompareFunction::Greater, true),
+            &[],
+        )?;
+        let attributes = raster_pipeline(
+            gpu,
+            "splat_attributes",
+            depth(wgpu::CompareFunction::GreaterEqual, false),
+            &[target.clone(), target.clone(), target.clone(), target],
+        )?;
+        let shade_layouts = shade_layouts(gpu);
+        let layout = gpu
+            .device
+            .create_pipeline_layout(&wgpu::PipelineLayoutDescriptor {
+                label: Some("shade"),
+                bind_group_layouts: &[Some(&shade_layouts[0]), Some(&shade_layouts[1])],
+                immediate_size: 0,
+            });
+        let module = module(gpu, "shade")?;
+        let shade = gpu
+            .device
+            .create_compute_pipeline(&wgpu::ComputePipelineDescriptor {
+                label: Some("shade"),
+                layout: Some(&layout),
+                module: &module,
+                entry_point: Some("main"),
+                compilation_options: wgpu::PipelineCompilationOptions {
+                    constants: &[],
+                    zero_initialize_workgroup_memory: false,
+                },
+                cache: None,
+            });
+        gpu.check()?;
+        Ok(SplatPipelines {
+            format,
+            visibility,
+            attributes,
+            shade,
+            shade_layouts,
+        })
+    }
+
+    pub fn targets(&self, gpu: &Gpu, width: u32, height: u32) -> Result<FrameTargets> {
+        let texture = |label, format, usage| {
+            gpu.device
+                .create_texture(&wgpu::TextureDescriptor {
+                    label: Some(label),
+                    size: wgpu::Extent3d {
+                        width,
+                        height,
+                        depth_or_array_layers: 1,
+                    },
+                    mip_level_count: 1,
+                    sample_count: 1,
+                    dimension: wgpu::TextureDimension::D2,
+                    format,
+                    usage,
+                    view_formats: &[],
+                })
+                .create_view(&Default::default())
+        };
+        let attachment = wgpu::TextureUsages::RENDER_ATTACHMENT;
+        let depth = texture("splat depth", DEPTH, attachment);
+        let sums = (0..TARGETS)
+            .map(|_| {
+                texture(
+                    "splat sums",
+                    self.format,
+                    attachment | wgpu::TextureUsages::TEXTURE_BINDING,
+                )
+            })
+            .collect();
+        let hdr = gpu.storage_zeroed("hdr image", width as u64 * height as u64 * 16)?;
+        Ok(FrameTargets {
+            width,
+            height,
+            depth,
+            sums,
+            hdr,
+        })
+    }
+
+    /// Records one frame into `out.hdr`: visibility, attributes, shade.
+    pub fn draw(
+        &self,
+        gpu: &Gpu,
+        encoder: &mut wgpu::CommandEncoder,
+        scene: &SceneBuffers,
+        cam: &Camera,
+        params: &ShadeParams,
+        out: &FrameTargets,
+    ) -> Result<()> {
+        let cam_buf = gpu.uniform("camera", cam);
+        let params_buf = gpu.uniform("shade params", params);
+        let buffers = |pipeline: &wgpu::RenderPipeline, list: &[&wgpu::Buffer]| {
+            let entries: Vec<wgpu::BindGroupEntry> = list
+                .iter()
+                .enumerate()
+                .map(|(i, b)| wgpu::BindGroupEntry {
+                    binding: i as u32,
+                    resource: b.as_entire_binding(),
+                })
+                .collect();
+            gpu.device.create_bind_group(&wgpu::BindGroupDescriptor {
+                label: None,
+                layout: &pipeline.get_bind_group_layout(0),
+                entries: &entries,
+            })
+        };
+        let vis_group = buffers(&self.visibility, &[&cam_buf, scene.splats]);
+        let attr_group = buffers(
+            &self.attributes,
+            &[
+                &cam_buf,
+                scene.splats,
+                &params_buf,
+                scene.materials,
+                scene.splat_light,
+                scene.lobes,
+            ],
+        );
+        let depth_attachment = |load| {
+            Some(wgpu::RenderPassDepthStencilAttachment {
+                view: &out.depth,
+                depth_ops: Some(wgpu::Operations {
+                    load,
+                    store: wgpu::StoreOp::Store,
+                }),
+                stencil_ops: None,
+            })
+        };
+        {
+            let mut pass = encoder.begin_render_pass(&wgpu::RenderPassDescriptor {
+                label: Some("splat_visibility"),
+                color_attachments: &[],
+                depth_stencil_attachment: depth_attachment(wgpu::LoadOp::Clear(0.0)),
+                timestamp_writes: None,
+                occlusion_query_set: None,
+                multiview_mask: None,
+            });
+            pass.set_pipeline(&self.visibility);
+            pass.set_bind_group(0, &vis_group, &[]);
+            pass.draw(0..4, 0..scene.splat_count);
+        }
+        {
+            let color: Vec<Option<wgpu::RenderPassColorAttachment>> = out
+                .sums
+                .iter()
+                .map(|view| {
+                    Some(wgpu::RenderPassColorAttachment {
+                        view,
+                        depth_slice: None,
+                        resolve_target: None,
+                        ops: wgpu::Operations {
+                            load: wgpu::LoadOp::Clear(wgpu::Color::TRANSPARENT),
+                            store: wgpu::StoreOp::Store,
+                        },
+                    })
+                })
+                .collect();
+            let mut pass = encoder.begin_render_pass(&wgpu::RenderPassDescriptor {
+                label: Some("splat_attributes"),
+                color_attachments: &color,
+                depth_stencil_attachment: depth_attachment(wgpu::LoadOp::Load),
+                timestamp_writes: None,
+                occlusion_query_set: None,
+                multiview_mask: None,
+            });
+            pass.set_pipeline(&self.attributes);
+            pass.set_bind_group(0, &attr_group, &[]);
+            pass.draw(0..4, 0..scene.splat_count);
+        }
+        let mut frame_entries = vec![
+            wgpu::BindGroupEntry {
+                binding: 0,
+                resource: cam_buf.as_entire_binding(),
+            },
+            wgpu::BindGroupEntry {
+                binding: 1,
+                resource: params_buf.as_entire_binding(),
+            },
+        ];
+        frame_entries.extend(out.sums.iter().enumerate().map(|(i, view)| {
+            wgpu::BindGroupEntry {
+                binding: 2 + i as u32,
+                resource: wgpu::BindingResource::TextureView(view),
+            }
+        }));
+        frame_entries.push(wgpu::BindGroupEntry {
+            binding: 6,
+            resource: scene.lights.as_entire_binding(),
+        });
+        frame_entries.push(wgpu::BindGroupEntry {
+            binding: 7,
+            resource: out.hdr.as_entire_binding(),
+        });
+        let geometry_entries: Vec<wgpu::BindGroupEntry> = scene
+            .geometry
+            .iter()
+            .enumerate()
+            .map(|(i, b)| wgpu::BindGroupEntry {
+                binding: i as u32,
+                resource: b.as_entire_binding(),
+            })
+            .collect();
+        let groups = [frame_entries, geometry_entries]
+            .iter()
+            .zip(&self.shade_layouts)
+            .map(|(entries, layout)| {
+                gpu.device.create_bind_group(&wgpu::BindGroupDescriptor {
+                    label: Some("shade"),
+                    layout,
+                    entries,
+                })
+            })
+            .collect::<Vec<_>>();
+        let (x, y) = gpu.dispatch_dims(groups_for(out.width * out.height, WG))?;
+        let mut pass = encoder.begin_compute_pass(&wgpu::ComputePassDescriptor {
+            label: Some("shade"),
+            timestamp_writes: None,
+        });
+        pass.set_pipeline(&self.shade);
+        for (g, group) in groups.iter().enumerate() {
+            pass.set_bind_group(g as u32, group, &[]);
+        }
+        pass.dispatch_workgroups(x, y, 1);
+        Ok(())
+    }
+}

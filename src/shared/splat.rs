@@ -1,0 +1,90 @@
+//! Twin of `wgsl/shared/splat.wgsl`: a splat's quad, a pixel's view ray, the ray–disk hit
+//! with its radial weight, the reversed depth, and one lobe's specular response.
+
+use glam::{Vec2, Vec3, Vec4};
+
+use super::lobes::FAMILY_WARD;
+use super::sampling::{PI, frame_of};
+use super::ward::tan2_to_normal;
+use crate::types::{Camera, Splat};
+
+pub const KERNEL_SHARPNESS: f32 = 2.0;
+pub const THESIS_SCALE: f32 = 1.0;
+pub const SHADOW_RAY_BUDGET: u32 = 16_384;
+
+pub fn quad_corner(s: &Splat, i: u32) -> Vec3 {
+    let f = frame_of(Vec3::from(s.normal));
+    let x = if i & 1 != 0 { 1.0 } else { -1.0 };
+    let y = if i & 2 != 0 { 1.0 } else { -1.0 };
+    Vec3::from(s.center) + s.radius * (x * f.t + y * f.b)
+}
+
+pub fn faces_camera(s: &Splat, eye: Vec3) -> bool {
+    Vec3::from(s.normal).dot(eye - Vec3::from(s.center)) > 0.0
+}
+
+pub fn clip_position(cam: &Camera, p: Vec3) -> Vec4 {
+    let v = p - Vec3::from(cam.eye);
+    let z = v.dot(Vec3::from(cam.forward));
+    Vec4::new(
+        v.dot(Vec3::from(cam.right)) / cam.tan_x,
+        v.dot(Vec3::from(cam.up)) / cam.tan_y,
+        cam.near,
+        z,
+    )
+}
+
+pub fn view_depth(cam: &Camera, z: f32) -> f32 {
+    cam.near / z
+}
+
+pub fn pixel_ray(cam: &Camera, pixel: Vec2) -> Vec3 {
+    let size = Vec2::from(cam.size);
+    let ndc = Vec2::new(
+        pixel.x / size.x * 2.0 - 1.0,
+        1.0 - pixel.y / size.y * 2.0,
+    );
+    (Vec3::from(cam.forward)
+        + (ndc.x * cam.tan_x) * Vec3::from(cam.right)
+        + (ndc.y * cam.tan_y) * Vec3::from(cam.up))
+    .normalize()
+}
+
+#[derive(Clone, Copy, Debug)]
+pub struct SplatHit {
+    pub t: f32,
+    pub q: f32,
+}
+
+pub fn splat_hit(s: &Splat, o: Vec3, d: Vec3) -> SplatHit {
+    let n = Vec3::from(s.normal);
+    let c = Vec3::from(s.center);
+    let t = n.dot(c - o) / n.dot(d);
+    let v = o + t * d - c;
+    SplatHit {
+        t,
+        q: v.dot(v) / (s.radius * s.radius),
+    }
+}
+
+pub fn covers(cam: &Camera, h: SplatHit, d: Vec3) -> bool {
+    h.q <= 1.0 && h.t * d.dot(Vec3::from(cam.forward)) >= cam.near
+}
+
+pub fn splat_weight(q: f32) -> f32 {
+    (-KERNEL_SHARPNESS * q).exp()
+}
+
+pub fn lobe_beta2(family: u32, sharpness: f32) -> f32 {
+    (if family == FAMILY_WARD { 1.0 } else { 0.5 }) / sharpness
+}
+
+pub fn lobe_specular(n: Vec3, wo: Vec3, axis: Vec3, alpha: f32, beta2: f32) -> f32 {
+    let h = wo + axis;
+    let ch = n.dot(h);
+    if !(ch > 0.0) {
+        return 0.0;
+    }
+    let s2 = alpha * alpha + beta2;
+    THESIS_SCALE * (-tan2_to_normal(n, h, ch) / s2).exp() / (4.0 * PI * s2)
+}

@@ -1,0 +1,114 @@
+// Surface splatting (DESIGN.md section 8): the quad a splat is drawn as, a pixel's view ray,
+// the ray-disk hit with its radial weight, the reversed depth, and the specular response of
+// one incident-light lobe (section 7). Twin: src/shared/splat.rs.
+//
+// Depth is reversed, near / z (1 at the near plane, towards 0 at infinity): a float's
+// relative precision then holds at every distance, and there is no far plane to clip at.
+// The rasterizer's interpolated depth of a quad is the depth of the disk's plane at each
+// pixel, since near / z is affine in screen space across a plane.
+
+// #import types
+// #import sampling
+// #import ward
+// #import lobes
+
+// The radial kernel exp(-KERNEL_SHARPNESS q) of q = d^2 / r^2: 1 at the centre, e^-2 at
+// the rim, so a pixel that only rims cover still gets a well-defined normalised value.
+const KERNEL_SHARPNESS: f32 = 2.0;
+
+// The thesis divided its lobe-times-BRDF formula by an empirical 1.81; under exact
+// definitions the best global scale is about 1 (DESIGN.md section 7), so it is left out.
+const THESIS_SCALE: f32 = 1.0;
+
+// Shadow rays spend at most this many grid steps and disk tests (see trace.wgsl).
+const SHADOW_RAY_BUDGET: u32 = 16384u;
+
+struct SplatVertex {
+    @builtin(position) position: vec4<f32>,
+    @location(0) @interpolate(flat) splat: u32,
+}
+
+// Corner `i` (0..3, triangle-strip order) of the square in the splat's plane that bounds its
+// disk: its projection bounds the projected disk, even where clipping cuts it.
+fn quad_corner(s: Splat, i: u32) -> vec3<f32> {
+    let f = frame_of(s.normal);
+    let x = select(-1.0, 1.0, (i & 1u) != 0u);
+    let y = select(-1.0, 1.0, (i & 2u) != 0u);
+    return s.center + s.radius * (x * f.t + y * f.b);
+}
+
+// Disks are one-sided, as for tracing: only their front shows.
+fn faces_camera(s: Splat, eye: vec3<f32>) -> bool {
+    return dot(s.normal, eye - s.center) > 0.0;
+}
+
+fn clip_position(cam: Camera, p: vec3<f32>) -> vec4<f32> {
+    let v = p - cam.eye;
+    let z = dot(v, cam.forward);
+    return vec4<f32>(dot(v, cam.right) / cam.tan_x, dot(v, cam.up) / cam.tan_y, cam.near, z);
+}
+
+// The vertex of both raster passes: corner `corner` of splat `i`'s quad; a back-facing
+// splat puts all four corners on one point outside the view, so it costs no fragments.
+fn splat_vertex(cam: Camera, s: Splat, i: u32, corner: u32) -> SplatVertex {
+    var out: SplatVertex;
+    out.splat = i;
+    out.position = select(vec4<f32>(2.0, 2.0, 0.5, 1.0), clip_position(cam, quad_corner(s, corner)),
+                          faces_camera(s, cam.eye));
+    return out;
+}
+
+fn view_depth(cam: Camera, z: f32) -> f32 {
+    return cam.near / z;
+}
+
+// The unit view ray through a point of the image (pixel centres at +0.5, rows from the top).
+fn pixel_ray(cam: Camera, pixel: vec2<f32>) -> vec3<f32> {
+    let ndc = vec2<f32>(pixel.x / cam.size.x * 2.0 - 1.0, 1.0 - pixel.y / cam.size.y * 2.0);
+    return normalize(cam.forward + (ndc.x * cam.tan_x) * cam.right + (ndc.y * cam.tan_y) * cam.up);
+}
+
+// Where ray (o, d) meets a splat's plane: t, and q = |hit - centre|^2 / r^2 (inside: q <= 1;
+// NaN or above 1 for a ray along the plane).
+struct SplatHit {
+    t: f32,
+    q: f32,
+}
+
+fn splat_hit(s: Splat, o: vec3<f32>, d: vec3<f32>) -> SplatHit {
+    var h: SplatHit;
+    h.t = dot(s.normal, s.center - o) / dot(s.normal, d);
+    let v = o + h.t * d - s.center;
+    h.q = dot(v, v) / (s.radius * s.radius);
+    return h;
+}
+
+// A fragment of the splat: inside its disk and in front of the near plane.
+fn covers(cam: Camera, h: SplatHit, d: vec3<f32>) -> bool {
+    return h.q <= 1.0 && h.t * dot(d, cam.forward) >= cam.near;
+}
+
+fn splat_weight(q: f32) -> f32 {
+    return exp(-KERNEL_SHARPNESS * q);
+}
+
+// beta^2 of a lobe in the thesis's exp(-tan^2 / beta^2) form: Ward-like lobes store 1 / beta^2;
+// a vMF lobe exp(k (cos - 1)) ~ exp(-k theta^2 / 2) matches the Ward-like form's
+// exp(-(theta / 2)^2 / beta^2) (its half-vector angle is half the deviation) at 1 / (2 k).
+fn lobe_beta2(family: u32, sharpness: f32) -> f32 {
+    return select(0.5, 1.0, family == FAMILY_WARD) / sharpness;
+}
+
+// The thesis's closed form of the Ward lobe (roughness alpha) convolved with a lobe of
+// width beta^2 around `axis` (the direction light comes from), seen along `wo`, per unit
+// of the lobe's irradiance: exp(-tan^2 d / (a^2 + b^2)) / (4 pi (a^2 + b^2)), d the angle
+// between n and the half-vector of wo and the axis.
+fn lobe_specular(n: vec3<f32>, wo: vec3<f32>, axis: vec3<f32>, alpha: f32, beta2: f32) -> f32 {
+    let h = wo + axis;
+    let ch = dot(n, h);
+    if !(ch > 0.0) {
+        return 0.0;
+    }
+    let s2 = alpha * alpha + beta2;
+    return THESIS_SCALE * exp(-tan2_to_normal(n, h, ch) / s2) / (4.0 * PI * s2);
+}

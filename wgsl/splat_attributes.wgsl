@@ -1,0 +1,64 @@
+// Splat pass 2, attributes (DESIGN.md sections 7 and 8): the splats within the depth
+// tolerance of the visible surface (depth test against pass 1, no depth writes) add
+// weight x (what the shade pass needs) into four float targets by additive blending, in
+// draw order. Each fragment is shaded from its own splat's lobes with its own view ray:
+// the indirect light, diffuse from the total irradiance and specular from every lobe.
+// Twin: src/cpu/splat_attributes.rs.
+
+// #import splat
+
+@group(0) @binding(0) var<uniform> cam: Camera;
+@group(0) @binding(1) var<storage, read> splats: array<Splat>;
+@group(0) @binding(2) var<uniform> params: ShadeParams;
+@group(0) @binding(3) var<storage, read> materials: array<Material>;
+@group(0) @binding(4) var<storage, read> splat_light: array<SplatLight>;
+@group(0) @binding(5) var<storage, read> lobes: array<Lobe>;
+
+// Each target holds weighted sums; w is the kernel weight, rho_s the mean specular albedo.
+struct Attributes {
+    // (w L_indirect, w)
+    @location(0) radiance: vec4<f32>,
+    // (w n, w t): normal and distance along the view ray
+    @location(1) geometry: vec4<f32>,
+    // (w rho_d, w rho_s alpha): the roughness is blended by specular weight
+    @location(2) diffuse: vec4<f32>,
+    // (w rho_s RGB, w rho_s)
+    @location(3) specular: vec4<f32>,
+}
+
+// Radiance leaving splat `i` towards wo by the light its photons brought (thesis 3.6.1).
+fn indirect(i: u32, s: Splat, m: Material, wo: vec3<f32>) -> vec3<f32> {
+    let light = splat_light[i];
+    var spec = vec3<f32>(0.0);
+    let first = i * params.lobes_per_splat;
+    for (var k = 0u; k < light.lobes; k++) {
+        let lobe = lobes[first + k];
+        let beta2 = lobe_beta2(params.family, lobe.sharpness);
+        spec += lobe.irradiance * lobe_specular(s.normal, wo, lobe.axis, m.roughness, beta2);
+    }
+    return s.diffuse * (light.irradiance / PI) + m.specular * spec;
+}
+
+@vertex
+fn vs_main(@builtin(vertex_index) corner: u32, @builtin(instance_index) i: u32) -> SplatVertex {
+    return splat_vertex(cam, splats[i], i, corner);
+}
+
+@fragment
+fn fs_main(v: SplatVertex) -> Attributes {
+    let s = splats[v.splat];
+    let d = pixel_ray(cam, v.position.xy);
+    let h = splat_hit(s, cam.eye, d);
+    if !covers(cam, h, d) {
+        discard;
+    }
+    let w = splat_weight(h.q);
+    let m = materials[s.material];
+    let gloss = (m.specular.x + m.specular.y + m.specular.z) * (1.0 / 3.0);
+    var out: Attributes;
+    out.radiance = w * vec4<f32>(indirect(v.splat, s, m, -d), 1.0);
+    out.geometry = w * vec4<f32>(s.normal, h.t);
+    out.diffuse = w * vec4<f32>(s.diffuse, gloss * m.roughness);
+    out.specular = w * vec4<f32>(m.specular, gloss);
+    return out;
+}

@@ -1,0 +1,27 @@
+// Splat pass 1, visibility (DESIGN.md section 8): every front-facing splat as a quad; the
+// fragment shader intersects the pixel's view ray with the disk, discards outside it, and
+// writes the hit's depth pushed back by `depth_tolerance` splat radii along view z. The
+// attribute pass then blends every splat within that tolerance of the nearest surface.
+// Depth is reversed (greater is nearer). Twin: src/cpu/splat_visibility.rs.
+
+// #import splat
+
+@group(0) @binding(0) var<uniform> cam: Camera;
+@group(0) @binding(1) var<storage, read> splats: array<Splat>;
+
+@vertex
+fn vs_main(@builtin(vertex_index) corner: u32, @builtin(instance_index) i: u32) -> SplatVertex {
+    return splat_vertex(cam, splats[i], i, corner);
+}
+
+@fragment
+fn fs_main(v: SplatVertex) -> @builtin(frag_depth) f32 {
+    let s = splats[v.splat];
+    let d = pixel_ray(cam, v.position.xy);
+    let h = splat_hit(s, cam.eye, d);
+    if !covers(cam, h, d) {
+        discard;
+    }
+    let z = h.t * dot(d, cam.forward);
+    return view_depth(cam, z + cam.depth_tolerance * s.radius);
+}
