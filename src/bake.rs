@@ -152,9 +152,8 @@ pub fn bake(scene: &Scene, device: BakeDevice, progress: &Progress) -> Result<Ba
     let em = StageReport {
         splats_fitted: Some(s.fitted),
         splats_lit: Some(s.listed),
-        skipped_reason: (s.fitted == 0).then(|| {
-            "no glossy splat has photons: only total irradiance was gathered".to_string()
-        }),
+        skipped_reason: (s.fitted == 0)
+            .then(|| "no glossy splat has photons: only total irradiance was gathered".to_string()),
         ..StageReport::ran(s.ms)
     };
     Ok(Baked {

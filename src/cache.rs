@@ -67,7 +67,8 @@ pub fn load(path: &Path, key: u64, splats: usize) -> Result<std::result::Result<
     if bytes.len() < HEADER || &bytes[..8] != MAGIC {
         return Err(bad("wrong magic bytes"));
     }
-    let u32_at = |o: usize| u32::from_le_bytes([bytes[o], bytes[o + 1], bytes[o + 2], bytes[o + 3]]);
+    let u32_at =
+        |o: usize| u32::from_le_bytes([bytes[o], bytes[o + 1], bytes[o + 2], bytes[o + 3]]);
     let mut key_bytes = [0u8; 8];
     key_bytes.copy_from_slice(&bytes[16..24]);
     if u32_at(8) != VERSION || u64::from_le_bytes(key_bytes) != key {

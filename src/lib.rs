@@ -8,6 +8,7 @@ pub mod bench;
 pub mod bins;
 pub mod cache;
 pub mod camera;
+pub mod compare;
 pub mod cpu;
 pub mod em;
 pub mod error;

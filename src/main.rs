@@ -6,10 +6,10 @@ use std::process::ExitCode;
 use clap::{Args, Parser, Subcommand, ValueEnum};
 use lobelight::em::{EmConfig, LobeFamily};
 use lobelight::frame::FrameConfig;
-use lobelight::tone::{ToneConfig, ToneMode};
 use lobelight::gpu::{BackendChoice, Gpu};
 use lobelight::photons::PhotonConfig;
 use lobelight::scene::file::StoreRange;
+use lobelight::tone::{ToneConfig, ToneMode};
 use lobelight::{Error, Result, bench, info, render, scene};
 
 #[derive(Parser)]

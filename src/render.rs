@@ -15,7 +15,7 @@ use crate::cpu;
 use crate::error::{Error, Result};
 use crate::frame::{FrameConfig, camera_uniform, cpu_frame, shade_params};
 use crate::gpu::Gpu;
-use crate::gpu::frame::{SceneBuffers, SplatPipelines};
+use crate::gpu::frame::{FrameScene, SplatPipelines};
 use crate::gpu::photons::trace_photons;
 use crate::gpu::scene::GpuScene;
 use crate::gpu::tone::tone_map;
@@ -263,18 +263,8 @@ fn render_lobes(
             let t = Instant::now();
             let pipelines = SplatPipelines::new(gpu)?;
             let targets = pipelines.targets(gpu, view.width, view.height)?;
-            let light = gpu.storage("splat light", &baked.lobes.light)?;
-            let lobes = gpu.storage("lobes", &baked.lobes.lobes)?;
-            let lights = gpu.storage("lights", &scene.lights)?;
-            let buffers = SceneBuffers {
-                splats: &on_gpu.splats,
-                splat_count: scene.splats.len() as u32,
-                materials: &on_gpu.materials,
-                splat_light: &light,
-                lobes: &lobes,
-                lights: &lights,
-                geometry: on_gpu.geometry(),
-            };
+            let frame_scene = FrameScene::upload(gpu, scene, &baked.lobes)?;
+            let buffers = frame_scene.buffers(&on_gpu);
             let mut encoder = gpu.encoder("frame");
             pipelines.draw(gpu, &mut encoder, &buffers, &cam, &params, &targets)?;
             gpu.submit_and_wait(encoder)?;
@@ -302,7 +292,8 @@ fn render_lobes(
         }
         None => {
             let t = Instant::now();
-            let host_grid = cpu::build_grid(&grid_params(&scene.splats, &scene.grid)?, &scene.splats)?;
+            let host_grid =
+                cpu::build_grid(&grid_params(&scene.splats, &scene.grid)?, &scene.splats)?;
             let grid = StageReport::ran(ms_since(t));
             let (baked, hit) = bake_or_load(scene, BakeDevice::Cpu(&host_grid), opts, &progress)?;
             let params = shade_params(scene, &baked.lobes, &opts.frame, view);
@@ -345,8 +336,7 @@ fn render_photons(
 ) -> Result<Stages> {
     if ImageFormat::of(output)? != ImageFormat::Png {
         return Err(Error::Invalid(
-            "--method photons writes PNG only (it shows where photons landed, not radiance)"
-                .into(),
+            "--method photons writes PNG only (it shows where photons landed, not radiance)".into(),
         ));
     }
     let (map, grid, grid_ms) = bake_photons(scene, gpu, opts.progress)?;

@@ -103,7 +103,13 @@ fn shade_sample(params: &ShadeParams, geo: &Geometry, sf: &Surface, ls: &LightSa
     brdf(sf, ls.wi) * ls.e * cos_i
 }
 
-fn direct(params: &ShadeParams, geo: &Geometry, lights: &[Light], sf: &Surface, pixel: u32) -> Vec3 {
+fn direct(
+    params: &ShadeParams,
+    geo: &Geometry,
+    lights: &[Light],
+    sf: &Surface,
+    pixel: u32,
+) -> Vec3 {
     let mut sum = Vec3::ZERO;
     let key = pcg_hash(pcg_hash(params.seed).wrapping_add(pixel));
     for (li, l) in lights.iter().enumerate().take(params.light_count as usize) {
@@ -125,7 +131,13 @@ fn direct(params: &ShadeParams, geo: &Geometry, lights: &[Light], sf: &Surface, 
     sum
 }
 
-fn emitted(cam: &Camera, params: &ShadeParams, lights: &[Light], d: Vec3, t_surface: f32) -> Option<Vec3> {
+fn emitted(
+    cam: &Camera,
+    params: &ShadeParams,
+    lights: &[Light],
+    d: Vec3,
+    t_surface: f32,
+) -> Option<Vec3> {
     let eye = Vec3::from(cam.eye);
     let mut out = None;
     let mut t_near = t_surface;

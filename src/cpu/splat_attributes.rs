@@ -5,7 +5,9 @@ use glam::{Vec3, Vec4};
 
 use super::splat_visibility::{TILE, Tiles, gather, raster};
 use crate::shared::sampling::PI;
-use crate::shared::splat::{covers, lobe_beta2, lobe_specular, pixel_ray, splat_hit, splat_weight, view_depth};
+use crate::shared::splat::{
+    covers, lobe_beta2, lobe_specular, pixel_ray, splat_hit, splat_weight, view_depth,
+};
 use crate::types::{Camera, Lobe, Material, ShadeParams, Splat, SplatLight};
 
 /// The four blended targets of the attribute pass (see the WGSL file for what each holds).

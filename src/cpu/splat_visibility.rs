@@ -6,7 +6,9 @@
 use glam::{Vec2, Vec3};
 use rayon::prelude::*;
 
-use crate::shared::splat::{clip_position, covers, faces_camera, pixel_ray, quad_corner, splat_hit, view_depth};
+use crate::shared::splat::{
+    clip_position, covers, faces_camera, pixel_ray, quad_corner, splat_hit, view_depth,
+};
 use crate::types::{Camera, Splat};
 
 /// Tile edge in pixels.

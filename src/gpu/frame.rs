@@ -4,9 +4,12 @@
 //! viewer or a benchmark draws frame after frame with nothing but a new camera uniform.
 
 use super::Gpu;
+use super::scene::GpuScene;
 use crate::cpu::groups_for;
 use crate::cpu::shade::WG;
+use crate::em::LobeMap;
 use crate::error::{Error, Result};
+use crate::scene::Scene;
 use crate::types::{Camera, ShadeParams};
 
 /// The format of the blended targets: f32 where the device can blend it, else f16.
@@ -35,6 +38,36 @@ pub struct SceneBuffers<'a> {
     pub lights: &'a wgpu::Buffer,
     /// Bind group 1 of tracing stages (`GpuScene::geometry`).
     pub geometry: [&'a wgpu::Buffer; 5],
+}
+
+/// The bake's result and the lights on the device, for frame after frame.
+pub struct FrameScene {
+    pub splat_light: wgpu::Buffer,
+    pub lobes: wgpu::Buffer,
+    pub lights: wgpu::Buffer,
+}
+
+impl FrameScene {
+    pub fn upload(gpu: &Gpu, scene: &Scene, lobes: &LobeMap) -> Result<FrameScene> {
+        Ok(FrameScene {
+            splat_light: gpu.storage("splat light", &lobes.light)?,
+            lobes: gpu.storage("lobes", &lobes.lobes)?,
+            lights: gpu.storage("lights", &scene.lights)?,
+        })
+    }
+
+    /// What the passes bind, with the scene's splats, materials and grid.
+    pub fn buffers<'a>(&'a self, on_gpu: &'a GpuScene) -> SceneBuffers<'a> {
+        SceneBuffers {
+            splats: &on_gpu.splats,
+            splat_count: on_gpu.grid.params.splat_count,
+            materials: &on_gpu.materials,
+            splat_light: &self.splat_light,
+            lobes: &self.lobes,
+            lights: &self.lights,
+            geometry: on_gpu.geometry(),
+        }
+    }
 }
 
 /// The compiled splat passes of one device.
@@ -368,12 +401,15 @@ impl SplatPipelines {
                 resource: params_buf.as_entire_binding(),
             },
         ];
-        frame_entries.extend(out.sums.iter().enumerate().map(|(i, view)| {
-            wgpu::BindGroupEntry {
-                binding: 2 + i as u32,
-                resource: wgpu::BindingResource::TextureView(view),
-            }
-        }));
+        frame_entries.extend(
+            out.sums
+                .iter()
+                .enumerate()
+                .map(|(i, view)| wgpu::BindGroupEntry {
+                    binding: 2 + i as u32,
+                    resource: wgpu::BindingResource::TextureView(view),
+                }),
+        );
         frame_entries.push(wgpu::BindGroupEntry {
             binding: 6,
             resource: scene.lights.as_entire_binding(),

@@ -40,10 +40,7 @@ pub fn view_depth(cam: &Camera, z: f32) -> f32 {
 
 pub fn pixel_ray(cam: &Camera, pixel: Vec2) -> Vec3 {
     let size = Vec2::from(cam.size);
-    let ndc = Vec2::new(
-        pixel.x / size.x * 2.0 - 1.0,
-        1.0 - pixel.y / size.y * 2.0,
-    );
+    let ndc = Vec2::new(pixel.x / size.x * 2.0 - 1.0, 1.0 - pixel.y / size.y * 2.0);
     (Vec3::from(cam.forward)
         + (ndc.x * cam.tan_x) * Vec3::from(cam.right)
         + (ndc.y * cam.tan_y) * Vec3::from(cam.up))
