@@ -4,17 +4,24 @@ use std::time::Instant;
 
 use serde::Serialize;
 
+use crate::bake::{BakeDevice, Progress, bake};
 use crate::bins::bin_params;
+use crate::camera::View;
 use crate::cpu;
 use crate::em::{EmConfig, EmStats, FitShape, LobeFamily};
 use crate::error::Result;
+use crate::frame::{FrameConfig, camera_uniform, cpu_frame, shade_params};
 use crate::gpu::Gpu;
 use crate::gpu::bins as gpu_bins;
 use crate::gpu::em as gpu_em;
+use crate::gpu::frame::{FrameScene, SplatPipelines};
 use crate::gpu::photons::trace_photons;
 use crate::gpu::scene::GpuScene;
+use crate::gpu::tone::tone_map as gpu_tone_map;
+use crate::grid::grid_params;
 use crate::photons::{PhotonConfig, PhotonMap, PhotonStats, ms_since, photons_within};
 use crate::scene::Scene;
+use crate::tone::ToneConfig;
 
 #[derive(Debug, Serialize)]
 pub struct PhotonBench {
@@ -282,5 +289,166 @@ impl std::fmt::Display for EmBench {
         )?;
         writeln!(f, "fit error    {:.4} nats per unit weight", self.nll)?;
         write!(f, "throughput   {:.0} fits/s", self.fits_per_s)
+    }
+}
+
+/// `bench frame`: the time of one frame (splat passes, shading, tone mapping) of a baked
+/// scene at each size, the bake done once beforehand as the viewer does.
+#[derive(Debug, Serialize)]
+pub struct FrameBench {
+    pub scene: String,
+    pub adapter: String,
+    pub backend: String,
+    pub splats: usize,
+    /// Splats with lobes (glossy, with photons): the ones whose fragments evaluate lobes.
+    pub splats_fitted: u32,
+    pub lights: usize,
+    pub area_samples: u32,
+    /// `frame_ms` at the first size (512²), for scripts that want one number.
+    pub frame_ms: f64,
+    pub sizes: Vec<FrameTiming>,
+}
+
+#[derive(Debug, Serialize)]
+pub struct FrameTiming {
+    pub width: u32,
+    pub height: u32,
+    /// Median over the timed frames of shade + tone map.
+    pub frame_ms: f64,
+    pub fps: f64,
+    /// Medians of the two parts: the splat passes with shading, and tone mapping.
+    pub shade_ms: f64,
+    pub tonemap_ms: f64,
+    /// GPU: medians of the visibility, attribute and shade passes, each waited for.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub passes_ms: Option<[f64; 3]>,
+    pub frames: u32,
+}
+
+/// The sizes `bench frame` times.
+pub const FRAME_SIZES: [(u32, u32); 2] = [(512, 512), (1920, 1080)];
+const TIMED_FRAMES: u32 = 5;
+
+fn median(mut v: Vec<f64>) -> f64 {
+    v.sort_by(f64::total_cmp);
+    v[v.len() / 2]
+}
+
+/// Bakes the scene once, then times frames at each of `FRAME_SIZES` (one untimed warm-up
+/// frame per size compiles the pipelines and allocates the targets).
+pub fn frame(
+    scene: &Scene,
+    gpu: Option<&Gpu>,
+    cfg: &FrameConfig,
+    tone: &ToneConfig,
+) -> Result<FrameBench> {
+    let progress = Progress::new(false);
+    let mut sizes = Vec::new();
+    let (adapter, backend, fitted) = match gpu {
+        Some(gpu) => {
+            let on_gpu = GpuScene::upload(gpu, scene)?;
+            let lobes = bake(scene, BakeDevice::Gpu(gpu, &on_gpu), &progress)?.lobes;
+            let frame_scene = FrameScene::upload(gpu, scene, &lobes)?;
+            let buffers = frame_scene.buffers(&on_gpu);
+            let pipelines = SplatPipelines::new(gpu)?;
+            for (w, h) in FRAME_SIZES {
+                let view = View::new(&scene.camera, w, h);
+                let cam = camera_uniform(&view, scene.bounds(), cfg);
+                let params = shade_params(scene, &lobes, cfg, &view);
+                let targets = pipelines.targets(gpu, w, h)?;
+                let mut times = Vec::new();
+                let mut pass_ms = Vec::new();
+                for _ in 0..=TIMED_FRAMES {
+                    let passes = pipelines.draw_timed(gpu, &buffers, &cam, &params, &targets)?;
+                    let shade = passes.iter().sum();
+                    pass_ms.push(passes);
+                    let t = Instant::now();
+                    let mut encoder = gpu.encoder("tone map");
+                    gpu_tone_map(gpu, &mut encoder, &targets.hdr, w * h, tone)?;
+                    gpu.submit_and_wait(encoder)?;
+                    times.push((shade, ms_since(t)));
+                }
+                let mut t = timing(w, h, &times[1..]);
+                t.passes_ms = Some(std::array::from_fn(|k| {
+                    median(pass_ms[1..].iter().map(|p| p[k]).collect())
+                }));
+                sizes.push(t);
+            }
+            let name = gpu.info.name.clone();
+            (name, gpu.backend_name().to_string(), lobes.stats.fitted)
+        }
+        None => {
+            let grid = cpu::build_grid(&grid_params(&scene.splats, &scene.grid)?, &scene.splats)?;
+            let lobes = bake(scene, BakeDevice::Cpu(&grid), &progress)?.lobes;
+            for (w, h) in FRAME_SIZES {
+                let view = View::new(&scene.camera, w, h);
+                let cam = camera_uniform(&view, scene.bounds(), cfg);
+                let params = shade_params(scene, &lobes, cfg, &view);
+                let mut times = Vec::new();
+                for _ in 0..=TIMED_FRAMES {
+                    let t = Instant::now();
+                    let hdr = cpu_frame(scene, &grid, &lobes, &cam, &params);
+                    let shade = ms_since(t);
+                    let t = Instant::now();
+                    cpu::tone_map(tone, &hdr)?;
+                    times.push((shade, ms_since(t)));
+                }
+                sizes.push(timing(w, h, &times[1..]));
+            }
+            let threads = rayon::current_num_threads();
+            let adapter = format!("CPU mirror ({threads} threads)");
+            (adapter, "cpu".to_string(), lobes.stats.fitted)
+        }
+    };
+    Ok(FrameBench {
+        scene: scene.path.display().to_string(),
+        adapter,
+        backend,
+        splats: scene.splats.len(),
+        splats_fitted: fitted,
+        lights: scene.lights.len(),
+        area_samples: cfg.area_samples,
+        frame_ms: sizes[0].frame_ms,
+        sizes,
+    })
+}
+
+fn timing(width: u32, height: u32, times: &[(f64, f64)]) -> FrameTiming {
+    let frame_ms = median(times.iter().map(|(a, b)| a + b).collect());
+    FrameTiming {
+        width,
+        height,
+        frame_ms,
+        fps: 1e3 / frame_ms,
+        shade_ms: median(times.iter().map(|t| t.0).collect()),
+        tonemap_ms: median(times.iter().map(|t| t.1).collect()),
+        passes_ms: None,
+        frames: times.len() as u32,
+    }
+}
+
+impl std::fmt::Display for FrameBench {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        writeln!(f, "scene        {}", self.scene)?;
+        writeln!(f, "device       {} ({})", self.adapter, self.backend)?;
+        writeln!(
+            f,
+            "splats       {} ({} with lobes), {} lights, {}² area samples",
+            self.splats, self.splats_fitted, self.lights, self.area_samples
+        )?;
+        for (i, s) in self.sizes.iter().enumerate() {
+            if i > 0 {
+                writeln!(f)?;
+            }
+            write!(
+                f,
+                "{:>4}×{:<4}    {:.1} ms/frame ({:.1} fps): shade {:.1} ms, tone map {:.1} ms",
+                s.width, s.height, s.frame_ms, s.fps, s.shade_ms, s.tonemap_ms
+            )?;
+            if let Some([v, a, sh]) = s.passes_ms {
+                write!(f, " (visibility {v:.1}, attributes {a:.1}, shade {sh:.1})")?;
+            }
+        }
+        Ok(())
     }
 }

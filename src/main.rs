@@ -186,6 +186,8 @@ enum Command {
         #[command(flatten)]
         bake: BakeArgs,
         #[command(flatten)]
+        look: LookArgs,
+        #[command(flatten)]
         device: DeviceArgs,
         /// Print one JSON object per scene on stdout (an array for several scenes).
         #[arg(long)]
@@ -199,6 +201,8 @@ enum BenchKind {
     Photons,
     /// Photon binning and the lobe fit: fits_per_s, em_ms, mean photons, fit error.
     Em,
+    /// Frames of the baked scene at 512² and 1920×1080: frame_ms, fps, shade and tone map.
+    Frame,
 }
 
 fn to_json<T: serde::Serialize>(value: &T) -> Result<serde_json::Value> {
@@ -268,6 +272,7 @@ fn run(cli: Cli) -> Result<()> {
             what,
             scenes,
             bake,
+            look,
             device,
             json,
         } => {
@@ -280,6 +285,10 @@ fn run(cli: Cli) -> Result<()> {
                 let (text, value) = match what {
                     BenchKind::Photons => {
                         let r = bench::photons(&scene, gpu.as_ref(), &photons)?;
+                        (r.to_string(), to_json(&r)?)
+                    }
+                    BenchKind::Frame => {
+                        let r = bench::frame(&scene, gpu.as_ref(), &look.frame(), &look.tone())?;
                         (r.to_string(), to_json(&r)?)
                     }
                     BenchKind::Em => {

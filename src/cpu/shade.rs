@@ -1,5 +1,7 @@
 //! Mirror of `wgsl/shade.wgsl`: normalise the blended sums, add direct light by shadow rays,
 //! show area lights seen directly; linear HDR out.
+// `!(x < y)` is meant: NaN must fail these tests, as it does in the WGSL twin.
+#![allow(clippy::neg_cmp_op_on_partial_ord)]
 
 use glam::{Vec2, Vec3, Vec4};
 use rayon::prelude::*;

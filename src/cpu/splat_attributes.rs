@@ -1,5 +1,7 @@
 //! Mirror of `wgsl/splat_attributes.wgsl`: the splats within the depth tolerance add their
 //! weighted attributes into four targets, in draw order per pixel (as the GPU blends).
+// `!(x < y)` is meant: NaN must fail these tests, as it does in the WGSL twin.
+#![allow(clippy::neg_cmp_op_on_partial_ord)]
 
 use glam::{Vec3, Vec4};
 

@@ -2,6 +2,8 @@
 //! image is cut into tiles, each tile lists the front-facing splats whose projected quad
 //! touches it in draw order, and each tile runs its splats over its pixels in that order, so
 //! every pixel sees the same fragments in the same order as on the GPU.
+// `!(x < y)` is meant: NaN must fail these tests, as it does in the WGSL twin.
+#![allow(clippy::neg_cmp_op_on_partial_ord)]
 
 use glam::{Vec2, Vec3};
 use rayon::prelude::*;
@@ -54,7 +56,7 @@ pub fn quad_bounds(cam: &Camera, s: &Splat) -> Option<Rect> {
     }
     let lo = lo.max(Vec2::ZERO).floor();
     let hi = hi.min(size).ceil();
-    (lo.x < hi.x && lo.y < hi.y).then(|| Rect {
+    (lo.x < hi.x && lo.y < hi.y).then_some(Rect {
         x0: lo.x as u32,
         y0: lo.y as u32,
         x1: hi.x as u32,

@@ -40,6 +40,30 @@ pub struct SceneBuffers<'a> {
     pub geometry: [&'a wgpu::Buffer; 5],
 }
 
+/// The passes of a frame, in order.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum SplatPass {
+    Visibility,
+    Attributes,
+    Shade,
+}
+
+impl SplatPass {
+    pub const ALL: [SplatPass; 3] = [
+        SplatPass::Visibility,
+        SplatPass::Attributes,
+        SplatPass::Shade,
+    ];
+
+    pub fn name(self) -> &'static str {
+        match self {
+            SplatPass::Visibility => "splat_visibility",
+            SplatPass::Attributes => "splat_attributes",
+            SplatPass::Shade => "shade",
+        }
+    }
+}
+
 /// The bake's result and the lights on the device, for frame after frame.
 pub struct FrameScene {
     pub splat_light: wgpu::Buffer,
@@ -311,8 +335,51 @@ impl SplatPipelines {
         params: &ShadeParams,
         out: &FrameTargets,
     ) -> Result<()> {
-        let cam_buf = gpu.uniform("camera", cam);
-        let params_buf = gpu.uniform("shade params", params);
+        let uniforms = self.uniforms(gpu, cam, params);
+        for pass in SplatPass::ALL {
+            self.record(gpu, encoder, scene, &uniforms, out, pass)?;
+        }
+        Ok(())
+    }
+
+    /// One frame with a wait after each pass: the milliseconds of each, in `SplatPass::ALL`
+    /// order (benchmarks; a frame that waits between passes is slower than `draw`'s).
+    pub fn draw_timed(
+        &self,
+        gpu: &Gpu,
+        scene: &SceneBuffers,
+        cam: &Camera,
+        params: &ShadeParams,
+        out: &FrameTargets,
+    ) -> Result<[f64; 3]> {
+        let uniforms = self.uniforms(gpu, cam, params);
+        let mut ms = [0.0; 3];
+        for (pass, slot) in SplatPass::ALL.into_iter().zip(&mut ms) {
+            let t = std::time::Instant::now();
+            let mut encoder = gpu.encoder(pass.name());
+            self.record(gpu, &mut encoder, scene, &uniforms, out, pass)?;
+            gpu.submit_and_wait(encoder)?;
+            *slot = crate::photons::ms_since(t);
+        }
+        Ok(ms)
+    }
+
+    fn uniforms(&self, gpu: &Gpu, cam: &Camera, params: &ShadeParams) -> [wgpu::Buffer; 2] {
+        [
+            gpu.uniform("camera", cam),
+            gpu.uniform("shade params", params),
+        ]
+    }
+
+    fn record(
+        &self,
+        gpu: &Gpu,
+        encoder: &mut wgpu::CommandEncoder,
+        scene: &SceneBuffers,
+        [cam_buf, params_buf]: &[wgpu::Buffer; 2],
+        out: &FrameTargets,
+        pass: SplatPass,
+    ) -> Result<()> {
         let buffers = |pipeline: &wgpu::RenderPipeline, list: &[&wgpu::Buffer]| {
             let entries: Vec<wgpu::BindGroupEntry> = list
                 .iter()
@@ -328,18 +395,6 @@ impl SplatPipelines {
                 entries: &entries,
             })
         };
-        let vis_group = buffers(&self.visibility, &[&cam_buf, scene.splats]);
-        let attr_group = buffers(
-            &self.attributes,
-            &[
-                &cam_buf,
-                scene.splats,
-                &params_buf,
-                scene.materials,
-                scene.splat_light,
-                scene.lobes,
-            ],
-        );
         let depth_attachment = |load| {
             Some(wgpu::RenderPassDepthStencilAttachment {
                 view: &out.depth,
@@ -350,7 +405,8 @@ impl SplatPipelines {
                 stencil_ops: None,
             })
         };
-        {
+        if pass == SplatPass::Visibility {
+            let vis_group = buffers(&self.visibility, &[cam_buf, scene.splats]);
             let mut pass = encoder.begin_render_pass(&wgpu::RenderPassDescriptor {
                 label: Some("splat_visibility"),
                 color_attachments: &[],
@@ -362,8 +418,20 @@ impl SplatPipelines {
             pass.set_pipeline(&self.visibility);
             pass.set_bind_group(0, &vis_group, &[]);
             pass.draw(0..4, 0..scene.splat_count);
+            return Ok(());
         }
-        {
+        if pass == SplatPass::Attributes {
+            let attr_group = buffers(
+                &self.attributes,
+                &[
+                    cam_buf,
+                    scene.splats,
+                    params_buf,
+                    scene.materials,
+                    scene.splat_light,
+                    scene.lobes,
+                ],
+            );
             let color: Vec<Option<wgpu::RenderPassColorAttachment>> = out
                 .sums
                 .iter()
@@ -390,6 +458,7 @@ impl SplatPipelines {
             pass.set_pipeline(&self.attributes);
             pass.set_bind_group(0, &attr_group, &[]);
             pass.draw(0..4, 0..scene.splat_count);
+            return Ok(());
         }
         let mut frame_entries = vec![
             wgpu::BindGroupEntry {

@@ -1,5 +1,7 @@
 //! Twin of `wgsl/shared/splat.wgsl`: a splat's quad, a pixel's view ray, the ray–disk hit
 //! with its radial weight, the reversed depth, and one lobe's specular response.
+// `!(x < y)` is meant: NaN must fail these tests, as it does in the WGSL twin.
+#![allow(clippy::neg_cmp_op_on_partial_ord)]
 
 use glam::{Vec2, Vec3, Vec4};
 
