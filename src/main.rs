@@ -10,7 +10,7 @@ use lobelight::gpu::{BackendChoice, Gpu};
 use lobelight::photons::PhotonConfig;
 use lobelight::scene::file::StoreRange;
 use lobelight::tone::{ToneConfig, ToneMode};
-use lobelight::{Error, Result, bench, info, render, scene};
+use lobelight::{Error, Result, bench, compare, info, render, scene};
 
 #[derive(Parser)]
 #[command(
@@ -177,6 +177,18 @@ enum Command {
         #[arg(long)]
         json: bool,
     },
+    /// Difference of image A against the reference B: mean relative difference, pixels
+    /// within 5 %, RMSE, energy (EXR for radiance; PNG compares display values).
+    Compare {
+        a: PathBuf,
+        b: PathBuf,
+        /// Write the per-pixel relative difference as a heat map (red 5 %, yellow ≥ 25 %).
+        #[arg(long, value_name = "OUT.png")]
+        heatmap: Option<PathBuf>,
+        /// Print one JSON object on stdout.
+        #[arg(long)]
+        json: bool,
+    },
     /// Measure a stage: throughput and the figures that show it did the right work.
     Bench {
         #[arg(value_enum)]
@@ -265,6 +277,39 @@ fn run(cli: Cli) -> Result<()> {
                 eprintln!(
                     "wrote {} ({}×{})",
                     report.output, report.width, report.height
+                );
+            }
+        }
+        Command::Compare {
+            a,
+            b,
+            heatmap,
+            json,
+        } => {
+            let (pa, wa, ha) = compare::read_image(&a)?;
+            let (pb, wb, hb) = compare::read_image(&b)?;
+            if (wa, ha) != (wb, hb) {
+                return Err(Error::Invalid(format!(
+                    "{} is {wa}×{ha} but {} is {wb}×{hb}",
+                    a.display(),
+                    b.display()
+                )));
+            }
+            let d = compare::difference(&pa, &pb)?;
+            if let Some(path) = heatmap {
+                compare::heatmap(&compare::relative(&pa, &pb), wa, ha, &path)?;
+            }
+            if json {
+                print_json(&d)?;
+            } else {
+                println!(
+                    "mean relative {:.4} %, within 5 %: {:.2} % of {} pixels, max {:.3}, rmse {:.4e}, energy {:+.4} %",
+                    100.0 * d.mean_relative,
+                    100.0 * d.within_5_percent,
+                    d.pixels,
+                    d.max_relative,
+                    d.rmse,
+                    100.0 * d.energy
                 );
             }
         }

@@ -257,3 +257,65 @@ fn impossible_photon_counts_are_clear_errors() {
         assert!(err.contains("photons must be within 1..="), "{err}");
     }
 }
+
+/// `render` (method lobes): PNG and EXR, the stage keys, a cache that a new view reuses and
+/// a bake change invalidates, and `compare` on the two EXRs.
+#[test]
+fn render_lobes_png_exr_and_cache() {
+    let dir = std::env::temp_dir().join(format!("lobelight-render-{}", std::process::id()));
+    std::fs::create_dir_all(&dir).unwrap();
+    let path = |name: &str| dir.join(name).to_str().unwrap().to_string();
+    let render = |out: &str, extra: &[&str]| {
+        let mut args = vec![
+            "render",
+            "scenes/cornell.toml",
+            "--photons",
+            "30000",
+            "--width",
+            "64",
+            "--height",
+            "48",
+            "-o",
+            out,
+            "--json",
+        ];
+        args.extend_from_slice(extra);
+        json(&args)
+    };
+    let cache = path("bake.cache");
+    let png = path("a.png");
+    let v = render(&png, &["--cache", &cache]);
+    assert_eq!(v["method"], "lobes");
+    assert_eq!(v["cache_hit"], false);
+    for stage in ["grid", "photons", "binning", "em", "shade", "tonemap"] {
+        assert_eq!(v["stages"][stage]["ran"], true, "{stage}");
+    }
+    assert!(v["stages"]["em"]["splats_fitted"].as_u64().unwrap() > 0);
+    assert!(v["log_average"].as_f64().unwrap() > 0.0);
+    let img = image::open(&png).unwrap().to_rgb8();
+    assert_eq!(img.dimensions(), (64, 48));
+    // The same bake from the cache, linear HDR out; then with the CPU mirror.
+    let exr = path("a.exr");
+    let v = render(&exr, &["--cache", &cache]);
+    assert_eq!(v["cache_hit"], true);
+    assert_eq!(v["stages"]["em"]["ran"], false);
+    assert_eq!(v["stages"]["tonemap"]["ran"], false);
+    let cpu_exr = path("cpu.exr");
+    let v = render(&cpu_exr, &["--cache", &cache, "--cpu"]);
+    assert_eq!(v["cache_hit"], true);
+    let d = json(&["compare", &exr, &cpu_exr, "--json"]);
+    assert!(d["mean_relative"].as_f64().unwrap() <= 0.01, "{d}");
+    assert!(d["within_5_percent"].as_f64().unwrap() >= 0.99, "{d}");
+    // A bake setting changed: the cache is stale and the bake runs again.
+    let v = render(&png, &["--cache", &cache, "--iterations", "3"]);
+    assert_eq!(v["cache_hit"], false);
+    assert_eq!(v["stages"]["em"]["ran"], true);
+    // Unknown extensions are refused before any work.
+    let out = lobelight(
+        &["render", "scenes/cornell.toml", "-o", &path("a.jpg")],
+        &[],
+    );
+    assert!(!out.status.success());
+    assert!(String::from_utf8_lossy(&out.stderr).contains(".png"));
+    std::fs::remove_dir_all(&dir).ok();
+}
