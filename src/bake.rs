@@ -44,7 +44,8 @@ impl Progress {
         Progress { show }
     }
 
-    fn bar(&self, total: u64) -> indicatif::ProgressBar {
+    /// A bar over `total` photons.
+    pub fn bar(&self, total: u64) -> indicatif::ProgressBar {
         if !self.show {
             return indicatif::ProgressBar::hidden();
         }

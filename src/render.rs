@@ -363,22 +363,6 @@ fn render_photons(
     })
 }
 
-fn progress_bar(show: bool, total: u64) -> indicatif::ProgressBar {
-    if !show {
-        return indicatif::ProgressBar::hidden();
-    }
-    let bar = indicatif::ProgressBar::new(total);
-    bar.set_style(
-        indicatif::ProgressStyle::with_template(
-            "{msg:>8} [{bar:30}] {human_pos}/{human_len} photons, {per_sec}, eta {eta}",
-        )
-        .unwrap_or_else(|_| indicatif::ProgressStyle::default_bar())
-        .progress_chars("=> "),
-    );
-    bar.set_message("tracing");
-    bar
-}
-
 /// Traces the scene's photons on the GPU or the CPU mirror; returns them with the grid (on the
 /// host, for visibility) and the grid build time.
 fn bake_photons(
@@ -387,7 +371,7 @@ fn bake_photons(
     show_progress: bool,
 ) -> Result<(PhotonMap, SplatGrid, f64)> {
     let cfg = PhotonConfig::from_scene(scene);
-    let bar = progress_bar(show_progress, cfg.photons);
+    let bar = Progress::new(show_progress).bar(cfg.photons);
     let mut progress = |done: u64, _total: u64| bar.set_position(done);
     let out = match gpu {
         Some(gpu) => {

@@ -3,8 +3,8 @@
 //! targets. The pipelines are built once per device; the targets once per image size, so a
 //! viewer or a benchmark draws frame after frame with nothing but a new camera uniform.
 
-use super::Gpu;
 use super::scene::GpuScene;
+use super::{Gpu, buffer_entries};
 use crate::cpu::groups_for;
 use crate::cpu::shade::WG;
 use crate::em::LobeMap;
@@ -381,18 +381,10 @@ impl SplatPipelines {
         pass: SplatPass,
     ) -> Result<()> {
         let buffers = |pipeline: &wgpu::RenderPipeline, list: &[&wgpu::Buffer]| {
-            let entries: Vec<wgpu::BindGroupEntry> = list
-                .iter()
-                .enumerate()
-                .map(|(i, b)| wgpu::BindGroupEntry {
-                    binding: i as u32,
-                    resource: b.as_entire_binding(),
-                })
-                .collect();
             gpu.device.create_bind_group(&wgpu::BindGroupDescriptor {
                 label: None,
                 layout: &pipeline.get_bind_group_layout(0),
-                entries: &entries,
+                entries: &buffer_entries(list),
             })
         };
         let depth_attachment = |load| {
@@ -487,15 +479,7 @@ impl SplatPipelines {
             binding: 7,
             resource: out.hdr.as_entire_binding(),
         });
-        let geometry_entries: Vec<wgpu::BindGroupEntry> = scene
-            .geometry
-            .iter()
-            .enumerate()
-            .map(|(i, b)| wgpu::BindGroupEntry {
-                binding: i as u32,
-                resource: b.as_entire_binding(),
-            })
-            .collect();
+        let geometry_entries = buffer_entries(&scene.geometry);
         let groups = [frame_entries, geometry_entries]
             .iter()
             .zip(&self.shade_layouts)

@@ -246,18 +246,10 @@ impl Gpu {
             .iter()
             .enumerate()
             .map(|(g, buffers)| {
-                let entries: Vec<wgpu::BindGroupEntry> = buffers
-                    .iter()
-                    .enumerate()
-                    .map(|(i, b)| wgpu::BindGroupEntry {
-                        binding: i as u32,
-                        resource: b.as_entire_binding(),
-                    })
-                    .collect();
                 self.device.create_bind_group(&wgpu::BindGroupDescriptor {
                     label: Some(stage),
                     layout: &pipeline.get_bind_group_layout(g as u32),
-                    entries: &entries,
+                    entries: &buffer_entries(buffers),
                 })
             })
             .collect();
@@ -405,6 +397,18 @@ impl Gpu {
         staging.unmap();
         Ok(out)
     }
+}
+
+/// Bind group entries for `buffers`, bound whole at bindings 0, 1, 2…
+pub(crate) fn buffer_entries<'a>(buffers: &[&'a wgpu::Buffer]) -> Vec<wgpu::BindGroupEntry<'a>> {
+    buffers
+        .iter()
+        .enumerate()
+        .map(|(i, b)| wgpu::BindGroupEntry {
+            binding: i as u32,
+            resource: b.as_entire_binding(),
+        })
+        .collect()
 }
 
 /// Lower is better: a real GPU before a software one.
