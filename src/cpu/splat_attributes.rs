@@ -64,8 +64,6 @@ pub fn splat_attributes(
     let forward = Vec3::from(cam.forward);
     let width = tiles.width as usize;
     let blocks = raster(
-        cam,
-        splats,
         tiles,
         || vec![[Vec4::ZERO; 4]; (TILE * TILE) as usize],
         |sums, tile, i, local, centre| {

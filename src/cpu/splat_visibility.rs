@@ -22,6 +22,8 @@ pub struct Tiles {
     pub height: u32,
     pub cols: u32,
     pub lists: Vec<Vec<u32>>,
+    /// Each splat's `quad_bounds`, computed once for both passes.
+    pub bounds: Vec<Option<Rect>>,
 }
 
 /// Pixel rectangle `[x0, x1) × [y0, y1)`.
@@ -83,14 +85,14 @@ pub fn bin_tiles(cam: &Camera, splats: &[Splat]) -> Tiles {
         height,
         cols,
         lists,
+        bounds,
     }
 }
 
-/// Runs `shade(splat, pixel index, pixel centre)` for every pixel of every splat's bounds in
-/// each tile, tiles in parallel, splats in draw order; `tile_out` collects per-tile results.
+/// Runs `shade(tile state, tile, splat, pixel in tile, pixel centre)` for every pixel of every
+/// listed splat's bounds in each tile, tiles in parallel, splats in draw order; returns each
+/// tile's state.
 pub fn raster<T: Send>(
-    cam: &Camera,
-    splats: &[Splat],
     tiles: &Tiles,
     init: impl Fn() -> T + Sync,
     shade: impl Fn(&mut T, Rect, u32, usize, Vec2) + Sync,
@@ -109,7 +111,8 @@ pub fn raster<T: Send>(
             };
             let mut out = init();
             for &i in list {
-                let Some(r) = quad_bounds(cam, &splats[i as usize]) else {
+                // Listed splats have bounds.
+                let Some(r) = tiles.bounds[i as usize] else {
                     continue;
                 };
                 for y in r.y0.max(tile.y0)..r.y1.min(tile.y1) {
@@ -146,8 +149,6 @@ pub fn splat_visibility(cam: &Camera, splats: &[Splat], tiles: &Tiles) -> Vec<f3
     let eye = Vec3::from(cam.eye);
     let forward = Vec3::from(cam.forward);
     let blocks = raster(
-        cam,
-        splats,
         tiles,
         || vec![0.0f32; (TILE * TILE) as usize],
         |depth, _, i, local, centre| {
