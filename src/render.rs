@@ -189,7 +189,11 @@ pub fn render(
     let (adapter, backend) = adapter_names(gpu);
     let (stages, cache_hit, log_average) = match opts.method {
         Method::Lobes => render_lobes(scene, gpu, opts, &view, format, output)?,
-        Method::Photons => (render_photons(scene, gpu, opts, &view, output)?, false, 0.0),
+        Method::Photons => (
+            render_photons(scene, gpu, opts, &view, format, output)?,
+            false,
+            0.0,
+        ),
     };
     Ok(RenderReport {
         adapter,
@@ -243,6 +247,25 @@ fn bake_or_load(
     Ok((baked, false))
 }
 
+/// The pixels a frame ends in: tone-mapped for PNG, linear for EXR.
+enum Pixels {
+    Rgba8(Vec<u32>),
+    Hdr(Vec<[f32; 4]>),
+}
+
+/// A drawn frame with the figures of its two stages.
+struct Drawn {
+    pixels: Pixels,
+    shade: StageReport,
+    tonemap: StageReport,
+    /// (Σ log(ε + Y), count), when the tone map ran.
+    log_sum: Option<[f32; 2]>,
+}
+
+fn tone_skipped() -> StageReport {
+    StageReport::skipped("EXR output keeps linear radiance")
+}
+
 /// The renderer: bake (or load), splat passes, tone map, write.
 fn render_lobes(
     scene: &Scene,
@@ -254,8 +277,8 @@ fn render_lobes(
 ) -> Result<(Stages, bool, f32)> {
     let progress = Progress::new(opts.progress);
     let cam = camera_uniform(view, scene.bounds(), &opts.frame);
-    let tone_skipped = || StageReport::skipped("EXR output keeps linear radiance");
-    let (baked, hit, hdr, rgba, grid, shade, tonemap, log_sum) = match gpu {
+    let pixels = view.width * view.height;
+    let (baked, hit, grid, drawn) = match gpu {
         Some(gpu) => {
             let on_gpu = GpuScene::upload(gpu, scene)?;
             let (baked, hit) = bake_or_load(scene, BakeDevice::Gpu(gpu, &on_gpu), opts, &progress)?;
@@ -269,26 +292,29 @@ fn render_lobes(
             pipelines.draw(gpu, &mut encoder, &buffers, &cam, &params, &targets)?;
             gpu.submit_and_wait(encoder)?;
             let shade = StageReport::ran(ms_since(t));
-            let pixels = view.width * view.height;
-            let (rgba, tonemap, log_sum) = if format == ImageFormat::Png {
-                let t = Instant::now();
-                let mut encoder = gpu.encoder("tone map");
-                let toned = tone_map(gpu, &mut encoder, &targets.hdr, pixels, &opts.tone)?;
-                gpu.submit_and_wait(encoder)?;
-                let ms = ms_since(t);
-                let rgba = gpu.read::<u32>(&toned.rgba, pixels as usize)?;
-                let sum = gpu.read::<[f32; 2]>(&toned.log_sum, 1)?;
-                (rgba, StageReport::ran(ms), sum.first().copied())
-            } else {
-                (Vec::new(), tone_skipped(), None)
+            let drawn = match format {
+                ImageFormat::Png => {
+                    let t = Instant::now();
+                    let mut encoder = gpu.encoder("tone map");
+                    let toned = tone_map(gpu, &mut encoder, &targets.hdr, pixels, &opts.tone)?;
+                    gpu.submit_and_wait(encoder)?;
+                    let tonemap = StageReport::ran(ms_since(t));
+                    let sum = gpu.read::<[f32; 2]>(&toned.log_sum, 1)?;
+                    Drawn {
+                        pixels: Pixels::Rgba8(gpu.read::<u32>(&toned.rgba, pixels as usize)?),
+                        shade,
+                        tonemap,
+                        log_sum: sum.first().copied(),
+                    }
+                }
+                ImageFormat::Exr => Drawn {
+                    pixels: Pixels::Hdr(gpu.read::<[f32; 4]>(&targets.hdr, pixels as usize)?),
+                    shade,
+                    tonemap: tone_skipped(),
+                    log_sum: None,
+                },
             };
-            let hdr = if format == ImageFormat::Exr {
-                gpu.read::<[f32; 4]>(&targets.hdr, pixels as usize)?
-            } else {
-                Vec::new()
-            };
-            let grid = StageReport::ran(on_gpu.grid_ms);
-            (baked, hit, hdr, rgba, grid, shade, tonemap, log_sum)
+            (baked, hit, StageReport::ran(on_gpu.grid_ms), drawn)
         }
         None => {
             let t = Instant::now();
@@ -300,30 +326,45 @@ fn render_lobes(
             let t = Instant::now();
             let hdr = cpu_frame(scene, &host_grid, &baked.lobes, &cam, &params);
             let shade = StageReport::ran(ms_since(t));
-            let (rgba, tonemap, log_sum) = if format == ImageFormat::Png {
-                let t = Instant::now();
-                let (rgba, sum) = cpu::tone_map(&opts.tone, &hdr)?;
-                (rgba, StageReport::ran(ms_since(t)), Some(sum))
-            } else {
-                (Vec::new(), tone_skipped(), None)
+            let drawn = match format {
+                ImageFormat::Png => {
+                    let t = Instant::now();
+                    let (rgba, sum) = cpu::tone_map(&opts.tone, &hdr)?;
+                    Drawn {
+                        pixels: Pixels::Rgba8(rgba),
+                        shade,
+                        tonemap: StageReport::ran(ms_since(t)),
+                        log_sum: Some(sum),
+                    }
+                }
+                ImageFormat::Exr => Drawn {
+                    pixels: Pixels::Hdr(hdr),
+                    shade,
+                    tonemap: tone_skipped(),
+                    log_sum: None,
+                },
             };
-            (baked, hit, hdr, rgba, grid, shade, tonemap, log_sum)
+            (baked, hit, grid, drawn)
         }
     };
-    progress.done("shade", shade.ms.unwrap_or(0.0), "");
-    match format {
-        ImageFormat::Png => write_rgba8(output, &rgba, view.width, view.height)?,
-        ImageFormat::Exr => write_exr(output, &hdr, view.width, view.height)?,
+    progress.done("shade", drawn.shade.ms.unwrap_or(0.0), "");
+    match &drawn.pixels {
+        Pixels::Rgba8(rgba) => write_rgba8(output, rgba, view.width, view.height)?,
+        Pixels::Hdr(hdr) => write_exr(output, hdr, view.width, view.height)?,
     }
     let stages = Stages {
         grid,
         photons: baked.photons,
         binning: baked.binning,
         em: baked.em,
-        shade,
-        tonemap,
+        shade: drawn.shade,
+        tonemap: drawn.tonemap,
     };
-    Ok((stages, hit, log_sum.map_or(0.0, crate::tone::log_average)))
+    Ok((
+        stages,
+        hit,
+        drawn.log_sum.map_or(0.0, crate::tone::log_average),
+    ))
 }
 
 /// `--method photons`: the stored photons seen from the camera (thesis Fig. 3.1).
@@ -332,9 +373,10 @@ fn render_photons(
     gpu: Option<&Gpu>,
     opts: &Options,
     view: &View,
+    format: ImageFormat,
     output: &Path,
 ) -> Result<Stages> {
-    if ImageFormat::of(output)? != ImageFormat::Png {
+    if format != ImageFormat::Png {
         return Err(Error::Invalid(
             "--method photons writes PNG only (it shows where photons landed, not radiance)".into(),
         ));
