@@ -351,10 +351,10 @@ pub fn frame(
             let frame_scene = FrameScene::upload(gpu, scene, &lobes)?;
             let buffers = frame_scene.buffers(&on_gpu);
             let pipelines = SplatPipelines::new(gpu)?;
+            let params = shade_params(scene, &lobes, cfg);
             for (w, h) in FRAME_SIZES {
                 let view = View::new(&scene.camera, w, h);
                 let cam = camera_uniform(&view, scene.bounds(), cfg);
-                let params = shade_params(scene, &lobes, cfg, &view);
                 let targets = pipelines.targets(gpu, w, h)?;
                 let mut times = Vec::new();
                 let mut pass_ms = Vec::new();
@@ -380,10 +380,10 @@ pub fn frame(
         None => {
             let grid = cpu::build_grid(&grid_params(&scene.splats, &scene.grid)?, &scene.splats)?;
             let lobes = bake(scene, BakeDevice::Cpu(&grid), &progress)?.lobes;
+            let params = shade_params(scene, &lobes, cfg);
             for (w, h) in FRAME_SIZES {
                 let view = View::new(&scene.camera, w, h);
                 let cam = camera_uniform(&view, scene.bounds(), cfg);
-                let params = shade_params(scene, &lobes, cfg, &view);
                 let mut times = Vec::new();
                 for _ in 0..=TIMED_FRAMES {
                     let t = Instant::now();

@@ -76,7 +76,8 @@ pub fn shadow_bias(splats: &[Splat]) -> f32 {
     (0.5 * sum / splats.len().max(1) as f64) as f32
 }
 
-pub fn shade_params(scene: &Scene, lobes: &LobeMap, cfg: &FrameConfig, view: &View) -> ShadeParams {
+/// The shading uniform of a bake; the image size comes with the camera.
+pub fn shade_params(scene: &Scene, lobes: &LobeMap, cfg: &FrameConfig) -> ShadeParams {
     ShadeParams {
         lobes_per_splat: lobes.lobes_per_splat,
         family: scene.bake.family.code(),
@@ -84,8 +85,7 @@ pub fn shade_params(scene: &Scene, lobes: &LobeMap, cfg: &FrameConfig, view: &Vi
         area_samples: cfg.area_samples,
         shadow_bias: shadow_bias(&scene.splats),
         seed: cfg.seed,
-        width: view.width,
-        height: view.height,
+        ..Default::default()
     }
 }
 

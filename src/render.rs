@@ -282,7 +282,7 @@ fn render_lobes(
         Some(gpu) => {
             let on_gpu = GpuScene::upload(gpu, scene)?;
             let (baked, hit) = bake_or_load(scene, BakeDevice::Gpu(gpu, &on_gpu), opts, &progress)?;
-            let params = shade_params(scene, &baked.lobes, &opts.frame, view);
+            let params = shade_params(scene, &baked.lobes, &opts.frame);
             let t = Instant::now();
             let pipelines = SplatPipelines::new(gpu)?;
             let targets = pipelines.targets(gpu, view.width, view.height)?;
@@ -322,7 +322,7 @@ fn render_lobes(
                 cpu::build_grid(&grid_params(&scene.splats, &scene.grid)?, &scene.splats)?;
             let grid = StageReport::ran(ms_since(t));
             let (baked, hit) = bake_or_load(scene, BakeDevice::Cpu(&host_grid), opts, &progress)?;
-            let params = shade_params(scene, &baked.lobes, &opts.frame, view);
+            let params = shade_params(scene, &baked.lobes, &opts.frame);
             let t = Instant::now();
             let hdr = cpu_frame(scene, &host_grid, &baked.lobes, &cam, &params);
             let shade = StageReport::ran(ms_since(t));

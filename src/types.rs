@@ -297,8 +297,8 @@ pub struct ShadeParams {
     /// Shadow rays start this far off the surface, along its normal (scene units).
     pub shadow_bias: f32,
     pub seed: u32,
-    pub width: u32,
-    pub height: u32,
+    pub _pad0: u32,
+    pub _pad1: u32,
 }
 
 /// The uniform grid over the splats: `cell = floor((p - origin) / cell_size)`, cells numbered

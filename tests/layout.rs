@@ -169,8 +169,8 @@ fn rust_layouts() -> Vec<RustLayout> {
             area_samples,
             shadow_bias,
             seed,
-            width,
-            height
+            _pad0,
+            _pad1
         }),
         layout!(GridParams {
             origin,

@@ -56,7 +56,7 @@ fn gpu_frame(
     let pipelines = SplatPipelines::new(gpu).unwrap();
     let targets = pipelines.targets(gpu, view.width, view.height).unwrap();
     let cam = camera_uniform(view, scene.bounds(), cfg);
-    let params = shade_params(scene, lobes, cfg, view);
+    let params = shade_params(scene, lobes, cfg);
     let mut encoder = gpu.encoder("test frame");
     pipelines
         .draw(
@@ -81,13 +81,7 @@ fn cpu_hdr(
     cfg: &FrameConfig,
 ) -> Vec<[f32; 4]> {
     let cam = camera_uniform(view, scene.bounds(), cfg);
-    cpu_frame(
-        scene,
-        grid,
-        lobes,
-        &cam,
-        &shade_params(scene, lobes, cfg, view),
-    )
+    cpu_frame(scene, grid, lobes, &cam, &shade_params(scene, lobes, cfg))
 }
 
 /// The glossy Cornell box, baked once on the CPU and drawn from two views by both paths.

@@ -153,10 +153,11 @@ fn emitted(d: vec3<f32>, t_surface: f32) -> vec3<f32> {
 fn main(@builtin(workgroup_id) wg: vec3<u32>, @builtin(num_workgroups) num_wg: vec3<u32>,
         @builtin(local_invocation_index) lid: u32) {
     let i = linear_workgroup(wg, num_wg) * WG + lid;
-    if i >= params.width * params.height {
+    let size = vec2<u32>(cam.size);
+    if i >= size.x * size.y {
         return;
     }
-    let px = vec2<u32>(i % params.width, i / params.width);
+    let px = vec2<u32>(i % size.x, i / size.x);
     let d = pixel_ray(cam, vec2<f32>(px) + 0.5);
     let acc = textureLoad(radiance_sum, px, 0);
     var color = vec3<f32>(0.0);

@@ -171,10 +171,11 @@ pub fn shade(
     geo: &Geometry,
 ) -> Vec<[f32; 4]> {
     let eye = Vec3::from(cam.eye);
-    (0..params.width * params.height)
+    let (width, height) = (cam.size[0] as u32, cam.size[1] as u32);
+    (0..width * height)
         .into_par_iter()
         .map(|i| {
-            let px = Vec2::new((i % params.width) as f32, (i / params.width) as f32);
+            let px = Vec2::new((i % width) as f32, (i / width) as f32);
             let d = pixel_ray(cam, px + 0.5);
             let acc = Vec4::from(sums.radiance[i as usize]);
             let mut color = Vec3::ZERO;

@@ -170,8 +170,8 @@ struct ShadeParams {
     area_samples: u32,
     shadow_bias: f32,
     seed: u32,
-    width: u32,
-    height: u32,
+    _pad0: u32,
+    _pad1: u32,
 }
 
 struct GridParams {
