@@ -1,5 +1,5 @@
 //! Mirror of `wgsl/splat_visibility.wgsl`, with the rasterizer the GPU has in hardware: the
-//! image is cut into tiles, each tile lists the front-facing splats whose projected quad
+//! image is cut into tiles, each tile lists the front-facing splats whose projected triangle
 //! touches it in draw order, and each tile runs its splats over its pixels in that order, so
 //! every pixel sees the same fragments in the same order as on the GPU.
 // `!(x < y)` is meant: NaN must fail these tests, as it does in the WGSL twin.
@@ -9,7 +9,8 @@ use glam::{Vec2, Vec3};
 use rayon::prelude::*;
 
 use crate::shared::splat::{
-    clip_position, covers, faces_camera, pixel_ray, quad_corner, splat_hit, view_depth,
+    SPLAT_CORNERS, clip_position, covers, faces_camera, pixel_ray, splat_corner, splat_hit,
+    view_depth,
 };
 use crate::types::{Camera, Splat};
 
@@ -22,7 +23,7 @@ pub struct Tiles {
     pub height: u32,
     pub cols: u32,
     pub lists: Vec<Vec<u32>>,
-    /// Each splat's `quad_bounds`, computed once for both passes.
+    /// Each splat's `splat_bounds`, computed once for both passes.
     pub bounds: Vec<Option<Rect>>,
 }
 
@@ -35,17 +36,17 @@ pub struct Rect {
     pub y1: u32,
 }
 
-/// The pixels a splat's quad may cover: the bounds of its projected corners, or the whole
-/// image when a corner lies behind the near plane (the GPU clips such a quad there; the
+/// The pixels a splat's triangle may cover: the bounds of its projected corners, or the whole
+/// image when a corner lies behind the near plane (the GPU clips such a triangle there; the
 /// per-pixel disk test decides either way). `None` for a back-facing splat.
-pub fn quad_bounds(cam: &Camera, s: &Splat) -> Option<Rect> {
+pub fn splat_bounds(cam: &Camera, s: &Splat) -> Option<Rect> {
     if !faces_camera(s, Vec3::from(cam.eye)) {
         return None;
     }
     let size = Vec2::from(cam.size);
     let (mut lo, mut hi) = (Vec2::splat(f32::MAX), Vec2::splat(f32::MIN));
-    for i in 0..4 {
-        let c = clip_position(cam, quad_corner(s, i));
+    for i in 0..SPLAT_CORNERS {
+        let c = clip_position(cam, splat_corner(s, i));
         if !(c.w > cam.near) {
             lo = Vec2::ZERO;
             hi = size;
@@ -70,7 +71,7 @@ pub fn bin_tiles(cam: &Camera, splats: &[Splat]) -> Tiles {
     let (width, height) = (cam.size[0] as u32, cam.size[1] as u32);
     let cols = width.div_ceil(TILE);
     let rows = height.div_ceil(TILE);
-    let bounds: Vec<Option<Rect>> = splats.par_iter().map(|s| quad_bounds(cam, s)).collect();
+    let bounds: Vec<Option<Rect>> = splats.par_iter().map(|s| splat_bounds(cam, s)).collect();
     let mut lists = vec![Vec::new(); (cols * rows) as usize];
     for (i, r) in bounds.iter().enumerate() {
         let Some(r) = r else { continue };

@@ -1,5 +1,5 @@
 //! The splat passes on the device (DESIGN.md §8): `splat_visibility` and `splat_attributes`
-//! as render passes over instanced quads, then `shade` as a compute pass over the blended
+//! as render passes over instanced triangles, then `shade` as a compute pass over the blended
 //! targets. The pipelines are built once per device; the targets once per image size, so a
 //! viewer or a benchmark draws frame after frame with nothing but a new camera uniform.
 
@@ -10,6 +10,7 @@ use crate::cpu::shade::WG;
 use crate::em::LobeMap;
 use crate::error::{Error, Result};
 use crate::scene::Scene;
+use crate::shared::splat::SPLAT_CORNERS;
 use crate::types::{Camera, ShadeParams};
 
 /// The format of the blended targets: f32 where the device can blend it, else f16.
@@ -409,7 +410,7 @@ impl SplatPipelines {
             });
             pass.set_pipeline(&self.visibility);
             pass.set_bind_group(0, &vis_group, &[]);
-            pass.draw(0..4, 0..scene.splat_count);
+            pass.draw(0..SPLAT_CORNERS, 0..scene.splat_count);
             return Ok(());
         }
         if pass == SplatPass::Attributes {
@@ -449,7 +450,7 @@ impl SplatPipelines {
             });
             pass.set_pipeline(&self.attributes);
             pass.set_bind_group(0, &attr_group, &[]);
-            pass.draw(0..4, 0..scene.splat_count);
+            pass.draw(0..SPLAT_CORNERS, 0..scene.splat_count);
             return Ok(());
         }
         let mut frame_entries = vec![

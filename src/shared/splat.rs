@@ -1,4 +1,4 @@
-//! Twin of `wgsl/shared/splat.wgsl`: a splat's quad, a pixel's view ray, the ray–disk hit
+//! Twin of `wgsl/shared/splat.wgsl`: a splat's triangle, a pixel's view ray, the ray–disk hit
 //! with its radial weight, the reversed depth, and one lobe's specular response.
 // `!(x < y)` is meant: NaN must fail these tests, as it does in the WGSL twin.
 #![allow(clippy::neg_cmp_op_on_partial_ord)]
@@ -14,10 +14,16 @@ pub const KERNEL_SHARPNESS: f32 = 2.0;
 pub const THESIS_SCALE: f32 = 1.0;
 pub const SHADOW_RAY_BUDGET: u32 = 16_384;
 
-pub fn quad_corner(s: &Splat, i: u32) -> Vec3 {
+pub const SPLAT_CORNERS: u32 = 3;
+const SQRT_3: f32 = 1.732_050_8;
+
+pub fn splat_corner(s: &Splat, i: u32) -> Vec3 {
     let f = frame_of(Vec3::from(s.normal));
-    let x = if i & 1 != 0 { 1.0 } else { -1.0 };
-    let y = if i & 2 != 0 { 1.0 } else { -1.0 };
+    let (x, y) = match i {
+        0 => (0.0, 2.0),
+        1 => (-SQRT_3, -1.0),
+        _ => (SQRT_3, -1.0),
+    };
     Vec3::from(s.center) + s.radius * (x * f.t + y * f.b)
 }
 
