@@ -9,6 +9,7 @@ pub mod bins;
 pub mod cache;
 pub mod camera;
 pub mod compare;
+pub mod convolution;
 pub mod cpu;
 pub mod em;
 pub mod error;
