@@ -1,11 +1,11 @@
-// Surface splatting (DESIGN.md section 8): the triangle a splat is drawn as, a pixel's view ray,
-// the ray-disk hit with its radial weight, the reversed depth, and the specular response of
+// Surface splatting (DESIGN.md section 8): the triangle a splat is drawn as, a pixel's view
+// ray, the ray-disk hit with its radial weight, the reversed depth, and the specular response of
 // one incident-light lobe (section 7). Twin: src/shared/splat.rs.
 //
 // Depth is reversed, near / z (1 at the near plane, towards 0 at infinity): a float's
 // relative precision then holds at every distance, and there is no far plane to clip at.
-// The rasterizer's interpolated depth of a splat's triangle is the depth of the disk's plane at each
-// pixel, since near / z is affine in screen space across a plane.
+// The rasterizer's interpolated depth of a splat's triangle is the depth of the disk's plane
+// at each pixel, since near / z is affine in screen space across a plane.
 
 // #import types
 // #import sampling
@@ -60,7 +60,8 @@ fn clip_position(cam: Camera, p: vec3<f32>) -> vec4<f32> {
 fn splat_vertex(cam: Camera, s: Splat, i: u32, corner: u32) -> SplatVertex {
     var out: SplatVertex;
     out.splat = i;
-    out.position = select(vec4<f32>(2.0, 2.0, 0.5, 1.0), clip_position(cam, splat_corner(s, corner)),
+    let outside = vec4<f32>(2.0, 2.0, 0.5, 1.0);
+    out.position = select(outside, clip_position(cam, splat_corner(s, corner)),
                           faces_camera(s, cam.eye));
     return out;
 }
