@@ -19,6 +19,8 @@
 //! The frame is local: the normal is +z, a lobe's axis lies in the xz plane at `angle` from
 //! the normal. Errors of a formula per lobe are relative L2 norms over view directions up to
 //! a view angle (60° and 85°) and the error of the reflected energy over the hemisphere.
+//! `ward`, `half_vector` and `reflected_pdf` are f64 twins of `shared::ward`'s
+//! `ward_specular`, `ward_half_vector` and `ward_pdf`: the reference needs the precision.
 
 use glam::DVec3;
 use rayon::prelude::*;
@@ -66,11 +68,16 @@ pub fn ward(wi: DVec3, wo: DVec3, alpha: f64) -> f64 {
 /// The thesis's lobe before normalisation: `exp(−tan²δ/β²) / (4πβ²)`, δ the angle between
 /// the normal and the half-vector of ω and the mirrored axis.
 pub fn lobe_shape(case: &Case, w: DVec3) -> f64 {
-    let h = w + case.mirror();
+    shape_about(case.mirror(), case.beta2, w)
+}
+
+/// `lobe_shape` with the mirrored axis already computed (the quadrature's inner loop).
+fn shape_about(mirror: DVec3, beta2: f64, w: DVec3) -> f64 {
+    let h = w + mirror;
     if w.z <= 0.0 || h.z <= 0.0 {
         return 0.0;
     }
-    (-tan2(h) / case.beta2).exp() / (4.0 * PI * case.beta2)
+    (-tan2(h) / beta2).exp() / (4.0 * PI * beta2)
 }
 
 /// A half-vector by Ward's map of the unit square: tan²θh = −w² ln(1 − u1), φ = 2π u2.
@@ -105,6 +112,7 @@ fn grid(n: usize) -> impl Iterator<Item = (f64, f64)> {
 /// The reference integral of one case with `n²` points per sample map.
 pub struct Reference {
     case: Case,
+    mirror: DVec3,
     n: usize,
     /// ∫_H lobe_shape dω: the lobe's density is `lobe_shape / norm`.
     pub norm: f64,
@@ -127,6 +135,7 @@ impl Reference {
             .sum();
         Reference {
             case,
+            mirror,
             n,
             norm: sum / (n * n) as f64,
         }
@@ -134,7 +143,7 @@ impl Reference {
 
     /// The lobe's unit-integral density.
     pub fn density(&self, w: DVec3) -> f64 {
-        lobe_shape(&self.case, w) / self.norm
+        shape_about(self.mirror, self.case.beta2, w) / self.norm
     }
 
     /// `I(ωo)`: the radiance towards `wo` per unit of the lobe's irradiance.
@@ -142,7 +151,7 @@ impl Reference {
         if wo.z <= 0.0 {
             return 0.0;
         }
-        let (mirror, alpha) = (self.case.mirror(), self.case.alpha);
+        let (mirror, alpha) = (self.mirror, self.case.alpha);
         let (b2, a2) = (self.case.beta2, alpha * alpha);
         let term = |w: DVec3| {
             if w.z <= 0.0 {
@@ -201,18 +210,18 @@ impl ViewGrid {
         // r(x) = π (e^{kx} − 1) / (e^k − 1) over x in [0, 1]; its first step is about a
         // tenth of the width (k found by bisection; k → 0 is the uniform grid).
         let first = (width * 0.1).min(PI / radial as f64);
-        let step0 = |k: f64| PI * ((k / radial as f64).exp() - 1.0) / (k.exp() - 1.0);
+        let radius = |k: f64, x: f64| PI * ((k * x).exp() - 1.0) / (k.exp() - 1.0);
         let (mut lo, mut hi) = (1e-6, 200.0);
         for _ in 0..100 {
             let mid = 0.5 * (lo + hi);
-            if step0(mid) > first {
+            if radius(mid, 1.0 / radial as f64) > first {
                 lo = mid;
             } else {
                 hi = mid;
             }
         }
         let k = 0.5 * (lo + hi);
-        let r_of = |x: f64| PI * ((k * x).exp() - 1.0) / (k.exp() - 1.0);
+        let r_of = |x: f64| radius(k, x);
         let centre = case.mirror();
         let t = DVec3::new(centre.z, 0.0, -centre.x);
         let b = DVec3::Y;
@@ -277,31 +286,30 @@ pub fn case_error(case: &Case, formulas: &[Formula], q: Quality) -> Vec<CaseErro
     formulas
         .iter()
         .map(|f| {
-            let mut sums = [0.0f64; 6];
+            // (∫ (formula − exact)², ∫ exact²) within each view cap; reflected energies.
+            let (mut cap60, mut cap85) = ([0.0f64; 2], [0.0f64; 2]);
+            let (mut energy, mut exact_energy) = (0.0f64, 0.0f64);
             for ((w, dw), &e) in views.points.iter().zip(&exact) {
                 if w.z <= 0.0 {
                     continue;
                 }
                 let a = f.radiance(case, *w);
-                let d2 = (a - e) * (a - e) * dw;
-                let e2 = e * e * dw;
-                if w.z >= cos60 {
-                    sums[0] += d2;
-                    sums[1] += e2;
+                let sq = [(a - e) * (a - e) * dw, e * e * dw];
+                for (cap, cos_cap) in [(&mut cap60, cos60), (&mut cap85, cos85)] {
+                    if w.z >= cos_cap {
+                        cap[0] += sq[0];
+                        cap[1] += sq[1];
+                    }
                 }
-                if w.z >= cos85 {
-                    sums[2] += d2;
-                    sums[3] += e2;
-                }
-                sums[4] += a * w.z * dw;
-                sums[5] += e * w.z * dw;
+                energy += a * w.z * dw;
+                exact_energy += e * w.z * dw;
             }
-            let ratio = |d: f64, e: f64| if e > 0.0 { (d / e).sqrt() } else { 0.0 };
+            let ratio = |[d, e]: [f64; 2]| if e > 0.0 { (d / e).sqrt() } else { 0.0 };
             CaseError {
-                l2_60: ratio(sums[0], sums[1]),
-                l2_85: ratio(sums[2], sums[3]),
-                energy: if sums[5] > 0.0 {
-                    (sums[4] - sums[5]).abs() / sums[5]
+                l2_60: ratio(cap60),
+                l2_85: ratio(cap85),
+                energy: if exact_energy > 0.0 {
+                    (energy - exact_energy).abs() / exact_energy
                 } else {
                     0.0
                 },
