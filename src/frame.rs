@@ -106,6 +106,7 @@ pub fn cpu_frame(
         &scene.materials,
         &lobes.light,
         &lobes.lobes,
+        crate::lobe_norms::lobe_norms(),
         &depth,
         &tiles,
     );

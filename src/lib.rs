@@ -17,6 +17,7 @@ pub mod frame;
 pub mod gpu;
 pub mod grid;
 pub mod info;
+pub mod lobe_norms;
 pub mod model;
 pub mod photons;
 pub mod render;

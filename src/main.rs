@@ -193,8 +193,11 @@ enum Command {
     Bench {
         #[arg(value_enum)]
         what: BenchKind,
-        #[arg(required = true)]
+        /// Scenes to measure (all kinds but `convolution`, which needs none).
         scenes: Vec<PathBuf>,
+        /// Where images the benchmark draws go (`convolution` heat maps).
+        #[arg(short, long, value_name = "DIR", default_value = ".")]
+        output: PathBuf,
         #[command(flatten)]
         bake: BakeArgs,
         #[command(flatten)]
@@ -215,6 +218,9 @@ enum BenchKind {
     Em,
     /// Frames of the baked scene at 512² and 1920×1080: frame_ms, fps, shade and tone map.
     Frame,
+    /// The lobe × BRDF shading formulas against quadrature: relative L2 and energy errors
+    /// of the thesis's form and ours, with heat maps (no scene).
+    Convolution,
 }
 
 fn to_json<T: serde::Serialize>(value: &T) -> Result<serde_json::Value> {
@@ -314,13 +320,32 @@ fn run(cli: Cli) -> Result<()> {
             }
         }
         Command::Bench {
+            what: BenchKind::Convolution,
+            output,
+            json,
+            ..
+        } => {
+            let r = lobelight::convolution::convolution_bench(&output, Default::default())?;
+            if json {
+                print_json(&r)?;
+            } else {
+                println!("{r}");
+            }
+        }
+        Command::Bench {
             what,
             scenes,
             bake,
             look,
             device,
             json,
+            ..
         } => {
+            if scenes.is_empty() {
+                return Err(Error::Invalid(
+                    "bench needs at least one scene (e.g. scenes/bunny.toml)".into(),
+                ));
+            }
             let gpu = device.gpu()?;
             let mut reports = Vec::new();
             for path in &scenes {
@@ -341,6 +366,7 @@ fn run(cli: Cli) -> Result<()> {
                         let r = bench::em(&scene, gpu.as_ref(), &photons, &em)?;
                         (r.to_string(), to_json(&r)?)
                     }
+                    BenchKind::Convolution => unreachable!("handled above"),
                 };
                 if !json {
                     println!("{text}\n");

@@ -6,6 +6,7 @@
 // Twin: src/cpu/splat_attributes.rs.
 
 // #import splat
+// #import lobe_brdf
 
 @group(0) @binding(0) var<uniform> cam: Camera;
 @group(0) @binding(1) var<storage, read> splats: array<Splat>;
@@ -13,6 +14,7 @@
 @group(0) @binding(3) var<storage, read> materials: array<Material>;
 @group(0) @binding(4) var<storage, read> splat_light: array<SplatLight>;
 @group(0) @binding(5) var<storage, read> lobes: array<Lobe>;
+@group(0) @binding(6) var<storage, read> lobe_norms: array<f32>;
 
 // Each target holds weighted sums; w is the kernel weight, rho_s the mean specular albedo.
 struct Attributes {
@@ -26,6 +28,16 @@ struct Attributes {
     @location(3) specular: vec4<f32>,
 }
 
+// The hemispherical integral of a lobe of width beta2 about axis (lobe_norms).
+fn lobe_norm(n: vec3<f32>, axis: vec3<f32>, beta2: f32) -> f32 {
+    let l = norm_lookup(dot(n, axis), beta2);
+    let i = l.index;
+    let row = NORM_COS_NODES;
+    let lo = lobe_norms[i] + l.fx * (lobe_norms[i + 1u] - lobe_norms[i]);
+    let hi = lobe_norms[i + row] + l.fx * (lobe_norms[i + row + 1u] - lobe_norms[i + row]);
+    return lo + l.fy * (hi - lo);
+}
+
 // Radiance leaving splat `i` towards wo by the light its photons brought (thesis 3.6.1).
 fn indirect(i: u32, s: Splat, m: Material, wo: vec3<f32>) -> vec3<f32> {
     let light = splat_light[i];
@@ -34,7 +46,8 @@ fn indirect(i: u32, s: Splat, m: Material, wo: vec3<f32>) -> vec3<f32> {
     for (var k = 0u; k < light.lobes; k++) {
         let lobe = lobes[first + k];
         let beta2 = lobe_beta2(params.family, lobe.sharpness);
-        spec += lobe.irradiance * lobe_specular(s.normal, wo, lobe.axis, m.roughness, beta2);
+        let norm = lobe_norm(s.normal, lobe.axis, beta2);
+        spec += lobe.irradiance * lobe_specular(s.normal, wo, lobe.axis, m.roughness, beta2, norm);
     }
     return s.diffuse * (light.irradiance / PI) + m.specular * spec;
 }

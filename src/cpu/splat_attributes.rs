@@ -6,10 +6,9 @@
 use glam::{Vec3, Vec4};
 
 use super::splat_visibility::{TILE, Tiles, gather, raster};
+use crate::shared::lobe_brdf::{lobe_specular, norm_at, norm_lookup};
 use crate::shared::sampling::PI;
-use crate::shared::splat::{
-    covers, lobe_beta2, lobe_specular, pixel_ray, splat_hit, splat_weight, view_depth,
-};
+use crate::shared::splat::{covers, lobe_beta2, pixel_ray, splat_hit, splat_weight, view_depth};
 use crate::types::{Camera, Lobe, Material, ShadeParams, Splat, SplatLight};
 
 /// The four blended targets of the attribute pass (see the WGSL file for what each holds).
@@ -22,10 +21,17 @@ pub struct Attributes {
 }
 
 #[allow(clippy::too_many_arguments)]
+/// The hemispherical integral of a lobe of width `beta2` about `axis` (`lobe_norms`).
+fn lobe_norm(lobe_norms: &[f32], n: Vec3, axis: Vec3, beta2: f32) -> f32 {
+    norm_at(lobe_norms, norm_lookup(n.dot(axis), beta2))
+}
+
+#[allow(clippy::too_many_arguments)]
 fn indirect(
     params: &ShadeParams,
     splat_light: &[SplatLight],
     lobes: &[Lobe],
+    lobe_norms: &[f32],
     i: u32,
     s: &Splat,
     m: &Material,
@@ -37,14 +43,9 @@ fn indirect(
     for k in 0..light.lobes {
         let lobe = &lobes[(first + k) as usize];
         let beta2 = lobe_beta2(params.family, lobe.sharpness);
-        spec += Vec3::from(lobe.irradiance)
-            * lobe_specular(
-                Vec3::from(s.normal),
-                wo,
-                Vec3::from(lobe.axis),
-                m.roughness,
-                beta2,
-            );
+        let (n, axis) = (Vec3::from(s.normal), Vec3::from(lobe.axis));
+        let norm = lobe_norm(lobe_norms, n, axis, beta2);
+        spec += Vec3::from(lobe.irradiance) * lobe_specular(n, wo, axis, m.roughness, beta2, norm);
     }
     Vec3::from(s.diffuse) * (Vec3::from(light.irradiance) / PI) + Vec3::from(m.specular) * spec
 }
@@ -57,6 +58,7 @@ pub fn splat_attributes(
     materials: &[Material],
     splat_light: &[SplatLight],
     lobes: &[Lobe],
+    lobe_norms: &[f32],
     depth: &[f32],
     tiles: &Tiles,
 ) -> Attributes {
@@ -85,7 +87,7 @@ pub fn splat_attributes(
             let m = &materials[s.material as usize];
             let gloss = (m.specular[0] + m.specular[1] + m.specular[2]) * (1.0 / 3.0);
             let out = [
-                w * indirect(params, splat_light, lobes, i, s, m, -d).extend(1.0),
+                w * indirect(params, splat_light, lobes, lobe_norms, i, s, m, -d).extend(1.0),
                 w * Vec3::from(s.normal).extend(h.t),
                 w * Vec3::from(s.diffuse).extend(gloss * m.roughness),
                 w * Vec3::from(m.specular).extend(gloss),

@@ -36,6 +36,8 @@ pub struct SceneBuffers<'a> {
     pub materials: &'a wgpu::Buffer,
     pub splat_light: &'a wgpu::Buffer,
     pub lobes: &'a wgpu::Buffer,
+    /// `lobe_norms::lobe_norms()`, the table the shading divides each lobe by.
+    pub lobe_norms: &'a wgpu::Buffer,
     pub lights: &'a wgpu::Buffer,
     /// Bind group 1 of tracing stages (`GpuScene::geometry`).
     pub geometry: [&'a wgpu::Buffer; 5],
@@ -69,6 +71,7 @@ impl SplatPass {
 pub struct FrameScene {
     pub splat_light: wgpu::Buffer,
     pub lobes: wgpu::Buffer,
+    pub lobe_norms: wgpu::Buffer,
     pub lights: wgpu::Buffer,
 }
 
@@ -77,6 +80,7 @@ impl FrameScene {
         Ok(FrameScene {
             splat_light: gpu.storage("splat light", &lobes.light)?,
             lobes: gpu.storage("lobes", &lobes.lobes)?,
+            lobe_norms: gpu.storage("lobe norms", crate::lobe_norms::lobe_norms())?,
             lights: gpu.storage("lights", &scene.lights)?,
         })
     }
@@ -89,6 +93,7 @@ impl FrameScene {
             materials: &on_gpu.materials,
             splat_light: &self.splat_light,
             lobes: &self.lobes,
+            lobe_norms: &self.lobe_norms,
             lights: &self.lights,
             geometry: on_gpu.geometry(),
         }
@@ -423,6 +428,7 @@ impl SplatPipelines {
                     scene.materials,
                     scene.splat_light,
                     scene.lobes,
+                    scene.lobe_norms,
                 ],
             );
             let color: Vec<Option<wgpu::RenderPassColorAttachment>> = out

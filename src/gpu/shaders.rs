@@ -74,6 +74,7 @@ pub const SHARED: &[WgslFile] = &[
     shared!("lobes"),
     shared!("tone"),
     shared!("splat"),
+    shared!("lobe_brdf"),
 ];
 
 pub fn stage(name: &str) -> Option<&'static WgslFile> {

@@ -1,17 +1,15 @@
 //! Twin of `wgsl/shared/splat.wgsl`: a splat's triangle, a pixel's view ray, the ray–disk hit
-//! with its radial weight, the reversed depth, and one lobe's specular response.
+//! with its radial weight, the reversed depth, and a lobe's width in the form the shading takes.
 // `!(x < y)` is meant: NaN must fail these tests, as it does in the WGSL twin.
 #![allow(clippy::neg_cmp_op_on_partial_ord)]
 
 use glam::{Vec2, Vec3, Vec4};
 
 use super::lobes::FAMILY_WARD;
-use super::sampling::{PI, frame_of};
-use super::ward::tan2_to_normal;
+use super::sampling::frame_of;
 use crate::types::{Camera, Splat};
 
 pub const KERNEL_SHARPNESS: f32 = 2.0;
-pub const THESIS_SCALE: f32 = 1.0;
 pub const SHADOW_RAY_BUDGET: u32 = 16_384;
 
 pub const SPLAT_CORNERS: u32 = 3;
@@ -82,14 +80,4 @@ pub fn splat_weight(q: f32) -> f32 {
 
 pub fn lobe_beta2(family: u32, sharpness: f32) -> f32 {
     (if family == FAMILY_WARD { 1.0 } else { 0.5 }) / sharpness
-}
-
-pub fn lobe_specular(n: Vec3, wo: Vec3, axis: Vec3, alpha: f32, beta2: f32) -> f32 {
-    let h = wo + axis;
-    let ch = n.dot(h);
-    if !(ch > 0.0) {
-        return 0.0;
-    }
-    let s2 = alpha * alpha + beta2;
-    THESIS_SCALE * (-tan2_to_normal(n, h, ch) / s2).exp() / (4.0 * PI * s2)
 }

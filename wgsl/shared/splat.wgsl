@@ -1,6 +1,6 @@
 // Surface splatting (DESIGN.md section 8): the triangle a splat is drawn as, a pixel's view
-// ray, the ray-disk hit with its radial weight, the reversed depth, and the specular response of
-// one incident-light lobe (section 7). Twin: src/shared/splat.rs.
+// ray, the ray-disk hit with its radial weight, the reversed depth, and a lobe's width in the
+// form the shading takes (section 7). Twin: src/shared/splat.rs.
 //
 // Depth is reversed, near / z (1 at the near plane, towards 0 at infinity): a float's
 // relative precision then holds at every distance, and there is no far plane to clip at.
@@ -15,10 +15,6 @@
 // The radial kernel exp(-KERNEL_SHARPNESS q) of q = d^2 / r^2: 1 at the centre, e^-2 at
 // the rim, so a pixel that only rims cover still gets a well-defined normalised value.
 const KERNEL_SHARPNESS: f32 = 2.0;
-
-// The thesis divided its lobe-times-BRDF formula by an empirical 1.81; under exact
-// definitions the best global scale is about 1 (DESIGN.md section 7), so it is left out.
-const THESIS_SCALE: f32 = 1.0;
 
 // Shadow rays spend at most this many grid steps and disk tests (see trace.wgsl).
 const SHADOW_RAY_BUDGET: u32 = 16384u;
@@ -105,18 +101,4 @@ fn splat_weight(q: f32) -> f32 {
 // exp(-(theta / 2)^2 / beta^2) (its half-vector angle is half the deviation) at 1 / (2 k).
 fn lobe_beta2(family: u32, sharpness: f32) -> f32 {
     return select(0.5, 1.0, family == FAMILY_WARD) / sharpness;
-}
-
-// The thesis's closed form of the Ward lobe (roughness alpha) convolved with a lobe of
-// width beta^2 around `axis` (the direction light comes from), seen along `wo`, per unit
-// of the lobe's irradiance: exp(-tan^2 d / (a^2 + b^2)) / (4 pi (a^2 + b^2)), d the angle
-// between n and the half-vector of wo and the axis.
-fn lobe_specular(n: vec3<f32>, wo: vec3<f32>, axis: vec3<f32>, alpha: f32, beta2: f32) -> f32 {
-    let h = wo + axis;
-    let ch = dot(n, h);
-    if !(ch > 0.0) {
-        return 0.0;
-    }
-    let s2 = alpha * alpha + beta2;
-    return THESIS_SCALE * exp(-tan2_to_normal(n, h, ch) / s2) / (4.0 * PI * s2);
 }

@@ -23,8 +23,18 @@
 //! `ward_specular`, `ward_half_vector` and `ward_pdf`: the reference needs the precision.
 
 use glam::DVec3;
-use rayon::prelude::*;
+
+use crate::lobe_norms::lobe_norms;
+use crate::shared::lobe_brdf::{lobe_specular, norm_at, norm_lookup};
 use std::f64::consts::PI;
+
+mod bench;
+mod errors;
+
+pub use bench::{ConvolutionBench, StudyGrid, convolution_bench};
+pub use errors::{
+    CaseError, Quality, Summary, ViewGrid, case_error, errors, study_grid, summary, thesis_grid,
+};
 
 /// One light lobe of the thesis's (Ward-like) family on a surface of roughness `alpha`.
 #[derive(Clone, Copy, Debug, PartialEq)]
@@ -63,6 +73,17 @@ pub fn ward(wi: DVec3, wo: DVec3, alpha: f64) -> f64 {
     let a2 = alpha * alpha;
     let hi = h.dot(wi);
     (-tan2(h) / a2).exp() / (4.0 * PI * a2 * hi * hi * h.z.powi(4))
+}
+
+/// Dür's Ward specular lobe without ρs, `exp(−tan²θh/α²) / (4π α² cos θi cos θo)`, which
+/// the thesis integrated against (`shared::ward::ward_specular_dur` in f64).
+pub fn ward_dur(wi: DVec3, wo: DVec3, alpha: f64) -> f64 {
+    if wi.z <= 0.0 || wo.z <= 0.0 {
+        return 0.0;
+    }
+    let h = (wi + wo).normalize();
+    let a2 = alpha * alpha;
+    (-tan2(h) / a2).exp() / (4.0 * PI * a2 * wi.z * wo.z)
 }
 
 /// The thesis's lobe before normalisation: `exp(−tan²δ/β²) / (4πβ²)`, δ the angle between
@@ -109,9 +130,22 @@ fn grid(n: usize) -> impl Iterator<Item = (f64, f64)> {
     (0..n * n).map(move |k| (((k % n) as f64 + 0.5) * step, ((k / n) as f64 + 0.5) * step))
 }
 
+/// What the integral stands for.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, serde::Serialize)]
+#[serde(rename_all = "snake_case")]
+pub enum Convention {
+    /// The renderer's: the lobe is a unit-integral density of irradiance and `f_s` the
+    /// bounded-albedo Ward, `I = ∫ f_s p dω`.
+    Renderer,
+    /// The thesis's §4.1: the lobe as it stands (its integral is about cos θL), Dür's Ward
+    /// and the cosine, `I = ∫ lobe_shape · f_Dür · cos θ dω`.
+    Thesis,
+}
+
 /// The reference integral of one case with `n²` points per sample map.
 pub struct Reference {
     case: Case,
+    convention: Convention,
     mirror: DVec3,
     n: usize,
     /// ∫_H lobe_shape dω: the lobe's density is `lobe_shape / norm`.
@@ -120,6 +154,10 @@ pub struct Reference {
 
 impl Reference {
     pub fn new(case: Case, n: usize) -> Reference {
+        Reference::with(case, Convention::Renderer, n)
+    }
+
+    pub fn with(case: Case, convention: Convention, n: usize) -> Reference {
         // Under the lobe's own map lobe_shape / pdf = cos³θh (h·L'): smooth, no weights.
         let mirror = case.mirror();
         let sum: f64 = grid(n)
@@ -135,6 +173,7 @@ impl Reference {
             .sum();
         Reference {
             case,
+            convention,
             mirror,
             n,
             norm: sum / (n * n) as f64,
@@ -158,10 +197,14 @@ impl Reference {
                 return 0.0;
             }
             let pdf = reflected_pdf(w, mirror, b2) + reflected_pdf(w, wo, a2);
-            if pdf > 0.0 {
-                ward(w, wo, alpha) * self.density(w) / pdf
-            } else {
-                0.0
+            if pdf <= 0.0 {
+                return 0.0;
+            }
+            match self.convention {
+                Convention::Renderer => ward(w, wo, alpha) * self.density(w) / pdf,
+                Convention::Thesis => {
+                    ward_dur(w, wo, alpha) * w.z * shape_about(mirror, b2, w) / pdf
+                }
             }
         };
         let sum: f64 = grid(self.n)
@@ -180,6 +223,9 @@ pub enum Formula {
     /// The thesis's widened lobe `exp(−tan²δ/(α²+β²)) / (4π(α²+β²))` divided by `scale`
     /// (the thesis used 1.81), δ the angle between the normal and the half-vector of ωo and L.
     Thesis { scale: f64 },
+    /// The renderer's shading, `shared::lobe_brdf::lobe_specular` (f32) with the norm from
+    /// `lobe_norms`: what the GPU and CPU frames compute.
+    Ours,
 }
 
 impl Formula {
@@ -193,187 +239,13 @@ impl Formula {
                 let s2 = case.alpha * case.alpha + case.beta2;
                 (-tan2(h) / s2).exp() / (4.0 * PI * s2 * scale)
             }
-        }
-    }
-}
-
-/// View directions for the errors of one case: a polar grid around the mirror direction,
-/// radii growing geometrically from a fraction of the response's width out to π, so sharp
-/// and broad responses are both resolved. Each point has its solid angle.
-pub struct ViewGrid {
-    pub points: Vec<(DVec3, f64)>,
-}
-
-impl ViewGrid {
-    pub fn new(case: &Case, radial: usize, around: usize) -> ViewGrid {
-        let width = 2.0 * (case.alpha * case.alpha + case.beta2).sqrt();
-        // r(x) = π (e^{kx} − 1) / (e^k − 1) over x in [0, 1]; its first step is about a
-        // tenth of the width (k found by bisection; k → 0 is the uniform grid).
-        let first = (width * 0.1).min(PI / radial as f64);
-        let radius = |k: f64, x: f64| PI * ((k * x).exp() - 1.0) / (k.exp() - 1.0);
-        let (mut lo, mut hi) = (1e-6, 200.0);
-        for _ in 0..100 {
-            let mid = 0.5 * (lo + hi);
-            if radius(mid, 1.0 / radial as f64) > first {
-                lo = mid;
-            } else {
-                hi = mid;
+            Formula::Ours => {
+                let (n, axis) = (glam::Vec3::Z, case.axis().as_vec3());
+                let beta2 = case.beta2 as f32;
+                let norm = norm_at(lobe_norms(), norm_lookup(axis.z, beta2));
+                let (wo, alpha) = (wo.as_vec3(), case.alpha as f32);
+                lobe_specular(n, wo, axis, alpha, beta2, norm) as f64
             }
         }
-        let k = 0.5 * (lo + hi);
-        let r_of = |x: f64| radius(k, x);
-        let centre = case.mirror();
-        let t = DVec3::new(centre.z, 0.0, -centre.x);
-        let b = DVec3::Y;
-        let mut points = Vec::with_capacity(radial * around);
-        for i in 0..radial {
-            let (r0, r1) = (
-                r_of(i as f64 / radial as f64),
-                r_of((i + 1) as f64 / radial as f64),
-            );
-            let r = 0.5 * (r0 + r1);
-            // Solid angle of the ring, split evenly: 2π (cos r0 − cos r1) / around.
-            let ring = 2.0 * PI * (r0.cos() - r1.cos()) / around as f64;
-            for j in 0..around {
-                let phi = 2.0 * PI * (j as f64 + 0.5) / around as f64;
-                let w = r.cos() * centre + r.sin() * (phi.cos() * t + phi.sin() * b);
-                points.push((w, ring));
-            }
-        }
-        ViewGrid { points }
     }
-}
-
-/// The errors of a formula on one case.
-#[derive(Clone, Copy, Debug, Default, PartialEq, serde::Serialize)]
-pub struct CaseError {
-    /// Relative L2 error over view angles up to 60°.
-    pub l2_60: f64,
-    /// Relative L2 error over view angles up to 85°.
-    pub l2_85: f64,
-    /// |reflected energy of the formula − of the integral| / that of the integral.
-    pub energy: f64,
-}
-
-/// Quadrature sizes: points per sample map edge, view rings and points per ring.
-#[derive(Clone, Copy, Debug)]
-pub struct Quality {
-    pub inner: usize,
-    pub radial: usize,
-    pub around: usize,
-}
-
-impl Default for Quality {
-    fn default() -> Quality {
-        Quality {
-            inner: 32,
-            radial: 48,
-            around: 32,
-        }
-    }
-}
-
-pub fn case_error(case: &Case, formulas: &[Formula], q: Quality) -> Vec<CaseError> {
-    let reference = Reference::new(*case, q.inner);
-    let views = ViewGrid::new(case, q.radial, q.around);
-    let exact: Vec<f64> = views
-        .points
-        .iter()
-        .map(|(w, _)| reference.radiance(*w))
-        .collect();
-    let cos60 = (60f64).to_radians().cos();
-    let cos85 = (85f64).to_radians().cos();
-    formulas
-        .iter()
-        .map(|f| {
-            // (∫ (formula − exact)², ∫ exact²) within each view cap; reflected energies.
-            let (mut cap60, mut cap85) = ([0.0f64; 2], [0.0f64; 2]);
-            let (mut energy, mut exact_energy) = (0.0f64, 0.0f64);
-            for ((w, dw), &e) in views.points.iter().zip(&exact) {
-                if w.z <= 0.0 {
-                    continue;
-                }
-                let a = f.radiance(case, *w);
-                let sq = [(a - e) * (a - e) * dw, e * e * dw];
-                for (cap, cos_cap) in [(&mut cap60, cos60), (&mut cap85, cos85)] {
-                    if w.z >= cos_cap {
-                        cap[0] += sq[0];
-                        cap[1] += sq[1];
-                    }
-                }
-                energy += a * w.z * dw;
-                exact_energy += e * w.z * dw;
-            }
-            let ratio = |[d, e]: [f64; 2]| if e > 0.0 { (d / e).sqrt() } else { 0.0 };
-            CaseError {
-                l2_60: ratio(cap60),
-                l2_85: ratio(cap85),
-                energy: if exact_energy > 0.0 {
-                    (energy - exact_energy).abs() / exact_energy
-                } else {
-                    0.0
-                },
-            }
-        })
-        .collect()
-}
-
-/// Errors over many cases, in parallel; `out[c][f]` is case c under formula f.
-pub fn errors(cases: &[Case], formulas: &[Formula], q: Quality) -> Vec<Vec<CaseError>> {
-    cases
-        .par_iter()
-        .map(|c| case_error(c, formulas, q))
-        .collect()
-}
-
-/// What `bench convolution` prints per formula: quantiles of the per-lobe errors.
-#[derive(Clone, Copy, Debug, Default, PartialEq, serde::Serialize)]
-pub struct Summary {
-    pub median: f64,
-    pub p95: f64,
-    pub max: f64,
-    pub max_to_85: f64,
-    pub energy_error: f64,
-    pub energy_error_p95: f64,
-}
-
-fn quantile(values: &mut [f64], q: f64) -> f64 {
-    if values.is_empty() {
-        return 0.0;
-    }
-    values.sort_by(f64::total_cmp);
-    let i = ((values.len() - 1) as f64 * q).round() as usize;
-    values[i]
-}
-
-pub fn summary(errors: &[CaseError]) -> Summary {
-    let mut l2: Vec<f64> = errors.iter().map(|e| e.l2_60).collect();
-    let mut l2_85: Vec<f64> = errors.iter().map(|e| e.l2_85).collect();
-    let mut energy: Vec<f64> = errors.iter().map(|e| e.energy).collect();
-    Summary {
-        median: quantile(&mut l2, 0.5),
-        p95: quantile(&mut l2, 0.95),
-        max: quantile(&mut l2, 1.0),
-        max_to_85: quantile(&mut l2_85, 1.0),
-        energy_error: quantile(&mut energy, 0.5),
-        energy_error_p95: quantile(&mut energy, 0.95),
-    }
-}
-
-/// The thesis's grid (§4.1): α = 0.065, β from 0.01 to 0.5 in 21 steps, lobe angles 0–90°
-/// in 19 steps (90° itself lies in the surface and reflects nothing, so it stops at 89.9°).
-pub fn thesis_grid() -> Vec<Case> {
-    let mut cases = Vec::new();
-    for i in 0..21 {
-        let beta = 0.01 + 0.49 * i as f64 / 20.0;
-        for j in 0..19 {
-            let angle = (5.0 * j as f64).min(89.9).to_radians();
-            cases.push(Case {
-                alpha: 0.065,
-                beta2: beta * beta,
-                angle,
-            });
-        }
-    }
-    cases
 }
