@@ -11,7 +11,7 @@ use rayon::prelude::*;
 use crate::convolution::{Case, Reference};
 use crate::shared::lobe_brdf::{NORM_B2_NODES, NORM_COS_NODES, norm_node};
 
-/// Quadrature points per edge of the lobe's sample map: node values converge to < 1e-3.
+/// Quadrature points per edge of the lobe's sample map (the reference tests use 32–64).
 const NORM_QUADRATURE: usize = 64;
 
 /// `NORM_COS_NODES × NORM_B2_NODES` norms, rows of constant β².

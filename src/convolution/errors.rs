@@ -61,9 +61,6 @@ pub struct CaseError {
     pub l2_60: Option<f64>,
     /// Relative L2 error over view angles up to 85°.
     pub l2_85: Option<f64>,
-    /// The error over views up to 60° left after scaling the formula to the exact
-    /// reflected energy: its error of shape alone.
-    pub shape_60: Option<f64>,
     /// |reflected energy of the formula − of the integral| / that of the integral.
     pub energy: f64,
 }
@@ -100,6 +97,16 @@ pub fn case_error(
         .map(|(w, _)| reference.radiance(*w))
         .collect();
     let in_cap = |w: DVec3, cap: f64| w.z >= cap.to_radians().cos();
+    let energy_of = |values: &[f64]| -> f64 {
+        views
+            .points
+            .iter()
+            .zip(values)
+            .filter(|((w, _), _)| w.z > 0.0)
+            .map(|((w, dw), v)| v * w.z * dw)
+            .sum()
+    };
+    let exact_energy = energy_of(&exact);
     let total: f64 = views
         .points
         .iter()
@@ -115,37 +122,22 @@ pub fn case_error(
                 .iter()
                 .map(|(w, _)| f.radiance(case, *w))
                 .collect();
-            let energy_of = |values: &[f64]| -> f64 {
-                views
-                    .points
-                    .iter()
-                    .zip(values)
-                    .filter(|((w, _), _)| w.z > 0.0)
-                    .map(|((w, dw), v)| v * w.z * dw)
-                    .sum()
-            };
-            let (energy, exact_energy) = (energy_of(&approx), energy_of(&exact));
-            // ‖scale·formula − exact‖ / ‖exact‖ over the views within `cap` degrees; none
-            // where the cap holds under 1 % of the response's squared norm.
-            let l2 = |cap: f64, scale: f64| -> Option<f64> {
+            let energy = energy_of(&approx);
+            // ‖formula − exact‖ / ‖exact‖ over the views within `cap` degrees; none where
+            // the cap holds under 1 % of the response's squared norm.
+            let l2 = |cap: f64| -> Option<f64> {
                 let (mut d, mut e2) = (0.0, 0.0);
                 for (((w, dw), a), e) in views.points.iter().zip(&approx).zip(&exact) {
                     if w.z > 0.0 && in_cap(*w, cap) {
-                        d += (scale * a - e) * (scale * a - e) * dw;
+                        d += (a - e) * (a - e) * dw;
                         e2 += e * e * dw;
                     }
                 }
                 (e2 > 0.01 * total).then(|| (d / e2).sqrt())
             };
-            let rescale = if energy > 0.0 {
-                exact_energy / energy
-            } else {
-                1.0
-            };
             CaseError {
-                l2_60: l2(60.0, 1.0),
-                l2_85: l2(85.0, 1.0),
-                shape_60: l2(60.0, rescale),
+                l2_60: l2(60.0),
+                l2_85: l2(85.0),
                 energy: if exact_energy > 0.0 {
                     (energy - exact_energy).abs() / exact_energy
                 } else {
