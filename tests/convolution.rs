@@ -187,15 +187,16 @@ fn lobe_norm_table_interpolates_within_one_percent() {
     assert!(worst < 0.01, "{worst}");
 }
 
-/// The renderer's shading against the reference on part of the study grid (view angles up
-/// to 60°): the median error within the 2 % the study targets, the reflected energy within
-/// 1 %, and far better than the thesis's form with its factor.
+/// The renderer's shading against the reference on part of the study grid, its worst
+/// corner included (α = 0.3, lobes at 75–85°): the study's targets over view angles up to
+/// 60° (median 2 %, p95 5 %, max 10 %), the reflected energy within 1 % (median and p95),
+/// and far better than the thesis's form with its factor.
 #[test]
-fn our_form_meets_the_median_targets_on_a_subgrid() {
+fn our_form_meets_the_study_targets_on_a_subgrid() {
     let mut cases = Vec::new();
-    for alpha in [0.02, 0.15] {
+    for alpha in [0.02, 0.15, 0.3] {
         for beta in [0.02, 0.1, 0.5] {
-            for angle in [0.0f64, 25.0, 50.0, 75.0] {
+            for angle in [0.0f64, 25.0, 50.0, 75.0, 85.0] {
                 cases.push(Case {
                     alpha,
                     beta2: beta * beta,
@@ -210,6 +211,9 @@ fn our_form_meets_the_median_targets_on_a_subgrid() {
     let (thesis, ours) = (column(0), column(1));
     eprintln!("thesis {thesis:?}\nours {ours:?}");
     assert!(ours.median <= 0.02, "{ours:?}");
+    assert!(ours.p95 <= 0.05, "{ours:?}");
+    assert!(ours.max <= 0.10, "{ours:?}");
     assert!(ours.energy_error <= 0.01, "{ours:?}");
+    assert!(ours.energy_error_p95 <= 0.01, "{ours:?}");
     assert!(ours.median * 10.0 < thesis.median, "{ours:?} {thesis:?}");
 }

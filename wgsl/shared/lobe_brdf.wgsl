@@ -10,12 +10,25 @@
 // Linearised about the peak of the product, m' ~ b + J m, the Gaussians convolve in closed
 // form, exp(-b^T S^-1 b) / (pi sqrt(det S)) with S = beta^2 I + alpha^2 J J^T: the
 // view-dependent stretch of the half-vector warp. The peak is found by re-linearising there
-// (LINEARISATIONS); the product's share above the horizon (w.n > 0, linear in m about the
-// peak) and 1 / ((h.wo) cos theta_h) at the peak finish it.
+// (LINEARISATIONS). The product's share above the horizon (w.n > 0, linear in m about the
+// peak) is a normal cdf. What the Gaussian leaves out, 1 / ((h.wo) cos theta_h) and the
+// light lobe's departure from its linearisation, varies across the product for rough
+// surfaces and grazing lobes: its mean over the product's Gaussian is taken at 3 x 3
+// Gauss-Hermite nodes.
 
 // #import sampling
 
 const LINEARISATIONS: u32 = 2u;
+
+// Gauss-Hermite nodes for a standard normal, exact up to degree 5: 0 and +-sqrt(3),
+// weights 2/3 and 1/6.
+const HERMITE_NODE: f32 = 1.7320508;
+const HERMITE_WEIGHTS: array<f32, 3> = array<f32, 3>(1.0 / 6.0, 2.0 / 3.0, 1.0 / 6.0);
+
+// The most a node's exact-over-linearised light-lobe ratio may weigh: far out in a broad
+// product the linearised tail can be orders of magnitude below the lobe, and one node must
+// not carry the mean.
+const NODE_RATIO_MAX: f32 = 8.0;
 
 // The lobe-norm table: N(beta^2, cos theta_L) at NORM_COS_NODES cosines evenly over [0, 1]
 // and NORM_B2_NODES values of log2 beta^2 evenly over [NORM_LOG2_B2_MIN, 0].
@@ -117,13 +130,19 @@ fn lobe_specular(
     var det = 1.0;
     // The product's covariance in m, (2M)^-1 with M^-1 = a^2 I - a^4 J^T S^-1 J: (xx, xy, yy).
     var cov = vec3<f32>(0.0);
+    // The last linearisation, m' ~ b + J m: the nodes compare the light lobe with it.
+    var b = vec2<f32>(0.0);
+    var jx = vec2<f32>(0.0);
+    var jy = vec2<f32>(0.0);
     for (var i = 0u; i < LINEARISATIONS; i++) {
         let p = slope_point(c, o, lm);
         if !p.ok {
             return 0.0;
         }
         // m' ~ b + J m about c; S = b^2 I + a^2 J J^T (rows of J: r0, r1).
-        let b = p.mp - (p.jx * c.x + p.jy * c.y);
+        b = p.mp - (p.jx * c.x + p.jy * c.y);
+        jx = p.jx;
+        jy = p.jy;
         let r0 = vec2<f32>(p.jx.x, p.jy.x);
         let r1 = vec2<f32>(p.jx.y, p.jy.y);
         let s00 = b2 + a2 * dot(r0, r0);
@@ -151,5 +170,27 @@ fn lobe_specular(
     if v > 0.0 {
         above = normal_cdf(p.wz / sqrt(v));
     }
-    return above * p.w * exp(-q) / (4.0 * PI * sqrt(det) * norm);
+    // The mean of r(m) w(m) over the product's Gaussian N(c, cov), r the light lobe over
+    // its linearisation, at nodes c + C x with C C^T = cov (Cholesky). Nodes below the
+    // horizon or where w is undefined take the peak's w: the horizon is above's.
+    let c00 = sqrt(max(cov.x, 0.0));
+    let c10 = select(0.0, cov.y / c00, c00 > 0.0);
+    let c11 = sqrt(max(cov.z - c10 * c10, 0.0));
+    var mean = 0.0;
+    for (var i = 0u; i < 3u; i++) {
+        let xi = (f32(i) - 1.0) * HERMITE_NODE;
+        for (var j = 0u; j < 3u; j++) {
+            let xj = (f32(j) - 1.0) * HERMITE_NODE;
+            let m = c + vec2<f32>(c00 * xi, c10 * xi + c11 * xj);
+            let s = slope_point(m, o, lm);
+            var value = p.w;
+            if s.ok && s.wz > 0.0 {
+                let lin = b + jx * m.x + jy * m.y;
+                let r = exp((dot(lin, lin) - dot(s.mp, s.mp)) / b2);
+                value = min(r, NODE_RATIO_MAX) * s.w;
+            }
+            mean += HERMITE_WEIGHTS[i] * HERMITE_WEIGHTS[j] * value;
+        }
+    }
+    return above * mean * exp(-q) / (4.0 * PI * sqrt(det) * norm);
 }
