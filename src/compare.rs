@@ -1,12 +1,26 @@
 //! Image differences: the figures parity tests assert on and `lobelight compare` prints.
 //! A pixel's relative difference is |a − b|₁ / max(|b|₁, floor) over RGB, against the
 //! reference b; the floor (1e-3 of b's mean |b|₁) keeps black pixels from dividing by zero.
+//!
+//! The standard HDR metrics, over pixels and channels, against the reference b:
+//! - relMSE = mean (a − b)² / (b² + ε), ε = (0.1 · mean b)² (the usual 0.01 for an image of
+//!   mean 1, scaled so that it does not depend on the scene's units);
+//! - SMAPE = mean |a − b| / (|a| + |b| + ε'), ε' = 0.01 · mean b, in [0, 1];
+//! - PSNR = 10 log10(peak² / MSE), peak the largest channel value of b;
+//! - FLIP (NVIDIA's perceptual difference, mean over pixels, in [0, 1]) on display images:
+//!   HDR pairs are tone-mapped first, both with the reference's log-average luminance, so a
+//!   change of brightness shows.
+//!
+//! Pixels that are not finite in either image are counted (`non_finite`) and left out of
+//! every mean.
 
 use std::path::Path;
 
 use serde::Serialize;
 
 use crate::error::{Error, Result};
+use crate::shared::tone::{log_luminance, srgb_byte, tone_map};
+use crate::tone::ToneConfig;
 
 #[derive(Clone, Debug, Serialize)]
 pub struct Difference {
@@ -20,6 +34,16 @@ pub struct Difference {
     pub rmse: f64,
     /// Σ|a|₁ / Σ|b|₁ − 1: the images' difference in total energy.
     pub energy: f64,
+    /// Relative mean squared error (module docs).
+    pub rel_mse: f64,
+    /// Peak signal-to-noise ratio in dB against the reference's peak; infinite for equal images.
+    pub psnr: f64,
+    /// Symmetric mean absolute percentage error, as a fraction.
+    pub smape: f64,
+    /// Mean FLIP error of the display images; none where an image is too small to filter.
+    pub flip: Option<f64>,
+    /// Pixels left out because either image is not finite there.
+    pub non_finite: usize,
 }
 
 fn l1(p: &[f32; 4]) -> f64 {
@@ -39,6 +63,123 @@ pub fn relative(a: &[[f32; 4]], b: &[[f32; 4]]) -> Vec<f64> {
         .collect()
 }
 
+/// The HDR metrics' sums over the finite pixel pairs.
+struct HdrMetrics {
+    rel_mse: f64,
+    psnr: f64,
+    smape: f64,
+    non_finite: usize,
+}
+
+fn finite(p: &[f32; 4]) -> bool {
+    p[..3].iter().all(|v| v.is_finite())
+}
+
+fn hdr_metrics(a: &[[f32; 4]], b: &[[f32; 4]]) -> HdrMetrics {
+    let pairs: Vec<(&[f32; 4], &[f32; 4])> = a
+        .iter()
+        .zip(b)
+        .filter(|(p, q)| finite(p) && finite(q))
+        .collect();
+    let values = 3.0 * pairs.len().max(1) as f64;
+    let mean_b = pairs.iter().map(|(_, q)| l1(q)).sum::<f64>() / values;
+    let peak = pairs
+        .iter()
+        .flat_map(|(_, q)| q[..3].iter().map(|&v| v as f64))
+        .fold(0.0, f64::max);
+    let (eps_mse, eps_smape) = (
+        (0.1 * mean_b).powi(2).max(1e-30),
+        (0.01 * mean_b).max(1e-30),
+    );
+    let (mut rel_mse, mut smape, mut mse) = (0.0, 0.0, 0.0);
+    for (p, q) in &pairs {
+        for c in 0..3 {
+            let (x, y) = (p[c] as f64, q[c] as f64);
+            let d = x - y;
+            rel_mse += d * d / (y * y + eps_mse);
+            smape += d.abs() / (x.abs() + y.abs() + eps_smape);
+            mse += d * d;
+        }
+    }
+    let mse = mse / values;
+    HdrMetrics {
+        rel_mse: rel_mse / values,
+        psnr: if mse > 0.0 {
+            10.0 * (peak * peak / mse).log10()
+        } else {
+            f64::INFINITY
+        },
+        smape: smape / values,
+        non_finite: a.len() - pairs.len(),
+    }
+}
+
+/// How the images' values are to be read.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum Values {
+    /// Linear radiance (EXR): FLIP compares them tone-mapped.
+    Radiance,
+    /// Display values in [0, 1] (PNG): FLIP compares them as they are.
+    Display,
+}
+
+/// 8-bit sRGB of each pixel as FLIP reads it.
+fn display_bytes(img: &[[f32; 4]], values: Values, log_sum: glam::Vec2) -> Vec<u8> {
+    let params = ToneConfig::default().params(img.len() as u32, 0);
+    img.iter()
+        .flat_map(|p| {
+            let c = glam::Vec3::new(p[0], p[1], p[2]);
+            match values {
+                Values::Radiance => {
+                    let d = tone_map(c, log_sum, &params);
+                    [srgb_byte(d.x), srgb_byte(d.y), srgb_byte(d.z)].map(|v| v as u8)
+                }
+                Values::Display => c
+                    .to_array()
+                    .map(|v| (v.clamp(0.0, 1.0) * 255.0).round() as u8),
+            }
+        })
+        .collect()
+}
+
+/// FLIP's smallest image: its filters span several pixels at the default viewing distance.
+const FLIP_MIN_SIZE: u32 = 8;
+
+/// The mean FLIP error of `a` against the reference `b`, both `width × height`.
+pub fn flip(
+    a: &[[f32; 4]],
+    b: &[[f32; 4]],
+    width: u32,
+    height: u32,
+    values: Values,
+) -> Option<f64> {
+    if width < FLIP_MIN_SIZE || height < FLIP_MIN_SIZE || a.len() != b.len() {
+        return None;
+    }
+    let log_sum = b.iter().fold(glam::Vec2::ZERO, |s, p| {
+        s + log_luminance(glam::Vec3::new(p[0], p[1], p[2]), crate::tone::LOG_EPSILON)
+    });
+    let image = |img| {
+        nv_flip::FlipImageRgb8::with_data(width, height, &display_bytes(img, values, log_sum))
+    };
+    let map = nv_flip::flip(image(b), image(a), nv_flip::DEFAULT_PIXELS_PER_DEGREE);
+    Some(nv_flip::FlipPool::from_image(&map).mean() as f64)
+}
+
+/// Every figure of `a` against the reference `b` (`width × height` pixels each).
+pub fn difference_of(
+    a: &[[f32; 4]],
+    b: &[[f32; 4]],
+    width: u32,
+    height: u32,
+    values: Values,
+) -> Result<Difference> {
+    let mut d = difference(a, b)?;
+    d.flip = flip(a, b, width, height, values);
+    Ok(d)
+}
+
+/// The figures of `a` against the reference `b` but FLIP, which needs the image's shape.
 pub fn difference(a: &[[f32; 4]], b: &[[f32; 4]]) -> Result<Difference> {
     if a.len() != b.len() || a.is_empty() {
         return Err(Error::Invalid(format!(
@@ -47,6 +188,7 @@ pub fn difference(a: &[[f32; 4]], b: &[[f32; 4]]) -> Result<Difference> {
             b.len()
         )));
     }
+    let hdr = hdr_metrics(a, b);
     let rel = relative(a, b);
     let n = rel.len() as f64;
     let sq: f64 = a
@@ -61,7 +203,25 @@ pub fn difference(a: &[[f32; 4]], b: &[[f32; 4]]) -> Result<Difference> {
         max_relative: rel.iter().copied().fold(0.0, f64::max),
         rmse: (sq / (3.0 * n)).sqrt(),
         energy: a.iter().map(l1).sum::<f64>() / b.iter().map(l1).sum::<f64>().max(1e-300) - 1.0,
+        rel_mse: hdr.rel_mse,
+        psnr: hdr.psnr,
+        smape: hdr.smape,
+        flip: None,
+        non_finite: hdr.non_finite,
     })
+}
+
+/// How a file's values read: EXR holds radiance, anything else display values.
+pub fn values_of(path: &Path) -> Values {
+    let exr = path
+        .extension()
+        .and_then(|e| e.to_str())
+        .is_some_and(|e| e.eq_ignore_ascii_case("exr"));
+    if exr {
+        Values::Radiance
+    } else {
+        Values::Display
+    }
 }
 
 /// Reads an image (EXR keeps linear values; 8-bit formats come as [0, 1]) with its size.

@@ -177,8 +177,9 @@ enum Command {
         #[arg(long)]
         json: bool,
     },
-    /// Difference of image A against the reference B: mean relative difference, pixels
-    /// within 5 %, RMSE, energy (EXR for radiance; PNG compares display values).
+    /// Difference of image A against the reference B: relMSE, PSNR, SMAPE, FLIP, mean
+    /// relative difference, pixels within 5 %, RMSE, energy (EXR for radiance, FLIP on the
+    /// tone-mapped pair; PNG compares display values).
     Compare {
         a: PathBuf,
         b: PathBuf,
@@ -301,15 +302,29 @@ fn run(cli: Cli) -> Result<()> {
                     b.display()
                 )));
             }
-            let d = compare::difference(&pa, &pb)?;
+            let values = compare::values_of(&b);
+            if compare::values_of(&a) != values {
+                return Err(Error::Invalid(format!(
+                    "{} and {} hold different kinds of values (radiance in EXR, display values \
+                     otherwise): compare two EXR or two PNG images",
+                    a.display(),
+                    b.display()
+                )));
+            }
+            let d = compare::difference_of(&pa, &pb, wa, ha, values)?;
             if let Some(path) = heatmap {
                 compare::heatmap(&compare::relative(&pa, &pb), wa, ha, &path)?;
             }
             if json {
                 print_json(&d)?;
             } else {
+                let flip = d.flip.map_or("—".to_string(), |f| format!("{f:.4}"));
                 println!(
-                    "mean relative {:.4} %, within 5 %: {:.2} % of {} pixels, max {:.3}, rmse {:.4e}, energy {:+.4} %",
+                    "relMSE {:.4e}, PSNR {:.2} dB, SMAPE {:.4}, FLIP {flip}\n\
+                     mean relative {:.4} %, within 5 %: {:.2} % of {} pixels, max {:.3}, rmse {:.4e}, energy {:+.4} %",
+                    d.rel_mse,
+                    d.psnr,
+                    d.smape,
                     100.0 * d.mean_relative,
                     100.0 * d.within_5_percent,
                     d.pixels,

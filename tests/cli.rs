@@ -306,6 +306,11 @@ fn render_lobes_png_exr_and_cache() {
     let d = json(&["compare", &exr, &cpu_exr, "--json"]);
     assert!(d["mean_relative"].as_f64().unwrap() <= 0.01, "{d}");
     assert!(d["within_5_percent"].as_f64().unwrap() >= 0.99, "{d}");
+    // The standard metrics agree: GPU and CPU mirror differ by rounding.
+    assert!(d["rel_mse"].as_f64().unwrap() <= 1e-3, "{d}");
+    assert!(d["smape"].as_f64().unwrap() <= 0.01, "{d}");
+    assert!(d["psnr"].as_f64().unwrap() >= 40.0, "{d}");
+    assert!(d["flip"].as_f64().unwrap() <= 0.01, "{d}");
     // A bake setting changed: the cache is stale and the bake runs again.
     let v = render(&png, &["--cache", &cache, "--iterations", "3"]);
     assert_eq!(v["cache_hit"], false);
