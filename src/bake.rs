@@ -4,20 +4,21 @@
 
 use std::time::{Duration, Instant};
 
-use crate::bins::bin_params;
+use crate::bins::{PhotonBins, bin_params};
 use crate::cpu;
 use crate::em::{EmConfig, FitShape, LobeMap};
 use crate::error::Result;
 use crate::gpu::Gpu;
-use crate::gpu::bins::bin_photons;
+use crate::gpu::bins::{GpuBins, bin_photons};
 use crate::gpu::em::fit_lobes;
 use crate::gpu::photons::trace_photons;
 use crate::gpu::scene::GpuScene;
 use crate::grid::SplatGrid;
-use crate::photons::{PhotonConfig, ms_since};
+use crate::photons::{PhotonConfig, PhotonStats, ms_since};
 use crate::render::StageReport;
 use crate::scene::Scene;
 use crate::shared::trace::Geometry;
+use crate::types::EmParams;
 
 /// Where the bake runs: a device with the scene uploaded, or the CPU with the host grid.
 #[derive(Clone, Copy)]
@@ -79,64 +80,113 @@ impl Progress {
     }
 }
 
+/// Photons traced and binned, on the device that made them (`GpuBins` or `PhotonBins`):
+/// what the lobe fit and the reference renderer read.
+pub struct Binned<B> {
+    pub bins: B,
+    /// The binning's search radius and slab (`EmConfig::params`; the reference reads them).
+    pub em: EmParams,
+    pub photons: StageReport,
+    pub binning: StageReport,
+}
+
+fn binned<B>(scene: &Scene, bins: B, stats: &PhotonStats, binning_ms: f64) -> Binned<B> {
+    let em = EmConfig::from_scene(scene);
+    Binned {
+        bins,
+        em: em.params(scene.splats.len() as u32, 0, FitShape::default()),
+        photons: StageReport {
+            emitted: Some(stats.emitted),
+            stored: Some(stats.stored),
+            ..StageReport::ran(stats.trace_ms)
+        },
+        binning: StageReport::ran(binning_ms),
+    }
+}
+
+/// Traces and bins on the device.
+pub fn bins_gpu(
+    scene: &Scene,
+    gpu: &Gpu,
+    on_gpu: &GpuScene,
+    progress: &Progress,
+) -> Result<Binned<GpuBins>> {
+    let photon_cfg = PhotonConfig::from_scene(scene);
+    let bar = progress.bar(photon_cfg.photons);
+    let mut on_batch = |done: u64, _total: u64| bar.set_position(done);
+    let traced = trace_photons(gpu, scene, on_gpu, &photon_cfg, &mut on_batch)?;
+    bar.finish_and_clear();
+    let stats = traced.stats.clone();
+    progress_photons(progress, &stats);
+    let spin = progress.spinner("binning");
+    let t = Instant::now();
+    let radius = EmConfig::from_scene(scene).radius;
+    let bins = bin_photons(gpu, &traced, &bin_params(&on_gpu.grid.params, radius)?)?;
+    drop(traced);
+    let binning_ms = ms_since(t);
+    spin.finish_and_clear();
+    progress.done("binning", binning_ms, "");
+    Ok(binned(scene, bins, &stats, binning_ms))
+}
+
+/// Traces and bins on the CPU mirror.
+pub fn bins_cpu(
+    scene: &Scene,
+    grid: &SplatGrid,
+    progress: &Progress,
+) -> Result<Binned<PhotonBins>> {
+    let photon_cfg = PhotonConfig::from_scene(scene);
+    let bar = progress.bar(photon_cfg.photons);
+    let mut on_batch = |done: u64, _total: u64| bar.set_position(done);
+    let geo = Geometry {
+        grid,
+        splats: &scene.splats,
+    };
+    let map = cpu::trace_photons(
+        &scene.lights,
+        &scene.materials,
+        &geo,
+        &photon_cfg,
+        &mut on_batch,
+    )?;
+    bar.finish_and_clear();
+    progress_photons(progress, &map.stats);
+    let spin = progress.spinner("binning");
+    let t = Instant::now();
+    let radius = EmConfig::from_scene(scene).radius;
+    let bins = cpu::bin_photons(&bin_params(&grid.params, radius)?, &map.photons)?;
+    let binning_ms = ms_since(t);
+    spin.finish_and_clear();
+    progress.done("binning", binning_ms, "");
+    Ok(binned(scene, bins, &map.stats, binning_ms))
+}
+
 /// Traces, bins and fits; the lobes come back to the host (a few bytes per splat), from
 /// where a cache file or any device can take them.
 pub fn bake(scene: &Scene, device: BakeDevice, progress: &Progress) -> Result<Baked> {
-    let photon_cfg = PhotonConfig::from_scene(scene);
     let em_cfg = EmConfig::from_scene(scene);
-    let bar = progress.bar(photon_cfg.photons);
-    let mut on_batch = |done: u64, _total: u64| bar.set_position(done);
-    let (lobes, stats, binning_ms) = match device {
+    let (lobes, photons, binning) = match device {
         BakeDevice::Gpu(gpu, on_gpu) => {
-            let traced = trace_photons(gpu, scene, on_gpu, &photon_cfg, &mut on_batch)?;
-            bar.finish_and_clear();
-            let stats = traced.stats.clone();
-            progress_photons(progress, &stats);
-            let spin = progress.spinner("binning");
-            let t = Instant::now();
-            let params = bin_params(&on_gpu.grid.params, em_cfg.radius)?;
-            let bins = bin_photons(gpu, &traced, &params)?;
-            drop(traced);
-            let binning_ms = ms_since(t);
-            spin.finish_and_clear();
-            progress.done("binning", binning_ms, "");
+            let b = bins_gpu(scene, gpu, on_gpu, progress)?;
             let spin = progress.spinner("em");
             let n = scene.splats.len() as u32;
-            let fitted = fit_lobes(gpu, &on_gpu.splats, &on_gpu.materials, n, &bins, &em_cfg)?;
+            let fitted = fit_lobes(gpu, &on_gpu.splats, &on_gpu.materials, n, &b.bins, &em_cfg)?;
             let lobes = fitted.download(gpu)?;
             spin.finish_and_clear();
-            (lobes, stats, binning_ms)
+            (lobes, b.photons, b.binning)
         }
         BakeDevice::Cpu(grid) => {
-            let geo = Geometry {
-                grid,
-                splats: &scene.splats,
-            };
-            let map = cpu::trace_photons(
-                &scene.lights,
-                &scene.materials,
-                &geo,
-                &photon_cfg,
-                &mut on_batch,
-            )?;
-            bar.finish_and_clear();
-            progress_photons(progress, &map.stats);
-            let spin = progress.spinner("binning");
-            let t = Instant::now();
-            let bins = cpu::bin_photons(&bin_params(&grid.params, em_cfg.radius)?, &map.photons)?;
-            let binning_ms = ms_since(t);
-            spin.finish_and_clear();
-            progress.done("binning", binning_ms, "");
+            let b = bins_cpu(scene, grid, progress)?;
             let spin = progress.spinner("em");
             let lobes = cpu::fit_lobes(
                 &em_cfg,
-                &bins,
+                &b.bins,
                 &scene.splats,
                 &scene.materials,
                 FitShape::default(),
             )?;
             spin.finish_and_clear();
-            (lobes, map.stats, binning_ms)
+            (lobes, b.photons, b.binning)
         }
     };
     let s = &lobes.stats;
@@ -158,18 +208,14 @@ pub fn bake(scene: &Scene, device: BakeDevice, progress: &Progress) -> Result<Ba
         ..StageReport::ran(s.ms)
     };
     Ok(Baked {
-        photons: StageReport {
-            emitted: Some(stats.emitted),
-            stored: Some(stats.stored),
-            ..StageReport::ran(stats.trace_ms)
-        },
-        binning: StageReport::ran(binning_ms),
+        photons,
+        binning,
         em,
         lobes,
     })
 }
 
-fn progress_photons(progress: &Progress, s: &crate::photons::PhotonStats) {
+fn progress_photons(progress: &Progress, s: &PhotonStats) {
     progress.done(
         "photons",
         s.trace_ms,

@@ -3,6 +3,7 @@
 
 use glam::{Vec2, Vec3};
 
+use crate::bins::PhotonBins;
 use crate::camera::View;
 use crate::cpu;
 use crate::em::LobeMap;
@@ -10,7 +11,7 @@ use crate::error::{Error, Result};
 use crate::grid::SplatGrid;
 use crate::scene::Scene;
 use crate::shared::trace::Geometry;
-use crate::types::{Camera, ShadeParams, Splat};
+use crate::types::{Camera, EmParams, ShadeParams, Splat};
 
 /// Settings of the splat passes.
 #[derive(Clone, Debug, PartialEq)]
@@ -114,5 +115,23 @@ pub fn cpu_frame(
         grid,
         splats: &scene.splats,
     };
+    cpu::shade::shade(cam, params, &sums, &scene.lights, &geo)
+}
+
+/// The reference on the CPU: the gather pass in place of visibility and attributes, then the
+/// same shade pass.
+pub fn cpu_reference(
+    scene: &Scene,
+    grid: &SplatGrid,
+    bins: &PhotonBins,
+    em: &EmParams,
+    cam: &Camera,
+    params: &ShadeParams,
+) -> Vec<[f32; 4]> {
+    let geo = Geometry {
+        grid,
+        splats: &scene.splats,
+    };
+    let sums = cpu::reference_gather::reference_gather(cam, em, &scene.materials, bins, &geo);
     cpu::shade::shade(cam, params, &sums, &scene.lights, &geo)
 }

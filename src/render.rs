@@ -8,15 +8,17 @@ use glam::Vec3;
 use rayon::prelude::*;
 use serde::Serialize;
 
-use crate::bake::{BakeDevice, Baked, Progress, bake};
+use crate::bake::{BakeDevice, Baked, Progress, bake, bins_cpu, bins_gpu};
 use crate::cache::{self, Miss};
 use crate::camera::View;
 use crate::cpu;
+use crate::em::LobeMap;
 use crate::error::{Error, Result};
-use crate::frame::{FrameConfig, camera_uniform, cpu_frame, shade_params};
+use crate::frame::{FrameConfig, camera_uniform, cpu_frame, cpu_reference, shade_params};
 use crate::gpu::Gpu;
 use crate::gpu::frame::{FrameScene, SplatPipelines};
 use crate::gpu::photons::trace_photons;
+use crate::gpu::reference::ReferencePipeline;
 use crate::gpu::scene::GpuScene;
 use crate::gpu::tone::tone_map;
 use crate::grid::{SplatGrid, grid_params};
@@ -35,6 +37,10 @@ pub enum Method {
     Lobes,
     /// Stored photons drawn as points where the camera sees them (a view of the bake).
     Photons,
+    /// The reference the lobes approximate (thesis §4.2): per pixel, the visible point by ray
+    /// casting and the photons within R gathered there with the exact BRDF, plus the same
+    /// direct light. No lobe fit, no cache.
+    Reference,
 }
 
 #[derive(Clone, Debug, Default)]
@@ -194,6 +200,10 @@ pub fn render(
             false,
             0.0,
         ),
+        Method::Reference => {
+            let (stages, log_average) = render_reference(scene, gpu, opts, &view, format, output)?;
+            (stages, false, log_average)
+        }
     };
     Ok(RenderReport {
         adapter,
@@ -266,6 +276,74 @@ fn tone_skipped() -> StageReport {
     StageReport::skipped("EXR output keeps linear radiance")
 }
 
+/// A frame's HDR image on the device, tone-mapped for PNG or read back linear for EXR.
+fn drawn_on_gpu(
+    gpu: &Gpu,
+    hdr: &wgpu::Buffer,
+    pixels: u32,
+    format: ImageFormat,
+    tone: &ToneConfig,
+    shade: StageReport,
+) -> Result<Drawn> {
+    Ok(match format {
+        ImageFormat::Png => {
+            let t = Instant::now();
+            let mut encoder = gpu.encoder("tone map");
+            let toned = tone_map(gpu, &mut encoder, hdr, pixels, tone)?;
+            gpu.submit_and_wait(encoder)?;
+            let tonemap = StageReport::ran(ms_since(t));
+            let sum = gpu.read::<[f32; 2]>(&toned.log_sum, 1)?;
+            Drawn {
+                pixels: Pixels::Rgba8(gpu.read::<u32>(&toned.rgba, pixels as usize)?),
+                shade,
+                tonemap,
+                log_sum: sum.first().copied(),
+            }
+        }
+        ImageFormat::Exr => Drawn {
+            pixels: Pixels::Hdr(gpu.read::<[f32; 4]>(hdr, pixels as usize)?),
+            shade,
+            tonemap: tone_skipped(),
+            log_sum: None,
+        },
+    })
+}
+
+/// A frame's HDR image from the CPU mirror, tone-mapped for PNG or kept linear for EXR.
+fn drawn_on_cpu(
+    hdr: Vec<[f32; 4]>,
+    format: ImageFormat,
+    tone: &ToneConfig,
+    shade: StageReport,
+) -> Result<Drawn> {
+    Ok(match format {
+        ImageFormat::Png => {
+            let t = Instant::now();
+            let (rgba, sum) = cpu::tone_map(tone, &hdr)?;
+            Drawn {
+                pixels: Pixels::Rgba8(rgba),
+                shade,
+                tonemap: StageReport::ran(ms_since(t)),
+                log_sum: Some(sum),
+            }
+        }
+        ImageFormat::Exr => Drawn {
+            pixels: Pixels::Hdr(hdr),
+            shade,
+            tonemap: tone_skipped(),
+            log_sum: None,
+        },
+    })
+}
+
+fn write_drawn(drawn: &Drawn, progress: &Progress, view: &View, output: &Path) -> Result<()> {
+    progress.done("shade", drawn.shade.ms.unwrap_or(0.0), "");
+    match &drawn.pixels {
+        Pixels::Rgba8(rgba) => write_rgba8(output, rgba, view.width, view.height),
+        Pixels::Hdr(hdr) => write_exr(output, hdr, view.width, view.height),
+    }
+}
+
 /// The renderer: bake (or load), splat passes, tone map, write.
 fn render_lobes(
     scene: &Scene,
@@ -292,28 +370,7 @@ fn render_lobes(
             pipelines.draw(gpu, &mut encoder, &buffers, &cam, &params, &targets)?;
             gpu.submit_and_wait(encoder)?;
             let shade = StageReport::ran(ms_since(t));
-            let drawn = match format {
-                ImageFormat::Png => {
-                    let t = Instant::now();
-                    let mut encoder = gpu.encoder("tone map");
-                    let toned = tone_map(gpu, &mut encoder, &targets.hdr, pixels, &opts.tone)?;
-                    gpu.submit_and_wait(encoder)?;
-                    let tonemap = StageReport::ran(ms_since(t));
-                    let sum = gpu.read::<[f32; 2]>(&toned.log_sum, 1)?;
-                    Drawn {
-                        pixels: Pixels::Rgba8(gpu.read::<u32>(&toned.rgba, pixels as usize)?),
-                        shade,
-                        tonemap,
-                        log_sum: sum.first().copied(),
-                    }
-                }
-                ImageFormat::Exr => Drawn {
-                    pixels: Pixels::Hdr(gpu.read::<[f32; 4]>(&targets.hdr, pixels as usize)?),
-                    shade,
-                    tonemap: tone_skipped(),
-                    log_sum: None,
-                },
-            };
+            let drawn = drawn_on_gpu(gpu, &targets.hdr, pixels, format, &opts.tone, shade)?;
             (baked, hit, StageReport::ran(on_gpu.grid_ms), drawn)
         }
         None => {
@@ -326,32 +383,11 @@ fn render_lobes(
             let t = Instant::now();
             let hdr = cpu_frame(scene, &host_grid, &baked.lobes, &cam, &params);
             let shade = StageReport::ran(ms_since(t));
-            let drawn = match format {
-                ImageFormat::Png => {
-                    let t = Instant::now();
-                    let (rgba, sum) = cpu::tone_map(&opts.tone, &hdr)?;
-                    Drawn {
-                        pixels: Pixels::Rgba8(rgba),
-                        shade,
-                        tonemap: StageReport::ran(ms_since(t)),
-                        log_sum: Some(sum),
-                    }
-                }
-                ImageFormat::Exr => Drawn {
-                    pixels: Pixels::Hdr(hdr),
-                    shade,
-                    tonemap: tone_skipped(),
-                    log_sum: None,
-                },
-            };
+            let drawn = drawn_on_cpu(hdr, format, &opts.tone, shade)?;
             (baked, hit, grid, drawn)
         }
     };
-    progress.done("shade", drawn.shade.ms.unwrap_or(0.0), "");
-    match &drawn.pixels {
-        Pixels::Rgba8(rgba) => write_rgba8(output, rgba, view.width, view.height)?,
-        Pixels::Hdr(hdr) => write_exr(output, hdr, view.width, view.height)?,
-    }
+    write_drawn(&drawn, &progress, view, output)?;
     let stages = Stages {
         grid,
         photons: baked.photons,
@@ -365,6 +401,78 @@ fn render_lobes(
         hit,
         drawn.log_sum.map_or(0.0, crate::tone::log_average),
     ))
+}
+
+/// `--method reference`: photons traced and binned (no fit), gathered per pixel at the
+/// visible point with the exact BRDF, direct light by the frame's own shade pass.
+fn render_reference(
+    scene: &Scene,
+    gpu: Option<&Gpu>,
+    opts: &Options,
+    view: &View,
+    format: ImageFormat,
+    output: &Path,
+) -> Result<(Stages, f32)> {
+    let progress = Progress::new(opts.progress);
+    let cam = camera_uniform(view, scene.bounds(), &opts.frame);
+    let pixels = view.width * view.height;
+    // The shade pass reads no lobes: an empty map gives it its other settings.
+    let params = shade_params(scene, &LobeMap::default(), &opts.frame);
+    let (grid, photons, binning, drawn) = match gpu {
+        Some(gpu) => {
+            let on_gpu = GpuScene::upload(gpu, scene)?;
+            let binned = bins_gpu(scene, gpu, &on_gpu, &progress)?;
+            let t = Instant::now();
+            let pipelines = SplatPipelines::new(gpu)?;
+            let reference = ReferencePipeline::new(gpu, &pipelines)?;
+            let targets = pipelines.targets(gpu, view.width, view.height)?;
+            let frame_scene = FrameScene::upload(gpu, scene, &LobeMap::default())?;
+            let buffers = frame_scene.buffers(&on_gpu);
+            let mut encoder = gpu.encoder("reference");
+            reference.draw(
+                gpu,
+                &mut encoder,
+                &pipelines,
+                &buffers,
+                &binned.bins,
+                &binned.em,
+                &cam,
+                &params,
+                &targets,
+            )?;
+            gpu.submit_and_wait(encoder)?;
+            let shade = StageReport::ran(ms_since(t));
+            let drawn = drawn_on_gpu(gpu, &targets.hdr, pixels, format, &opts.tone, shade)?;
+            (
+                StageReport::ran(on_gpu.grid_ms),
+                binned.photons,
+                binned.binning,
+                drawn,
+            )
+        }
+        None => {
+            let t = Instant::now();
+            let host_grid =
+                cpu::build_grid(&grid_params(&scene.splats, &scene.grid)?, &scene.splats)?;
+            let grid = StageReport::ran(ms_since(t));
+            let binned = bins_cpu(scene, &host_grid, &progress)?;
+            let t = Instant::now();
+            let hdr = cpu_reference(scene, &host_grid, &binned.bins, &binned.em, &cam, &params);
+            let shade = StageReport::ran(ms_since(t));
+            let drawn = drawn_on_cpu(hdr, format, &opts.tone, shade)?;
+            (grid, binned.photons, binned.binning, drawn)
+        }
+    };
+    write_drawn(&drawn, &progress, view, output)?;
+    let stages = Stages {
+        grid,
+        photons,
+        binning,
+        em: StageReport::skipped("the reference gathers photons; it fits no lobes"),
+        shade: drawn.shade,
+        tonemap: drawn.tonemap,
+    };
+    Ok((stages, drawn.log_sum.map_or(0.0, crate::tone::log_average)))
 }
 
 /// `--method photons`: the stored photons seen from the camera (thesis Fig. 3.1).

@@ -16,18 +16,6 @@
 @group(0) @binding(5) var<storage, read> lobes: array<Lobe>;
 @group(0) @binding(6) var<storage, read> lobe_norms: array<f32>;
 
-// Each target holds weighted sums; w is the kernel weight, rho_s the mean specular albedo.
-struct Attributes {
-    // (w L_indirect, w)
-    @location(0) radiance: vec4<f32>,
-    // (w n, w t): normal and distance along the view ray
-    @location(1) geometry: vec4<f32>,
-    // (w rho_d, w rho_s alpha): the roughness is blended by specular weight
-    @location(2) diffuse: vec4<f32>,
-    // (w rho_s RGB, w rho_s)
-    @location(3) specular: vec4<f32>,
-}
-
 // The hemispherical integral of a lobe of width beta2 about axis (lobe_norms).
 fn lobe_norm(n: vec3<f32>, axis: vec3<f32>, beta2: f32) -> f32 {
     let l = norm_lookup(dot(n, axis), beta2);

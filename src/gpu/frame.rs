@@ -114,7 +114,7 @@ pub struct FrameTargets {
     pub width: u32,
     pub height: u32,
     depth: wgpu::TextureView,
-    sums: Vec<wgpu::TextureView>,
+    pub(super) sums: Vec<wgpu::TextureView>,
     /// Linear HDR radiance, one `vec4<f32>` per pixel, rows from the top.
     pub hdr: wgpu::Buffer,
 }
@@ -129,10 +129,10 @@ fn module(gpu: &Gpu, name: &'static str) -> Result<wgpu::ShaderModule> {
         }))
 }
 
-fn raster_pipeline(
+pub(super) fn raster_pipeline(
     gpu: &Gpu,
     name: &'static str,
-    depth: wgpu::DepthStencilState,
+    depth: Option<wgpu::DepthStencilState>,
     targets: &[Option<wgpu::ColorTargetState>],
 ) -> Result<wgpu::RenderPipeline> {
     let module = module(gpu, name)?;
@@ -151,7 +151,7 @@ fn raster_pipeline(
                 topology: wgpu::PrimitiveTopology::TriangleStrip,
                 ..Default::default()
             },
-            depth_stencil: Some(depth),
+            depth_stencil: depth,
             multisample: Default::default(),
             fragment: Some(wgpu::FragmentState {
                 module: &module,
@@ -250,13 +250,13 @@ impl SplatPipelines {
         let visibility = raster_pipeline(
             gpu,
             "splat_visibility",
-            depth(wgpu::CompareFunction::Greater, true),
+            Some(depth(wgpu::CompareFunction::Greater, true)),
             &[],
         )?;
         let attributes = raster_pipeline(
             gpu,
             "splat_attributes",
-            depth(wgpu::CompareFunction::GreaterEqual, false),
+            Some(depth(wgpu::CompareFunction::GreaterEqual, false)),
             &[target.clone(), target.clone(), target.clone(), target],
         )?;
         let shade_layouts = shade_layouts(gpu);
@@ -329,6 +329,25 @@ impl SplatPipelines {
             sums,
             hdr,
         })
+    }
+
+    /// The format of the blended targets.
+    pub fn format(&self) -> wgpu::TextureFormat {
+        self.format
+    }
+
+    /// Records the shade pass alone, over targets another pass filled (the reference).
+    pub fn shade(
+        &self,
+        gpu: &Gpu,
+        encoder: &mut wgpu::CommandEncoder,
+        scene: &SceneBuffers,
+        cam: &Camera,
+        params: &ShadeParams,
+        out: &FrameTargets,
+    ) -> Result<()> {
+        let uniforms = self.uniforms(gpu, cam, params);
+        self.record(gpu, encoder, scene, &uniforms, out, SplatPass::Shade)
     }
 
     /// Records one frame into `out.hdr`: visibility, attributes, shade.

@@ -6,6 +6,7 @@ pub mod em;
 pub mod frame;
 pub mod grid;
 pub mod photons;
+pub mod reference;
 pub mod scan;
 pub mod scene;
 pub mod shaders;

@@ -58,6 +58,7 @@ pub const STAGES: &[WgslFile] = &[
     stage!("splat_visibility"),
     stage!("splat_attributes"),
     stage!("shade"),
+    stage!("reference_gather"),
 ];
 
 /// Every shared module (`wgsl/shared/<name>.wgsl`), importable by name.

@@ -19,6 +19,19 @@ const KERNEL_SHARPNESS: f32 = 2.0;
 // Shadow rays spend at most this many grid steps and disk tests (see trace.wgsl).
 const SHADOW_RAY_BUDGET: u32 = 16384u;
 
+// What the attribute pass blends into its four targets (and the reference pass writes with
+// w = 1): weighted sums, w the kernel weight, rho_s the mean specular albedo.
+struct Attributes {
+    // (w L_indirect, w)
+    @location(0) radiance: vec4<f32>,
+    // (w n, w t): normal and distance along the view ray
+    @location(1) geometry: vec4<f32>,
+    // (w rho_d, w rho_s alpha): the roughness is blended by specular weight
+    @location(2) diffuse: vec4<f32>,
+    // (w rho_s RGB, w rho_s)
+    @location(3) specular: vec4<f32>,
+}
+
 struct SplatVertex {
     @builtin(position) position: vec4<f32>,
     @location(0) @interpolate(flat) splat: u32,
