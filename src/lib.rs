@@ -20,9 +20,11 @@ pub mod info;
 pub mod lobe_norms;
 pub mod model;
 pub mod photons;
+pub mod plot;
 pub mod render;
 pub mod scene;
 pub mod shared;
+pub mod sweep;
 pub mod tone;
 pub mod types;
 

@@ -196,7 +196,8 @@ enum Command {
         what: BenchKind,
         /// Scenes to measure (all kinds but `convolution`, which needs none).
         scenes: Vec<PathBuf>,
-        /// Where images the benchmark draws go (`convolution` heat maps).
+        /// Where files the benchmark writes go (`convolution` heat maps; `sweep` tables,
+        /// charts and reference images).
         #[arg(short, long, value_name = "DIR", default_value = ".")]
         output: PathBuf,
         #[command(flatten)]
@@ -222,6 +223,9 @@ enum BenchKind {
     /// The lobe × BRDF shading formulas against quadrature: relative L2 and energy errors
     /// of the thesis's form and ours, with heat maps (no scene).
     Convolution,
+    /// Bake time, frame time and error against the photon-map reference while one setting
+    /// varies at a time (photons, iterations, radius, lobes, splats, family): tables and charts.
+    Sweep,
 }
 
 fn to_json<T: serde::Serialize>(value: &T) -> Result<serde_json::Value> {
@@ -348,6 +352,39 @@ fn run(cli: Cli) -> Result<()> {
             }
         }
         Command::Bench {
+            what: BenchKind::Sweep,
+            scenes,
+            output,
+            bake,
+            device,
+            json,
+            ..
+        } => {
+            if scenes.is_empty() {
+                return Err(Error::Invalid(
+                    "bench sweep needs at least one scene (e.g. scenes/bunny.toml scenes/dragon.toml)"
+                        .into(),
+                ));
+            }
+            let mut loaded = Vec::new();
+            for path in &scenes {
+                let mut scene = scene::load(path)?;
+                bake.apply(&mut scene)?;
+                let name = path
+                    .file_stem()
+                    .map_or("scene".into(), |s| s.to_string_lossy().into_owned());
+                loaded.push((name, scene));
+            }
+            let gpu = device.gpu()?;
+            let plan = lobelight::sweep::SweepPlan::default();
+            let r = lobelight::sweep::sweep(&loaded, gpu.as_ref(), &plan, &output)?;
+            if json {
+                print_json(&r)?;
+            } else {
+                println!("{r}");
+            }
+        }
+        Command::Bench {
             what,
             scenes,
             bake,
@@ -381,7 +418,7 @@ fn run(cli: Cli) -> Result<()> {
                         let r = bench::em(&scene, gpu.as_ref(), &photons, &em)?;
                         (r.to_string(), to_json(&r)?)
                     }
-                    BenchKind::Convolution => unreachable!("handled above"),
+                    BenchKind::Convolution | BenchKind::Sweep => unreachable!("handled above"),
                 };
                 if !json {
                     println!("{text}\n");

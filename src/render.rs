@@ -192,6 +192,13 @@ pub fn render(
     opts.frame.validate()?;
     opts.tone.validate()?;
     let view = View::new(&scene.camera, width, height);
+    if opts.method == Method::Reference && opts.cache.is_some() {
+        return Err(Error::Invalid(
+            "--cache holds fitted lobes; --method reference gathers photons and has none to \
+             load or save"
+                .into(),
+        ));
+    }
     let (adapter, backend) = adapter_names(gpu);
     let (stages, cache_hit, log_average) = match opts.method {
         Method::Lobes => render_lobes(scene, gpu, opts, &view, format, output)?,

@@ -1,0 +1,124 @@
+#!/usr/bin/env python3
+"""External check of lobelight's diffuse transport against Mitsuba 3 (DESIGN.md §11).
+
+Mitsuba path-traces its own Cornell box (meshes) with the geometry, materials, light and camera
+that scenes/diffuse.toml gives lobelight (splats). Both images are linear EXR with a box pixel
+filter and the same bounce cap, so they compare pixel for pixel:
+
+- at convergence: lobelight against Mitsuba with many samples per pixel;
+- at equal time: Mitsuba with as many samples as fit in lobelight's wall time (bake and
+  frame), against its own converged image; beside lobelight's error against the same image.
+
+Figures come from `lobelight compare --json` (relMSE, SMAPE, FLIP). Usage:
+
+    pip install mitsuba            # the scalar_rgb variant needs nothing else
+    cargo build --release
+    python3 benches/mitsuba/cornell.py --size 256 --spp 1024 -o mitsuba-out
+
+It prints one JSON object on stdout; images and figures go to the output folder.
+"""
+
+import argparse
+import json
+import subprocess
+import sys
+import time
+from pathlib import Path
+
+ROOT = Path(__file__).resolve().parents[2]
+LOBELIGHT = ROOT / "target" / "release" / "lobelight"
+SCENE = ROOT / "scenes" / "diffuse.toml"
+
+
+def mitsuba_scene(mi, size, spp, max_depth):
+    """Mitsuba's Cornell box at `size`², box filter, paths of at most `max_depth` vertices."""
+    scene = mi.cornell_box()
+    scene["integrator"]["max_depth"] = max_depth
+    film = scene["sensor"]["film"]
+    film["width"] = film["height"] = size
+    film["rfilter"] = {"type": "box"}
+    scene["sensor"]["sampler"]["sample_count"] = spp
+    return mi.load_dict(scene)
+
+
+def render_mitsuba(mi, size, spp, max_depth, seed, path):
+    scene = mitsuba_scene(mi, size, spp, max_depth)
+    start = time.perf_counter()
+    image = mi.render(scene, spp=spp, seed=seed)
+    seconds = time.perf_counter() - start
+    mi.Bitmap(image).write(str(path))
+    return seconds
+
+
+def lobelight(*args):
+    out = subprocess.run(
+        [str(LOBELIGHT), *map(str, args)], check=True, capture_output=True, text=True
+    )
+    return json.loads(out.stdout) if "--json" in args else None
+
+
+def compare(a, b):
+    d = lobelight("compare", a, b, "--json")
+    return {k: d[k] for k in ("rel_mse", "smape", "flip", "mean_relative", "energy")}
+
+
+def main():
+    p = argparse.ArgumentParser(description=__doc__.split("\n")[0])
+    p.add_argument("--size", type=int, default=256, help="image side in pixels")
+    p.add_argument("--spp", type=int, default=1024, help="Mitsuba's converged samples per pixel")
+    p.add_argument("--photons", type=int, default=None, help="lobelight's photons (scene's default)")
+    p.add_argument("--variant", default="scalar_rgb", help="Mitsuba variant (llvm_ad_rgb is faster)")
+    p.add_argument("-o", "--output", type=Path, default=Path("mitsuba-out"))
+    p.add_argument("--max-depth", type=int, default=8,
+                   help="lobelight's photon path length (scene [bake] max_depth); Mitsuba gets one "
+                        "more, as its depth counts the emitter vertex")
+    args = p.parse_args()
+    if not LOBELIGHT.exists():
+        sys.exit(f"{LOBELIGHT} is missing: run `cargo build --release` first")
+    try:
+        import mitsuba as mi
+    except ImportError:
+        sys.exit("Mitsuba 3 is missing: `pip install mitsuba`")
+    mi.set_variant(args.variant)
+    out = args.output
+    out.mkdir(parents=True, exist_ok=True)
+    depth = args.max_depth + 1
+
+    ours = out / "lobelight.exr"
+    render_args = ["render", SCENE, "-o", ours, "--width", args.size, "--height", args.size, "--json"]
+    if args.photons:
+        render_args += ["--photons", args.photons]
+    start = time.perf_counter()
+    report = lobelight(*render_args)
+    ours_seconds = time.perf_counter() - start
+
+    converged = out / "mitsuba_converged.exr"
+    converged_seconds = render_mitsuba(mi, args.size, args.spp, depth, 0, converged)
+    # Samples per pixel that fit in lobelight's time, from the converged run's rate.
+    equal_spp = max(1, int(args.spp * ours_seconds / converged_seconds))
+    equal = out / "mitsuba_equal_time.exr"
+    equal_seconds = render_mitsuba(mi, args.size, equal_spp, depth, 1, equal)
+
+    result = {
+        "size": args.size,
+        "max_depth_lobelight": args.max_depth,
+        "max_depth_mitsuba": depth,
+        "lobelight": {
+            "seconds": ours_seconds,
+            "photons": report["stages"]["photons"].get("emitted"),
+            "adapter": report["adapter"],
+            "against_converged": compare(ours, converged),
+        },
+        "mitsuba_converged": {"spp": args.spp, "seconds": converged_seconds, "variant": args.variant},
+        "mitsuba_equal_time": {
+            "spp": equal_spp,
+            "seconds": equal_seconds,
+            "against_converged": compare(equal, converged),
+        },
+    }
+    (out / "mitsuba.json").write_text(json.dumps(result, indent=2))
+    print(json.dumps(result, indent=2))
+
+
+if __name__ == "__main__":
+    main()

@@ -1,0 +1,597 @@
+//! `lobelight bench sweep` (thesis chapter 4 in one command): for each scene, a photon-map
+//! reference (`--method reference` with the most photons of the plan), then one lobe render
+//! per setting of one knob at a time from a base (photons emitted, EM iterations, search
+//! radius, lobes per splat, splat count, lobe family), each with its bake time, its frame time
+//! and its error against the reference. Writes `sweep.csv`, `sweep.md`, one chart per scene
+//! (`sweep_<scene>.png`: error against bake time and against frame time) and the references
+//! (`reference_<scene>.exr`).
+//!
+//! Both images get the same direct light from the same shade pass, so the error is the
+//! indirect light's: the lobes' fit and shading against the photons they stand for, plus the
+//! photon noise of both.
+
+use std::fmt::Write as _;
+use std::path::Path;
+use std::time::Instant;
+
+use serde::Serialize;
+
+use crate::bake::{BakeDevice, Progress, bake, bins_cpu, bins_gpu};
+use crate::camera::View;
+use crate::compare::{Values, difference_of};
+use crate::cpu;
+use crate::em::{LobeFamily, LobeMap};
+use crate::error::{Error, Result};
+use crate::frame::{FrameConfig, camera_uniform, cpu_frame, cpu_reference, shade_params};
+use crate::gpu::Gpu;
+use crate::gpu::frame::{FrameScene, SplatPipelines};
+use crate::gpu::reference::ReferencePipeline;
+use crate::gpu::scene::GpuScene;
+use crate::grid::grid_params;
+use crate::photons::ms_since;
+use crate::plot::{Chart, Series};
+use crate::scene::Scene;
+use crate::shared::rng::{pcg_hash, unit_float};
+
+/// What a sweep varies, and around what.
+#[derive(Clone, Debug, Serialize)]
+pub struct SweepPlan {
+    /// Square images of this many pixels a side.
+    pub size: u32,
+    /// Photons of the base setting (every knob but `photons` keeps it).
+    pub base_photons: u64,
+    /// Photons of the reference.
+    pub reference_photons: u64,
+    pub photons: Vec<u64>,
+    pub iterations: Vec<u32>,
+    /// Search radii as multiples of the scene's.
+    pub radius_scales: Vec<f32>,
+    pub lobes: Vec<u32>,
+    /// Fractions of the splats kept (the rest dropped at random, radii grown to keep the area).
+    pub splat_fractions: Vec<f32>,
+    pub families: Vec<LobeFamily>,
+    /// Timed frames per setting (after one untimed); the median is reported.
+    pub frames: u32,
+}
+
+impl Default for SweepPlan {
+    fn default() -> SweepPlan {
+        SweepPlan {
+            size: 256,
+            base_photons: 1_000_000,
+            reference_photons: 10_000_000,
+            photons: vec![300_000, 600_000, 1_000_000, 3_000_000, 10_000_000],
+            iterations: vec![2, 5, 10, 20, 100],
+            radius_scales: vec![0.5, 0.75, 1.0, 1.5, 2.0],
+            lobes: vec![1, 2, 3, 5, 8],
+            splat_fractions: vec![0.25, 0.5, 1.0],
+            families: vec![LobeFamily::Ward, LobeFamily::Vmf],
+            frames: 3,
+        }
+    }
+}
+
+/// One knob at one value.
+#[derive(Clone, Copy, Debug)]
+enum Setting {
+    Photons(u64),
+    Iterations(u32),
+    Radius(f32),
+    Lobes(u32),
+    Splats(f32),
+    Family(LobeFamily),
+}
+
+impl Setting {
+    fn knob(self) -> &'static str {
+        match self {
+            Setting::Photons(_) => "photons",
+            Setting::Iterations(_) => "iterations",
+            Setting::Radius(_) => "radius",
+            Setting::Lobes(_) => "lobes",
+            Setting::Splats(_) => "splats",
+            Setting::Family(_) => "family",
+        }
+    }
+
+    fn value(self) -> String {
+        match self {
+            Setting::Photons(n) if n >= 1_000_000 => format!("{}M", n as f64 / 1e6),
+            Setting::Photons(n) => format!("{}k", n as f64 / 1e3),
+            Setting::Iterations(n) | Setting::Lobes(n) => n.to_string(),
+            Setting::Radius(s) => format!("{s}R"),
+            Setting::Splats(f) => format!("{}%", f * 100.0),
+            Setting::Family(f) => format!("{f:?}").to_lowercase(),
+        }
+    }
+}
+
+impl SweepPlan {
+    fn settings(&self) -> Vec<Setting> {
+        let mut out: Vec<Setting> = self.photons.iter().map(|&n| Setting::Photons(n)).collect();
+        out.extend(self.iterations.iter().map(|&n| Setting::Iterations(n)));
+        out.extend(self.radius_scales.iter().map(|&s| Setting::Radius(s)));
+        out.extend(self.lobes.iter().map(|&n| Setting::Lobes(n)));
+        out.extend(self.splat_fractions.iter().map(|&f| Setting::Splats(f)));
+        out.extend(self.families.iter().map(|&f| Setting::Family(f)));
+        out
+    }
+}
+
+/// Keeps about `fraction` of the splats (a hash of each index decides, so the same ones every
+/// time) and grows their radii by 1/√fraction so that the kept disks cover the same area.
+pub fn thin(scene: &Scene, fraction: f32) -> Scene {
+    let mut out = scene.clone();
+    if fraction >= 1.0 {
+        return out;
+    }
+    let grow = 1.0 / fraction.max(1e-6).sqrt();
+    out.splats = scene
+        .splats
+        .iter()
+        .enumerate()
+        .filter(|(i, _)| unit_float(pcg_hash(*i as u32 ^ 0x5eed_5eed)) < fraction)
+        .map(|(_, s)| {
+            let mut s = *s;
+            s.radius *= grow;
+            s
+        })
+        .collect();
+    out
+}
+
+/// The base scene with one knob turned; the search radius is pinned to the base's, so that
+/// thinning (which grows the bounds a little) does not move it.
+fn apply(base: &Scene, setting: Setting, radius: f32) -> Scene {
+    let mut scene = match setting {
+        Setting::Splats(f) => thin(base, f),
+        _ => base.clone(),
+    };
+    scene.bake.radius = Some(radius);
+    match setting {
+        Setting::Photons(n) => scene.bake.photons = n,
+        Setting::Iterations(n) => scene.bake.iterations = n,
+        Setting::Radius(s) => scene.bake.radius = Some(radius * s),
+        Setting::Lobes(n) => scene.bake.lobes = n,
+        Setting::Family(f) => scene.bake.family = f,
+        Setting::Splats(_) => {}
+    }
+    scene
+}
+
+#[derive(Clone, Debug, Serialize)]
+pub struct SweepRow {
+    pub scene: String,
+    pub knob: String,
+    pub value: String,
+    pub photons: u64,
+    pub iterations: u32,
+    pub radius: f32,
+    pub lobes: u32,
+    pub family: LobeFamily,
+    pub splats: usize,
+    pub photons_ms: f64,
+    pub binning_ms: f64,
+    pub em_ms: f64,
+    /// Photons, binning and EM.
+    pub bake_ms: f64,
+    /// Median of the timed frames: the splat passes, without tone mapping.
+    pub frame_ms: f64,
+    /// Against the reference (`compare`'s definitions).
+    pub rel_mse: f64,
+    pub smape: f64,
+    pub flip: Option<f64>,
+}
+
+/// A setting that could not run on this device, with the reason (e.g. a software device's
+/// loop limit at high photon counts): the sweep goes on without it.
+#[derive(Clone, Debug, Serialize)]
+pub struct SweepSkip {
+    pub scene: String,
+    pub knob: String,
+    pub value: String,
+    pub reason: String,
+}
+
+#[derive(Clone, Debug, Serialize)]
+pub struct SweepReference {
+    pub scene: String,
+    pub photons: u64,
+    pub splats: usize,
+    /// Photons, binning, gather and shade.
+    pub ms: f64,
+    pub image: String,
+}
+
+#[derive(Clone, Debug, Serialize)]
+pub struct SweepReport {
+    pub adapter: String,
+    pub backend: String,
+    pub plan: SweepPlan,
+    pub references: Vec<SweepReference>,
+    pub rows: Vec<SweepRow>,
+    pub skipped: Vec<SweepSkip>,
+    /// The tables and charts written.
+    pub files: Vec<String>,
+    /// False when no font was found: the charts have no text.
+    pub chart_text: bool,
+    pub ms: f64,
+}
+
+/// What one lobe render measured.
+struct LobeRun {
+    hdr: Vec<[f32; 4]>,
+    photons_ms: f64,
+    binning_ms: f64,
+    em_ms: f64,
+    frame_ms: f64,
+}
+
+fn median(mut v: Vec<f64>) -> f64 {
+    v.sort_by(f64::total_cmp);
+    v.get(v.len() / 2).copied().unwrap_or(0.0)
+}
+
+/// Where the sweep runs: a device with its pipelines built once, or the CPU mirror.
+enum Runner<'a> {
+    Gpu {
+        gpu: &'a Gpu,
+        splat: SplatPipelines,
+        reference: ReferencePipeline,
+    },
+    Cpu,
+}
+
+impl Runner<'_> {
+    fn lobes(&self, scene: &Scene, view: &View, frames: u32) -> Result<LobeRun> {
+        let quiet = Progress::new(false);
+        let cfg = FrameConfig::default();
+        let cam = camera_uniform(view, scene.bounds(), &cfg);
+        let pixels = (view.width * view.height) as usize;
+        let mut times = Vec::new();
+        let (hdr, baked) = match self {
+            Runner::Gpu { gpu, splat, .. } => {
+                let on_gpu = GpuScene::upload(gpu, scene)?;
+                let baked = bake(scene, BakeDevice::Gpu(gpu, &on_gpu), &quiet)?;
+                let frame_scene = FrameScene::upload(gpu, scene, &baked.lobes)?;
+                let buffers = frame_scene.buffers(&on_gpu);
+                let params = shade_params(scene, &baked.lobes, &cfg);
+                let targets = splat.targets(gpu, view.width, view.height)?;
+                for i in 0..=frames {
+                    let t = Instant::now();
+                    let mut encoder = gpu.encoder("sweep frame");
+                    splat.draw(gpu, &mut encoder, &buffers, &cam, &params, &targets)?;
+                    gpu.submit_and_wait(encoder)?;
+                    if i > 0 {
+                        times.push(ms_since(t));
+                    }
+                }
+                (gpu.read::<[f32; 4]>(&targets.hdr, pixels)?, baked)
+            }
+            Runner::Cpu => {
+                let grid =
+                    cpu::build_grid(&grid_params(&scene.splats, &scene.grid)?, &scene.splats)?;
+                let baked = bake(scene, BakeDevice::Cpu(&grid), &quiet)?;
+                let params = shade_params(scene, &baked.lobes, &cfg);
+                let mut hdr = Vec::new();
+                for _ in 0..frames.max(1) {
+                    let t = Instant::now();
+                    hdr = cpu_frame(scene, &grid, &baked.lobes, &cam, &params);
+                    times.push(ms_since(t));
+                }
+                (hdr, baked)
+            }
+        };
+        Ok(LobeRun {
+            hdr,
+            photons_ms: baked.photons.ms.unwrap_or(0.0),
+            binning_ms: baked.binning.ms.unwrap_or(0.0),
+            em_ms: baked.em.ms.unwrap_or(0.0),
+            frame_ms: median(times),
+        })
+    }
+
+    fn reference(&self, scene: &Scene, view: &View) -> Result<Vec<[f32; 4]>> {
+        let progress = Progress::new(true);
+        let cfg = FrameConfig::default();
+        let cam = camera_uniform(view, scene.bounds(), &cfg);
+        let params = shade_params(scene, &LobeMap::default(), &cfg);
+        match self {
+            Runner::Gpu {
+                gpu,
+                splat,
+                reference,
+            } => {
+                let on_gpu = GpuScene::upload(gpu, scene)?;
+                let binned = bins_gpu(scene, gpu, &on_gpu, &progress)?;
+                let frame_scene = FrameScene::upload(gpu, scene, &LobeMap::default())?;
+                let targets = splat.targets(gpu, view.width, view.height)?;
+                let mut encoder = gpu.encoder("sweep reference");
+                let buffers = frame_scene.buffers(&on_gpu);
+                reference.draw(
+                    gpu,
+                    &mut encoder,
+                    splat,
+                    &buffers,
+                    &binned.bins,
+                    &binned.em,
+                    &cam,
+                    &params,
+                    &targets,
+                )?;
+                gpu.submit_and_wait(encoder)?;
+                gpu.read(&targets.hdr, (view.width * view.height) as usize)
+            }
+            Runner::Cpu => {
+                let grid =
+                    cpu::build_grid(&grid_params(&scene.splats, &scene.grid)?, &scene.splats)?;
+                let binned = bins_cpu(scene, &grid, &progress)?;
+                Ok(cpu_reference(
+                    scene,
+                    &grid,
+                    &binned.bins,
+                    &binned.em,
+                    &cam,
+                    &params,
+                ))
+            }
+        }
+    }
+}
+
+/// Runs the plan on each `(name, scene)`, writing tables, charts and references to `out_dir`.
+pub fn sweep(
+    scenes: &[(String, Scene)],
+    gpu: Option<&Gpu>,
+    plan: &SweepPlan,
+    out_dir: &Path,
+) -> Result<SweepReport> {
+    let start = Instant::now();
+    std::fs::create_dir_all(out_dir)
+        .map_err(|e| Error::Invalid(format!("{}: {e}", out_dir.display())))?;
+    let runner = match gpu {
+        Some(gpu) => {
+            let splat = SplatPipelines::new(gpu)?;
+            let reference = ReferencePipeline::new(gpu, &splat)?;
+            Runner::Gpu {
+                gpu,
+                splat,
+                reference,
+            }
+        }
+        None => Runner::Cpu,
+    };
+    let (adapter, backend) = match gpu {
+        Some(g) => (g.info.name.clone(), g.backend_name().to_string()),
+        None => ("CPU mirror".to_string(), "cpu".to_string()),
+    };
+    let mut references = Vec::new();
+    let mut rows = Vec::new();
+    let mut skipped = Vec::new();
+    let mut files = Vec::new();
+    let mut chart_text = true;
+    for (name, scene) in scenes {
+        let view = View::new(&scene.camera, plan.size, plan.size);
+        let radius = scene.search_radius();
+        let mut base = scene.clone();
+        base.bake.photons = plan.base_photons;
+        let reference_scene = apply(&base, Setting::Photons(plan.reference_photons), radius);
+        eprintln!(
+            "sweep {name}: reference, {} photons",
+            plan.reference_photons
+        );
+        let t = Instant::now();
+        let reference = runner.reference(&reference_scene, &view)?;
+        let image = out_dir.join(format!("reference_{name}.exr"));
+        crate::render::write_exr(&image, &reference, plan.size, plan.size)?;
+        references.push(SweepReference {
+            scene: name.clone(),
+            photons: plan.reference_photons,
+            splats: scene.splats.len(),
+            ms: ms_since(t),
+            image: image.display().to_string(),
+        });
+        for setting in plan.settings() {
+            let s = apply(&base, setting, radius);
+            let run = match runner.lobes(&s, &view, plan.frames) {
+                Ok(run) => run,
+                Err(e) => {
+                    eprintln!(
+                        "sweep {name}: {} {} skipped: {e}",
+                        setting.knob(),
+                        setting.value()
+                    );
+                    skipped.push(SweepSkip {
+                        scene: name.clone(),
+                        knob: setting.knob().into(),
+                        value: setting.value(),
+                        reason: e.to_string(),
+                    });
+                    continue;
+                }
+            };
+            let d = difference_of(&run.hdr, &reference, plan.size, plan.size, Values::Radiance)?;
+            let row = SweepRow {
+                scene: name.clone(),
+                knob: setting.knob().into(),
+                value: setting.value(),
+                photons: s.bake.photons,
+                iterations: s.bake.iterations,
+                radius: s.search_radius(),
+                lobes: s.bake.lobes,
+                family: s.bake.family,
+                splats: s.splats.len(),
+                photons_ms: run.photons_ms,
+                binning_ms: run.binning_ms,
+                em_ms: run.em_ms,
+                bake_ms: run.photons_ms + run.binning_ms + run.em_ms,
+                frame_ms: run.frame_ms,
+                rel_mse: d.rel_mse,
+                smape: d.smape,
+                flip: d.flip,
+            };
+            eprintln!(
+                "sweep {name}: {:<10} {:>6}  bake {:>8.0} ms  frame {:>6.1} ms  relMSE {:.4}  SMAPE {:.4}",
+                row.knob, row.value, row.bake_ms, row.frame_ms, row.rel_mse, row.smape
+            );
+            rows.push(row);
+        }
+        let chart = out_dir.join(format!("sweep_{name}.png"));
+        chart_text &= crate::plot::draw(&charts(name, &rows), &chart)?;
+        files.push(chart.display().to_string());
+    }
+    let mut md = markdown(&rows);
+    for skip in &skipped {
+        let _ = writeln!(
+            md,
+            "Skipped: {} {} = {}: {}",
+            skip.scene, skip.knob, skip.value, skip.reason
+        );
+    }
+    for (file, text) in [("sweep.csv", csv(&rows)), ("sweep.md", md)] {
+        let path = out_dir.join(file);
+        std::fs::write(&path, text)
+            .map_err(|e| Error::Invalid(format!("{}: {e}", path.display())))?;
+        files.push(path.display().to_string());
+    }
+    Ok(SweepReport {
+        adapter,
+        backend,
+        plan: plan.clone(),
+        references,
+        rows,
+        skipped,
+        files,
+        chart_text,
+        ms: ms_since(start),
+    })
+}
+
+/// Error against bake time and against frame time, one series per knob.
+fn charts(scene: &str, rows: &[SweepRow]) -> [Chart; 2] {
+    let series = |x: fn(&SweepRow) -> f64| -> Vec<Series> {
+        let mut knobs: Vec<&str> = rows
+            .iter()
+            .filter(|r| r.scene == scene)
+            .map(|r| r.knob.as_str())
+            .collect();
+        knobs.dedup();
+        knobs
+            .into_iter()
+            .map(|k| {
+                let mine: Vec<&SweepRow> = rows
+                    .iter()
+                    .filter(|r| r.scene == scene && r.knob == k)
+                    .collect();
+                Series {
+                    name: k.to_string(),
+                    points: mine.iter().map(|r| (x(r), r.rel_mse)).collect(),
+                    labels: mine.iter().map(|r| r.value.clone()).collect(),
+                }
+            })
+            .collect()
+    };
+    [
+        Chart {
+            title: format!("{scene}: error against bake time"),
+            x_label: "bake time (s): photons + binning + EM".into(),
+            y_label: "relMSE".into(),
+            log_x: true,
+            log_y: true,
+            series: series(|r| r.bake_ms / 1e3),
+        },
+        Chart {
+            title: format!("{scene}: error against frame time"),
+            x_label: "frame time (ms)".into(),
+            y_label: "relMSE".into(),
+            log_x: false,
+            log_y: true,
+            series: series(|r| r.frame_ms),
+        },
+    ]
+}
+
+const CSV_HEADER: &str = "scene,knob,value,photons,iterations,radius,lobes,family,splats,\
+photons_ms,binning_ms,em_ms,bake_ms,frame_ms,rel_mse,smape,flip";
+
+pub fn csv(rows: &[SweepRow]) -> String {
+    let mut out = format!("{CSV_HEADER}\n");
+    for r in rows {
+        let flip = r.flip.map_or(String::new(), |f| format!("{f:.6}"));
+        let _ = writeln!(
+            out,
+            "{},{},{},{},{},{},{},{:?},{},{:.1},{:.1},{:.1},{:.1},{:.2},{:.6},{:.6},{flip}",
+            r.scene,
+            r.knob,
+            r.value,
+            r.photons,
+            r.iterations,
+            r.radius,
+            r.lobes,
+            r.family,
+            r.splats,
+            r.photons_ms,
+            r.binning_ms,
+            r.em_ms,
+            r.bake_ms,
+            r.frame_ms,
+            r.rel_mse,
+            r.smape
+        );
+    }
+    out
+}
+
+pub fn markdown(rows: &[SweepRow]) -> String {
+    let mut out = String::new();
+    let mut scenes: Vec<&str> = rows.iter().map(|r| r.scene.as_str()).collect();
+    scenes.dedup();
+    for scene in scenes {
+        let _ = writeln!(out, "### {scene}\n");
+        out.push_str(
+            "| knob | value | photons | splats | bake (s) | frame (ms) | relMSE | SMAPE | FLIP |\n",
+        );
+        out.push_str("| --- | --- | ---: | ---: | ---: | ---: | ---: | ---: | ---: |\n");
+        for r in rows.iter().filter(|r| r.scene == scene) {
+            let flip = r.flip.map_or("—".to_string(), |f| format!("{f:.4}"));
+            let _ = writeln!(
+                out,
+                "| {} | {} | {} | {} | {:.2} | {:.1} | {:.4} | {:.4} | {flip} |",
+                r.knob,
+                r.value,
+                r.photons,
+                r.splats,
+                r.bake_ms / 1e3,
+                r.frame_ms,
+                r.rel_mse,
+                r.smape
+            );
+        }
+        out.push('\n');
+    }
+    out
+}
+
+impl std::fmt::Display for SweepReport {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        writeln!(f, "device   {} ({})", self.adapter, self.backend)?;
+        for r in &self.references {
+            writeln!(
+                f,
+                "reference {}: {} photons, {:.1} s",
+                r.scene,
+                r.photons,
+                r.ms / 1e3
+            )?;
+        }
+        write!(f, "{}", markdown(&self.rows))?;
+        for skip in &self.skipped {
+            writeln!(
+                f,
+                "skipped  {} {} = {}: {}",
+                skip.scene, skip.knob, skip.value, skip.reason
+            )?;
+        }
+        write!(f, "wrote    {}", self.files.join(", "))
+    }
+}
