@@ -119,19 +119,20 @@ pub fn cpu_frame(
 }
 
 /// The reference on the CPU: the gather pass in place of visibility and attributes, then the
-/// same shade pass.
+/// same shade pass (which reads no lobes: an empty map gives it its other settings).
 pub fn cpu_reference(
     scene: &Scene,
     grid: &SplatGrid,
     bins: &PhotonBins,
     em: &EmParams,
     cam: &Camera,
-    params: &ShadeParams,
+    cfg: &FrameConfig,
 ) -> Vec<[f32; 4]> {
+    let params = shade_params(scene, &LobeMap::default(), cfg);
     let geo = Geometry {
         grid,
         splats: &scene.splats,
     };
     let sums = cpu::reference_gather::reference_gather(cam, em, &scene.materials, bins, &geo);
-    cpu::shade::shade(cam, params, &sums, &scene.lights, &geo)
+    cpu::shade::shade(cam, &params, &sums, &scene.lights, &geo)
 }

@@ -12,7 +12,6 @@ use crate::bake::{BakeDevice, Baked, Progress, bake, bins_cpu, bins_gpu};
 use crate::cache::{self, Miss};
 use crate::camera::View;
 use crate::cpu;
-use crate::em::LobeMap;
 use crate::error::{Error, Result};
 use crate::frame::{FrameConfig, camera_uniform, cpu_frame, cpu_reference, shade_params};
 use crate::gpu::Gpu;
@@ -423,8 +422,6 @@ fn render_reference(
     let progress = Progress::new(opts.progress);
     let cam = camera_uniform(view, scene.bounds(), &opts.frame);
     let pixels = view.width * view.height;
-    // The shade pass reads no lobes: an empty map gives it its other settings.
-    let params = shade_params(scene, &LobeMap::default(), &opts.frame);
     let (grid, photons, binning, drawn) = match gpu {
         Some(gpu) => {
             let on_gpu = GpuScene::upload(gpu, scene)?;
@@ -432,22 +429,17 @@ fn render_reference(
             let t = Instant::now();
             let pipelines = SplatPipelines::new(gpu)?;
             let reference = ReferencePipeline::new(gpu, &pipelines)?;
-            let targets = pipelines.targets(gpu, view.width, view.height)?;
-            let frame_scene = FrameScene::upload(gpu, scene, &LobeMap::default())?;
-            let buffers = frame_scene.buffers(&on_gpu);
-            let mut encoder = gpu.encoder("reference");
-            reference.draw(
+            let size = (view.width, view.height);
+            let targets = reference.image(
                 gpu,
-                &mut encoder,
                 &pipelines,
-                &buffers,
-                &binned.bins,
-                &binned.em,
+                scene,
+                &on_gpu,
+                &binned,
                 &cam,
-                &params,
-                &targets,
+                &opts.frame,
+                size,
             )?;
-            gpu.submit_and_wait(encoder)?;
             let shade = StageReport::ran(ms_since(t));
             let drawn = drawn_on_gpu(gpu, &targets.hdr, pixels, format, &opts.tone, shade)?;
             (
@@ -464,7 +456,14 @@ fn render_reference(
             let grid = StageReport::ran(ms_since(t));
             let binned = bins_cpu(scene, &host_grid, &progress)?;
             let t = Instant::now();
-            let hdr = cpu_reference(scene, &host_grid, &binned.bins, &binned.em, &cam, &params);
+            let hdr = cpu_reference(
+                scene,
+                &host_grid,
+                &binned.bins,
+                &binned.em,
+                &cam,
+                &opts.frame,
+            );
             let shade = StageReport::ran(ms_since(t));
             let drawn = drawn_on_cpu(hdr, format, &opts.tone, shade)?;
             (grid, binned.photons, binned.binning, drawn)

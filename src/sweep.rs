@@ -20,7 +20,7 @@ use crate::bake::{BakeDevice, Progress, bake, bins_cpu, bins_gpu};
 use crate::camera::View;
 use crate::compare::{Values, difference_of};
 use crate::cpu;
-use crate::em::{LobeFamily, LobeMap};
+use crate::em::LobeFamily;
 use crate::error::{Error, Result};
 use crate::frame::{FrameConfig, camera_uniform, cpu_frame, cpu_reference, shade_params};
 use crate::gpu::Gpu;
@@ -295,7 +295,6 @@ impl Runner<'_> {
         let progress = Progress::new(true);
         let cfg = FrameConfig::default();
         let cam = camera_uniform(view, scene.bounds(), &cfg);
-        let params = shade_params(scene, &LobeMap::default(), &cfg);
         match self {
             Runner::Gpu {
                 gpu,
@@ -304,22 +303,9 @@ impl Runner<'_> {
             } => {
                 let on_gpu = GpuScene::upload(gpu, scene)?;
                 let binned = bins_gpu(scene, gpu, &on_gpu, &progress)?;
-                let frame_scene = FrameScene::upload(gpu, scene, &LobeMap::default())?;
-                let targets = splat.targets(gpu, view.width, view.height)?;
-                let mut encoder = gpu.encoder("sweep reference");
-                let buffers = frame_scene.buffers(&on_gpu);
-                reference.draw(
-                    gpu,
-                    &mut encoder,
-                    splat,
-                    &buffers,
-                    &binned.bins,
-                    &binned.em,
-                    &cam,
-                    &params,
-                    &targets,
-                )?;
-                gpu.submit_and_wait(encoder)?;
+                let size = (view.width, view.height);
+                let targets =
+                    reference.image(gpu, splat, scene, &on_gpu, &binned, &cam, &cfg, size)?;
                 gpu.read(&targets.hdr, (view.width * view.height) as usize)
             }
             Runner::Cpu => {
@@ -332,7 +318,7 @@ impl Runner<'_> {
                     &binned.bins,
                     &binned.em,
                     &cam,
-                    &params,
+                    &cfg,
                 ))
             }
         }

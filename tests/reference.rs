@@ -5,73 +5,55 @@ mod common;
 
 use std::path::Path;
 
-use lobelight::bake::{Progress, bins_cpu};
+use lobelight::bake::{Binned, Progress, bins_cpu};
 use lobelight::bins::PhotonBins;
 use lobelight::camera::View;
 use lobelight::compare::difference;
 use lobelight::cpu;
-use lobelight::em::LobeMap;
 use lobelight::frame::{FrameConfig, camera_uniform, cpu_frame, cpu_reference, shade_params};
 use lobelight::gpu::Gpu;
 use lobelight::gpu::bins::GpuBins;
-use lobelight::gpu::frame::{FrameScene, SplatPipelines};
+use lobelight::gpu::frame::SplatPipelines;
 use lobelight::gpu::reference::ReferencePipeline;
 use lobelight::gpu::scene::GpuScene;
-use lobelight::grid::{SplatGrid, grid_params};
+use lobelight::grid::SplatGrid;
 use lobelight::scene::{self, Scene};
-use lobelight::types::EmParams;
 
 /// The splat passes' parity tolerances (tests/render.rs).
 const MEAN_RELATIVE: f64 = 0.01;
 const WITHIN_5_PERCENT: f64 = 0.99;
 
-fn host_grid(scene: &Scene) -> SplatGrid {
-    cpu::build_grid(
-        &grid_params(&scene.splats, &scene.grid).unwrap(),
-        &scene.splats,
-    )
-    .unwrap()
-}
-
 fn load(path: &str, photons: u64) -> (Scene, SplatGrid) {
     let mut scene = scene::load(Path::new(path)).unwrap();
     scene.bake.photons = photons;
-    let grid = host_grid(&scene);
+    let grid = common::host_grid(&scene);
     (scene, grid)
 }
 
 fn gpu_reference(
     gpu: &Gpu,
     scene: &Scene,
-    bins: &PhotonBins,
-    em: &EmParams,
+    binned: &Binned<PhotonBins>,
     view: &View,
 ) -> Vec<[f32; 4]> {
     let cfg = FrameConfig::default();
     let on_gpu = GpuScene::upload(gpu, scene).unwrap();
-    let frame_scene = FrameScene::upload(gpu, scene, &LobeMap::default()).unwrap();
     let pipelines = SplatPipelines::new(gpu).unwrap();
     let reference = ReferencePipeline::new(gpu, &pipelines).unwrap();
-    let targets = pipelines.targets(gpu, view.width, view.height).unwrap();
-    let bins = GpuBins::upload(gpu, bins).unwrap();
+    // The CPU's bins on the device: both paths gather the very same photons.
+    let on_device = Binned {
+        bins: GpuBins::upload(gpu, &binned.bins).unwrap(),
+        em: binned.em,
+        photons: binned.photons.clone(),
+        binning: binned.binning.clone(),
+    };
     let cam = camera_uniform(view, scene.bounds(), &cfg);
-    let params = shade_params(scene, &LobeMap::default(), &cfg);
-    let mut encoder = gpu.encoder("test reference");
-    let buffers = frame_scene.buffers(&on_gpu);
-    reference
-        .draw(
-            gpu,
-            &mut encoder,
-            &pipelines,
-            &buffers,
-            &bins,
-            em,
-            &cam,
-            &params,
-            &targets,
+    let size = (view.width, view.height);
+    let targets = reference
+        .image(
+            gpu, &pipelines, scene, &on_gpu, &on_device, &cam, &cfg, size,
         )
         .unwrap();
-    gpu.submit_and_wait(encoder).unwrap();
     gpu.read(&targets.hdr, (view.width * view.height) as usize)
         .unwrap()
 }
@@ -88,10 +70,9 @@ fn reference_matches_the_cpu_mirror() {
     desc.eye = [-0.8, 0.6, 2.2];
     desc.target = [0.1, -0.4, -0.2];
     for view in [front, View::new(&desc, 96, 72)] {
-        let a = gpu_reference(&gpu, &scene, &binned.bins, &binned.em, &view);
+        let a = gpu_reference(&gpu, &scene, &binned, &view);
         let cam = camera_uniform(&view, scene.bounds(), &cfg);
-        let params = shade_params(&scene, &LobeMap::default(), &cfg);
-        let b = cpu_reference(&scene, &grid, &binned.bins, &binned.em, &cam, &params);
+        let b = cpu_reference(&scene, &grid, &binned.bins, &binned.em, &cam, &cfg);
         let d = difference(&a, &b).unwrap();
         eprintln!("{}x{}: {d:?}", view.width, view.height);
         assert!(d.mean_relative <= MEAN_RELATIVE, "{d:?}");
@@ -131,8 +112,7 @@ fn reference_and_lobes_agree_where_nothing_is_glossy() {
         &cam,
         &shade_params(&scene, &lobes, &cfg),
     );
-    let params = shade_params(&scene, &LobeMap::default(), &cfg);
-    let b = cpu_reference(&scene, &grid, &binned.bins, &binned.em, &cam, &params);
+    let b = cpu_reference(&scene, &grid, &binned.bins, &binned.em, &cam, &cfg);
     let d = difference(&a, &b).unwrap();
     eprintln!("{d:?}");
     assert!(d.energy.abs() <= 0.01, "{d:?}");

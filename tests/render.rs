@@ -8,26 +8,17 @@ use std::path::Path;
 use lobelight::bake::{BakeDevice, Progress, bake};
 use lobelight::camera::View;
 use lobelight::compare::difference;
-use lobelight::cpu;
 use lobelight::em::LobeMap;
 use lobelight::frame::{FrameConfig, camera_uniform, cpu_frame, shade_params};
 use lobelight::gpu::Gpu;
 use lobelight::gpu::frame::{FrameScene, SplatPipelines};
 use lobelight::gpu::scene::GpuScene;
-use lobelight::grid::{SplatGrid, grid_params};
+use lobelight::grid::SplatGrid;
 use lobelight::scene::{self, Scene};
 
 /// Parity tolerances of the issue: mean relative difference and pixels within 5 %.
 const MEAN_RELATIVE: f64 = 0.01;
 const WITHIN_5_PERCENT: f64 = 0.99;
-
-fn host_grid(scene: &Scene) -> SplatGrid {
-    cpu::build_grid(
-        &grid_params(&scene.splats, &scene.grid).unwrap(),
-        &scene.splats,
-    )
-    .unwrap()
-}
 
 fn cpu_bake(scene: &Scene, grid: &SplatGrid) -> LobeMap {
     bake(scene, BakeDevice::Cpu(grid), &Progress::new(false))
@@ -90,7 +81,7 @@ fn splat_passes_match_the_cpu_mirror() {
     let gpu = common::gpu();
     let mut scene = scene::load(Path::new("scenes/cornell.toml")).unwrap();
     scene.bake.photons = 100_000;
-    let grid = host_grid(&scene);
+    let grid = common::host_grid(&scene);
     let lobes = cpu_bake(&scene, &grid);
     assert!(lobes.stats.fitted > 500, "the glossy block has lobes");
     let cfg = FrameConfig::default();
@@ -166,7 +157,7 @@ fn direct_light_matches_closed_forms() {
     let cfg = FrameConfig::default();
     for (light, irradiance) in cases {
         let scene = plane_scene(light);
-        let grid = host_grid(&scene);
+        let grid = common::host_grid(&scene);
         let lobes = cpu_bake(&scene, &grid);
         let view = View::new(&scene.camera, 33, 33);
         let expect = 0.5 / pi * irradiance;
@@ -190,7 +181,7 @@ fn area_light_is_seen_directly() {
     let scene = plane_scene(
         "[[light]]\ntype = \"area\"\ncenter = [0.0, 1.0, 0.0]\nsize = [0.5, 0.5]\nnormal = [0.0, 1.0, 0.0]\nradiance = [1.0, 2.0, 3.0]",
     );
-    let grid = host_grid(&scene);
+    let grid = common::host_grid(&scene);
     let lobes = cpu_bake(&scene, &grid);
     let view = View::new(&scene.camera, 33, 33);
     let hdr = cpu_hdr(&scene, &grid, &lobes, &view, &FrameConfig::default());
@@ -210,7 +201,7 @@ fn cache_key_follows_the_bake_not_the_view() {
     let mut scene =
         plane_scene("[[light]]\ntype = \"point\"\nposition = [0.0, 1.0, 0.0]\npower = 1.0");
     let key = bake_key(&scene);
-    let grid = host_grid(&scene);
+    let grid = common::host_grid(&scene);
     let lobes = cpu_bake(&scene, &grid);
     let path =
         std::env::temp_dir().join(format!("lobelight-cache-test-{}.bin", std::process::id()));

@@ -114,9 +114,29 @@ pub struct FrameTargets {
     pub width: u32,
     pub height: u32,
     depth: wgpu::TextureView,
-    pub(super) sums: Vec<wgpu::TextureView>,
+    sums: Vec<wgpu::TextureView>,
     /// Linear HDR radiance, one `vec4<f32>` per pixel, rows from the top.
     pub hdr: wgpu::Buffer,
+}
+
+impl FrameTargets {
+    /// The attribute targets as colour attachments cleared to zero.
+    pub(super) fn cleared_sums(&self) -> Vec<Option<wgpu::RenderPassColorAttachment<'_>>> {
+        self.sums
+            .iter()
+            .map(|view| {
+                Some(wgpu::RenderPassColorAttachment {
+                    view,
+                    depth_slice: None,
+                    resolve_target: None,
+                    ops: wgpu::Operations {
+                        load: wgpu::LoadOp::Clear(wgpu::Color::TRANSPARENT),
+                        store: wgpu::StoreOp::Store,
+                    },
+                })
+            })
+            .collect()
+    }
 }
 
 fn module(gpu: &Gpu, name: &'static str) -> Result<wgpu::ShaderModule> {
@@ -450,21 +470,7 @@ impl SplatPipelines {
                     scene.lobe_norms,
                 ],
             );
-            let color: Vec<Option<wgpu::RenderPassColorAttachment>> = out
-                .sums
-                .iter()
-                .map(|view| {
-                    Some(wgpu::RenderPassColorAttachment {
-                        view,
-                        depth_slice: None,
-                        resolve_target: None,
-                        ops: wgpu::Operations {
-                            load: wgpu::LoadOp::Clear(wgpu::Color::TRANSPARENT),
-                            store: wgpu::StoreOp::Store,
-                        },
-                    })
-                })
-                .collect();
+            let color = out.cleared_sums();
             let mut pass = encoder.begin_render_pass(&wgpu::RenderPassDescriptor {
                 label: Some("splat_attributes"),
                 color_attachments: &color,
