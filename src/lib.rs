@@ -27,5 +27,6 @@ pub mod shared;
 pub mod sweep;
 pub mod tone;
 pub mod types;
+pub mod view;
 
 pub use error::{Error, Result};

@@ -190,6 +190,28 @@ enum Command {
         #[arg(long)]
         json: bool,
     },
+    /// A window that draws the scene in real time: direct light at once, global illumination
+    /// when the bake (on a second thread) is in. Keys: see README (H in the window).
+    View {
+        scene: PathBuf,
+        #[arg(long)]
+        width: Option<u32>,
+        #[arg(long)]
+        height: Option<u32>,
+        /// Scripted run: draw N frames once the bake is in, then exit.
+        #[arg(long, value_name = "N")]
+        frames: Option<u32>,
+        /// With --frames: save the last frame here (PNG).
+        #[arg(long, value_name = "OUT.png", requires = "frames")]
+        screenshot: Option<PathBuf>,
+        #[command(flatten)]
+        bake: BakeArgs,
+        #[command(flatten)]
+        look: LookArgs,
+        /// Graphics API (default: WGPU_BACKEND, else Vulkan, else GL).
+        #[arg(long, value_enum, default_value_t = BackendChoice::Auto)]
+        backend: BackendChoice,
+    },
     /// Measure a stage: throughput and the figures that show it did the right work.
     Bench {
         #[arg(value_enum)]
@@ -290,6 +312,34 @@ fn run(cli: Cli) -> Result<()> {
                     report.output, report.width, report.height
                 );
             }
+        }
+        Command::View {
+            scene,
+            width,
+            height,
+            frames,
+            screenshot,
+            bake,
+            look,
+            backend,
+        } => {
+            let mut scene = scene::load(&scene)?;
+            bake.apply(&mut scene)?;
+            let [w0, h0] = scene.camera.resolution;
+            let (width, height) = (width.unwrap_or(w0), height.unwrap_or(h0));
+            scene::check_resolution(width, height).map_err(Error::Invalid)?;
+            let opts = lobelight::view::ViewOptions {
+                width,
+                height,
+                backend,
+                frame: look.frame(),
+                tone: look.tone(),
+                frames,
+                screenshot,
+            };
+            opts.frame.validate()?;
+            opts.tone.validate()?;
+            lobelight::view::view(scene, opts)?;
         }
         Command::Compare {
             a,

@@ -14,6 +14,7 @@ pub mod grid_distance;
 pub mod grid_rank;
 pub mod grid_scatter;
 pub mod photon_trace;
+pub mod present;
 pub mod reference_gather;
 pub mod scan_apply;
 pub mod scan_reduce;

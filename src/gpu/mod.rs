@@ -6,6 +6,7 @@ pub mod em;
 pub mod frame;
 pub mod grid;
 pub mod photons;
+pub mod present;
 pub mod reference;
 pub mod scan;
 pub mod scene;
@@ -35,7 +36,14 @@ const INSTALL_HINT: &str = "install a Vulkan driver; without a GPU, Mesa's softw
     rasterizer lavapipe works: `sudo apt-get install mesa-vulkan-drivers` (Debian/Ubuntu) or \
     `sudo dnf install mesa-vulkan-drivers` (Fedora); Mesa's OpenGL (EGL) is used as a fallback";
 
-/// A headless device and everything recorded on it.
+/// The window a device must present to: the event loop's display and the window.
+type Window<'a> = (
+    &'a winit::event_loop::OwnedDisplayHandle,
+    &'a Arc<winit::window::Window>,
+);
+type Surface = wgpu::Surface<'static>;
+
+/// A device (headless, or able to present to a window) and everything recorded on it.
 pub struct Gpu {
     pub device: wgpu::Device,
     pub queue: wgpu::Queue,
@@ -44,6 +52,8 @@ pub struct Gpu {
     /// Subgroup operations are enabled (`wgpu::Features::SUBGROUP`, where the device has it).
     pub subgroups: bool,
     pipelines: Mutex<HashMap<String, wgpu::ComputePipeline>>,
+    /// The adapter the device came from (a window's surface asks it what it supports).
+    pub adapter: wgpu::Adapter,
     /// First uncaptured device error, surfaced as an `Error` after the next wait
     /// (wgpu's default handler panics).
     error: Arc<Mutex<Option<String>>>,
@@ -52,6 +62,21 @@ pub struct Gpu {
 impl Gpu {
     /// Opens a device on the chosen backend (see `BackendChoice`).
     pub fn new(choice: BackendChoice) -> Result<Gpu> {
+        Self::choose(choice, None).map(|(gpu, _)| gpu)
+    }
+
+    /// A device that can present to `window` (the viewer), with the window's surface.
+    pub fn for_window(
+        choice: BackendChoice,
+        display: &winit::event_loop::OwnedDisplayHandle,
+        window: &Arc<winit::window::Window>,
+    ) -> Result<(Gpu, wgpu::Surface<'static>)> {
+        let (gpu, surface) = Self::choose(choice, Some((display, window)))?;
+        let surface = surface.ok_or_else(|| Error::Gpu("no surface for the window".into()))?;
+        Ok((gpu, surface))
+    }
+
+    fn choose(choice: BackendChoice, window: Option<Window<'_>>) -> Result<(Gpu, Option<Surface>)> {
         let attempts: Vec<(&str, wgpu::Backends)> = match choice {
             BackendChoice::Vulkan => vec![("Vulkan", wgpu::Backends::VULKAN)],
             BackendChoice::Gl => vec![("GL", wgpu::Backends::GL)],
@@ -65,21 +90,41 @@ impl Gpu {
         };
         let mut tried = Vec::new();
         for (name, backends) in attempts {
-            match Self::open(backends)? {
-                Some(gpu) => return Ok(gpu),
+            match Self::open(backends, window)? {
+                Some(found) => return Ok(found),
                 None => tried.push(name),
             }
         }
+        let what = if window.is_some() {
+            "that can present to the window"
+        } else {
+            "with compute shaders"
+        };
         Err(Error::NoAdapter(format!(
-            "no GPU adapter with compute shaders found (tried: {}); {INSTALL_HINT}",
+            "no GPU adapter {what} found (tried: {}); {INSTALL_HINT}",
             tried.join(", ")
         )))
     }
 
-    fn open(backends: wgpu::Backends) -> Result<Option<Gpu>> {
-        let mut desc = wgpu::InstanceDescriptor::new_without_display_handle_from_env();
+    fn open(
+        backends: wgpu::Backends,
+        window: Option<Window<'_>>,
+    ) -> Result<Option<(Gpu, Option<Surface>)>> {
+        let mut desc = match window {
+            Some((display, _)) => wgpu::InstanceDescriptor::new_with_display_handle_from_env(
+                Box::new(display.clone()),
+            ),
+            None => wgpu::InstanceDescriptor::new_without_display_handle_from_env(),
+        };
         desc.backends = backends;
         let instance = wgpu::Instance::new(desc);
+        let surface =
+            match window {
+                Some((_, w)) => Some(instance.create_surface(w.clone()).map_err(|e| {
+                    Error::Gpu(format!("cannot make a surface of the window: {e}"))
+                })?),
+                None => None,
+            };
         let adapters = pollster::block_on(instance.enumerate_adapters(backends));
         let Some(adapter) = adapters
             .into_iter()
@@ -87,6 +132,7 @@ impl Gpu {
                 a.get_downlevel_capabilities()
                     .flags
                     .contains(wgpu::DownlevelFlags::COMPUTE_SHADERS)
+                    && surface.as_ref().is_none_or(|s| a.is_surface_supported(s))
             })
             .min_by_key(|a| adapter_rank(a.get_info().device_type))
         else {
@@ -121,7 +167,7 @@ impl Gpu {
             }
         }));
         let subgroups = device.features().contains(wgpu::Features::SUBGROUP);
-        Ok(Some(Gpu {
+        let gpu = Gpu {
             device,
             queue,
             info,
@@ -129,7 +175,9 @@ impl Gpu {
             subgroups,
             pipelines: Mutex::new(HashMap::new()),
             error,
-        }))
+            adapter,
+        };
+        Ok(Some((gpu, surface)))
     }
 
     pub fn backend_name(&self) -> &'static str {

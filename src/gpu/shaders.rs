@@ -59,6 +59,7 @@ pub const STAGES: &[WgslFile] = &[
     stage!("splat_attributes"),
     stage!("shade"),
     stage!("reference_gather"),
+    stage!("present"),
 ];
 
 /// Every shared module (`wgsl/shared/<name>.wgsl`), importable by name.

@@ -1,0 +1,69 @@
+//! The window's last pass (`wgsl/present.wgsl`): the tone-mapped image drawn onto a surface
+//! texture (or any colour target of the same format, which is how its test reads it back).
+
+use super::frame::raster_pipeline;
+use super::{Gpu, buffer_entries};
+use crate::error::Result;
+
+pub struct PresentPipeline {
+    pipeline: wgpu::RenderPipeline,
+    /// The target's format is sRGB: the shader decodes the bytes the hardware will encode.
+    decode: bool,
+}
+
+impl PresentPipeline {
+    pub fn new(gpu: &Gpu, format: wgpu::TextureFormat) -> Result<PresentPipeline> {
+        let target = Some(wgpu::ColorTargetState {
+            format,
+            blend: None,
+            write_mask: wgpu::ColorWrites::ALL,
+        });
+        let pipeline = raster_pipeline(gpu, "present", None, &[target])?;
+        gpu.check()?;
+        Ok(PresentPipeline {
+            pipeline,
+            decode: format.is_srgb(),
+        })
+    }
+
+    /// The uniform of an image of `width × height`.
+    pub fn params(&self, width: u32, height: u32) -> [u32; 4] {
+        [width, height, self.decode as u32, 0]
+    }
+
+    /// Records the draw of `rgba` (`width × height` packed sRGB pixels) onto `view`.
+    pub fn record(
+        &self,
+        gpu: &Gpu,
+        encoder: &mut wgpu::CommandEncoder,
+        view: &wgpu::TextureView,
+        rgba: &wgpu::Buffer,
+        (width, height): (u32, u32),
+    ) {
+        let params = gpu.uniform("present params", &self.params(width, height));
+        let group = gpu.device.create_bind_group(&wgpu::BindGroupDescriptor {
+            label: Some("present"),
+            layout: &self.pipeline.get_bind_group_layout(0),
+            entries: &buffer_entries(&[&params, rgba]),
+        });
+        let mut pass = encoder.begin_render_pass(&wgpu::RenderPassDescriptor {
+            label: Some("present"),
+            color_attachments: &[Some(wgpu::RenderPassColorAttachment {
+                view,
+                depth_slice: None,
+                resolve_target: None,
+                ops: wgpu::Operations {
+                    load: wgpu::LoadOp::Clear(wgpu::Color::BLACK),
+                    store: wgpu::StoreOp::Store,
+                },
+            })],
+            depth_stencil_attachment: None,
+            timestamp_writes: None,
+            occlusion_query_set: None,
+            multiview_mask: None,
+        });
+        pass.set_pipeline(&self.pipeline);
+        pass.set_bind_group(0, &group, &[]);
+        pass.draw(0..3, 0..1);
+    }
+}

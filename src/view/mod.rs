@@ -1,0 +1,437 @@
+//! `lobelight view`: a winit window that draws the scene every frame through the offscreen
+//! render's passes (splat passes, tone map) and one more, `present`, onto the window. The
+//! window opens with direct light while the bake runs on a second thread on the same device,
+//! and switches to full global illumination when the lobes arrive.
+//!
+//! Keys: mouse left drag orbits, right drag pans, wheel zooms; W A S D fly, Q E down and up;
+//! the keys plus and minus change the exposure by half a stop, [ and ] the tone-map key; P
+//! saves a screenshot; H prints the keys; Esc quits. `--frames N --screenshot OUT.png` draws N frames once the bake
+//! is in, saves the last and exits (scripted runs and tests).
+
+mod orbit;
+
+use std::path::PathBuf;
+use std::sync::Arc;
+use std::sync::mpsc::{Receiver, TryRecvError, channel};
+use std::time::Instant;
+
+use winit::application::ApplicationHandler;
+use winit::dpi::PhysicalSize;
+use winit::event::{ElementState, MouseButton, MouseScrollDelta, WindowEvent};
+use winit::event_loop::{ActiveEventLoop, EventLoop, OwnedDisplayHandle};
+use winit::keyboard::{Key, NamedKey};
+use winit::window::{Window, WindowId};
+
+use crate::bake::{BakeDevice, Progress, bake};
+use crate::camera::View;
+use crate::em::LobeMap;
+use crate::error::{Error, Result};
+use crate::frame::{FrameConfig, camera_uniform, shade_params};
+use crate::gpu::frame::{FrameScene, FrameTargets, SplatPipelines};
+use crate::gpu::present::PresentPipeline;
+use crate::gpu::scene::GpuScene;
+use crate::gpu::tone::tone_map;
+use crate::gpu::{BackendChoice, Gpu};
+use crate::scene::Scene;
+use crate::tone::ToneConfig;
+pub use orbit::Orbit;
+
+pub const HELP: &str = "mouse: left drag orbit, right drag pan, wheel zoom | W A S D fly, Q E \
+down/up | + − exposure | [ ] key | P screenshot | H help | Esc quit";
+
+#[derive(Clone, Debug)]
+pub struct ViewOptions {
+    pub width: u32,
+    pub height: u32,
+    pub backend: BackendChoice,
+    pub frame: FrameConfig,
+    pub tone: ToneConfig,
+    /// Scripted run: draw this many frames once the bake is in, then exit.
+    pub frames: Option<u32>,
+    /// Where a scripted run saves its last frame.
+    pub screenshot: Option<PathBuf>,
+}
+
+pub fn view(scene: Scene, opts: ViewOptions) -> Result<()> {
+    let event_loop =
+        EventLoop::new().map_err(|e| Error::Gpu(format!("cannot open a window: {e}")))?;
+    let display = event_loop.owned_display_handle();
+    let mut app = App {
+        scene: Arc::new(scene),
+        opts,
+        display,
+        state: None,
+        error: None,
+    };
+    event_loop
+        .run_app(&mut app)
+        .map_err(|e| Error::Gpu(format!("the window's event loop failed: {e}")))?;
+    app.error.map_or(Ok(()), Err)
+}
+
+struct App {
+    scene: Arc<Scene>,
+    opts: ViewOptions,
+    display: OwnedDisplayHandle,
+    state: Option<State>,
+    error: Option<Error>,
+}
+
+/// Everything a drawn window holds.
+struct State {
+    window: Arc<Window>,
+    gpu: Arc<Gpu>,
+    surface: wgpu::Surface<'static>,
+    config: wgpu::SurfaceConfiguration,
+    on_gpu: GpuScene,
+    pipelines: SplatPipelines,
+    present: PresentPipeline,
+    frame_scene: FrameScene,
+    lobes: LobeMap,
+    targets: FrameTargets,
+    orbit: Orbit,
+    tone: ToneConfig,
+    bake: Option<Receiver<Result<LobeMap>>>,
+    bake_start: Instant,
+    bake_s: Option<f64>,
+    /// Frames drawn since the bake came in (scripted runs count these).
+    frames_lit: u32,
+    screenshots: u32,
+    drag: Option<(MouseButton, (f64, f64))>,
+    cursor: (f64, f64),
+    frame_ms: f64,
+}
+
+impl App {
+    fn start(&mut self, event_loop: &ActiveEventLoop) -> Result<State> {
+        let size = PhysicalSize::new(self.opts.width, self.opts.height);
+        let window = Arc::new(
+            event_loop
+                .create_window(
+                    Window::default_attributes()
+                        .with_title("lobelight")
+                        .with_inner_size(size),
+                )
+                .map_err(|e| Error::Gpu(format!("cannot open a window: {e}")))?,
+        );
+        let (gpu, surface) = Gpu::for_window(self.opts.backend, &self.display, &window)?;
+        let gpu = Arc::new(gpu);
+        let caps = surface.get_capabilities(&gpu.adapter);
+        // A plain (non-sRGB) 8-bit format takes the tone map's bytes as they are.
+        let format = caps
+            .formats
+            .iter()
+            .copied()
+            .find(|f| !f.is_srgb())
+            .or(caps.formats.first().copied())
+            .ok_or_else(|| Error::Gpu("the window's surface offers no format".into()))?;
+        let inner = window.inner_size();
+        let config = wgpu::SurfaceConfiguration {
+            usage: wgpu::TextureUsages::RENDER_ATTACHMENT,
+            format,
+            width: inner.width.max(1),
+            height: inner.height.max(1),
+            present_mode: wgpu::PresentMode::AutoVsync,
+            desired_maximum_frame_latency: 2,
+            alpha_mode: caps
+                .alpha_modes
+                .first()
+                .copied()
+                .unwrap_or(wgpu::CompositeAlphaMode::Auto),
+            view_formats: vec![],
+            color_space: wgpu::SurfaceColorSpace::Auto,
+        };
+        surface.configure(&gpu.device, &config);
+        let on_gpu = GpuScene::upload(&gpu, &self.scene)?;
+        let pipelines = SplatPipelines::new(&gpu)?;
+        let present = PresentPipeline::new(&gpu, format)?;
+        let lobes = LobeMap::default();
+        let frame_scene = FrameScene::upload(&gpu, &self.scene, &lobes)?;
+        let targets = pipelines.targets(&gpu, config.width, config.height)?;
+        // The bake runs beside the frames, on the same device.
+        let (send, receive) = channel();
+        let (bake_gpu, bake_scene) = (gpu.clone(), self.scene.clone());
+        std::thread::spawn(move || {
+            let baked = GpuScene::upload(&bake_gpu, &bake_scene).and_then(|on_gpu| {
+                let device = BakeDevice::Gpu(&bake_gpu, &on_gpu);
+                bake(&bake_scene, device, &Progress::new(false)).map(|b| b.lobes)
+            });
+            // The window may be gone by then; nothing waits for the result.
+            let _ = send.send(baked);
+        });
+        eprintln!("{HELP}");
+        Ok(State {
+            window,
+            gpu,
+            surface,
+            config,
+            on_gpu,
+            pipelines,
+            present,
+            frame_scene,
+            lobes,
+            targets,
+            orbit: Orbit::new(&self.scene.camera),
+            tone: self.opts.tone,
+            bake: Some(receive),
+            bake_start: Instant::now(),
+            bake_s: None,
+            frames_lit: 0,
+            screenshots: 0,
+            drag: None,
+            cursor: (0.0, 0.0),
+            frame_ms: 0.0,
+        })
+    }
+}
+
+impl State {
+    /// Takes the bake's result when it has come in.
+    fn poll_bake(&mut self, scene: &Scene) -> Result<()> {
+        let Some(rx) = &self.bake else {
+            return Ok(());
+        };
+        match rx.try_recv() {
+            Ok(lobes) => {
+                self.lobes = lobes?;
+                self.frame_scene = FrameScene::upload(&self.gpu, scene, &self.lobes)?;
+                self.bake = None;
+                self.bake_s = Some(self.bake_start.elapsed().as_secs_f64());
+            }
+            Err(TryRecvError::Empty) => {}
+            Err(TryRecvError::Disconnected) => {
+                return Err(Error::Gpu("the bake stopped without a result".into()));
+            }
+        }
+        Ok(())
+    }
+
+    fn resize(&mut self, size: PhysicalSize<u32>) -> Result<()> {
+        if size.width == 0 || size.height == 0 {
+            return Ok(()); // minimised: nothing to draw into
+        }
+        self.config.width = size.width;
+        self.config.height = size.height;
+        self.surface.configure(&self.gpu.device, &self.config);
+        self.targets = self.pipelines.targets(&self.gpu, size.width, size.height)?;
+        Ok(())
+    }
+
+    /// Draws one frame; returns the tone-mapped image's buffer (for screenshots), or none
+    /// when the surface could not give a texture this time.
+    fn draw(&mut self, scene: &Scene, frame: &FrameConfig) -> Result<Option<wgpu::Buffer>> {
+        let (w, h) = (self.config.width, self.config.height);
+        if self.targets.width != w || self.targets.height != h {
+            return Ok(None);
+        }
+        let texture = match self.surface.get_current_texture() {
+            wgpu::CurrentSurfaceTexture::Success(t)
+            | wgpu::CurrentSurfaceTexture::Suboptimal(t) => t,
+            wgpu::CurrentSurfaceTexture::Timeout | wgpu::CurrentSurfaceTexture::Occluded => {
+                return Ok(None);
+            }
+            wgpu::CurrentSurfaceTexture::Outdated | wgpu::CurrentSurfaceTexture::Lost => {
+                self.surface.configure(&self.gpu.device, &self.config);
+                return Ok(None);
+            }
+            other => {
+                return Err(Error::Gpu(format!(
+                    "the window's surface failed: {other:?}"
+                )));
+            }
+        };
+        let start = Instant::now();
+        let view = View::new(&self.orbit.camera(), w, h);
+        let cam = camera_uniform(&view, scene.bounds(), frame);
+        let params = shade_params(scene, &self.lobes, frame);
+        let gpu = &self.gpu;
+        let mut encoder = gpu.encoder("view frame");
+        let buffers = self.frame_scene.buffers(&self.on_gpu);
+        self.pipelines
+            .draw(gpu, &mut encoder, &buffers, &cam, &params, &self.targets)?;
+        let toned = tone_map(gpu, &mut encoder, &self.targets.hdr, w * h, &self.tone)?;
+        let target = texture.texture.create_view(&Default::default());
+        self.present
+            .record(gpu, &mut encoder, &target, &toned.rgba, (w, h));
+        gpu.submit_and_wait(encoder)?;
+        gpu.queue.present(texture);
+        self.frame_ms = crate::photons::ms_since(start);
+        Ok(Some(toned.rgba))
+    }
+
+    fn title(&self, scene: &Scene) -> String {
+        let light = match self.bake_s {
+            Some(s) => format!("global illumination (baked in {s:.1} s)"),
+            None => format!(
+                "direct light; baking… {:.0} s",
+                self.bake_start.elapsed().as_secs_f64()
+            ),
+        };
+        format!(
+            "lobelight — {:.1} fps, {:.0} ms — {} splats, {} photons — {light} — H: keys",
+            1e3 / self.frame_ms.max(1e-3),
+            self.frame_ms,
+            scene.splats.len(),
+            scene.bake.photons
+        )
+    }
+
+    fn screenshot(&self, rgba: &wgpu::Buffer, path: &std::path::Path) -> Result<()> {
+        let (w, h) = (self.config.width, self.config.height);
+        let pixels = self.gpu.read::<u32>(rgba, (w * h) as usize)?;
+        crate::render::write_rgba8(path, &pixels, w, h)
+    }
+
+    fn key(&mut self, key: &Key) -> Option<KeyAction> {
+        let step = 0.05;
+        match key {
+            Key::Named(NamedKey::Escape) => return Some(KeyAction::Quit),
+            Key::Character(c) => match c.as_str() {
+                "w" | "W" => self.orbit.fly(step, 0.0, 0.0),
+                "s" | "S" => self.orbit.fly(-step, 0.0, 0.0),
+                "a" | "A" => self.orbit.fly(0.0, -step, 0.0),
+                "d" | "D" => self.orbit.fly(0.0, step, 0.0),
+                "q" | "Q" => self.orbit.fly(0.0, 0.0, -step),
+                "e" | "E" => self.orbit.fly(0.0, 0.0, step),
+                "+" | "=" => self.tone.exposure += 0.5,
+                "-" => self.tone.exposure -= 0.5,
+                "[" => self.tone.key = (self.tone.key / 1.25).max(0.01),
+                "]" => self.tone.key = (self.tone.key * 1.25).min(1.0),
+                "p" | "P" => return Some(KeyAction::Screenshot),
+                "h" | "H" => eprintln!("{HELP}"),
+                _ => {}
+            },
+            _ => {}
+        }
+        None
+    }
+}
+
+enum KeyAction {
+    Quit,
+    Screenshot,
+}
+
+impl App {
+    fn fail(&mut self, event_loop: &ActiveEventLoop, e: Error) {
+        self.error.get_or_insert(e);
+        event_loop.exit();
+    }
+
+    fn redraw(&mut self, event_loop: &ActiveEventLoop) -> Result<()> {
+        let scene = self.scene.clone();
+        let Some(state) = self.state.as_mut() else {
+            return Ok(());
+        };
+        state.poll_bake(&scene)?;
+        let scripted = self.opts.frames.is_some();
+        // A scripted run waits for the bake: its frames are meant to show the full light.
+        if scripted && state.bake.is_some() {
+            std::thread::sleep(std::time::Duration::from_millis(20));
+            state.window.request_redraw();
+            return Ok(());
+        }
+        let Some(rgba) = state.draw(&scene, &self.opts.frame)? else {
+            state.window.request_redraw();
+            return Ok(());
+        };
+        if state.bake.is_none() {
+            state.frames_lit += 1;
+        }
+        state.window.set_title(&state.title(&scene));
+        if let Some(n) = self.opts.frames
+            && state.frames_lit >= n
+        {
+            if let Some(path) = &self.opts.screenshot {
+                state.screenshot(&rgba, path)?;
+                eprintln!("wrote {}", path.display());
+            }
+            event_loop.exit();
+            return Ok(());
+        }
+        state.window.request_redraw();
+        Ok(())
+    }
+}
+
+impl ApplicationHandler for App {
+    fn resumed(&mut self, event_loop: &ActiveEventLoop) {
+        if self.state.is_some() {
+            return;
+        }
+        match self.start(event_loop) {
+            Ok(state) => {
+                state.window.request_redraw();
+                self.state = Some(state);
+            }
+            Err(e) => self.fail(event_loop, e),
+        }
+    }
+
+    fn window_event(&mut self, event_loop: &ActiveEventLoop, _id: WindowId, event: WindowEvent) {
+        let result = match event {
+            WindowEvent::CloseRequested => {
+                event_loop.exit();
+                Ok(())
+            }
+            WindowEvent::RedrawRequested => self.redraw(event_loop),
+            other => self.input(event_loop, other),
+        };
+        if let Err(e) = result {
+            self.fail(event_loop, e);
+        }
+    }
+}
+
+impl App {
+    fn input(&mut self, event_loop: &ActiveEventLoop, event: WindowEvent) -> Result<()> {
+        let Some(state) = self.state.as_mut() else {
+            return Ok(());
+        };
+        match event {
+            WindowEvent::Resized(size) => state.resize(size)?,
+            WindowEvent::MouseInput {
+                state: pressed,
+                button,
+                ..
+            } => {
+                state.drag = (pressed == ElementState::Pressed).then_some((button, state.cursor));
+            }
+            WindowEvent::CursorMoved { position, .. } => {
+                state.cursor = (position.x, position.y);
+                if let Some((button, from)) = state.drag {
+                    let (dx, dy) = ((position.x - from.0) as f32, (position.y - from.1) as f32);
+                    match button {
+                        MouseButton::Left => state.orbit.turn(dx, dy),
+                        _ => state.orbit.pan(dx, dy),
+                    }
+                    state.drag = Some((button, state.cursor));
+                }
+            }
+            WindowEvent::MouseWheel { delta, .. } => {
+                let lines = match delta {
+                    MouseScrollDelta::LineDelta(_, y) => y,
+                    MouseScrollDelta::PixelDelta(p) => p.y as f32 / 40.0,
+                };
+                state.orbit.zoom(lines);
+            }
+            WindowEvent::KeyboardInput { event, .. } if event.state == ElementState::Pressed => {
+                match state.key(&event.logical_key) {
+                    Some(KeyAction::Quit) => event_loop.exit(),
+                    Some(KeyAction::Screenshot) => {
+                        state.screenshots += 1;
+                        let path = PathBuf::from(format!("lobelight-{}.png", state.screenshots));
+                        // The next frame's image is the one on screen after this key.
+                        if let Some(rgba) = state.draw(&self.scene, &self.opts.frame)? {
+                            state.screenshot(&rgba, &path)?;
+                            eprintln!("wrote {}", path.display());
+                        }
+                    }
+                    None => {}
+                }
+            }
+            _ => {}
+        }
+        Ok(())
+    }
+}

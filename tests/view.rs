@@ -1,0 +1,124 @@
+//! The viewer: a scripted run in a virtual X display (Xvfb, on lavapipe in CI) against the
+//! offscreen render of the same camera, and the present pass against its CPU mirror.
+
+mod common;
+
+use std::process::Command;
+
+use lobelight::compare::{Values, difference_of, read_image};
+use lobelight::cpu::present::present;
+use lobelight::gpu::present::PresentPipeline;
+
+fn path(name: &str) -> String {
+    let dir = std::env::temp_dir().join(format!("lobelight-view-{}", std::process::id()));
+    std::fs::create_dir_all(&dir).unwrap();
+    dir.join(name).display().to_string()
+}
+
+/// `view --frames 3 --screenshot` under `xvfb-run` saves what the window showed; the same
+/// scene, bake settings and size rendered offscreen give the same image. The bake and both
+/// frames are deterministic, so the tolerance is one 8-bit step: mean relative difference
+/// under 0.5 % and every pixel within 5 %.
+#[test]
+fn a_scripted_view_matches_the_offscreen_render() {
+    let exe = env!("CARGO_BIN_EXE_lobelight");
+    let (shot, offscreen) = (path("shot.png"), path("offscreen.png"));
+    let common = [
+        "scenes/cornell.toml",
+        "--photons",
+        "100000",
+        "--width",
+        "96",
+        "--height",
+        "72",
+    ];
+    let view = Command::new("xvfb-run")
+        .args(["-a", "-s", "-screen 0 640x480x24", exe, "view"])
+        .args(common)
+        .args(["--frames", "3", "--screenshot", &shot])
+        .output()
+        .expect("xvfb-run is missing: install the xvfb package (CI does)");
+    assert!(
+        view.status.success(),
+        "{}",
+        String::from_utf8_lossy(&view.stderr)
+    );
+    let render = Command::new(exe)
+        .arg("render")
+        .args(common)
+        .args(["-o", &offscreen])
+        .output()
+        .unwrap();
+    assert!(render.status.success());
+    let (a, w, h) = read_image(std::path::Path::new(&shot)).unwrap();
+    let (b, wb, hb) = read_image(std::path::Path::new(&offscreen)).unwrap();
+    assert_eq!((w, h), (96, 72));
+    assert_eq!((w, h), (wb, hb));
+    let d = difference_of(&a, &b, w, h, Values::Display).unwrap();
+    assert!(d.mean_relative <= 0.005, "{d:?}");
+    assert!(d.within_5_percent >= 1.0, "{d:?}");
+}
+
+/// The present pass drawn into an offscreen texture of a plain and of an sRGB format, read
+/// back, against the mirror: within one 8-bit step.
+#[test]
+fn the_present_pass_matches_its_mirror() {
+    let gpu = common::gpu();
+    let (w, h) = (64u32, 48u32);
+    let rgba: Vec<u32> = (0..w * h).map(|i| (i * 2654435761) | 0xff00_0000).collect();
+    let buffer = gpu.storage("image", &rgba).unwrap();
+    for format in [
+        wgpu::TextureFormat::Rgba8Unorm,
+        wgpu::TextureFormat::Rgba8UnormSrgb,
+    ] {
+        let pipeline = PresentPipeline::new(&gpu, format).unwrap();
+        let texture = gpu.device.create_texture(&wgpu::TextureDescriptor {
+            label: Some("present target"),
+            size: wgpu::Extent3d {
+                width: w,
+                height: h,
+                depth_or_array_layers: 1,
+            },
+            mip_level_count: 1,
+            sample_count: 1,
+            dimension: wgpu::TextureDimension::D2,
+            format,
+            usage: wgpu::TextureUsages::RENDER_ATTACHMENT | wgpu::TextureUsages::COPY_SRC,
+            view_formats: &[],
+        });
+        let out = gpu.storage_zeroed("read back", (w * h * 4) as u64).unwrap();
+        let mut encoder = gpu.encoder("present test");
+        let view = texture.create_view(&Default::default());
+        pipeline.record(&gpu, &mut encoder, &view, &buffer, (w, h));
+        encoder.copy_texture_to_buffer(
+            texture.as_image_copy(),
+            wgpu::TexelCopyBufferInfo {
+                buffer: &out,
+                layout: wgpu::TexelCopyBufferLayout {
+                    offset: 0,
+                    bytes_per_row: Some(w * 4),
+                    rows_per_image: Some(h),
+                },
+            },
+            texture.size(),
+        );
+        gpu.submit_and_wait(encoder).unwrap();
+        let got: Vec<u32> = gpu.read(&out, (w * h) as usize).unwrap();
+        let want = present(pipeline.params(w, h), &rgba);
+        for (i, (g, m)) in got.iter().zip(&want).enumerate() {
+            for (c, &value) in m[..3].iter().enumerate() {
+                // What the texture stores: the mirror's value, sRGB-encoded for an sRGB format.
+                let v = if format.is_srgb() {
+                    lobelight::shared::tone::srgb_byte(value) as i32
+                } else {
+                    (value * 255.0).round() as i32
+                };
+                let stored = ((g >> (8 * c)) & 0xff) as i32;
+                assert!(
+                    (stored - v).abs() <= 1,
+                    "{format:?} pixel {i} channel {c}: {stored} vs {v}"
+                );
+            }
+        }
+    }
+}
