@@ -100,6 +100,8 @@ struct State {
     drag: Option<(MouseButton, (f64, f64))>,
     cursor: (f64, f64),
     frame_ms: f64,
+    /// Frame times (ms) since the bake came in: a scripted run prints their median.
+    lit_ms: Vec<f64>,
 }
 
 impl App {
@@ -181,6 +183,7 @@ impl App {
             drag: None,
             cursor: (0.0, 0.0),
             frame_ms: 0.0,
+            lit_ms: Vec::new(),
         })
     }
 }
@@ -337,6 +340,7 @@ impl App {
         };
         if state.bake.is_none() {
             state.frames_lit += 1;
+            state.lit_ms.push(state.frame_ms);
         }
         state.window.set_title(&state.title(&scene));
         if let Some(n) = self.opts.frames
@@ -346,6 +350,17 @@ impl App {
                 state.screenshot(&rgba, path)?;
                 eprintln!("wrote {}", path.display());
             }
+            let mut ms = state.lit_ms.clone();
+            ms.sort_by(f64::total_cmp);
+            eprintln!(
+                "{} frames of {}×{} in the window: median {:.1} ms (frame, tone map and \
+                 present); bake {:.1} s",
+                ms.len(),
+                state.config.width,
+                state.config.height,
+                ms.get(ms.len() / 2).copied().unwrap_or(0.0),
+                state.bake_s.unwrap_or(0.0)
+            );
             event_loop.exit();
             return Ok(());
         }
