@@ -3,6 +3,8 @@
 // the hardware encodes on write, so the bytes are decoded to linear first (params.z = 1).
 // Twin: src/cpu/present.rs.
 
+// #import fullscreen
+
 // x: image width, y: image height, z: 1 to decode sRGB, w: unused.
 @group(0) @binding(0) var<uniform> params: vec4<u32>;
 @group(0) @binding(1) var<storage, read> rgba: array<u32>;
@@ -15,10 +17,7 @@ fn srgb_to_linear(c: vec3<f32>) -> vec3<f32> {
 
 @vertex
 fn vs_main(@builtin(vertex_index) corner: u32) -> @builtin(position) vec4<f32> {
-    // One triangle over the whole viewport: (-1, -1), (3, -1), (-1, 3).
-    let x = f32(corner & 1u) * 4.0 - 1.0;
-    let y = f32(corner >> 1u) * 4.0 - 1.0;
-    return vec4<f32>(x, y, 0.0, 1.0);
+    return fullscreen_corner(corner);
 }
 
 @fragment

@@ -11,6 +11,7 @@
 // #import trace
 // #import bins
 // #import octahedral
+// #import fullscreen
 
 @group(0) @binding(0) var<uniform> cam: Camera;
 @group(0) @binding(1) var<uniform> em: EmParams;
@@ -49,10 +50,7 @@ fn gather(p: vec3<f32>, n: vec3<f32>, wo: vec3<f32>, rho_d: vec3<f32>, m: Materi
 
 @vertex
 fn vs_main(@builtin(vertex_index) corner: u32) -> @builtin(position) vec4<f32> {
-    // One triangle over the whole viewport: (-1, -1), (3, -1), (-1, 3).
-    let x = f32(corner & 1u) * 4.0 - 1.0;
-    let y = f32(corner >> 1u) * 4.0 - 1.0;
-    return vec4<f32>(x, y, 0.0, 1.0);
+    return fullscreen_corner(corner);
 }
 
 @fragment

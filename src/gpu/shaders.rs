@@ -77,6 +77,7 @@ pub const SHARED: &[WgslFile] = &[
     shared!("tone"),
     shared!("splat"),
     shared!("lobe_brdf"),
+    shared!("fullscreen"),
 ];
 
 pub fn stage(name: &str) -> Option<&'static WgslFile> {
