@@ -13,6 +13,45 @@ use crate::scene::Scene;
 use crate::shared::trace::Geometry;
 use crate::types::{Camera, EmParams, ShadeParams, Splat};
 
+/// Which light a frame shows: everything, or one part of it (the viewer's keys 1–5).
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, clap::ValueEnum, serde::Serialize)]
+#[serde(rename_all = "lowercase")]
+pub enum Show {
+    /// Direct and indirect, diffuse and specular.
+    #[default]
+    Full,
+    /// Shadow-ray light alone.
+    Direct,
+    /// The bake's light alone: total irradiance and the lobes.
+    Indirect,
+    /// Diffuse reflection alone, direct and indirect.
+    Diffuse,
+    /// The lobes' specular reflection alone.
+    Lobes,
+}
+
+impl Show {
+    pub const ALL: [Show; 5] = [
+        Show::Full,
+        Show::Direct,
+        Show::Indirect,
+        Show::Diffuse,
+        Show::Lobes,
+    ];
+
+    /// `ShadeParams::show` bits.
+    pub fn mask(self) -> u32 {
+        use crate::shared::splat::*;
+        match self {
+            Show::Full => SHOW_ALL,
+            Show::Direct => SHOW_DIRECT_DIFFUSE | SHOW_DIRECT_SPECULAR,
+            Show::Indirect => SHOW_INDIRECT_DIFFUSE | SHOW_INDIRECT_SPECULAR,
+            Show::Diffuse => SHOW_DIRECT_DIFFUSE | SHOW_INDIRECT_DIFFUSE,
+            Show::Lobes => SHOW_INDIRECT_SPECULAR,
+        }
+    }
+}
+
 /// Settings of the splat passes.
 #[derive(Clone, Debug, PartialEq)]
 pub struct FrameConfig {
@@ -22,6 +61,8 @@ pub struct FrameConfig {
     pub depth_tolerance: f32,
     /// Seed of the area-light jitter.
     pub seed: u32,
+    /// Which light terms to show (`shared::splat::SHOW_*` bits).
+    pub show: u32,
 }
 
 impl Default for FrameConfig {
@@ -30,6 +71,7 @@ impl Default for FrameConfig {
             area_samples: 4,
             depth_tolerance: 1.0,
             seed: 1,
+            show: crate::shared::splat::SHOW_ALL,
         }
     }
 }
@@ -86,6 +128,7 @@ pub fn shade_params(scene: &Scene, lobes: &LobeMap, cfg: &FrameConfig) -> ShadeP
         area_samples: cfg.area_samples,
         shadow_bias: shadow_bias(&scene.splats),
         seed: cfg.seed,
+        show: cfg.show,
         ..Default::default()
     }
 }

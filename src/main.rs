@@ -5,7 +5,7 @@ use std::process::ExitCode;
 
 use clap::{Args, Parser, Subcommand, ValueEnum};
 use lobelight::em::{EmConfig, LobeFamily};
-use lobelight::frame::FrameConfig;
+use lobelight::frame::{FrameConfig, Show};
 use lobelight::gpu::{BackendChoice, Gpu};
 use lobelight::photons::PhotonConfig;
 use lobelight::scene::file::StoreRange;
@@ -116,12 +116,16 @@ struct LookArgs {
     /// Area lights: shadow-ray samples per pixel along each edge (N² in all).
     #[arg(long, default_value_t = 4)]
     area_samples: u32,
+    /// Which light to show: all of it, or one part.
+    #[arg(long, value_enum, default_value_t = Show::Full)]
+    show: Show,
 }
 
 impl LookArgs {
     fn frame(&self) -> FrameConfig {
         FrameConfig {
             area_samples: self.area_samples,
+            show: self.show.mask(),
             ..FrameConfig::default()
         }
     }

@@ -297,7 +297,8 @@ pub struct ShadeParams {
     /// Shadow rays start this far off the surface, along its normal (scene units).
     pub shadow_bias: f32,
     pub seed: u32,
-    pub _pad0: u32,
+    /// Which light terms the frame shows (`shared::splat::SHOW_*` bits).
+    pub show: u32,
     pub _pad1: u32,
 }
 

@@ -169,7 +169,7 @@ fn rust_layouts() -> Vec<RustLayout> {
             area_samples,
             shadow_bias,
             seed,
-            _pad0,
+            show,
             _pad1
         }),
         layout!(GridParams {

@@ -172,11 +172,18 @@ fn main(@builtin(workgroup_id) wg: vec3<u32>, @builtin(num_workgroups) num_wg: v
         sf.p = cam.eye + t_surface * d;
         sf.n = select(-d, normalize(g.xyz), dot(g.xyz, g.xyz) > 0.0);
         sf.wo = -d;
-        sf.rho_d = dif.xyz * inv_w;
-        sf.rho_s = spec.xyz * inv_w;
+        // Terms the frame does not show weigh nothing; with neither, no shadow ray is cast.
+        sf.rho_d = select(vec3<f32>(0.0), dif.xyz * inv_w, (params.show & SHOW_DIRECT_DIFFUSE) != 0u);
+        sf.rho_s = select(vec3<f32>(0.0), spec.xyz * inv_w, (params.show & SHOW_DIRECT_SPECULAR) != 0u);
         sf.alpha = select(0.0, dif.w / spec.w, spec.w > 0.0);
-        color = acc.xyz * inv_w + direct(sf, i);
+        color = acc.xyz * inv_w;
+        if (params.show & (SHOW_DIRECT_DIFFUSE | SHOW_DIRECT_SPECULAR)) != 0u {
+            color += direct(sf, i);
+        }
     }
-    let light = emitted(d, t_surface);
-    hdr[i] = vec4<f32>(select(color, light, light.x >= 0.0), 1.0);
+    // A light seen directly hides what lies behind it; its radiance counts with the direct
+    // diffuse term, so that the parts a frame can show add up to the whole.
+    let seen = emitted(d, t_surface);
+    let light = select(vec3<f32>(0.0), seen, (params.show & SHOW_DIRECT_DIFFUSE) != 0u);
+    hdr[i] = vec4<f32>(select(color, light, seen.x >= 0.0), 1.0);
 }

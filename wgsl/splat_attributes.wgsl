@@ -31,13 +31,16 @@ fn indirect(i: u32, s: Splat, m: Material, wo: vec3<f32>) -> vec3<f32> {
     let light = splat_light[i];
     var spec = vec3<f32>(0.0);
     let first = i * params.lobes_per_splat;
-    for (var k = 0u; k < light.lobes; k++) {
+    let shown = select(0u, light.lobes, (params.show & SHOW_INDIRECT_SPECULAR) != 0u);
+    for (var k = 0u; k < shown; k++) {
         let lobe = lobes[first + k];
         let beta2 = lobe_beta2(params.family, lobe.sharpness);
         let norm = lobe_norm(s.normal, lobe.axis, beta2);
         spec += lobe.irradiance * lobe_specular(s.normal, wo, lobe.axis, m.roughness, beta2, norm);
     }
-    return s.diffuse * (light.irradiance / PI) + m.specular * spec;
+    let diffuse = select(vec3<f32>(0.0), s.diffuse * (light.irradiance / PI),
+                         (params.show & SHOW_INDIRECT_DIFFUSE) != 0u);
+    return diffuse + m.specular * spec;
 }
 
 @vertex

@@ -8,7 +8,9 @@ use rayon::prelude::*;
 
 use crate::shared::rng::{pcg_hash, unit_float};
 use crate::shared::sampling::{PI, smoothstep};
-use crate::shared::splat::{SHADOW_RAY_BUDGET, pixel_ray};
+use crate::shared::splat::{
+    SHADOW_RAY_BUDGET, SHOW_DIRECT_DIFFUSE, SHOW_DIRECT_SPECULAR, pixel_ray,
+};
 use crate::shared::trace::{FAR, Geometry, trace_ray};
 use crate::shared::ward::ward_specular;
 use crate::types::{Camera, Light, NO_SPLAT, ShadeParams, light_kind};
@@ -180,6 +182,13 @@ pub fn shade(
             let acc = Vec4::from(sums.radiance[i as usize]);
             let mut color = Vec3::ZERO;
             let mut t_surface = FAR;
+            let shown = |bit: u32, v: Vec3| {
+                if params.show & bit != 0 {
+                    v
+                } else {
+                    Vec3::ZERO
+                }
+            };
             if acc.w > 0.0 {
                 let inv_w = 1.0 / acc.w;
                 let g = Vec4::from(sums.geometry[i as usize]);
@@ -187,17 +196,25 @@ pub fn shade(
                 let spec = Vec4::from(sums.specular[i as usize]);
                 t_surface = g.w * inv_w;
                 let gn = g.truncate();
+                // Terms the frame does not show weigh nothing; with neither, no shadow ray.
                 let sf = Surface {
                     p: eye + t_surface * d,
                     n: if gn.dot(gn) > 0.0 { gn.normalize() } else { -d },
                     wo: -d,
-                    rho_d: dif.truncate() * inv_w,
-                    rho_s: spec.truncate() * inv_w,
+                    rho_d: shown(SHOW_DIRECT_DIFFUSE, dif.truncate() * inv_w),
+                    rho_s: shown(SHOW_DIRECT_SPECULAR, spec.truncate() * inv_w),
                     alpha: if spec.w > 0.0 { dif.w / spec.w } else { 0.0 },
                 };
-                color = acc.truncate() * inv_w + direct(params, geo, lights, &sf, i);
+                color = acc.truncate() * inv_w;
+                if params.show & (SHOW_DIRECT_DIFFUSE | SHOW_DIRECT_SPECULAR) != 0 {
+                    color += direct(params, geo, lights, &sf, i);
+                }
             }
-            let c = emitted(cam, params, lights, d, t_surface).unwrap_or(color);
+            // A light seen directly hides what lies behind it; its radiance counts with the
+            // direct diffuse term, so that the parts a frame can show add up to the whole.
+            let c = emitted(cam, params, lights, d, t_surface)
+                .map(|light| shown(SHOW_DIRECT_DIFFUSE, light))
+                .unwrap_or(color);
             [c.x, c.y, c.z, 1.0]
         })
         .collect()

@@ -8,7 +8,10 @@ use glam::{Vec3, Vec4};
 use super::splat_visibility::{TILE, Tiles, gather, raster};
 use crate::shared::lobe_brdf::{lobe_specular, norm_at, norm_lookup};
 use crate::shared::sampling::PI;
-use crate::shared::splat::{covers, lobe_beta2, pixel_ray, splat_hit, splat_weight, view_depth};
+use crate::shared::splat::{
+    SHOW_INDIRECT_DIFFUSE, SHOW_INDIRECT_SPECULAR, covers, lobe_beta2, pixel_ray, splat_hit,
+    splat_weight, view_depth,
+};
 use crate::types::{Camera, Lobe, Material, ShadeParams, Splat, SplatLight};
 
 /// The four blended targets of the attribute pass (see the WGSL file for what each holds).
@@ -40,14 +43,24 @@ fn indirect(
     let light = &splat_light[i as usize];
     let mut spec = Vec3::ZERO;
     let first = i * params.lobes_per_splat;
-    for k in 0..light.lobes {
+    let shown = if params.show & SHOW_INDIRECT_SPECULAR != 0 {
+        light.lobes
+    } else {
+        0
+    };
+    for k in 0..shown {
         let lobe = &lobes[(first + k) as usize];
         let beta2 = lobe_beta2(params.family, lobe.sharpness);
         let (n, axis) = (Vec3::from(s.normal), Vec3::from(lobe.axis));
         let norm = lobe_norm(lobe_norms, n, axis, beta2);
         spec += Vec3::from(lobe.irradiance) * lobe_specular(n, wo, axis, m.roughness, beta2, norm);
     }
-    Vec3::from(s.diffuse) * (Vec3::from(light.irradiance) / PI) + Vec3::from(m.specular) * spec
+    let diffuse = if params.show & SHOW_INDIRECT_DIFFUSE != 0 {
+        Vec3::from(s.diffuse) * (Vec3::from(light.irradiance) / PI)
+    } else {
+        Vec3::ZERO
+    };
+    diffuse + Vec3::from(m.specular) * spec
 }
 
 #[allow(clippy::too_many_arguments)]

@@ -12,6 +12,14 @@ use crate::types::{Camera, Splat};
 pub const KERNEL_SHARPNESS: f32 = 2.0;
 pub const SHADOW_RAY_BUDGET: u32 = 16_384;
 
+/// Light terms a frame shows (`ShadeParams::show`): direct diffuse and specular (shadow rays),
+/// indirect diffuse (total irradiance) and specular (the lobes).
+pub const SHOW_DIRECT_DIFFUSE: u32 = 1;
+pub const SHOW_DIRECT_SPECULAR: u32 = 2;
+pub const SHOW_INDIRECT_DIFFUSE: u32 = 4;
+pub const SHOW_INDIRECT_SPECULAR: u32 = 8;
+pub const SHOW_ALL: u32 = 15;
+
 pub const SPLAT_CORNERS: u32 = 3;
 const SQRT_3: f32 = 1.732_050_8;
 

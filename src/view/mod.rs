@@ -26,7 +26,7 @@ use crate::bake::{BakeDevice, Progress, bake};
 use crate::camera::View;
 use crate::em::LobeMap;
 use crate::error::{Error, Result};
-use crate::frame::{FrameConfig, camera_uniform, shade_params};
+use crate::frame::{FrameConfig, Show, camera_uniform, shade_params};
 use crate::gpu::frame::{FrameScene, FrameTargets, SplatPipelines};
 use crate::gpu::present::PresentPipeline;
 use crate::gpu::scene::GpuScene;
@@ -37,7 +37,8 @@ use crate::tone::ToneConfig;
 pub use orbit::Orbit;
 
 pub const HELP: &str = "mouse: left drag orbit, right drag pan, wheel zoom | W A S D fly, Q E \
-down/up | + − exposure | [ ] key | P screenshot | H help | Esc quit";
+down/up | 1 full, 2 direct, 3 indirect, 4 diffuse only, 5 lobes only | + − exposure | [ ] key | \
+P screenshot | H help | Esc quit";
 
 #[derive(Clone, Debug)]
 pub struct ViewOptions {
@@ -102,6 +103,8 @@ struct State {
     frame_ms: f64,
     /// Frame times (ms) since the bake came in: a scripted run prints their median.
     lit_ms: Vec<f64>,
+    /// Which light the frame shows (keys 1–5).
+    show: Show,
 }
 
 impl App {
@@ -184,6 +187,10 @@ impl App {
             cursor: (0.0, 0.0),
             frame_ms: 0.0,
             lit_ms: Vec::new(),
+            show: Show::ALL
+                .into_iter()
+                .find(|s| s.mask() == self.opts.frame.show)
+                .unwrap_or_default(),
         })
     }
 }
@@ -246,7 +253,11 @@ impl State {
         let start = Instant::now();
         let view = View::new(&self.orbit.camera(), w, h);
         let cam = camera_uniform(&view, scene.bounds(), frame);
-        let params = shade_params(scene, &self.lobes, frame);
+        let frame = FrameConfig {
+            show: self.show.mask(),
+            ..frame.clone()
+        };
+        let params = shade_params(scene, &self.lobes, &frame);
         let gpu = &self.gpu;
         let mut encoder = gpu.encoder("view frame");
         let buffers = self.frame_scene.buffers(&self.on_gpu);
@@ -271,11 +282,12 @@ impl State {
             ),
         };
         format!(
-            "lobelight — {:.1} fps, {:.0} ms — {} splats, {} photons — {light} — H: keys",
+            "lobelight — {:.1} fps, {:.0} ms — {} splats, {} photons — {light} — showing {:?} — H: keys",
             1e3 / self.frame_ms.max(1e-3),
             self.frame_ms,
             scene.splats.len(),
-            scene.bake.photons
+            scene.bake.photons,
+            self.show
         )
     }
 
@@ -301,6 +313,11 @@ impl State {
                 "[" => self.tone.key = (self.tone.key / 1.25).max(0.01),
                 "]" => self.tone.key = (self.tone.key * 1.25).min(1.0),
                 "p" | "P" => return Some(KeyAction::Screenshot),
+                "1" | "2" | "3" | "4" | "5" => {
+                    let k = c.as_str().parse::<usize>().unwrap_or(1) - 1;
+                    let show = Show::ALL[k.min(Show::ALL.len() - 1)];
+                    self.show = show;
+                }
                 "h" | "H" => eprintln!("{HELP}"),
                 _ => {}
             },

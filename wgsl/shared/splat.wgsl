@@ -19,6 +19,14 @@ const KERNEL_SHARPNESS: f32 = 2.0;
 // Shadow rays spend at most this many grid steps and disk tests (see trace.wgsl).
 const SHADOW_RAY_BUDGET: u32 = 16384u;
 
+// Light terms a frame shows (ShadeParams.show): direct diffuse and specular (shadow rays),
+// indirect diffuse (total irradiance) and specular (the lobes).
+const SHOW_DIRECT_DIFFUSE: u32 = 1u;
+const SHOW_DIRECT_SPECULAR: u32 = 2u;
+const SHOW_INDIRECT_DIFFUSE: u32 = 4u;
+const SHOW_INDIRECT_SPECULAR: u32 = 8u;
+const SHOW_ALL: u32 = 15u;
+
 // What the attribute pass blends into its four targets (and the reference pass writes with
 // w = 1): weighted sums, w the kernel weight, rho_s the mean specular albedo.
 struct Attributes {

@@ -170,7 +170,7 @@ struct ShadeParams {
     area_samples: u32,
     shadow_bias: f32,
     seed: u32,
-    _pad0: u32,
+    show: u32,
     _pad1: u32,
 }
 
