@@ -37,8 +37,8 @@ use crate::tone::ToneConfig;
 pub use orbit::Orbit;
 
 pub const HELP: &str = "mouse: left drag orbit, right drag pan, wheel zoom | W A S D fly, Q E \
-down/up | 1 full, 2 direct, 3 indirect, 4 diffuse only, 5 lobes only | + − exposure | [ ] key | \
-P screenshot | H help | Esc quit";
+down/up | arrows move the light (re-bake) | 1 full, 2 direct, 3 indirect, 4 diffuse only, \
+5 lobes only | + − exposure | [ ] key | P screenshot | H help | Esc quit";
 
 #[derive(Clone, Debug)]
 pub struct ViewOptions {
@@ -153,17 +153,7 @@ impl App {
         let lobes = LobeMap::default();
         let frame_scene = FrameScene::upload(&gpu, &self.scene, &lobes)?;
         let targets = pipelines.targets(&gpu, config.width, config.height)?;
-        // The bake runs beside the frames, on the same device.
-        let (send, receive) = channel();
-        let (bake_gpu, bake_scene) = (gpu.clone(), self.scene.clone());
-        std::thread::spawn(move || {
-            let baked = GpuScene::upload(&bake_gpu, &bake_scene).and_then(|on_gpu| {
-                let device = BakeDevice::Gpu(&bake_gpu, &on_gpu);
-                bake(&bake_scene, device, &Progress::new(false)).map(|b| b.lobes)
-            });
-            // The window may be gone by then; nothing waits for the result.
-            let _ = send.send(baked);
-        });
+        let receive = spawn_bake(&gpu, &self.scene);
         eprintln!("{HELP}");
         Ok(State {
             window,
@@ -277,7 +267,12 @@ impl State {
         let light = match self.bake_s {
             Some(s) => format!("global illumination (baked in {s:.1} s)"),
             None => format!(
-                "direct light; baking… {:.0} s",
+                "{}; baking… {:.0} s",
+                if self.lobes.light.is_empty() {
+                    "direct light"
+                } else {
+                    "indirect light of the last bake"
+                },
                 self.bake_start.elapsed().as_secs_f64()
             ),
         };
@@ -301,6 +296,10 @@ impl State {
         let step = 0.05;
         match key {
             Key::Named(NamedKey::Escape) => return Some(KeyAction::Quit),
+            Key::Named(NamedKey::ArrowLeft) => return Some(KeyAction::MoveLight(-1.0, 0.0)),
+            Key::Named(NamedKey::ArrowRight) => return Some(KeyAction::MoveLight(1.0, 0.0)),
+            Key::Named(NamedKey::ArrowUp) => return Some(KeyAction::MoveLight(0.0, -1.0)),
+            Key::Named(NamedKey::ArrowDown) => return Some(KeyAction::MoveLight(0.0, 1.0)),
             Key::Character(c) => match c.as_str() {
                 "w" | "W" => self.orbit.fly(step, 0.0, 0.0),
                 "s" | "S" => self.orbit.fly(-step, 0.0, 0.0),
@@ -327,9 +326,29 @@ impl State {
     }
 }
 
+/// Bakes `scene` on a second thread on the same device, beside the frames.
+fn spawn_bake(gpu: &Arc<Gpu>, scene: &Arc<Scene>) -> Receiver<Result<LobeMap>> {
+    let (send, receive) = channel();
+    let (gpu, scene) = (gpu.clone(), scene.clone());
+    std::thread::spawn(move || {
+        let baked = GpuScene::upload(&gpu, &scene).and_then(|on_gpu| {
+            let device = BakeDevice::Gpu(&gpu, &on_gpu);
+            bake(&scene, device, &Progress::new(false)).map(|b| b.lobes)
+        });
+        // The window may be gone, or a newer bake started: nothing need wait for this one.
+        let _ = send.send(baked);
+    });
+    receive
+}
+
+/// How far an arrow key moves the first light, as a fraction of the scene's size.
+const LIGHT_STEP: f32 = 0.05;
+
 enum KeyAction {
     Quit,
     Screenshot,
+    /// Move the first light by (x, z) steps and bake again.
+    MoveLight(f32, f32),
 }
 
 impl App {
@@ -458,6 +477,26 @@ impl App {
                             state.screenshot(&rgba, &path)?;
                             eprintln!("wrote {}", path.display());
                         }
+                    }
+                    Some(KeyAction::MoveLight(dx, dz)) => {
+                        let Some(first) = self.scene.lights.first() else {
+                            return Ok(());
+                        };
+                        let (lo, hi) = self.scene.bounds();
+                        let step = LIGHT_STEP * (hi - lo).max_element();
+                        let mut moved = (*self.scene).clone();
+                        let mut light = *first;
+                        light.position[0] += dx * step;
+                        light.position[2] += dz * step;
+                        moved.lights[0] = light;
+                        self.scene = Arc::new(moved);
+                        // Direct light follows at once; the indirect light with the new bake
+                        // (a bake still running for the old position is left to finish unheard).
+                        state.frame_scene =
+                            FrameScene::upload(&state.gpu, &self.scene, &state.lobes)?;
+                        state.bake = Some(spawn_bake(&state.gpu, &self.scene));
+                        state.bake_start = Instant::now();
+                        state.bake_s = None;
                     }
                     None => {}
                 }
