@@ -208,6 +208,10 @@ enum Command {
         /// With --frames: save the last frame here (PNG).
         #[arg(long, value_name = "OUT.png", requires = "frames")]
         screenshot: Option<PathBuf>,
+        /// Load the bake from FILE when it was made for this scene and these bake settings
+        /// (an instant start); else bake and save it there.
+        #[arg(long, value_name = "FILE")]
+        cache: Option<PathBuf>,
         #[command(flatten)]
         bake: BakeArgs,
         #[command(flatten)]
@@ -323,6 +327,7 @@ fn run(cli: Cli) -> Result<()> {
             height,
             frames,
             screenshot,
+            cache,
             bake,
             look,
             backend,
@@ -340,6 +345,7 @@ fn run(cli: Cli) -> Result<()> {
                 tone: look.tone(),
                 frames,
                 screenshot,
+                cache,
             };
             opts.frame.validate()?;
             opts.tone.validate()?;

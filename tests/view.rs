@@ -122,3 +122,39 @@ fn the_present_pass_matches_its_mirror() {
         }
     }
 }
+
+/// With `--cache` the first run bakes and saves; the second loads the lobes at start (no bake)
+/// and shows the same image.
+#[test]
+fn the_viewer_starts_from_the_bake_cache() {
+    let exe = env!("CARGO_BIN_EXE_lobelight");
+    let cache = path("view.cache");
+    std::fs::remove_file(&cache).ok();
+    let run = |shot: &str| {
+        let out = Command::new("xvfb-run")
+            .args([
+                "-a",
+                "-s",
+                "-screen 0 640x480x24",
+                exe,
+                "view",
+                "scenes/cornell.toml",
+            ])
+            .args(["--photons", "50000", "--width", "64", "--height", "48"])
+            .args(["--frames", "1", "--screenshot", shot, "--cache", &cache])
+            .output()
+            .expect("xvfb-run is missing: install the xvfb package (CI does)");
+        let stderr = String::from_utf8_lossy(&out.stderr).into_owned();
+        assert!(out.status.success(), "{stderr}");
+        stderr
+    };
+    let (first, second) = (path("first.png"), path("second.png"));
+    run(&first);
+    assert!(std::path::Path::new(&cache).exists());
+    let log = run(&second);
+    assert!(log.contains("bake 0.0 s"), "{log}");
+    let (a, w, h) = read_image(std::path::Path::new(&first)).unwrap();
+    let (b, _, _) = read_image(std::path::Path::new(&second)).unwrap();
+    let d = difference_of(&a, &b, w, h, Values::Display).unwrap();
+    assert_eq!(d.max_relative, 0.0, "{d:?}");
+}

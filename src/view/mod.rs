@@ -51,6 +51,9 @@ pub struct ViewOptions {
     pub frames: Option<u32>,
     /// Where a scripted run saves its last frame.
     pub screenshot: Option<PathBuf>,
+    /// The bake cache: loaded at start when it matches the scene, else written once the first
+    /// bake is in (`render --cache`'s file format).
+    pub cache: Option<PathBuf>,
 }
 
 pub fn view(scene: Scene, opts: ViewOptions) -> Result<()> {
@@ -153,7 +156,30 @@ impl App {
         let lobes = LobeMap::default();
         let frame_scene = FrameScene::upload(&gpu, &self.scene, &lobes)?;
         let targets = pipelines.targets(&gpu, config.width, config.height)?;
-        let receive = spawn_bake(&gpu, &self.scene);
+        let cached = match &self.opts.cache {
+            Some(path) => crate::cache::load(
+                path,
+                crate::cache::bake_key(&self.scene),
+                self.scene.splats.len(),
+            )?
+            .ok(),
+            None => None,
+        };
+        let (lobes, frame_scene, receive, bake_s) = match cached {
+            Some(lobes) => {
+                let frame_scene = FrameScene::upload(&gpu, &self.scene, &lobes)?;
+                (lobes, frame_scene, None, Some(0.0))
+            }
+            None => {
+                let save = self.opts.cache.clone();
+                (
+                    lobes,
+                    frame_scene,
+                    Some(spawn_bake(&gpu, &self.scene, save)),
+                    None,
+                )
+            }
+        };
         eprintln!("{HELP}");
         Ok(State {
             window,
@@ -168,9 +194,9 @@ impl App {
             targets,
             orbit: Orbit::new(&self.scene.camera),
             tone: self.opts.tone,
-            bake: Some(receive),
+            bake: receive,
             bake_start: Instant::now(),
-            bake_s: None,
+            bake_s,
             frames_lit: 0,
             screenshots: 0,
             drag: None,
@@ -326,14 +352,23 @@ impl State {
     }
 }
 
-/// Bakes `scene` on a second thread on the same device, beside the frames.
-fn spawn_bake(gpu: &Arc<Gpu>, scene: &Arc<Scene>) -> Receiver<Result<LobeMap>> {
+/// Bakes `scene` on a second thread on the same device, beside the frames, and saves the
+/// result to `cache` when given.
+fn spawn_bake(
+    gpu: &Arc<Gpu>,
+    scene: &Arc<Scene>,
+    cache: Option<PathBuf>,
+) -> Receiver<Result<LobeMap>> {
     let (send, receive) = channel();
     let (gpu, scene) = (gpu.clone(), scene.clone());
     std::thread::spawn(move || {
         let baked = GpuScene::upload(&gpu, &scene).and_then(|on_gpu| {
             let device = BakeDevice::Gpu(&gpu, &on_gpu);
-            bake(&scene, device, &Progress::new(false)).map(|b| b.lobes)
+            let lobes = bake(&scene, device, &Progress::new(false))?.lobes;
+            if let Some(path) = cache {
+                crate::cache::save(&path, crate::cache::bake_key(&scene), &lobes)?;
+            }
+            Ok(lobes)
         });
         // The window may be gone, or a newer bake started: nothing need wait for this one.
         let _ = send.send(baked);
@@ -494,7 +529,7 @@ impl App {
                         // (a bake still running for the old position is left to finish unheard).
                         state.frame_scene =
                             FrameScene::upload(&state.gpu, &self.scene, &state.lobes)?;
-                        state.bake = Some(spawn_bake(&state.gpu, &self.scene));
+                        state.bake = Some(spawn_bake(&state.gpu, &self.scene, None));
                         state.bake_start = Instant::now();
                         state.bake_s = None;
                     }
