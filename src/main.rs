@@ -262,9 +262,16 @@ fn to_json<T: serde::Serialize>(value: &T) -> Result<serde_json::Value> {
     serde_json::to_value(value).map_err(|e| Error::Invalid(e.to_string()))
 }
 
+/// A line on stdout. A reader that went away (`| head`) is not an error of ours: the output
+/// simply stops, where `println!` would panic.
+fn say(args: std::fmt::Arguments) {
+    use std::io::Write;
+    let _ = writeln!(std::io::stdout().lock(), "{args}");
+}
+
 fn print_json<T: serde::Serialize>(value: &T) -> Result<()> {
     let text = serde_json::to_string_pretty(value).map_err(|e| Error::Invalid(e.to_string()))?;
-    println!("{text}");
+    say(format_args!("{text}"));
     Ok(())
 }
 
@@ -281,7 +288,7 @@ fn run(cli: Cli) -> Result<()> {
             if json {
                 print_json(&info)?;
             } else {
-                println!("{info}");
+                say(format_args!("{info}"));
             }
         }
         Command::Render {
@@ -383,7 +390,7 @@ fn run(cli: Cli) -> Result<()> {
                 print_json(&d)?;
             } else {
                 let flip = d.flip.map_or("—".to_string(), |f| format!("{f:.4}"));
-                println!(
+                say(format_args!(
                     "relMSE {:.4e}, PSNR {:.2} dB, SMAPE {:.4}, FLIP {flip}\n\
                      mean relative {:.4} %, within 5 %: {:.2} % of {} pixels, max {:.3}, rmse {:.4e}, energy {:+.4} %",
                     d.rel_mse,
@@ -395,7 +402,7 @@ fn run(cli: Cli) -> Result<()> {
                     d.max_relative,
                     d.rmse,
                     100.0 * d.energy
-                );
+                ));
             }
         }
         Command::Bench {
@@ -408,7 +415,7 @@ fn run(cli: Cli) -> Result<()> {
             if json {
                 print_json(&r)?;
             } else {
-                println!("{r}");
+                say(format_args!("{r}"));
             }
         }
         Command::Bench {
@@ -441,7 +448,7 @@ fn run(cli: Cli) -> Result<()> {
             if json {
                 print_json(&r)?;
             } else {
-                println!("{r}");
+                say(format_args!("{r}"));
             }
         }
         Command::Bench {
@@ -481,7 +488,7 @@ fn run(cli: Cli) -> Result<()> {
                     BenchKind::Convolution | BenchKind::Sweep => unreachable!("handled above"),
                 };
                 if !json {
-                    println!("{text}\n");
+                    say(format_args!("{text}\n"));
                 }
                 reports.push(value);
             }

@@ -324,3 +324,32 @@ fn render_lobes_png_exr_and_cache() {
     assert!(String::from_utf8_lossy(&out.stderr).contains(".png"));
     std::fs::remove_dir_all(&dir).ok();
 }
+
+/// A reader that goes away (`lobelight … | head -1`) ends the output, not the process with a
+/// panic.
+#[test]
+fn a_closed_stdout_is_not_a_panic() {
+    let dir = std::env::temp_dir().join(format!("lobelight-pipe-{}", std::process::id()));
+    std::fs::create_dir_all(&dir).unwrap();
+    let png = dir.join("a.png");
+    image::RgbImage::from_pixel(16, 16, image::Rgb([90, 120, 200]))
+        .save(&png)
+        .unwrap();
+    let mut child = Command::new(env!("CARGO_BIN_EXE_lobelight"))
+        .args([
+            "compare",
+            png.to_str().unwrap(),
+            png.to_str().unwrap(),
+            "--json",
+        ])
+        .stdout(std::process::Stdio::piped())
+        .stderr(std::process::Stdio::piped())
+        .spawn()
+        .unwrap();
+    drop(child.stdout.take());
+    let out = child.wait_with_output().unwrap();
+    let stderr = String::from_utf8_lossy(&out.stderr);
+    assert!(out.status.success(), "{stderr}");
+    assert!(!stderr.contains("panicked"), "{stderr}");
+    std::fs::remove_dir_all(&dir).ok();
+}
