@@ -269,6 +269,16 @@ fn say(args: std::fmt::Arguments) {
     let _ = writeln!(std::io::stdout().lock(), "{args}");
 }
 
+/// A command's figures: one JSON object, or its human-readable text.
+fn print_report<T: serde::Serialize + std::fmt::Display>(json: bool, report: &T) -> Result<()> {
+    if json {
+        print_json(report)
+    } else {
+        say(format_args!("{report}"));
+        Ok(())
+    }
+}
+
 fn print_json<T: serde::Serialize>(value: &T) -> Result<()> {
     let text = serde_json::to_string_pretty(value).map_err(|e| Error::Invalid(e.to_string()))?;
     say(format_args!("{text}"));
@@ -285,11 +295,7 @@ fn run(cli: Cli) -> Result<()> {
             let scene = scene::load(&scene)?;
             let gpu = device.gpu()?;
             let info = info::info(&scene, gpu.as_ref())?;
-            if json {
-                print_json(&info)?;
-            } else {
-                say(format_args!("{info}"));
-            }
+            print_report(json, &info)?;
         }
         Command::Render {
             scene,
@@ -412,11 +418,7 @@ fn run(cli: Cli) -> Result<()> {
             ..
         } => {
             let r = lobelight::convolution::convolution_bench(&output, Default::default())?;
-            if json {
-                print_json(&r)?;
-            } else {
-                say(format_args!("{r}"));
-            }
+            print_report(json, &r)?;
         }
         Command::Bench {
             what: BenchKind::Sweep,
@@ -445,11 +447,7 @@ fn run(cli: Cli) -> Result<()> {
             let gpu = device.gpu()?;
             let plan = lobelight::sweep::SweepPlan::default();
             let r = lobelight::sweep::sweep(&loaded, gpu.as_ref(), &plan, &output)?;
-            if json {
-                print_json(&r)?;
-            } else {
-                say(format_args!("{r}"));
-            }
+            print_report(json, &r)?;
         }
         Command::Bench {
             what,

@@ -153,8 +153,6 @@ impl App {
         let on_gpu = GpuScene::upload(&gpu, &self.scene)?;
         let pipelines = SplatPipelines::new(&gpu)?;
         let present = PresentPipeline::new(&gpu, format)?;
-        let lobes = LobeMap::default();
-        let frame_scene = FrameScene::upload(&gpu, &self.scene, &lobes)?;
         let targets = pipelines.targets(&gpu, config.width, config.height)?;
         let cached = match &self.opts.cache {
             Some(path) => crate::cache::load(
@@ -165,21 +163,16 @@ impl App {
             .ok(),
             None => None,
         };
-        let (lobes, frame_scene, receive, bake_s) = match cached {
-            Some(lobes) => {
-                let frame_scene = FrameScene::upload(&gpu, &self.scene, &lobes)?;
-                (lobes, frame_scene, None, Some(0.0))
-            }
+        // A cached bake is in from the first frame; else direct light until the bake is.
+        let (receive, bake_s) = match cached {
+            Some(_) => (None, Some(0.0)),
             None => {
                 let save = self.opts.cache.clone();
-                (
-                    lobes,
-                    frame_scene,
-                    Some(spawn_bake(&gpu, &self.scene, save)),
-                    None,
-                )
+                (Some(spawn_bake(&gpu, &self.scene, save)), None)
             }
         };
+        let lobes = cached.unwrap_or_default();
+        let frame_scene = FrameScene::upload(&gpu, &self.scene, &lobes)?;
         eprintln!("{HELP}");
         Ok(State {
             window,
