@@ -4,29 +4,28 @@
 use std::path::{Path, PathBuf};
 use std::time::Instant;
 
-use glam::Vec3;
-use rayon::prelude::*;
 use serde::Serialize;
 
 use crate::bake::{BakeDevice, Baked, Progress, bake, bins_cpu, bins_gpu};
 use crate::cache::{self, Miss};
 use crate::camera::View;
 use crate::cpu;
+use crate::cpu::photon_view::scene_scale;
 use crate::error::{Error, Result};
 use crate::frame::{FrameConfig, camera_uniform, cpu_frame, cpu_reference, shade_params};
 use crate::gpu::Gpu;
 use crate::gpu::frame::{FrameScene, SplatPipelines};
+use crate::gpu::photon_view::photon_image;
 use crate::gpu::photons::trace_photons;
 use crate::gpu::reference::ReferencePipeline;
 use crate::gpu::scene::GpuScene;
 use crate::gpu::tone::tone_map;
-use crate::grid::{SplatGrid, grid_params};
-use crate::photons::{PhotonConfig, PhotonMap, ms_since};
+use crate::grid::grid_params;
+use crate::photons::{PhotonConfig, ms_since};
 use crate::scene::Scene;
 use crate::shared::tone::srgb_byte;
-use crate::shared::trace::{Geometry, trace_ray};
+use crate::shared::trace::Geometry;
 use crate::tone::ToneConfig;
-use crate::types::{Material, NO_SPLAT, Photon};
 
 #[derive(Clone, Copy, Debug, Default, PartialEq, Eq, clap::ValueEnum, Serialize)]
 #[serde(rename_all = "lowercase")]
@@ -481,7 +480,8 @@ fn render_reference(
     Ok((stages, drawn.log_sum.map_or(0.0, crate::tone::log_average)))
 }
 
-/// `--method photons`: the stored photons seen from the camera (thesis Fig. 3.1).
+/// `--method photons`: the stored photons seen from the camera (thesis Fig. 3.1), drawn by
+/// the `photon_view` stage on the device or its CPU mirror.
 fn render_photons(
     scene: &Scene,
     gpu: Option<&Gpu>,
@@ -495,90 +495,51 @@ fn render_photons(
             "--method photons writes PNG only (it shows where photons landed, not radiance)".into(),
         ));
     }
-    let (map, grid, grid_ms) = bake_photons(scene, gpu, opts.progress)?;
-    let t = Instant::now();
-    let geo = Geometry {
-        grid: &grid,
-        splats: &scene.splats,
+    let cfg = PhotonConfig::from_scene(scene);
+    let bar = Progress::new(opts.progress).bar(cfg.photons);
+    let mut on_batch = |done: u64, _total: u64| bar.set_position(done);
+    let cam = camera_uniform(view, scene.bounds(), &opts.frame);
+    let scale = scene_scale(&scene.lights, cfg.photons)?;
+    let (hdr, stats, grid_ms, draw_ms) = match gpu {
+        Some(gpu) => {
+            let on_gpu = GpuScene::upload(gpu, scene)?;
+            let traced = trace_photons(gpu, scene, &on_gpu, &cfg, &mut on_batch)?;
+            bar.finish_and_clear();
+            let t = Instant::now();
+            let mut encoder = gpu.encoder("photon view");
+            let hdr = photon_image(gpu, &mut encoder, &on_gpu, &traced, &cam, scale)?;
+            gpu.submit_and_wait(encoder)?;
+            let hdr = gpu.read::<[f32; 4]>(&hdr, (view.width * view.height) as usize)?;
+            (hdr, traced.stats, on_gpu.grid_ms, ms_since(t))
+        }
+        None => {
+            let (map, grid, grid_ms) = cpu::trace_scene(scene, &cfg, &mut on_batch)?;
+            bar.finish_and_clear();
+            let t = Instant::now();
+            let geo = Geometry {
+                grid: &grid,
+                splats: &scene.splats,
+            };
+            let hdr = cpu::photon_image(&cam, &scene.materials, &map.photons, &geo, scale);
+            (hdr, map.stats, grid_ms, ms_since(t))
+        }
     };
-    let image = draw_photons(view, &geo, &scene.materials, &map.photons);
+    let image: Vec<[f32; 3]> = hdr.iter().map(|c| [c[0], c[1], c[2]]).collect();
     write_png(output, &image, view.width, view.height)?;
     let not_built = "not part of --method photons";
     Ok(Stages {
         grid: StageReport::ran(grid_ms),
         photons: StageReport {
-            emitted: Some(map.stats.emitted),
-            stored: Some(map.stats.stored),
-            ..StageReport::ran(map.stats.trace_ms)
+            emitted: Some(stats.emitted),
+            stored: Some(stats.stored),
+            ..StageReport::ran(stats.trace_ms)
         },
         binning: StageReport::skipped(not_built),
         em: StageReport::skipped(not_built),
-        // Drawing the photons, on the CPU.
-        shade: StageReport::ran(ms_since(t)),
+        // Drawing the photons.
+        shade: StageReport::ran(draw_ms),
         tonemap: StageReport::skipped("photon view is scaled by its 99.5th percentile"),
     })
-}
-
-/// Traces the scene's photons on the GPU or the CPU mirror; returns them with the grid (on the
-/// host, for visibility) and the grid build time.
-fn bake_photons(
-    scene: &Scene,
-    gpu: Option<&Gpu>,
-    show_progress: bool,
-) -> Result<(PhotonMap, SplatGrid, f64)> {
-    let cfg = PhotonConfig::from_scene(scene);
-    let bar = Progress::new(show_progress).bar(cfg.photons);
-    let mut progress = |done: u64, _total: u64| bar.set_position(done);
-    let out = match gpu {
-        Some(gpu) => {
-            let on_gpu = GpuScene::upload(gpu, scene)?;
-            let traced = trace_photons(gpu, scene, &on_gpu, &cfg, &mut progress)?;
-            (
-                traced.download(gpu)?,
-                on_gpu.grid.download(gpu)?,
-                on_gpu.grid_ms,
-            )
-        }
-        None => cpu::trace_scene(scene, &cfg, &mut progress)?,
-    };
-    bar.finish_and_clear();
-    Ok(out)
-}
-
-/// Sums the power of the photons the camera sees (on the front of their splat, with nothing
-/// in between) into their pixels, times the splat's albedo (ρd + ρs): a photon stores the
-/// power that arrives, and the wall colours only show in what leaves.
-pub fn draw_photons(
-    view: &View,
-    geo: &Geometry,
-    materials: &[Material],
-    photons: &[Photon],
-) -> Vec<[f32; 3]> {
-    let (w, h) = (view.width as usize, view.height as usize);
-    let visible: Vec<(usize, Vec3)> = photons
-        .par_iter()
-        .filter_map(|p| {
-            let pos = Vec3::from(p.position);
-            let (x, y) = view.project(pos)?;
-            let s = &geo.splats[p.splat as usize];
-            let to_eye = view.eye - pos;
-            if Vec3::from(s.normal).dot(to_eye) <= 0.0 {
-                return None;
-            }
-            let dist = to_eye.length();
-            let mut budget = crate::photons::ITERATION_BUDGET;
-            let hit = trace_ray(geo, pos, to_eye / dist, p.splat, dist * 0.999, &mut budget);
-            let albedo =
-                Vec3::from(s.diffuse) + Vec3::from(materials[s.material as usize].specular);
-            (hit.splat == NO_SPLAT && hit.aborted == 0)
-                .then(|| (y as usize * w + x as usize, Vec3::from(p.power) * albedo))
-        })
-        .collect();
-    let mut image = vec![Vec3::ZERO; w * h];
-    for (i, power) in visible {
-        image[i] += power;
-    }
-    image.into_iter().map(|c| c.to_array()).collect()
 }
 
 /// Writes an HDR image as PNG, scaled so that the 99.5th percentile of the lit pixels' largest

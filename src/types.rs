@@ -115,6 +115,21 @@ pub struct TraceParams {
     pub _pad0: u32,
 }
 
+/// Uniform of `photon_view` and `photon_resolve`: the stored photons splatted into the pixels
+/// the camera sees them in, as fixed-point sums (integer atomics keep the image
+/// deterministic).
+#[repr(C)]
+#[derive(Clone, Copy, Debug, Default, PartialEq, Pod, Zeroable)]
+pub struct PhotonViewParams {
+    /// Photons in this dispatch (one page), or pixels for `photon_resolve`.
+    pub count: u32,
+    /// Image width and height in pixels.
+    pub width: u32,
+    pub height: u32,
+    /// Fixed-point units per unit of power (`photon_view::fixed_scale`).
+    pub scale: f32,
+}
+
 /// Counters of the photon store and of how paths ended, read back after each batch.
 /// `stored` counts every store attempt, also those past `capacity` (which set `overflow` and
 /// write nothing): after an overflow it is exactly the capacity the batch needs.

@@ -75,6 +75,12 @@ fn rust_layouts() -> Vec<RustLayout> {
             iteration_budget,
             _pad0
         }),
+        layout!(PhotonViewParams {
+            count,
+            width,
+            height,
+            scale
+        }),
         layout!(TraceCounters {
             stored,
             capacity,

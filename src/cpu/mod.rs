@@ -13,7 +13,9 @@ pub mod grid_count;
 pub mod grid_distance;
 pub mod grid_rank;
 pub mod grid_scatter;
+pub mod photon_resolve;
 pub mod photon_trace;
+pub mod photon_view;
 pub mod present;
 pub mod reference_gather;
 pub mod scan_apply;
@@ -64,6 +66,31 @@ pub fn tone_map(cfg: &crate::tone::ToneConfig, hdr: &[[f32; 4]]) -> Result<(Vec<
     let mut rgba = vec![0u32; hdr.len()];
     tonemap_apply::tonemap_apply(&cfg.params(pixels, 0), hdr, &sums_in, &mut rgba);
     Ok((rgba, sums_in[0]))
+}
+
+/// The photon view of `cam` as `gpu::photon_view::photon_image` records it: every page (here
+/// one) through `photon_view`, then `photon_resolve`; HDR pixels, rows from the top.
+pub fn photon_image(
+    cam: &crate::types::Camera,
+    materials: &[Material],
+    photons: &[Photon],
+    geo: &Geometry,
+    scale: f32,
+) -> Vec<[f32; 4]> {
+    let (width, height) = (cam.size[0] as u32, cam.size[1] as u32);
+    let pixels = (width * height) as usize;
+    let mut sums = vec![0u32; 3 * pixels];
+    let mut params = crate::types::PhotonViewParams {
+        count: photons.len() as u32,
+        width,
+        height,
+        scale,
+    };
+    photon_view::photon_view(&params, cam, materials, photons, &mut sums, geo);
+    params.count = pixels as u32;
+    let mut hdr = vec![[0.0f32; 4]; pixels];
+    photon_resolve::photon_resolve(&params, &sums, &mut hdr);
+    hdr
 }
 
 /// Exclusive scan of `values` in place, level by level exactly as `gpu::scan` records it:

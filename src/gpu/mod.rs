@@ -5,6 +5,7 @@ pub mod bins;
 pub mod em;
 pub mod frame;
 pub mod grid;
+pub mod photon_view;
 pub mod photons;
 pub mod present;
 pub mod reference;

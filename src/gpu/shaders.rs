@@ -60,6 +60,8 @@ pub const STAGES: &[WgslFile] = &[
     stage!("shade"),
     stage!("reference_gather"),
     stage!("present"),
+    stage!("photon_view"),
+    stage!("photon_resolve"),
 ];
 
 /// Every shared module (`wgsl/shared/<name>.wgsl`), importable by name.

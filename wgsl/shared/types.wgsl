@@ -63,6 +63,13 @@ struct TraceParams {
     _pad0: u32,
 }
 
+struct PhotonViewParams {
+    count: u32,
+    width: u32,
+    height: u32,
+    scale: f32,
+}
+
 // Atomic twin of TraceCounters; `capacity` is written by the host only.
 struct TraceCounters {
     stored: atomic<u32>,

@@ -1,0 +1,83 @@
+//! The photon view (`photon_view` + `photon_resolve`): the device against its CPU mirror on
+//! the same photons, and the fixed-point sums' independence from photon order.
+
+mod common;
+
+use std::path::Path;
+
+use lobelight::camera::View;
+use lobelight::cpu;
+use lobelight::cpu::photon_view::scene_scale;
+use lobelight::frame::{FrameConfig, camera_uniform};
+use lobelight::gpu::photon_view::photon_image;
+use lobelight::gpu::photons::GpuPhotons;
+use lobelight::gpu::scene::GpuScene;
+use lobelight::photons::{PhotonConfig, PhotonMap};
+use lobelight::scene::{self, Scene};
+use lobelight::shared::trace::Geometry;
+use lobelight::types::Camera;
+
+/// Pixels whose sums may differ: a photon on a pixel's edge, or a visibility ray that grazes a
+/// disk's rim, can land apart on the two devices (their f32 rounding differs).
+const EXACT_PIXELS: f64 = 0.995;
+/// And the image's total power.
+const TOTAL_RELATIVE: f64 = 0.005;
+
+fn setup() -> (Scene, PhotonMap, lobelight::grid::SplatGrid, Camera, f32) {
+    let mut scene = scene::load(Path::new("scenes/cornell.toml")).unwrap();
+    scene.bake.photons = 40_000;
+    let cfg = PhotonConfig::from_scene(&scene);
+    let (map, grid, _) = cpu::trace_scene(&scene, &cfg, &mut |_, _| {}).unwrap();
+    let view = View::new(&scene.camera, 96, 96);
+    let cam = camera_uniform(&view, scene.bounds(), &FrameConfig::default());
+    let scale = scene_scale(&scene.lights, cfg.photons).unwrap();
+    (scene, map, grid, cam, scale)
+}
+
+fn total(image: &[[f32; 4]]) -> f64 {
+    image.iter().map(|c| (c[0] + c[1] + c[2]) as f64).sum()
+}
+
+#[test]
+fn device_matches_the_cpu_mirror() {
+    let gpu = common::gpu();
+    let (scene, map, grid, cam, scale) = setup();
+    let geo = Geometry {
+        grid: &grid,
+        splats: &scene.splats,
+    };
+    let ours = cpu::photon_image(&cam, &scene.materials, &map.photons, &geo, scale);
+    let on_gpu = GpuScene::upload(&gpu, &scene).unwrap();
+    let photons = GpuPhotons::upload(&gpu, &map).unwrap();
+    let mut encoder = gpu.encoder("photon view");
+    let hdr = photon_image(&gpu, &mut encoder, &on_gpu, &photons, &cam, scale).unwrap();
+    gpu.submit_and_wait(encoder).unwrap();
+    let theirs: Vec<[f32; 4]> = gpu.read(&hdr, ours.len()).unwrap();
+    let exact = ours.iter().zip(&theirs).filter(|(a, b)| a == b).count();
+    let lit = ours.iter().filter(|c| c[0] > 0.0).count();
+    assert!(lit > ours.len() / 2, "only {lit} pixels saw a photon");
+    let share = exact as f64 / ours.len() as f64;
+    assert!(share >= EXACT_PIXELS, "{share:.4} of pixels identical");
+    let (a, b) = (total(&ours), total(&theirs));
+    assert!(
+        ((a - b) / a).abs() <= TOTAL_RELATIVE,
+        "total power {a} on the CPU, {b} on the device"
+    );
+    assert!(theirs.iter().flatten().all(|v| v.is_finite()));
+}
+
+#[test]
+fn the_sums_do_not_depend_on_photon_order() {
+    let (scene, mut map, grid, cam, scale) = setup();
+    let geo = Geometry {
+        grid: &grid,
+        splats: &scene.splats,
+    };
+    let forward = cpu::photon_image(&cam, &scene.materials, &map.photons, &geo, scale);
+    map.photons.reverse();
+    let backward = cpu::photon_image(&cam, &scene.materials, &map.photons, &geo, scale);
+    assert!(
+        forward == backward,
+        "reversing the photons changed the image"
+    );
+}
