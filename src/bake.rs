@@ -11,7 +11,7 @@ use crate::error::Result;
 use crate::gpu::Gpu;
 use crate::gpu::bins::{GpuBins, bin_photons};
 use crate::gpu::em::fit_lobes;
-use crate::gpu::photons::trace_photons;
+use crate::gpu::photons::{GpuPhotons, trace_photons};
 use crate::gpu::scene::GpuScene;
 use crate::grid::SplatGrid;
 use crate::photons::{PhotonConfig, PhotonStats, ms_since};
@@ -111,6 +111,17 @@ pub fn bins_gpu(
     on_gpu: &GpuScene,
     progress: &Progress,
 ) -> Result<Binned<GpuBins>> {
+    Ok(traced_and_binned_gpu(scene, gpu, on_gpu, progress)?.1)
+}
+
+/// Traces and bins on the device, and keeps the traced photons too (the viewer's photon view
+/// draws them).
+pub fn traced_and_binned_gpu(
+    scene: &Scene,
+    gpu: &Gpu,
+    on_gpu: &GpuScene,
+    progress: &Progress,
+) -> Result<(GpuPhotons, Binned<GpuBins>)> {
     let photon_cfg = PhotonConfig::from_scene(scene);
     let bar = progress.bar(photon_cfg.photons);
     let mut on_batch = |done: u64, _total: u64| bar.set_position(done);
@@ -122,11 +133,10 @@ pub fn bins_gpu(
     let t = Instant::now();
     let radius = EmConfig::from_scene(scene).radius;
     let bins = bin_photons(gpu, &traced, &bin_params(&on_gpu.grid.params, radius)?)?;
-    drop(traced);
     let binning_ms = ms_since(t);
     spin.finish_and_clear();
     progress.done("binning", binning_ms, "");
-    Ok(binned(scene, bins, &stats, binning_ms))
+    Ok((traced, binned(scene, bins, &stats, binning_ms)))
 }
 
 /// Traces and bins on the CPU mirror.
@@ -161,6 +171,30 @@ pub fn bins_cpu(
     Ok(binned(scene, bins, &map.stats, binning_ms))
 }
 
+/// Fits the lobes to photons binned on the device; they come back to the host.
+pub fn fit_gpu(
+    scene: &Scene,
+    gpu: &Gpu,
+    on_gpu: &GpuScene,
+    binned: &Binned<GpuBins>,
+    progress: &Progress,
+) -> Result<LobeMap> {
+    let spin = progress.spinner("em");
+    let n = scene.splats.len() as u32;
+    let em_cfg = EmConfig::from_scene(scene);
+    let fitted = fit_lobes(
+        gpu,
+        &on_gpu.splats,
+        &on_gpu.materials,
+        n,
+        &binned.bins,
+        &em_cfg,
+    )?;
+    let lobes = fitted.download(gpu)?;
+    spin.finish_and_clear();
+    Ok(lobes)
+}
+
 /// Traces, bins and fits; the lobes come back to the host (a few bytes per splat), from
 /// where a cache file or any device can take them.
 pub fn bake(scene: &Scene, device: BakeDevice, progress: &Progress) -> Result<Baked> {
@@ -168,11 +202,7 @@ pub fn bake(scene: &Scene, device: BakeDevice, progress: &Progress) -> Result<Ba
     let (lobes, photons, binning) = match device {
         BakeDevice::Gpu(gpu, on_gpu) => {
             let b = bins_gpu(scene, gpu, on_gpu, progress)?;
-            let spin = progress.spinner("em");
-            let n = scene.splats.len() as u32;
-            let fitted = fit_lobes(gpu, &on_gpu.splats, &on_gpu.materials, n, &b.bins, &em_cfg)?;
-            let lobes = fitted.download(gpu)?;
-            spin.finish_and_clear();
+            let lobes = fit_gpu(scene, gpu, on_gpu, &b, progress)?;
             (lobes, b.photons, b.binning)
         }
         BakeDevice::Cpu(grid) => {

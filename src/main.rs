@@ -212,6 +212,9 @@ enum Command {
         /// (an instant start); else bake and save it there.
         #[arg(long, value_name = "FILE")]
         cache: Option<PathBuf>,
+        /// What the window shows first (keys R and M switch).
+        #[arg(long, value_enum, default_value_t = render::Method::Lobes)]
+        method: render::Method,
         #[command(flatten)]
         bake: BakeArgs,
         #[command(flatten)]
@@ -341,6 +344,7 @@ fn run(cli: Cli) -> Result<()> {
             frames,
             screenshot,
             cache,
+            method,
             bake,
             look,
             backend,
@@ -356,6 +360,7 @@ fn run(cli: Cli) -> Result<()> {
                 backend,
                 frame: look.frame(),
                 tone: look.tone(),
+                method,
                 frames,
                 screenshot,
                 cache,

@@ -5,9 +5,19 @@ mod common;
 
 use std::process::Command;
 
+use lobelight::camera::View;
 use lobelight::compare::{Values, difference_of, read_image};
+use lobelight::cpu::photon_view::scene_scale;
 use lobelight::cpu::present::present;
+use lobelight::frame::{FrameConfig, camera_uniform};
+use lobelight::gpu::photon_view::photon_image;
+use lobelight::gpu::photons::trace_photons;
 use lobelight::gpu::present::PresentPipeline;
+use lobelight::gpu::scene::GpuScene;
+use lobelight::gpu::tone::tone_map;
+use lobelight::photons::PhotonConfig;
+use lobelight::scene;
+use lobelight::tone::ToneConfig;
 
 fn path(name: &str) -> String {
     let dir = std::env::temp_dir().join(format!("lobelight-view-{}", std::process::id()));
@@ -15,27 +25,23 @@ fn path(name: &str) -> String {
     dir.join(name).display().to_string()
 }
 
-/// `view --frames 3 --screenshot` under `xvfb-run` saves what the window showed; the same
-/// scene, bake settings and size rendered offscreen give the same image. The bake and both
-/// frames are deterministic, so the tolerance is one 8-bit step: mean relative difference
-/// under 0.5 % and every pixel within 5 %.
-#[test]
-fn a_scripted_view_matches_the_offscreen_render() {
+const COMMON: [&str; 7] = [
+    "scenes/cornell.toml",
+    "--photons",
+    "100000",
+    "--width",
+    "96",
+    "--height",
+    "72",
+];
+
+/// `view --frames 3 --screenshot` of `method` under `xvfb-run`: the screenshot's pixels.
+fn scripted_view(method: &str, shot: &str) -> (Vec<[f32; 4]>, u32, u32) {
     let exe = env!("CARGO_BIN_EXE_lobelight");
-    let (shot, offscreen) = (path("shot.png"), path("offscreen.png"));
-    let common = [
-        "scenes/cornell.toml",
-        "--photons",
-        "100000",
-        "--width",
-        "96",
-        "--height",
-        "72",
-    ];
     let view = Command::new("xvfb-run")
         .args(["-a", "-s", "-screen 0 640x480x24", exe, "view"])
-        .args(common)
-        .args(["--frames", "3", "--screenshot", &shot])
+        .args(COMMON)
+        .args(["--method", method, "--frames", "3", "--screenshot", shot])
         .output()
         .expect("xvfb-run is missing: install the xvfb package (CI does)");
     assert!(
@@ -43,17 +49,62 @@ fn a_scripted_view_matches_the_offscreen_render() {
         "{}",
         String::from_utf8_lossy(&view.stderr)
     );
-    let render = Command::new(exe)
-        .arg("render")
-        .args(common)
-        .args(["-o", &offscreen])
-        .output()
-        .unwrap();
-    assert!(render.status.success());
-    let (a, w, h) = read_image(std::path::Path::new(&shot)).unwrap();
-    let (b, wb, hb) = read_image(std::path::Path::new(&offscreen)).unwrap();
+    let (a, w, h) = read_image(std::path::Path::new(shot)).unwrap();
     assert_eq!((w, h), (96, 72));
-    assert_eq!((w, h), (wb, hb));
+    (a, w, h)
+}
+
+/// A scripted view saves what the window showed; the same scene, bake settings and size
+/// rendered offscreen give the same image, for the lobes and for the reference (key R). The
+/// bake and both frames are deterministic, so the tolerance is one 8-bit step: mean relative
+/// difference under 0.5 % and every pixel within 5 %.
+#[test]
+fn a_scripted_view_matches_the_offscreen_render() {
+    let exe = env!("CARGO_BIN_EXE_lobelight");
+    for method in ["lobes", "reference"] {
+        let (shot, offscreen) = (path(&format!("shot-{method}.png")), path("offscreen.png"));
+        let (a, w, h) = scripted_view(method, &shot);
+        let render = Command::new(exe)
+            .arg("render")
+            .args(COMMON)
+            .args(["--method", method, "-o", &offscreen])
+            .output()
+            .unwrap();
+        assert!(render.status.success());
+        let (b, wb, hb) = read_image(std::path::Path::new(&offscreen)).unwrap();
+        assert_eq!((w, h), (wb, hb));
+        let d = difference_of(&a, &b, w, h, Values::Display).unwrap();
+        assert!(d.mean_relative <= 0.005, "{method}: {d:?}");
+        assert!(d.within_5_percent >= 1.0, "{method}: {d:?}");
+    }
+}
+
+/// The photon view (key M) shows the bake's photons through the tone map: the same photons
+/// traced here on the device, drawn by `photon_image` and tone-mapped, give the screenshot
+/// (within one 8-bit step, as above).
+#[test]
+fn the_photon_view_shows_the_bakes_photons() {
+    let shot = path("shot-photons.png");
+    let (a, w, h) = scripted_view("photons", &shot);
+    let gpu = common::gpu();
+    let mut scene = scene::load(std::path::Path::new(COMMON[0])).unwrap();
+    scene.bake.photons = 100_000;
+    let on_gpu = GpuScene::upload(&gpu, &scene).unwrap();
+    let cfg = PhotonConfig::from_scene(&scene);
+    let traced = trace_photons(&gpu, &scene, &on_gpu, &cfg, &mut |_, _| {}).unwrap();
+    let view = View::new(&scene.camera, w, h);
+    let cam = camera_uniform(&view, scene.bounds(), &FrameConfig::default());
+    let scale = scene_scale(&scene.lights, cfg.photons).unwrap();
+    let mut encoder = gpu.encoder("photon view");
+    let hdr = photon_image(&gpu, &mut encoder, &on_gpu, &traced, &cam, scale).unwrap();
+    let toned = tone_map(&gpu, &mut encoder, &hdr, w * h, &ToneConfig::default()).unwrap();
+    gpu.submit_and_wait(encoder).unwrap();
+    let rgba: Vec<u32> = gpu.read(&toned.rgba, (w * h) as usize).unwrap();
+    // What the PNG holds: the bytes over 255.
+    let b: Vec<[f32; 4]> = rgba
+        .iter()
+        .map(|p| std::array::from_fn(|c| ((p >> (8 * c)) & 0xff) as f32 / 255.0))
+        .collect();
     let d = difference_of(&a, &b, w, h, Values::Display).unwrap();
     assert!(d.mean_relative <= 0.005, "{d:?}");
     assert!(d.within_5_percent >= 1.0, "{d:?}");

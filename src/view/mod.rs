@@ -3,16 +3,16 @@
 //! window opens with direct light while the bake runs on a second thread on the same device,
 //! and switches to full global illumination when the lobes arrive.
 //!
-//! Keys: mouse left drag orbits, right drag pans, wheel zooms; W A S D fly, Q E down and up;
-//! the keys plus and minus change the exposure by half a stop, [ and ] the tone-map key; P
-//! saves a screenshot; H prints the keys; Esc quits. `--frames N --screenshot OUT.png` draws N frames once the bake
+//! Keys: see `HELP`. A moved light bakes again at once, a preview with an eighth of the
+//! photons first (`baking`). `--frames N --screenshot OUT.png` draws N frames once the bake
 //! is in, saves the last and exits (scripted runs and tests).
 
+mod baking;
 mod orbit;
 
 use std::path::PathBuf;
 use std::sync::Arc;
-use std::sync::mpsc::{Receiver, TryRecvError, channel};
+use std::sync::atomic::AtomicU64;
 use std::time::Instant;
 
 use winit::application::ApplicationHandler;
@@ -22,23 +22,29 @@ use winit::event_loop::{ActiveEventLoop, EventLoop, OwnedDisplayHandle};
 use winit::keyboard::{Key, NamedKey};
 use winit::window::{Window, WindowId};
 
-use crate::bake::{BakeDevice, Progress, bake};
 use crate::camera::View;
+use crate::cpu::photon_view::scene_scale;
 use crate::em::LobeMap;
 use crate::error::{Error, Result};
 use crate::frame::{FrameConfig, Show, camera_uniform, shade_params};
 use crate::gpu::frame::{FrameScene, FrameTargets, SplatPipelines};
+use crate::gpu::photon_view::photon_image;
 use crate::gpu::present::PresentPipeline;
+use crate::gpu::reference::ReferencePipeline;
 use crate::gpu::scene::GpuScene;
 use crate::gpu::tone::tone_map;
 use crate::gpu::{BackendChoice, Gpu};
+use crate::render::Method;
 use crate::scene::Scene;
 use crate::tone::ToneConfig;
+use baking::{BakeResult, Baking};
+pub use baking::{PREVIEW_FRACTION, passes};
 pub use orbit::Orbit;
 
 pub const HELP: &str = "mouse: left drag orbit, right drag pan, wheel zoom | W A S D fly, Q E \
 down/up | arrows move the light (re-bake) | 1 full, 2 direct, 3 indirect, 4 diffuse only, \
-5 lobes only | + − exposure | [ ] key | P screenshot | H help | Esc quit";
+5 lobes only | R reference / lobes | M photon view | + − exposure | [ ] key | P screenshot | \
+H help | Esc quit";
 
 #[derive(Clone, Debug)]
 pub struct ViewOptions {
@@ -47,6 +53,8 @@ pub struct ViewOptions {
     pub backend: BackendChoice,
     pub frame: FrameConfig,
     pub tone: ToneConfig,
+    /// What the window shows first (keys R and M switch).
+    pub method: Method,
     /// Scripted run: draw this many frames once the bake is in, then exit.
     pub frames: Option<u32>,
     /// Where a scripted run saves its last frame.
@@ -56,7 +64,18 @@ pub struct ViewOptions {
     pub cache: Option<PathBuf>,
 }
 
-pub fn view(scene: Scene, opts: ViewOptions) -> Result<()> {
+/// What a scripted run measured.
+#[derive(Clone, Debug, Default, serde::Serialize)]
+pub struct ViewReport {
+    pub width: u32,
+    pub height: u32,
+    /// Frames drawn with the full bake in, and their median time (frame, tone map, present).
+    pub frames: u32,
+    pub frame_ms: f64,
+    pub bake_s: f64,
+}
+
+pub fn view(scene: Scene, opts: ViewOptions) -> Result<ViewReport> {
     let event_loop =
         EventLoop::new().map_err(|e| Error::Gpu(format!("cannot open a window: {e}")))?;
     let display = event_loop.owned_display_handle();
@@ -66,11 +85,12 @@ pub fn view(scene: Scene, opts: ViewOptions) -> Result<()> {
         display,
         state: None,
         error: None,
+        report: ViewReport::default(),
     };
     event_loop
         .run_app(&mut app)
         .map_err(|e| Error::Gpu(format!("the window's event loop failed: {e}")))?;
-    app.error.map_or(Ok(()), Err)
+    app.error.map_or(Ok(app.report), Err)
 }
 
 struct App {
@@ -79,6 +99,7 @@ struct App {
     display: OwnedDisplayHandle,
     state: Option<State>,
     error: Option<Error>,
+    report: ViewReport,
 }
 
 /// Everything a drawn window holds.
@@ -87,16 +108,23 @@ struct State {
     gpu: Arc<Gpu>,
     surface: wgpu::Surface<'static>,
     config: wgpu::SurfaceConfiguration,
-    on_gpu: GpuScene,
+    on_gpu: Arc<GpuScene>,
     pipelines: SplatPipelines,
+    /// Built the first time the reference is shown.
+    reference: Option<ReferencePipeline>,
     present: PresentPipeline,
     frame_scene: FrameScene,
     lobes: LobeMap,
+    /// The last bake's photons and bins, on the device (reference and photon views).
+    baked: Option<BakeResult>,
     targets: FrameTargets,
     orbit: Orbit,
     tone: ToneConfig,
-    bake: Option<Receiver<Result<LobeMap>>>,
-    bake_start: Instant,
+    method: Method,
+    /// The bake under way, and the counter that tells an older one to stop.
+    baking: Option<Baking>,
+    generation: Arc<AtomicU64>,
+    /// How long the last finished bake took, and whether a preview is on screen.
     bake_s: Option<f64>,
     /// Frames drawn since the bake came in (scripted runs count these).
     frames_lit: u32,
@@ -150,7 +178,7 @@ impl App {
             color_space: wgpu::SurfaceColorSpace::Auto,
         };
         surface.configure(&gpu.device, &config);
-        let on_gpu = GpuScene::upload(&gpu, &self.scene)?;
+        let on_gpu = Arc::new(GpuScene::upload(&gpu, &self.scene)?);
         let pipelines = SplatPipelines::new(&gpu)?;
         let present = PresentPipeline::new(&gpu, format)?;
         let targets = pipelines.targets(&gpu, config.width, config.height)?;
@@ -163,12 +191,20 @@ impl App {
             .ok(),
             None => None,
         };
+        let generation = Arc::new(AtomicU64::new(0));
         // A cached bake is in from the first frame; else direct light until the bake is.
-        let (receive, bake_s) = match cached {
-            Some(_) => (None, Some(0.0)),
-            None => {
-                let save = self.opts.cache.clone();
-                (Some(spawn_bake(&gpu, &self.scene, save)), None)
+        // The reference and photon views need the photons, which no cache holds.
+        let (baking, bake_s) = match (&cached, self.opts.method) {
+            (Some(_), Method::Lobes) => (None, Some(0.0)),
+            _ => {
+                let save = if cached.is_none() {
+                    self.opts.cache.clone()
+                } else {
+                    None
+                };
+                let full = passes(self.scene.bake.photons, false);
+                let b = baking::spawn(&gpu, &on_gpu, &self.scene, full, save, &generation);
+                (Some(b), None)
             }
         };
         let lobes = cached.unwrap_or_default();
@@ -181,14 +217,17 @@ impl App {
             config,
             on_gpu,
             pipelines,
+            reference: None,
             present,
             frame_scene,
             lobes,
+            baked: None,
             targets,
             orbit: Orbit::new(&self.scene.camera),
             tone: self.opts.tone,
-            bake: receive,
-            bake_start: Instant::now(),
+            method: self.opts.method,
+            baking,
+            generation,
             bake_s,
             frames_lit: 0,
             screenshots: 0,
@@ -205,24 +244,46 @@ impl App {
 }
 
 impl State {
-    /// Takes the bake's result when it has come in.
+    /// Takes a bake pass's result when one has come in.
     fn poll_bake(&mut self, scene: &Scene) -> Result<()> {
-        let Some(rx) = &self.bake else {
+        let Some(baking) = self.baking.as_mut() else {
             return Ok(());
         };
-        match rx.try_recv() {
-            Ok(lobes) => {
-                self.lobes = lobes?;
-                self.frame_scene = FrameScene::upload(&self.gpu, scene, &self.lobes)?;
-                self.bake = None;
-                self.bake_s = Some(self.bake_start.elapsed().as_secs_f64());
-            }
-            Err(TryRecvError::Empty) => {}
-            Err(TryRecvError::Disconnected) => {
-                return Err(Error::Gpu("the bake stopped without a result".into()));
-            }
+        let Some(result) = baking.poll()? else {
+            return Ok(());
+        };
+        if !result.preview {
+            self.baking = None;
+            self.bake_s = Some(result.seconds);
+            eprintln!(
+                "bake: {} photons in {:.2} s",
+                result.emitted, result.seconds
+            );
+        } else {
+            eprintln!(
+                "preview bake: {} photons in {:.2} s",
+                result.emitted, result.seconds
+            );
         }
+        self.frame_scene = FrameScene::upload(&self.gpu, scene, &result.lobes)?;
+        self.lobes = result.lobes.clone();
+        self.baked = Some(result);
         Ok(())
+    }
+
+    /// Bakes `scene` again (a moved light: a preview first) or for the photons a view needs.
+    fn rebake(&mut self, scene: &Arc<Scene>, preview: bool) {
+        let counts = passes(scene.bake.photons, preview);
+        let b = baking::spawn(
+            &self.gpu,
+            &self.on_gpu,
+            scene,
+            counts,
+            None,
+            &self.generation,
+        );
+        self.baking = Some(b);
+        self.bake_s = None;
     }
 
     fn resize(&mut self, size: PhysicalSize<u32>) -> Result<()> {
@@ -234,6 +295,56 @@ impl State {
         self.surface.configure(&self.gpu.device, &self.config);
         self.targets = self.pipelines.targets(&self.gpu, size.width, size.height)?;
         Ok(())
+    }
+
+    /// Records the HDR image of the chosen method into `encoder`; returns its buffer.
+    fn record_hdr<'a>(
+        &'a mut self,
+        scene: &Scene,
+        frame: &FrameConfig,
+        encoder: &mut wgpu::CommandEncoder,
+    ) -> Result<std::borrow::Cow<'a, wgpu::Buffer>> {
+        let (w, h) = (self.config.width, self.config.height);
+        let view = View::new(&self.orbit.camera(), w, h);
+        let cam = camera_uniform(&view, scene.bounds(), frame);
+        let gpu = &self.gpu;
+        let buffers = self.frame_scene.buffers(&self.on_gpu);
+        match (self.method, &self.baked) {
+            (Method::Photons, Some(baked)) => {
+                let scale = scene_scale(&scene.lights, baked.emitted)?;
+                let hdr = photon_image(gpu, encoder, &self.on_gpu, &baked.photons, &cam, scale)?;
+                Ok(std::borrow::Cow::Owned(hdr))
+            }
+            (Method::Reference, Some(baked)) => {
+                if self.reference.is_none() {
+                    self.reference = Some(ReferencePipeline::new(gpu, &self.pipelines)?);
+                }
+                let no_lobes = LobeMap::default();
+                let params = shade_params(scene, &no_lobes, frame);
+                if let Some(reference) = &self.reference {
+                    let bins = &baked.binned;
+                    reference.draw(
+                        gpu,
+                        encoder,
+                        &self.pipelines,
+                        &buffers,
+                        &bins.bins,
+                        &bins.em,
+                        &cam,
+                        &params,
+                        &self.targets,
+                    )?;
+                }
+                Ok(std::borrow::Cow::Borrowed(&self.targets.hdr))
+            }
+            // The lobes, and what shows while the photons a view needs are on their way.
+            _ => {
+                let params = shade_params(scene, &self.lobes, frame);
+                self.pipelines
+                    .draw(gpu, encoder, &buffers, &cam, &params, &self.targets)?;
+                Ok(std::borrow::Cow::Borrowed(&self.targets.hdr))
+            }
+        }
     }
 
     /// Draws one frame; returns the tone-mapped image's buffer (for screenshots), or none
@@ -260,22 +371,19 @@ impl State {
             }
         };
         let start = Instant::now();
-        let view = View::new(&self.orbit.camera(), w, h);
-        let cam = camera_uniform(&view, scene.bounds(), frame);
         let frame = FrameConfig {
             show: self.show.mask(),
             ..frame.clone()
         };
-        let params = shade_params(scene, &self.lobes, &frame);
-        let gpu = &self.gpu;
+        let gpu = self.gpu.clone();
         let mut encoder = gpu.encoder("view frame");
-        let buffers = self.frame_scene.buffers(&self.on_gpu);
-        self.pipelines
-            .draw(gpu, &mut encoder, &buffers, &cam, &params, &self.targets)?;
-        let toned = tone_map(gpu, &mut encoder, &self.targets.hdr, w * h, &self.tone)?;
+        let tone = self.tone;
+        let hdr = self.record_hdr(scene, &frame, &mut encoder)?;
+        let toned = tone_map(&gpu, &mut encoder, &hdr, w * h, &tone)?;
+        drop(hdr);
         let target = texture.texture.create_view(&Default::default());
         self.present
-            .record(gpu, &mut encoder, &target, &toned.rgba, (w, h));
+            .record(&gpu, &mut encoder, &target, &toned.rgba, (w, h));
         gpu.submit_and_wait(encoder)?;
         gpu.queue.present(texture);
         self.frame_ms = crate::photons::ms_since(start);
@@ -283,24 +391,30 @@ impl State {
     }
 
     fn title(&self, scene: &Scene) -> String {
-        let light = match self.bake_s {
-            Some(s) => format!("global illumination (baked in {s:.1} s)"),
-            None => format!(
-                "{}; baking… {:.0} s",
-                if self.lobes.light.is_empty() {
-                    "direct light"
-                } else {
-                    "indirect light of the last bake"
+        let light = match (&self.baking, self.bake_s) {
+            (None, Some(s)) => format!("global illumination (baked in {s:.1} s)"),
+            (Some(b), _) => format!(
+                "{}; baking {} photons… {:.1} s",
+                match &self.baked {
+                    Some(r) if r.preview => "preview bake",
+                    Some(_) => "indirect light of the last bake",
+                    None => "direct light",
                 },
-                self.bake_start.elapsed().as_secs_f64()
+                b.photons(),
+                b.started.elapsed().as_secs_f64()
             ),
+            (None, None) => "direct light".into(),
         };
+        let waiting = self.method != Method::Lobes && self.baked.is_none();
         format!(
-            "lobelight — {:.1} fps, {:.0} ms — {} splats, {} photons — {light} — showing {:?} — H: keys",
+            "lobelight — {:.1} fps, {:.0} ms — {} splats, {} photons — {light} — {:?}{}, \
+             showing {:?} — H: keys",
             1e3 / self.frame_ms.max(1e-3),
             self.frame_ms,
             scene.splats.len(),
             scene.bake.photons,
+            self.method,
+            if waiting { " (waits for photons)" } else { "" },
             self.show
         )
     }
@@ -331,6 +445,8 @@ impl State {
                 "[" => self.tone.key = (self.tone.key / 1.25).max(0.01),
                 "]" => self.tone.key = (self.tone.key * 1.25).min(1.0),
                 "p" | "P" => return Some(KeyAction::Screenshot),
+                "r" | "R" => return Some(KeyAction::Method(Method::Reference)),
+                "m" | "M" => return Some(KeyAction::Method(Method::Photons)),
                 "1" | "2" | "3" | "4" | "5" => {
                     let k = c.as_str().parse::<usize>().unwrap_or(1) - 1;
                     let show = Show::ALL[k.min(Show::ALL.len() - 1)];
@@ -345,36 +461,14 @@ impl State {
     }
 }
 
-/// Bakes `scene` on a second thread on the same device, beside the frames, and saves the
-/// result to `cache` when given.
-fn spawn_bake(
-    gpu: &Arc<Gpu>,
-    scene: &Arc<Scene>,
-    cache: Option<PathBuf>,
-) -> Receiver<Result<LobeMap>> {
-    let (send, receive) = channel();
-    let (gpu, scene) = (gpu.clone(), scene.clone());
-    std::thread::spawn(move || {
-        let baked = GpuScene::upload(&gpu, &scene).and_then(|on_gpu| {
-            let device = BakeDevice::Gpu(&gpu, &on_gpu);
-            let lobes = bake(&scene, device, &Progress::new(false))?.lobes;
-            if let Some(path) = cache {
-                crate::cache::save(&path, crate::cache::bake_key(&scene), &lobes)?;
-            }
-            Ok(lobes)
-        });
-        // The window may be gone, or a newer bake started: nothing need wait for this one.
-        let _ = send.send(baked);
-    });
-    receive
-}
-
 /// How far an arrow key moves the first light, as a fraction of the scene's size.
 const LIGHT_STEP: f32 = 0.05;
 
 enum KeyAction {
     Quit,
     Screenshot,
+    /// Show this method, or the lobes again when it is on.
+    Method(Method),
     /// Move the first light by (x, z) steps and bake again.
     MoveLight(f32, f32),
 }
@@ -393,7 +487,7 @@ impl App {
         state.poll_bake(&scene)?;
         let scripted = self.opts.frames.is_some();
         // A scripted run waits for the bake: its frames are meant to show the full light.
-        if scripted && state.bake.is_some() {
+        if scripted && state.baking.is_some() {
             std::thread::sleep(std::time::Duration::from_millis(20));
             state.window.request_redraw();
             return Ok(());
@@ -402,7 +496,7 @@ impl App {
             state.window.request_redraw();
             return Ok(());
         };
-        if state.bake.is_none() {
+        if state.baking.is_none() {
             state.frames_lit += 1;
             state.lit_ms.push(state.frame_ms);
         }
@@ -416,14 +510,18 @@ impl App {
             }
             let mut ms = state.lit_ms.clone();
             ms.sort_by(f64::total_cmp);
+            self.report = ViewReport {
+                width: state.config.width,
+                height: state.config.height,
+                frames: ms.len() as u32,
+                frame_ms: ms.get(ms.len() / 2).copied().unwrap_or(0.0),
+                bake_s: state.bake_s.unwrap_or(0.0),
+            };
+            let r = &self.report;
             eprintln!(
                 "{} frames of {}×{} in the window: median {:.1} ms (frame, tone map and \
                  present); bake {:.1} s",
-                ms.len(),
-                state.config.width,
-                state.config.height,
-                ms.get(ms.len() / 2).copied().unwrap_or(0.0),
-                state.bake_s.unwrap_or(0.0)
+                r.frames, r.width, r.height, r.frame_ms, r.bake_s
             );
             event_loop.exit();
             return Ok(());
@@ -506,6 +604,20 @@ impl App {
                             eprintln!("wrote {}", path.display());
                         }
                     }
+                    Some(KeyAction::Method(method)) => {
+                        state.method = if state.method == method {
+                            Method::Lobes
+                        } else {
+                            method
+                        };
+                        // A cached start has no photons: bake them (the lobes stay on).
+                        if state.method != Method::Lobes
+                            && state.baked.is_none()
+                            && state.baking.is_none()
+                        {
+                            state.rebake(&self.scene, false);
+                        }
+                    }
                     Some(KeyAction::MoveLight(dx, dz)) => {
                         let Some(first) = self.scene.lights.first() else {
                             return Ok(());
@@ -518,13 +630,11 @@ impl App {
                         light.position[2] += dz * step;
                         moved.lights[0] = light;
                         self.scene = Arc::new(moved);
-                        // Direct light follows at once; the indirect light with the new bake
-                        // (a bake still running for the old position is left to finish unheard).
+                        // Direct light follows at once; the indirect light with the preview
+                        // bake, then the full one (a bake for the old position stops).
                         state.frame_scene =
                             FrameScene::upload(&state.gpu, &self.scene, &state.lobes)?;
-                        state.bake = Some(spawn_bake(&state.gpu, &self.scene, None));
-                        state.bake_start = Instant::now();
-                        state.bake_s = None;
+                        state.rebake(&self.scene, true);
                     }
                     None => {}
                 }

@@ -1,0 +1,153 @@
+//! The viewer's bakes, on a second thread beside the frames (same device). A bake sends its
+//! result after each of its passes: a light that moved gets a quick preview bake with a
+//! fraction of the photons first, then the full bake. Starting a newer bake makes the older
+//! one stop at its next pass (a generation counter), so keys pressed in a row never queue
+//! bakes up. The photons and their bins stay on the device for the reference and photon
+//! views.
+
+use std::path::PathBuf;
+use std::sync::Arc;
+use std::sync::atomic::{AtomicU64, Ordering};
+use std::sync::mpsc::{Receiver, TryRecvError, channel};
+use std::time::Instant;
+
+use crate::bake::{Binned, Progress, fit_gpu, traced_and_binned_gpu};
+use crate::em::LobeMap;
+use crate::error::{Error, Result};
+use crate::gpu::Gpu;
+use crate::gpu::bins::GpuBins;
+use crate::gpu::photons::GpuPhotons;
+use crate::gpu::scene::GpuScene;
+use crate::photons::ms_since;
+use crate::scene::Scene;
+
+/// A preview bake traces this fraction of the scene's photons.
+pub const PREVIEW_FRACTION: u64 = 8;
+/// Scenes with fewer photons than this bake in full at once.
+const PREVIEW_MIN: u64 = 200_000;
+
+/// One finished pass of a bake.
+pub struct BakeResult {
+    pub lobes: LobeMap,
+    pub photons: GpuPhotons,
+    pub binned: Binned<GpuBins>,
+    /// Photons emitted in this pass.
+    pub emitted: u64,
+    /// More passes follow (this one is a preview).
+    pub preview: bool,
+    /// Time from the bake's start to this result.
+    pub seconds: f64,
+}
+
+/// A bake running on its thread.
+pub struct Baking {
+    receive: Receiver<Result<BakeResult>>,
+    pub started: Instant,
+    passes: Vec<u64>,
+    /// Passes received.
+    received: usize,
+}
+
+/// The photon counts of a bake's passes: a preview first when asked and worth it.
+pub fn passes(full: u64, preview: bool) -> Vec<u64> {
+    if preview && full >= PREVIEW_MIN {
+        vec![full / PREVIEW_FRACTION, full]
+    } else {
+        vec![full]
+    }
+}
+
+/// Starts a bake of `scene` over `passes`, as generation `generation.fetch_add(1) + 1`; the
+/// full (last) pass is saved to `cache` when given.
+pub fn spawn(
+    gpu: &Arc<Gpu>,
+    on_gpu: &Arc<GpuScene>,
+    scene: &Arc<Scene>,
+    passes: Vec<u64>,
+    cache: Option<PathBuf>,
+    generation: &Arc<AtomicU64>,
+) -> Baking {
+    let (send, receive) = channel();
+    let mine = generation.fetch_add(1, Ordering::SeqCst) + 1;
+    let (gpu, on_gpu, scene, generation) = (
+        gpu.clone(),
+        on_gpu.clone(),
+        scene.clone(),
+        generation.clone(),
+    );
+    let started = Instant::now();
+    let counts = passes.clone();
+    std::thread::spawn(move || {
+        let last = passes.len().saturating_sub(1);
+        for (k, &photons) in passes.iter().enumerate() {
+            if generation.load(Ordering::SeqCst) != mine {
+                return; // a newer bake took over
+            }
+            let mut pass = (*scene).clone();
+            pass.bake.photons = photons;
+            let baked = bake_pass(&gpu, &on_gpu, &pass, k < last, started);
+            let baked = baked.and_then(|b| {
+                if let (Some(path), false) = (&cache, b.preview) {
+                    crate::cache::save(path, crate::cache::bake_key(&scene), &b.lobes)?;
+                }
+                Ok(b)
+            });
+            let failed = baked.is_err();
+            // The window may be gone: nothing need wait for this bake then.
+            if send.send(baked).is_err() || failed {
+                return;
+            }
+        }
+    });
+    Baking {
+        receive,
+        started,
+        passes: counts,
+        received: 0,
+    }
+}
+
+fn bake_pass(
+    gpu: &Gpu,
+    on_gpu: &GpuScene,
+    scene: &Scene,
+    preview: bool,
+    started: Instant,
+) -> Result<BakeResult> {
+    let progress = Progress::new(false);
+    let (photons, binned) = traced_and_binned_gpu(scene, gpu, on_gpu, &progress)?;
+    let lobes = fit_gpu(scene, gpu, on_gpu, &binned, &progress)?;
+    Ok(BakeResult {
+        lobes,
+        emitted: photons.stats.emitted,
+        photons,
+        binned,
+        preview,
+        seconds: ms_since(started) / 1e3,
+    })
+}
+
+impl Baking {
+    /// Photons of the pass under way.
+    pub fn photons(&self) -> u64 {
+        let last = self.passes.len().saturating_sub(1);
+        self.passes
+            .get(self.received.min(last))
+            .copied()
+            .unwrap_or(0)
+    }
+
+    /// The next pass's result when it has come in.
+    pub fn poll(&mut self) -> Result<Option<BakeResult>> {
+        match self.receive.try_recv() {
+            Ok(result) => {
+                self.received += 1;
+                Ok(Some(result?))
+            }
+            Err(TryRecvError::Empty) => Ok(None),
+            Err(TryRecvError::Disconnected) => {
+                Err(Error::Gpu("the bake stopped without a result".into()))
+            }
+        }
+    }
+}
