@@ -11,17 +11,20 @@ use crate::cpu;
 use crate::em::{EmConfig, EmStats, FitShape, LobeFamily};
 use crate::error::Result;
 use crate::frame::{FrameConfig, camera_uniform, cpu_frame, shade_params};
-use crate::gpu::Gpu;
 use crate::gpu::bins as gpu_bins;
 use crate::gpu::em as gpu_em;
 use crate::gpu::frame::{FrameScene, SplatPipelines};
 use crate::gpu::photons::trace_photons;
+use crate::gpu::present::PresentPipeline;
 use crate::gpu::scene::GpuScene;
 use crate::gpu::tone::tone_map as gpu_tone_map;
+use crate::gpu::{BackendChoice, Gpu};
 use crate::grid::grid_params;
 use crate::photons::{PhotonConfig, PhotonMap, PhotonStats, ms_since, photons_within};
+use crate::render::Method;
 use crate::scene::Scene;
 use crate::tone::ToneConfig;
+use crate::view::{ViewOptions, ViewReport};
 
 #[derive(Debug, Serialize)]
 pub struct PhotonBench {
@@ -307,6 +310,9 @@ pub struct FrameBench {
     /// `frame_ms` at the first size (512²), for scripts that want one number.
     pub frame_ms: f64,
     pub sizes: Vec<FrameTiming>,
+    /// `--window`: frames drawn in a 1280×720 window by the viewer, swap chain included.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub window: Option<ViewReport>,
 }
 
 #[derive(Debug, Serialize)]
@@ -322,11 +328,16 @@ pub struct FrameTiming {
     /// GPU: medians of the visibility, attribute and shade passes, each waited for.
     #[serde(skip_serializing_if = "Option::is_none")]
     pub passes_ms: Option<[f64; 3]>,
+    /// GPU: median of the present pass (the tone-mapped bytes drawn onto a window-format
+    /// BGRA8 texture of this size), apart from `frame_ms`; what a window adds to a frame
+    /// besides the swap chain itself.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub present_ms: Option<f64>,
     pub frames: u32,
 }
 
-/// The sizes `bench frame` times.
-pub const FRAME_SIZES: [(u32, u32); 2] = [(512, 512), (1920, 1080)];
+/// The sizes `bench frame` times: a square, the viewer's window and full HD.
+pub const FRAME_SIZES: [(u32, u32); 3] = [(512, 512), (1280, 720), (1920, 1080)];
 const TIMED_FRAMES: u32 = 5;
 
 fn median(mut v: Vec<f64>) -> f64 {
@@ -351,27 +362,37 @@ pub fn frame(
             let frame_scene = FrameScene::upload(gpu, scene, &lobes)?;
             let buffers = frame_scene.buffers(&on_gpu);
             let pipelines = SplatPipelines::new(gpu)?;
+            let present = PresentPipeline::new(gpu, WINDOW_FORMAT)?;
             let params = shade_params(scene, &lobes, cfg);
             for (w, h) in FRAME_SIZES {
                 let view = View::new(&scene.camera, w, h);
                 let cam = camera_uniform(&view, scene.bounds(), cfg);
                 let targets = pipelines.targets(gpu, w, h)?;
+                let window = window_texture(gpu, w, h);
+                let window = window.create_view(&Default::default());
                 let mut times = Vec::new();
                 let mut pass_ms = Vec::new();
+                let mut present_ms = Vec::new();
                 for _ in 0..=TIMED_FRAMES {
                     let passes = pipelines.draw_timed(gpu, &buffers, &cam, &params, &targets)?;
                     let shade = passes.iter().sum();
                     pass_ms.push(passes);
                     let t = Instant::now();
                     let mut encoder = gpu.encoder("tone map");
-                    gpu_tone_map(gpu, &mut encoder, &targets.hdr, w * h, tone)?;
+                    let toned = gpu_tone_map(gpu, &mut encoder, &targets.hdr, w * h, tone)?;
                     gpu.submit_and_wait(encoder)?;
                     times.push((shade, ms_since(t)));
+                    let t = Instant::now();
+                    let mut encoder = gpu.encoder("present");
+                    present.record(gpu, &mut encoder, &window, &toned.rgba, (w, h));
+                    gpu.submit_and_wait(encoder)?;
+                    present_ms.push(ms_since(t));
                 }
                 let mut t = timing(w, h, &times[1..]);
                 t.passes_ms = Some(std::array::from_fn(|k| {
                     median(pass_ms[1..].iter().map(|p| p[k]).collect())
                 }));
+                t.present_ms = Some(median(present_ms[1..].to_vec()));
                 sizes.push(t);
             }
             let name = gpu.info.name.clone();
@@ -410,6 +431,55 @@ pub fn frame(
         area_samples: cfg.area_samples,
         frame_ms: sizes[0].frame_ms,
         sizes,
+        window: None,
+    })
+}
+
+/// Frames `bench frame --window` draws in the window (after the bake).
+pub const WINDOW_FRAMES: u32 = 10;
+/// The window's size.
+pub const WINDOW_SIZE: (u32, u32) = (1280, 720);
+
+/// Opens the viewer on `scene` at `WINDOW_SIZE`, bakes, draws `WINDOW_FRAMES` frames and
+/// closes: the median frame time with the window's swap chain.
+pub fn window_frames(
+    scene: &Scene,
+    frame: FrameConfig,
+    tone: ToneConfig,
+    backend: BackendChoice,
+) -> Result<ViewReport> {
+    let opts = ViewOptions {
+        width: WINDOW_SIZE.0,
+        height: WINDOW_SIZE.1,
+        backend,
+        frame,
+        tone,
+        method: Method::Lobes,
+        frames: Some(WINDOW_FRAMES),
+        screenshot: None,
+        cache: None,
+    };
+    crate::view::view(scene.clone(), opts)
+}
+
+/// The usual window surface format (Vulkan's first choice on most platforms).
+const WINDOW_FORMAT: wgpu::TextureFormat = wgpu::TextureFormat::Bgra8Unorm;
+
+/// An offscreen stand-in for a window's surface texture.
+fn window_texture(gpu: &Gpu, width: u32, height: u32) -> wgpu::Texture {
+    gpu.device.create_texture(&wgpu::TextureDescriptor {
+        label: Some("window stand-in"),
+        size: wgpu::Extent3d {
+            width,
+            height,
+            depth_or_array_layers: 1,
+        },
+        mip_level_count: 1,
+        sample_count: 1,
+        dimension: wgpu::TextureDimension::D2,
+        format: WINDOW_FORMAT,
+        usage: wgpu::TextureUsages::RENDER_ATTACHMENT,
+        view_formats: &[],
     })
 }
 
@@ -423,6 +493,7 @@ fn timing(width: u32, height: u32, times: &[(f64, f64)]) -> FrameTiming {
         shade_ms: median(times.iter().map(|t| t.0).collect()),
         tonemap_ms: median(times.iter().map(|t| t.1).collect()),
         passes_ms: None,
+        present_ms: None,
         frames: times.len() as u32,
     }
 }
@@ -448,6 +519,20 @@ impl std::fmt::Display for FrameBench {
             if let Some([v, a, sh]) = s.passes_ms {
                 write!(f, " (visibility {v:.1}, attributes {a:.1}, shade {sh:.1})")?;
             }
+            if let Some(p) = s.present_ms {
+                write!(f, "; present {p:.1} ms")?;
+            }
+        }
+        if let Some(w) = &self.window {
+            write!(
+                f,
+                "\nwindow       {}×{}: {:.1} ms/frame ({:.1} fps) over {} frames, swap chain included",
+                w.width,
+                w.height,
+                w.frame_ms,
+                1e3 / w.frame_ms.max(1e-9),
+                w.frames
+            )?;
         }
         Ok(())
     }

@@ -21,6 +21,7 @@ pub mod lobe_norms;
 pub mod model;
 pub mod photons;
 pub mod plot;
+pub mod rebake;
 pub mod render;
 pub mod scene;
 pub mod shared;

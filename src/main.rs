@@ -242,6 +242,10 @@ enum Command {
         /// Print one JSON object per scene on stdout (an array for several scenes).
         #[arg(long)]
         json: bool,
+        /// `frame` only: also draw WINDOW_FRAMES frames in a 1280×720 window (needs a display;
+        /// one scene), the figures under the key `window`.
+        #[arg(long)]
+        window: bool,
     },
 }
 
@@ -253,6 +257,9 @@ enum BenchKind {
     Em,
     /// Frames of the baked scene at 512² and 1920×1080: frame_ms, fps, shade and tone map.
     Frame,
+    /// What a moved light costs: the viewer's preview and full re-bake on the scene already
+    /// on the device, rebake_ms, preview_ms and the preview's error.
+    Rebake,
     /// The lobe × BRDF shading formulas against quadrature: relative L2 and energy errors
     /// of the thesis's form and ours, with heat maps (no scene).
     Convolution,
@@ -461,11 +468,18 @@ fn run(cli: Cli) -> Result<()> {
             look,
             device,
             json,
+            window,
             ..
         } => {
             if scenes.is_empty() {
                 return Err(Error::Invalid(
                     "bench needs at least one scene (e.g. scenes/bunny.toml)".into(),
+                ));
+            }
+            if window && (scenes.len() > 1 || !matches!(what, BenchKind::Frame) || device.cpu) {
+                return Err(Error::Invalid(
+                    "--window is for `bench frame` of one scene on a GPU (a process opens one window)"
+                        .into(),
                 ));
             }
             let gpu = device.gpu()?;
@@ -480,7 +494,17 @@ fn run(cli: Cli) -> Result<()> {
                         (r.to_string(), to_json(&r)?)
                     }
                     BenchKind::Frame => {
-                        let r = bench::frame(&scene, gpu.as_ref(), &look.frame(), &look.tone())?;
+                        let mut r =
+                            bench::frame(&scene, gpu.as_ref(), &look.frame(), &look.tone())?;
+                        if window {
+                            let (frame, tone) = (look.frame(), look.tone());
+                            let backend = device.backend;
+                            r.window = Some(bench::window_frames(&scene, frame, tone, backend)?);
+                        }
+                        (r.to_string(), to_json(&r)?)
+                    }
+                    BenchKind::Rebake => {
+                        let r = lobelight::rebake::rebake(&scene, gpu.as_ref())?;
                         (r.to_string(), to_json(&r)?)
                     }
                     BenchKind::Em => {

@@ -353,3 +353,48 @@ fn a_closed_stdout_is_not_a_panic() {
     assert!(!stderr.contains("panicked"), "{stderr}");
     std::fs::remove_dir_all(&dir).ok();
 }
+
+/// `bench rebake`: a preview with an eighth of the photons and fewer EM iterations, then the
+/// full re-bake, over light moves; the preview's frame differs from the full one, but not
+/// wildly (relMSE under 0.5 on the Cornell box at 25 k photons).
+#[test]
+fn bench_rebake_json_has_the_documented_keys() {
+    let r = json(&[
+        "bench",
+        "rebake",
+        "scenes/cornell.toml",
+        "--photons",
+        "200000",
+        "--json",
+    ]);
+    for key in [
+        "rebake_ms",
+        "preview_ms",
+        "bake_ms",
+        "grid_ms",
+        "photons_per_s",
+        "preview_rel_mse",
+        "preview_photons",
+        "preview_iterations",
+        "moves",
+    ] {
+        assert!(r.get(key).is_some(), "missing key {key}: {r}");
+    }
+    assert_eq!(r["photons"], 200_000);
+    assert_eq!(r["preview_photons"], 25_000);
+    let e = r["preview_rel_mse"].as_f64().unwrap();
+    assert!(e > 0.0 && e < 0.5, "preview relMSE {e}");
+    // Too few photons for a preview is a clear error.
+    let out = lobelight(
+        &[
+            "bench",
+            "rebake",
+            "scenes/cornell.toml",
+            "--photons",
+            "1000",
+        ],
+        &[],
+    );
+    assert!(!out.status.success());
+    assert!(String::from_utf8_lossy(&out.stderr).contains("preview"));
+}

@@ -110,6 +110,81 @@ fn the_photon_view_shows_the_bakes_photons() {
     assert!(d.within_5_percent >= 1.0, "{d:?}");
 }
 
+/// On a GL-only machine the viewer runs on GL: its scripted view matches the Vulkan
+/// offscreen render (the GL fallback traces the same photons; tests/cli.rs) within the
+/// tolerance above.
+#[test]
+fn the_viewer_runs_on_gl() {
+    let exe = env!("CARGO_BIN_EXE_lobelight");
+    let (shot, offscreen) = (path("shot-gl.png"), path("offscreen-vk.png"));
+    let view = Command::new("xvfb-run")
+        .args(["-a", "-s", "-screen 0 640x480x24", exe, "view"])
+        .args(COMMON)
+        .args(["--backend", "gl", "--frames", "1", "--screenshot", &shot])
+        .output()
+        .expect("xvfb-run is missing: install the xvfb package (CI does)");
+    assert!(
+        view.status.success(),
+        "{}",
+        String::from_utf8_lossy(&view.stderr)
+    );
+    let render = Command::new(exe)
+        .arg("render")
+        .args(COMMON)
+        .args(["--backend", "vulkan", "-o", &offscreen])
+        .output()
+        .unwrap();
+    assert!(render.status.success());
+    let (a, w, h) = read_image(std::path::Path::new(&shot)).unwrap();
+    let (b, _, _) = read_image(std::path::Path::new(&offscreen)).unwrap();
+    let d = difference_of(&a, &b, w, h, Values::Display).unwrap();
+    assert!(d.mean_relative <= 0.005, "{d:?}");
+    assert!(d.within_5_percent >= 1.0, "{d:?}");
+}
+
+/// `bench frame --window` adds the window's figures (swap chain included) under `window`,
+/// and every size has the present pass's time.
+#[test]
+fn bench_frame_window_reports_the_window() {
+    let exe = env!("CARGO_BIN_EXE_lobelight");
+    let out = Command::new("xvfb-run")
+        .args(["-a", "-s", "-screen 0 1600x900x24", exe, "bench", "frame"])
+        .args([
+            "scenes/cornell.toml",
+            "--photons",
+            "20000",
+            "--area-samples",
+            "1",
+        ])
+        .args(["--window", "--json"])
+        .output()
+        .expect("xvfb-run is missing: install the xvfb package (CI does)");
+    assert!(
+        out.status.success(),
+        "{}",
+        String::from_utf8_lossy(&out.stderr)
+    );
+    let r: serde_json::Value = serde_json::from_slice(&out.stdout).unwrap();
+    let sizes = r["sizes"].as_array().unwrap();
+    assert!(
+        sizes
+            .iter()
+            .any(|s| s["width"] == 1280 && s["height"] == 720)
+    );
+    assert!(
+        sizes
+            .iter()
+            .all(|s| s["present_ms"].as_f64().unwrap() > 0.0)
+    );
+    let w = &r["window"];
+    assert_eq!(
+        (w["width"].as_u64(), w["height"].as_u64()),
+        (Some(1280), Some(720))
+    );
+    assert!(w["frame_ms"].as_f64().unwrap() > 0.0, "{w}");
+    assert!(w["frames"].as_u64().unwrap() >= 10, "{w}");
+}
+
 /// The present pass drawn into an offscreen texture of a plain and of an sRGB format, read
 /// back, against the mirror: within one 8-bit step.
 #[test]
@@ -208,4 +283,58 @@ fn the_viewer_starts_from_the_bake_cache() {
     let (b, _, _) = read_image(std::path::Path::new(&second)).unwrap();
     let d = difference_of(&a, &b, w, h, Values::Display).unwrap();
     assert_eq!(d.max_relative, 0.0, "{d:?}");
+}
+
+/// The viewer's background bake of a moved light: a preview pass (an eighth of the photons,
+/// fewer EM iterations), then the full pass, whose lobes are the very ones `bake` gives for
+/// the moved scene (the bake is deterministic). A newer bake makes an older one stop before
+/// its next pass.
+#[test]
+fn a_moved_light_bakes_a_preview_then_in_full() {
+    use std::sync::Arc;
+    use std::sync::atomic::AtomicU64;
+
+    use lobelight::bake::{BakeDevice, Progress, bake};
+    use lobelight::view::baking::{BakeResult, Baking, spawn};
+    use lobelight::view::{move_first_light, passes};
+
+    let gpu = Arc::new(common::gpu());
+    let mut scene = scene::load(std::path::Path::new(COMMON[0])).unwrap();
+    scene.bake.photons = 200_000;
+    let moved = Arc::new(move_first_light(&scene, 1.0, 0.0).unwrap());
+    assert_ne!(moved.lights[0].position, scene.lights[0].position);
+    let on_gpu = Arc::new(GpuScene::upload(&gpu, &moved).unwrap());
+    let generation = Arc::new(AtomicU64::new(0));
+    let wait = |baking: &mut Baking| -> Vec<BakeResult> {
+        let mut got = Vec::new();
+        let start = std::time::Instant::now();
+        while got.last().is_none_or(|r: &BakeResult| r.preview) {
+            match baking.poll() {
+                Ok(Some(r)) => got.push(r),
+                Ok(None) => std::thread::sleep(std::time::Duration::from_millis(10)),
+                Err(_) => break, // the bake stopped
+            }
+            assert!(start.elapsed().as_secs() < 600, "the bake never finished");
+        }
+        got
+    };
+    let plan = passes(&moved.bake, true);
+    assert_eq!(plan.len(), 2);
+    assert_eq!(plan[0].photons, 25_000);
+    assert!(plan[0].iterations < plan[1].iterations);
+    // An older bake, then a newer one at once: the older stops after its first pass at most.
+    let mut older = spawn(&gpu, &on_gpu, &moved, plan.clone(), None, &generation);
+    let mut newer = spawn(&gpu, &on_gpu, &moved, plan, None, &generation);
+    let results = wait(&mut newer);
+    assert_eq!(results.len(), 2);
+    assert!(results[0].preview && !results[1].preview);
+    assert_eq!(results[0].emitted, 25_000);
+    assert_eq!(results[1].emitted, 200_000);
+    let stale = wait(&mut older);
+    assert!(stale.iter().all(|r| r.preview), "a stopped bake finished");
+    let quiet = Progress::new(false);
+    let direct = bake(&moved, BakeDevice::Gpu(&gpu, &on_gpu), &quiet).unwrap();
+    let full = &results[1].lobes;
+    assert_eq!(full.light, direct.lobes.light);
+    assert_eq!(full.lobes, direct.lobes.lobes);
 }

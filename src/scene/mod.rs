@@ -12,9 +12,8 @@ use crate::error::{Error, Result};
 use crate::grid::GridConfig;
 use crate::model;
 use crate::types::{Light, Material, Splat, light_kind};
-use file::{
-    Anchor, BakeDesc, CameraDesc, LightDesc, MaterialDesc, ObjectDesc, Scale, SceneFile, ShapeKind,
-};
+pub use file::BakeDesc;
+use file::{Anchor, CameraDesc, LightDesc, MaterialDesc, ObjectDesc, Scale, SceneFile, ShapeKind};
 use shapes::Disk;
 
 /// Splat spacing of procedural shapes when an object does not set `spacing`.

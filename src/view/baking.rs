@@ -19,10 +19,14 @@ use crate::gpu::bins::GpuBins;
 use crate::gpu::photons::GpuPhotons;
 use crate::gpu::scene::GpuScene;
 use crate::photons::ms_since;
-use crate::scene::Scene;
+use crate::scene::{BakeDesc, Scene};
 
-/// A preview bake traces this fraction of the scene's photons.
+/// A preview bake traces this fraction of the scene's photons, with this fraction of its EM
+/// iterations (at least `PREVIEW_MIN_ITERATIONS`): the fit's cost per splat does not shrink
+/// with the photons.
 pub const PREVIEW_FRACTION: u64 = 8;
+const PREVIEW_ITERATIONS: u32 = 3;
+const PREVIEW_MIN_ITERATIONS: u32 = 2;
 /// Scenes with fewer photons than this bake in full at once.
 const PREVIEW_MIN: u64 = 200_000;
 
@@ -48,12 +52,17 @@ pub struct Baking {
     received: usize,
 }
 
-/// The photon counts of a bake's passes: a preview first when asked and worth it.
-pub fn passes(full: u64, preview: bool) -> Vec<u64> {
-    if preview && full >= PREVIEW_MIN {
-        vec![full / PREVIEW_FRACTION, full]
+/// The bake settings of a bake's passes: a preview first when asked and worth it.
+pub fn passes(full: &BakeDesc, preview: bool) -> Vec<BakeDesc> {
+    if preview && full.photons >= PREVIEW_MIN {
+        let quick = BakeDesc {
+            photons: full.photons / PREVIEW_FRACTION,
+            iterations: (full.iterations / PREVIEW_ITERATIONS).max(PREVIEW_MIN_ITERATIONS),
+            ..full.clone()
+        };
+        vec![quick, full.clone()]
     } else {
-        vec![full]
+        vec![full.clone()]
     }
 }
 
@@ -63,7 +72,7 @@ pub fn spawn(
     gpu: &Arc<Gpu>,
     on_gpu: &Arc<GpuScene>,
     scene: &Arc<Scene>,
-    passes: Vec<u64>,
+    passes: Vec<BakeDesc>,
     cache: Option<PathBuf>,
     generation: &Arc<AtomicU64>,
 ) -> Baking {
@@ -76,15 +85,15 @@ pub fn spawn(
         generation.clone(),
     );
     let started = Instant::now();
-    let counts = passes.clone();
+    let counts = passes.iter().map(|p| p.photons).collect();
     std::thread::spawn(move || {
         let last = passes.len().saturating_sub(1);
-        for (k, &photons) in passes.iter().enumerate() {
+        for (k, settings) in passes.iter().enumerate() {
             if generation.load(Ordering::SeqCst) != mine {
                 return; // a newer bake took over
             }
             let mut pass = (*scene).clone();
-            pass.bake.photons = photons;
+            pass.bake = settings.clone();
             let baked = bake_pass(&gpu, &on_gpu, &pass, k < last, started);
             let baked = baked.and_then(|b| {
                 if let (Some(path), false) = (&cache, b.preview) {

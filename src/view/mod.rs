@@ -7,7 +7,7 @@
 //! photons first (`baking`). `--frames N --screenshot OUT.png` draws N frames once the bake
 //! is in, saves the last and exits (scripted runs and tests).
 
-mod baking;
+pub mod baking;
 mod orbit;
 
 use std::path::PathBuf;
@@ -202,7 +202,7 @@ impl App {
                 } else {
                     None
                 };
-                let full = passes(self.scene.bake.photons, false);
+                let full = passes(&self.scene.bake, false);
                 let b = baking::spawn(&gpu, &on_gpu, &self.scene, full, save, &generation);
                 (Some(b), None)
             }
@@ -273,7 +273,7 @@ impl State {
 
     /// Bakes `scene` again (a moved light: a preview first) or for the photons a view needs.
     fn rebake(&mut self, scene: &Arc<Scene>, preview: bool) {
-        let counts = passes(scene.bake.photons, preview);
+        let counts = passes(&scene.bake, preview);
         let b = baking::spawn(
             &self.gpu,
             &self.on_gpu,
@@ -462,7 +462,21 @@ impl State {
 }
 
 /// How far an arrow key moves the first light, as a fraction of the scene's size.
-const LIGHT_STEP: f32 = 0.05;
+pub const LIGHT_STEP: f32 = 0.05;
+
+/// `scene` with its first light moved by `(dx, dz)` steps of `LIGHT_STEP` along x and z, as
+/// the arrow keys move it; none for a scene without lights.
+pub fn move_first_light(scene: &Scene, dx: f32, dz: f32) -> Option<Scene> {
+    let first = scene.lights.first()?;
+    let (lo, hi) = scene.bounds();
+    let step = LIGHT_STEP * (hi - lo).max_element();
+    let mut moved = scene.clone();
+    let mut light = *first;
+    light.position[0] += dx * step;
+    light.position[2] += dz * step;
+    moved.lights[0] = light;
+    Some(moved)
+}
 
 enum KeyAction {
     Quit,
@@ -619,16 +633,9 @@ impl App {
                         }
                     }
                     Some(KeyAction::MoveLight(dx, dz)) => {
-                        let Some(first) = self.scene.lights.first() else {
+                        let Some(moved) = move_first_light(&self.scene, dx, dz) else {
                             return Ok(());
                         };
-                        let (lo, hi) = self.scene.bounds();
-                        let step = LIGHT_STEP * (hi - lo).max_element();
-                        let mut moved = (*self.scene).clone();
-                        let mut light = *first;
-                        light.position[0] += dx * step;
-                        light.position[2] += dz * step;
-                        moved.lights[0] = light;
                         self.scene = Arc::new(moved);
                         // Direct light follows at once; the indirect light with the preview
                         // bake, then the full one (a bake for the old position stops).

@@ -1,0 +1,179 @@
+//! `bench rebake`: what a moved light costs. The viewer's arrow keys move the first light and
+//! bake again on the scene already on the device (no grid rebuild): a preview with an eighth
+//! of the photons and a third of the EM iterations, then the full bake. This times both over a few moves and measures the
+//! preview's error against the full bake's frame, so the preview's speed comes with its price.
+
+use std::time::Instant;
+
+use serde::Serialize;
+
+use crate::bake::{BakeDevice, Progress, bake};
+use crate::camera::View;
+use crate::compare::difference;
+use crate::cpu;
+use crate::em::LobeMap;
+use crate::error::{Error, Result};
+use crate::frame::{FrameConfig, camera_uniform, cpu_frame, shade_params};
+use crate::gpu::Gpu;
+use crate::gpu::frame::{FrameScene, SplatPipelines};
+use crate::gpu::scene::GpuScene;
+use crate::grid::{SplatGrid, grid_params};
+use crate::photons::ms_since;
+use crate::scene::Scene;
+use crate::view::{move_first_light, passes};
+
+/// Light moves timed (one arrow-key step each, along x).
+pub const MOVES: u32 = 3;
+/// The size of the frames the preview is compared on.
+const IMAGE: (u32, u32) = (256, 256);
+
+#[derive(Debug, Serialize)]
+pub struct RebakeBench {
+    pub scene: String,
+    pub adapter: String,
+    pub backend: String,
+    pub splats: usize,
+    pub photons: u64,
+    pub preview_photons: u64,
+    pub preview_iterations: u32,
+    /// Uploading the splats and building the grid: paid once, not by a re-bake.
+    pub grid_ms: f64,
+    /// The first bake (pipelines compiled on the way).
+    pub bake_ms: f64,
+    /// Medians over the moves: the full re-bake and the preview bake.
+    pub rebake_ms: f64,
+    pub preview_ms: f64,
+    /// Photons traced per second by the full re-bake.
+    pub photons_per_s: f64,
+    /// Median relMSE of the preview's frame against the full bake's (256², same light).
+    pub preview_rel_mse: f64,
+    pub moves: u32,
+}
+
+/// Where it runs: the device with the scene on it, or the CPU mirror with its grid.
+enum Place<'a> {
+    Gpu(&'a Gpu, GpuScene, SplatPipelines),
+    Cpu(SplatGrid),
+}
+
+impl Place<'_> {
+    fn bake(&self, scene: &Scene) -> Result<(LobeMap, f64)> {
+        let quiet = Progress::new(false);
+        let t = Instant::now();
+        let device = match self {
+            Place::Gpu(gpu, on_gpu, _) => BakeDevice::Gpu(gpu, on_gpu),
+            Place::Cpu(grid) => BakeDevice::Cpu(grid),
+        };
+        let lobes = bake(scene, device, &quiet)?.lobes;
+        Ok((lobes, ms_since(t)))
+    }
+
+    /// The frame of the scene's camera with `lobes`, linear HDR.
+    fn image(&self, scene: &Scene, lobes: &LobeMap) -> Result<Vec<[f32; 4]>> {
+        let cfg = FrameConfig::default();
+        let view = View::new(&scene.camera, IMAGE.0, IMAGE.1);
+        let cam = camera_uniform(&view, scene.bounds(), &cfg);
+        let params = shade_params(scene, lobes, &cfg);
+        match self {
+            Place::Gpu(gpu, on_gpu, splat) => {
+                let frame_scene = FrameScene::upload(gpu, scene, lobes)?;
+                let targets = splat.targets(gpu, IMAGE.0, IMAGE.1)?;
+                let mut encoder = gpu.encoder("rebake frame");
+                let buffers = frame_scene.buffers(on_gpu);
+                splat.draw(gpu, &mut encoder, &buffers, &cam, &params, &targets)?;
+                gpu.submit_and_wait(encoder)?;
+                gpu.read(&targets.hdr, (IMAGE.0 * IMAGE.1) as usize)
+            }
+            Place::Cpu(grid) => Ok(cpu_frame(scene, grid, lobes, &cam, &params)),
+        }
+    }
+}
+
+fn median(mut v: Vec<f64>) -> f64 {
+    v.sort_by(f64::total_cmp);
+    v.get(v.len() / 2).copied().unwrap_or(0.0)
+}
+
+pub fn rebake(scene: &Scene, gpu: Option<&Gpu>) -> Result<RebakeBench> {
+    let [quick, full] = &passes(&scene.bake, true)[..] else {
+        return Err(Error::Invalid(format!(
+            "bench rebake needs a scene with enough photons for a preview bake (it has {}; \
+             use --photons 1000000)",
+            scene.bake.photons
+        )));
+    };
+    let t = Instant::now();
+    let (place, adapter, backend) = match gpu {
+        Some(gpu) => {
+            let on_gpu = GpuScene::upload(gpu, scene)?;
+            let splat = SplatPipelines::new(gpu)?;
+            let name = (gpu.info.name.clone(), gpu.backend_name().to_string());
+            (Place::Gpu(gpu, on_gpu, splat), name.0, name.1)
+        }
+        None => {
+            let grid = cpu::build_grid(&grid_params(&scene.splats, &scene.grid)?, &scene.splats)?;
+            let threads = rayon::current_num_threads();
+            let adapter = format!("CPU mirror ({threads} threads)");
+            (Place::Cpu(grid), adapter, "cpu".to_string())
+        }
+    };
+    let grid_ms = ms_since(t);
+    let (_, bake_ms) = place.bake(scene)?;
+    let (mut full_ms, mut preview_ms, mut errors) = (Vec::new(), Vec::new(), Vec::new());
+    for k in 1..=MOVES {
+        let moved = move_first_light(scene, k as f32, 0.0)
+            .ok_or_else(|| Error::Invalid("bench rebake needs a scene with a light".into()))?;
+        let mut preview = moved.clone();
+        preview.bake = quick.clone();
+        let (quick, ms) = place.bake(&preview)?;
+        preview_ms.push(ms);
+        let (full, ms) = place.bake(&moved)?;
+        full_ms.push(ms);
+        let d = difference(&place.image(&moved, &quick)?, &place.image(&moved, &full)?)?;
+        errors.push(d.rel_mse);
+    }
+    let rebake_ms = median(full_ms);
+    let photons = full.photons;
+    Ok(RebakeBench {
+        scene: scene.path.display().to_string(),
+        adapter,
+        backend,
+        splats: scene.splats.len(),
+        photons,
+        preview_photons: quick.photons,
+        preview_iterations: quick.iterations,
+        grid_ms,
+        bake_ms,
+        rebake_ms,
+        preview_ms: median(preview_ms),
+        photons_per_s: photons as f64 / (rebake_ms / 1e3).max(1e-9),
+        preview_rel_mse: median(errors),
+        moves: MOVES,
+    })
+}
+
+impl std::fmt::Display for RebakeBench {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        writeln!(f, "scene        {}", self.scene)?;
+        writeln!(f, "device       {} ({})", self.adapter, self.backend)?;
+        writeln!(
+            f,
+            "scene        {} splats, grid built once in {:.1} ms; first bake {:.1} ms",
+            self.splats, self.grid_ms, self.bake_ms
+        )?;
+        writeln!(
+            f,
+            "re-bake      {:.1} ms for {} photons ({:.2} M photons/s), median of {} light moves",
+            self.rebake_ms,
+            self.photons,
+            self.photons_per_s / 1e6,
+            self.moves
+        )?;
+        write!(
+            f,
+            "preview      {:.1} ms for {} photons and {} EM iterations, relMSE {:.4} against \
+             the full re-bake",
+            self.preview_ms, self.preview_photons, self.preview_iterations, self.preview_rel_mse
+        )
+    }
+}
