@@ -2,6 +2,8 @@
 //! on the device or on the CPU mirror, with a line of figures per stage. A frame needs only
 //! its result, so a camera change never bakes again.
 
+use std::sync::Arc;
+use std::sync::atomic::{AtomicU64, Ordering};
 use std::time::{Duration, Instant};
 
 use crate::bins::{PhotonBins, bin_params};
@@ -38,11 +40,28 @@ pub struct Baked {
 /// one line per finished stage with its time and rate.
 pub struct Progress {
     show: bool,
+    /// Photons traced so far, for a reader on another thread (the viewer's title).
+    traced: Option<Arc<AtomicU64>>,
 }
 
 impl Progress {
     pub fn new(show: bool) -> Progress {
-        Progress { show }
+        Progress { show, traced: None }
+    }
+
+    /// Quiet, but counting the photons traced into `traced`.
+    pub fn counting(traced: Arc<AtomicU64>) -> Progress {
+        Progress {
+            show: false,
+            traced: Some(traced),
+        }
+    }
+
+    /// Records that `done` photons are traced.
+    fn traced(&self, done: u64) {
+        if let Some(t) = &self.traced {
+            t.store(done, Ordering::Relaxed);
+        }
     }
 
     /// A bar over `total` photons.
@@ -124,7 +143,10 @@ pub fn traced_and_binned_gpu(
 ) -> Result<(GpuPhotons, Binned<GpuBins>)> {
     let photon_cfg = PhotonConfig::from_scene(scene);
     let bar = progress.bar(photon_cfg.photons);
-    let mut on_batch = |done: u64, _total: u64| bar.set_position(done);
+    let mut on_batch = |done: u64, _total: u64| {
+        bar.set_position(done);
+        progress.traced(done);
+    };
     let traced = trace_photons(gpu, scene, on_gpu, &photon_cfg, &mut on_batch)?;
     bar.finish_and_clear();
     let stats = traced.stats.clone();
@@ -147,7 +169,10 @@ pub fn bins_cpu(
 ) -> Result<Binned<PhotonBins>> {
     let photon_cfg = PhotonConfig::from_scene(scene);
     let bar = progress.bar(photon_cfg.photons);
-    let mut on_batch = |done: u64, _total: u64| bar.set_position(done);
+    let mut on_batch = |done: u64, _total: u64| {
+        bar.set_position(done);
+        progress.traced(done);
+    };
     let geo = Geometry {
         grid,
         splats: &scene.splats,

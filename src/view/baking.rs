@@ -47,6 +47,8 @@ pub struct BakeResult {
 pub struct Baking {
     receive: Receiver<Result<BakeResult>>,
     pub started: Instant,
+    /// Photons traced so far in the pass under way.
+    pub traced: Arc<AtomicU64>,
     passes: Vec<u64>,
     /// Passes received.
     received: usize,
@@ -86,6 +88,8 @@ pub fn spawn(
     );
     let started = Instant::now();
     let counts = passes.iter().map(|p| p.photons).collect();
+    let traced = Arc::new(AtomicU64::new(0));
+    let counter = traced.clone();
     std::thread::spawn(move || {
         let last = passes.len().saturating_sub(1);
         for (k, settings) in passes.iter().enumerate() {
@@ -94,7 +98,8 @@ pub fn spawn(
             }
             let mut pass = (*scene).clone();
             pass.bake = settings.clone();
-            let baked = bake_pass(&gpu, &on_gpu, &pass, k < last, started);
+            counter.store(0, Ordering::Relaxed);
+            let baked = bake_pass(&gpu, &on_gpu, &pass, k < last, started, &counter);
             let baked = baked.and_then(|b| {
                 if let (Some(path), false) = (&cache, b.preview) {
                     crate::cache::save(path, crate::cache::bake_key(&scene), &b.lobes)?;
@@ -111,6 +116,7 @@ pub fn spawn(
     Baking {
         receive,
         started,
+        traced,
         passes: counts,
         received: 0,
     }
@@ -122,8 +128,9 @@ fn bake_pass(
     scene: &Scene,
     preview: bool,
     started: Instant,
+    traced: &Arc<AtomicU64>,
 ) -> Result<BakeResult> {
-    let progress = Progress::new(false);
+    let progress = Progress::counting(traced.clone());
     let (photons, binned) = traced_and_binned_gpu(scene, gpu, on_gpu, &progress)?;
     let lobes = fit_gpu(scene, gpu, on_gpu, &binned, &progress)?;
     Ok(BakeResult {

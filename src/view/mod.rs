@@ -393,16 +393,27 @@ impl State {
     fn title(&self, scene: &Scene) -> String {
         let light = match (&self.baking, self.bake_s) {
             (None, Some(s)) => format!("global illumination (baked in {s:.1} s)"),
-            (Some(b), _) => format!(
-                "{}; baking {} photons… {:.1} s",
-                match &self.baked {
-                    Some(r) if r.preview => "preview bake",
-                    Some(_) => "indirect light of the last bake",
-                    None => "direct light",
-                },
-                b.photons(),
-                b.started.elapsed().as_secs_f64()
-            ),
+            (Some(b), _) => {
+                let traced = b.traced.load(std::sync::atomic::Ordering::Relaxed);
+                let total = b.photons();
+                let stage = if traced < total {
+                    format!(
+                        "tracing {:.0} %",
+                        100.0 * traced as f64 / total.max(1) as f64
+                    )
+                } else {
+                    "fitting lobes".to_string()
+                };
+                format!(
+                    "{}; baking {total} photons: {stage}, {:.1} s",
+                    match &self.baked {
+                        Some(r) if r.preview => "preview bake",
+                        Some(_) => "indirect light of the last bake",
+                        None => "direct light",
+                    },
+                    b.started.elapsed().as_secs_f64()
+                )
+            }
             (None, None) => "direct light".into(),
         };
         let waiting = self.method != Method::Lobes && self.baked.is_none();
