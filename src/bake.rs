@@ -8,7 +8,7 @@ use std::time::{Duration, Instant};
 
 use crate::bins::{PhotonBins, bin_params};
 use crate::cpu;
-use crate::em::{EmConfig, FitShape, LobeMap};
+use crate::em::{EmConfig, EmStats, FitShape, LobeMap};
 use crate::error::Result;
 use crate::gpu::Gpu;
 use crate::gpu::bins::{GpuBins, bin_photons};
@@ -258,8 +258,7 @@ pub fn bake(scene: &Scene, device: BakeDevice, progress: &Progress) -> Result<Ba
     let em = StageReport {
         splats_fitted: Some(s.fitted),
         splats_lit: Some(s.listed),
-        skipped_reason: (s.fitted == 0)
-            .then(|| "no glossy splat has photons: only total irradiance was gathered".to_string()),
+        skipped_reason: Some(em_skipped(s, scene.splats.len())),
         ..StageReport::ran(s.ms)
     };
     Ok(Baked {
@@ -268,6 +267,26 @@ pub fn bake(scene: &Scene, device: BakeDevice, progress: &Progress) -> Result<Ba
         em,
         lobes,
     })
+}
+
+/// What the lobe fit left out, and why: splats without photons cost nothing, diffuse ones
+/// only their irradiance gather, and with nothing glossy lit no EM runs and no lobes are kept.
+fn em_skipped(s: &EmStats, splats: usize) -> String {
+    let dark = splats.saturating_sub(s.listed as usize);
+    if s.fitted == 0 {
+        format!(
+            "no EM and no lobes kept: no glossy splat has photons (irradiance gathered on {} \
+             splats; {dark} without photons skipped)",
+            s.listed
+        )
+    } else {
+        format!(
+            "EM on {} glossy splats only: {} diffuse splats gathered irradiance only, {dark} \
+             without photons skipped",
+            s.fitted,
+            s.listed - s.fitted
+        )
+    }
 }
 
 fn progress_photons(progress: &Progress, s: &PhotonStats) {

@@ -8,7 +8,7 @@ use crate::bake::{BakeDevice, Progress, bake};
 use crate::bins::bin_params;
 use crate::camera::View;
 use crate::cpu;
-use crate::em::{EmConfig, EmStats, FitShape, LobeFamily};
+use crate::em::{EmConfig, EmStats, FitShape, LobeFamily, LobeMap};
 use crate::error::Result;
 use crate::frame::{FrameConfig, camera_uniform, cpu_frame, shade_params};
 use crate::gpu::bins as gpu_bins;
@@ -189,6 +189,18 @@ pub struct EmBench {
     /// Fit error: negative log-likelihood per unit photon weight, mean over fitted splats.
     pub nll: f64,
     pub stats: EmStats,
+    /// The same fit as a render runs it, skipping what the scene does not need (EM on glossy
+    /// splats only, no lobes kept when none are fitted): the saving against the above.
+    pub skipping: EmSkipping,
+}
+
+#[derive(Debug, Serialize)]
+pub struct EmSkipping {
+    pub em_ms: f64,
+    pub splats_fitted: u32,
+    /// Bytes of lobes the bake keeps, skipping and fitting every splat.
+    pub lobe_bytes: u64,
+    pub lobe_bytes_fit_all: u64,
 }
 
 /// Traces and bins the scene's photons, then times the lobe fit. On the GPU a first fit
@@ -203,7 +215,11 @@ pub fn em(
         fit_all: true,
         ..cfg.clone()
     };
-    let (map, traced_stats, binning_ms, adapter, backend) = match gpu {
+    let skip_cfg = EmConfig {
+        fit_all: false,
+        ..cfg.clone()
+    };
+    let (map, skipping, traced_stats, binning_ms, adapter, backend) = match gpu {
         Some(gpu) => {
             let on_gpu = GpuScene::upload(gpu, scene)?;
             let traced = trace_photons(gpu, scene, &on_gpu, photons, &mut |_, _| {})?;
@@ -222,9 +238,10 @@ pub fn em(
                 ..cfg.clone()
             })?;
             let map = fit(&cfg)?.download(gpu)?;
+            let skipping = fit(&skip_cfg)?.download(gpu)?;
             let name = gpu.info.name.clone();
             let backend = gpu.backend_name().to_string();
-            (map, traced_stats, binning_ms, name, backend)
+            (map, skipping, traced_stats, binning_ms, name, backend)
         }
         None => {
             let (traced, grid, _) = cpu::trace_scene(scene, photons, &mut |_, _| {})?;
@@ -232,16 +249,26 @@ pub fn em(
             let t = Instant::now();
             let bins = cpu::bin_photons(&params, &traced.photons)?;
             let binning_ms = ms_since(t);
-            let map = cpu::fit_lobes(
-                &cfg,
-                &bins,
-                &scene.splats,
-                &scene.materials,
-                FitShape::default(),
-            )?;
+            let fit = |c: &EmConfig| {
+                cpu::fit_lobes(
+                    c,
+                    &bins,
+                    &scene.splats,
+                    &scene.materials,
+                    FitShape::default(),
+                )
+            };
+            let (map, skipping) = (fit(&cfg)?, fit(&skip_cfg)?);
             let threads = rayon::current_num_threads();
             let adapter = format!("CPU mirror ({threads} threads)");
-            (map, traced.stats, binning_ms, adapter, "cpu".into())
+            (
+                map,
+                skipping,
+                traced.stats,
+                binning_ms,
+                adapter,
+                "cpu".into(),
+            )
         }
     };
     let s = &map.stats;
@@ -264,7 +291,17 @@ pub fn em(
         mean_photons: map.mean_photons(),
         nll: map.nll(),
         stats: s.clone(),
+        skipping: EmSkipping {
+            em_ms: skipping.stats.ms,
+            splats_fitted: skipping.stats.fitted,
+            lobe_bytes: lobe_bytes(&skipping),
+            lobe_bytes_fit_all: lobe_bytes(&map),
+        },
     })
+}
+
+fn lobe_bytes(map: &LobeMap) -> u64 {
+    (map.lobes.len() * size_of::<crate::types::Lobe>()) as u64
 }
 
 impl std::fmt::Display for EmBench {
@@ -291,7 +328,18 @@ impl std::fmt::Display for EmBench {
             self.photons_ms, self.stored, self.binning_ms, self.em_ms, self.stats.dispatches
         )?;
         writeln!(f, "fit error    {:.4} nats per unit weight", self.nll)?;
-        write!(f, "throughput   {:.0} fits/s", self.fits_per_s)
+        writeln!(f, "throughput   {:.0} fits/s", self.fits_per_s)?;
+        let k = &self.skipping;
+        write!(
+            f,
+            "skipping     EM {:.1} ms on {} glossy splats (all: {:.1} ms), lobes kept {:.1} MB \
+             (all: {:.1} MB)",
+            k.em_ms,
+            k.splats_fitted,
+            self.em_ms,
+            k.lobe_bytes as f64 / 1e6,
+            k.lobe_bytes_fit_all as f64 / 1e6
+        )
     }
 }
 

@@ -226,6 +226,16 @@ pub struct LobeMap {
 }
 
 impl LobeMap {
+    /// Frees the lobe slots when no splat was fitted (nothing glossy has photons): the map,
+    /// the cache file and the frame then hold no lobes, and shading reads none.
+    pub fn keep_only_used(mut self) -> LobeMap {
+        if self.stats.fitted == 0 {
+            self.lobes_per_splat = 0;
+            self.lobes = Vec::new();
+        }
+        self
+    }
+
     /// The lobes of splat `i` that were written.
     pub fn splat_lobes(&self, i: usize) -> &[Lobe] {
         let k = self.lobes_per_splat as usize;

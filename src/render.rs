@@ -131,7 +131,8 @@ impl std::fmt::Display for RenderReport {
         ];
         for (name, r) in rows {
             match (r.ran, r.ms, &r.skipped_reason) {
-                (true, Some(ms), _) => writeln!(f, "{name:<8} {ms:>9.1} ms")?,
+                (true, Some(ms), Some(part)) => writeln!(f, "{name:<8} {ms:>9.1} ms  ({part})")?,
+                (true, Some(ms), None) => writeln!(f, "{name:<8} {ms:>9.1} ms")?,
                 (_, _, Some(why)) => writeln!(f, "{name:<8}   skipped: {why}")?,
                 _ => writeln!(f, "{name:<8}   ran")?,
             }

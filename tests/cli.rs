@@ -123,9 +123,16 @@ fn bench_em_json_has_the_documented_keys() {
         "iterations",
         "search_radius",
         "stats",
+        "skipping",
     ] {
         assert!(gpu.get(key).is_some(), "missing key {key}: {gpu}");
     }
+    // The render's fit skips the diffuse splats: fewer fitted, the same lobe slots (some
+    // splats are glossy, so the lobes are kept).
+    let k = &gpu["skipping"];
+    assert!(k["splats_fitted"].as_u64().unwrap() < gpu["splats_fitted"].as_u64().unwrap());
+    assert!(k["em_ms"].as_f64().unwrap() > 0.0);
+    assert_eq!(k["lobe_bytes"], k["lobe_bytes_fit_all"]);
     assert_eq!(gpu["family"], "ward", "the default family");
     assert_eq!(gpu["iterations"], 3);
     assert!(gpu["fits_per_s"].as_f64().unwrap() > 0.0);

@@ -395,5 +395,5 @@ pub fn fit_lobes(
     }
     map.stats.photons = map.fitted().map(|l| l.photons as u64).sum();
     map.stats.ms = ms_since(t);
-    Ok(map)
+    Ok(map.keep_only_used())
 }

@@ -25,11 +25,17 @@ pub struct GpuLobes {
 }
 
 impl GpuLobes {
+    /// The fit on the host; no lobes when none were fitted (`LobeMap::keep_only_used`).
     pub fn download(&self, gpu: &Gpu) -> Result<LobeMap> {
         let n = self.splat_count as usize;
+        let per_splat = if self.stats.fitted == 0 {
+            0
+        } else {
+            self.lobes_per_splat
+        };
         let mut map = LobeMap {
-            lobes_per_splat: self.lobes_per_splat,
-            lobes: gpu.read::<Lobe>(&self.lobes, n * self.lobes_per_splat as usize)?,
+            lobes_per_splat: per_splat,
+            lobes: gpu.read::<Lobe>(&self.lobes, n * per_splat as usize)?,
             light: gpu.read::<SplatLight>(&self.light, n)?,
             stats: self.stats.clone(),
         };

@@ -354,15 +354,13 @@ impl Gpu {
         }
     }
 
-    /// A storage buffer holding `data` (at least 4 bytes: empty bindings are invalid).
+    /// A storage buffer holding `data`; empty data gives one zeroed element (at least 4
+    /// bytes): empty bindings are invalid, and an array binding needs one whole element.
     pub fn storage<T: Pod>(&self, label: &str, data: &[T]) -> Result<wgpu::Buffer> {
         let bytes: &[u8] = bytemuck::cast_slice(data);
         self.check_size(label, bytes.len() as u64)?;
-        let contents = if bytes.is_empty() {
-            &[0u8; 4][..]
-        } else {
-            bytes
-        };
+        let one_zeroed = vec![0u8; size_of::<T>().max(4)];
+        let contents = if bytes.is_empty() { &one_zeroed } else { bytes };
         Ok(self
             .device
             .create_buffer_init(&wgpu::util::BufferInitDescriptor {
