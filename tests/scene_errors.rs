@@ -170,3 +170,18 @@ fn transforms_apply_in_order() {
         assert!(d.dot(sp.normal.into()) > 0.0);
     }
 }
+
+/// A spacing or size that would make billions of splats, or splats of radius 0, is refused
+/// with the object's line before anything is allocated.
+#[test]
+fn impossible_sizes_are_refused_before_allocating() {
+    let huge = MINIMAL.replace("shape = \"quad\"", "shape = \"quad\"\nspacing = 1e-7");
+    let e = err(&huge);
+    assert!(e.contains("line") && e.contains("spacing"), "{e}");
+    let sphere = MINIMAL.replace("shape = \"quad\"", "shape = \"sphere\"\nradius = 1e-30");
+    let e = err(&sphere);
+    assert!(e.contains("degenerate splat"), "{e}");
+    let scaled = MINIMAL.replace("shape = \"quad\"", "shape = \"box\"\nscale = 1e30");
+    let e = err(&scaled);
+    assert!(e.contains("splats") || e.contains("degenerate"), "{e}");
+}

@@ -116,6 +116,8 @@ pub fn srgb_to_linear(c: f32) -> f32 {
 }
 
 pub fn to_splats(mesh: &Mesh, path: &Path) -> Result<SplatSet> {
+    // `load` validated already; a mesh built elsewhere is checked here, not trusted.
+    validate(path, mesh)?;
     let (normals, radii) = if mesh.faces.is_empty() {
         let radii = normals::spacing_radii(&mesh.positions);
         let normals = match &mesh.normals {

@@ -16,6 +16,22 @@ pub use file::BakeDesc;
 use file::{Anchor, CameraDesc, LightDesc, MaterialDesc, ObjectDesc, Scale, SceneFile, ShapeKind};
 use shapes::Disk;
 
+/// A splat every stage can work with: finite, a positive radius, a unit normal, a finite
+/// non-negative albedo.
+pub fn splat_is_sane(s: &Splat) -> bool {
+    let n = glam::Vec3::from(s.normal);
+    glam::Vec3::from(s.center).is_finite()
+        && s.radius.is_finite()
+        && s.radius > 0.0
+        && n.is_finite()
+        && (n.length() - 1.0).abs() < 1e-3
+        && s.diffuse.iter().all(|c| c.is_finite() && *c >= 0.0)
+}
+
+/// Most splats one procedural object may make (about 3 GB of splats and grid): past it a
+/// typo in `spacing` is far likelier than intent.
+pub const MAX_OBJECT_SPLATS: u64 = 50_000_000;
+
 /// Splat spacing of procedural shapes when an object does not set `spacing`.
 pub const DEFAULT_SPACING: f32 = 0.025;
 
@@ -498,6 +514,20 @@ fn build_object(
             });
         }
     };
+    let planned = match o.shape {
+        ShapeKind::CornellBox => shapes::cornell_count(&m, spacing),
+        ShapeKind::Box => shapes::cube_count(&m, spacing),
+        ShapeKind::Sphere => shapes::sphere_count(&m, o.radius.unwrap_or(1.0), spacing),
+        ShapeKind::Quad => shapes::quad_count(&m, o.size.unwrap_or([1.0, 1.0]), spacing),
+        ShapeKind::Model => 0.0,
+    };
+    // A NaN count (a transform that is not finite) is refused too.
+    if planned.is_nan() || planned > MAX_OBJECT_SPLATS as f64 {
+        return Err(at(format!(
+            "this shape at spacing {spacing} would make {planned:.3e} splats, more than the \
+             {MAX_OBJECT_SPLATS} one object may have: raise `spacing` or lower `scale`"
+        )));
+    }
     let mut disks = Vec::new();
     let mut source = None;
     let mut dropped = 0;
@@ -556,6 +586,15 @@ fn build_object(
             push(&placed, material, colors);
             source = Some(rel.clone());
         }
+    }
+    // Sizes near the limits of f32 make disks of radius 0 or infinite ones: refused here, so
+    // that no stage meets a degenerate splat.
+    if let Some(bad) = splats[before..].iter().find(|s| !splat_is_sane(s)) {
+        return Err(at(format!(
+            "this object makes a degenerate splat (radius {}, centre {:?}, normal {:?}): its \
+             size, scale, fit or spacing is out of range",
+            bad.radius, bad.center, bad.normal
+        )));
     }
     Ok(ObjectSummary {
         shape: o.shape.name().to_string(),

@@ -132,6 +132,46 @@ pub fn sphere(m: &Affine3A, radius: f32, spacing: f32, out: &mut Vec<Disk>) {
     }
 }
 
+/// Disks `parallelogram` makes of edges `u`, `v`, counted in f64 so that no spacing overflows.
+fn grid_count(u: Vec3, v: Vec3, spacing: f32) -> f64 {
+    let n = |e: Vec3| (e.length() as f64 / spacing as f64).round().max(1.0);
+    n(u) * n(v)
+}
+
+fn faces_count(m: &Affine3A, faces: &[([f32; 3], [f32; 3], [f32; 3])], spacing: f32) -> f64 {
+    faces
+        .iter()
+        .map(|&(_, u, v)| {
+            let (u, v) = (m.transform_vector3(u.into()), m.transform_vector3(v.into()));
+            grid_count(u, v, spacing)
+        })
+        .sum()
+}
+
+/// How many disks `cube` makes (NaN or infinite for a transform that is).
+pub fn cube_count(m: &Affine3A, spacing: f32) -> f64 {
+    faces_count(m, &CUBE_FACES, spacing)
+}
+
+/// How many disks `cornell_walls` makes.
+pub fn cornell_count(m: &Affine3A, spacing: f32) -> f64 {
+    faces_count(m, &CUBE_FACES[..5], spacing)
+}
+
+/// How many disks `quad` makes.
+pub fn quad_count(m: &Affine3A, size: [f32; 2], spacing: f32) -> f64 {
+    let (u, v) = (Vec3::new(size[0], 0.0, 0.0), Vec3::new(0.0, size[1], 0.0));
+    grid_count(m.transform_vector3(u), m.transform_vector3(v), spacing)
+}
+
+/// How many disks `sphere` makes.
+pub fn sphere_count(m: &Affine3A, radius: f32, spacing: f32) -> f64 {
+    let r = radius as f64 * max_scale(m) as f64;
+    (4.0 * std::f64::consts::PI * r * r / (spacing as f64 * spacing as f64))
+        .round()
+        .max(12.0)
+}
+
 /// Largest stretch the linear part applies to any direction (bounds a disk radius' growth).
 pub fn max_scale(m: &Affine3A) -> f32 {
     let c = m.matrix3;
