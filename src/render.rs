@@ -187,6 +187,9 @@ pub fn render(
     let [w0, h0] = scene.camera.resolution;
     let (width, height) = (opts.width.unwrap_or(w0), opts.height.unwrap_or(h0));
     crate::scene::check_resolution(width, height).map_err(Error::Invalid)?;
+    if let Some(gpu) = gpu {
+        gpu.check_image(width, height)?;
+    }
     let format = ImageFormat::of(output)?;
     opts.frame.validate()?;
     opts.tone.validate()?;

@@ -405,3 +405,26 @@ fn bench_rebake_json_has_the_documented_keys() {
     assert!(!out.status.success());
     assert!(String::from_utf8_lossy(&out.stderr).contains("preview"));
 }
+
+/// An image larger than the device can bind is refused at once, before the bake, with what
+/// the device holds.
+#[test]
+fn an_image_beyond_the_device_is_refused_before_baking() {
+    let out = lobelight(
+        &[
+            "render",
+            "scenes/cornell.toml",
+            "--width",
+            "16384",
+            "--height",
+            "16384",
+            "-o",
+            "/tmp/lobelight-too-big.png",
+        ],
+        &[],
+    );
+    assert!(!out.status.success());
+    let err = String::from_utf8_lossy(&out.stderr);
+    assert!(err.contains("largest storage binding"), "{err}");
+    assert!(!err.contains("photons"), "it baked first: {err}");
+}

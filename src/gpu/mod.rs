@@ -401,6 +401,22 @@ impl Gpu {
             .min(self.limits.max_buffer_size)
     }
 
+    /// Refuses an image this device cannot hold in one HDR binding (16 bytes a pixel), before
+    /// any work: the frame stages bind the whole image.
+    pub fn check_image(&self, width: u32, height: u32) -> Result<()> {
+        let bytes = width as u64 * height as u64 * 16;
+        let max = self.max_binding_bytes();
+        if bytes > max {
+            return Err(Error::Invalid(format!(
+                "a {width}×{height} image needs {bytes} bytes of HDR pixels, more than this \
+                 device's largest storage binding ({max} bytes, about {} pixels): render \
+                 smaller",
+                max / 16
+            )));
+        }
+        Ok(())
+    }
+
     fn check_size(&self, label: &str, bytes: u64) -> Result<()> {
         let max = self.max_binding_bytes();
         if bytes > max {

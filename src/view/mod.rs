@@ -293,6 +293,12 @@ impl State {
         self.config.width = size.width;
         self.config.height = size.height;
         self.surface.configure(&self.gpu.device, &self.config);
+        // Too large for this device: say so and draw nothing until the window is smaller
+        // (`draw` skips frames whose targets do not match the window).
+        if let Err(e) = self.gpu.check_image(size.width, size.height) {
+            eprintln!("lobelight: {e}");
+            return Ok(());
+        }
         self.targets = self.pipelines.targets(&self.gpu, size.width, size.height)?;
         Ok(())
     }
