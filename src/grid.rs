@@ -99,6 +99,16 @@ pub fn grid_params(splats: &[Splat], cfg: &GridConfig) -> Result<GridParams> {
             cfg.max_dim
         )));
     }
+    // Every stage assumes sane splats: a NaN or zero normal, or a radius of 0, stops here
+    // with the splat's index, on the device's path and the CPU's alike.
+    if let Some(i) = splats.iter().position(|s| !crate::scene::splat_is_sane(s)) {
+        let s = &splats[i];
+        return Err(Error::Invalid(format!(
+            "splat {i} is degenerate (centre {:?}, radius {}, normal {:?}): every splat needs a \
+             finite centre, a positive radius and a unit normal",
+            s.center, s.radius, s.normal
+        )));
+    }
     let (lo, hi) =
         splat_bounds(splats).ok_or_else(|| Error::Invalid("the scene has no splats".into()))?;
     if !lo.is_finite() || !hi.is_finite() {

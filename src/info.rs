@@ -70,7 +70,9 @@ pub fn info(scene: &Scene, gpu: Option<&Gpu>) -> Result<Info> {
         None => cpu::build_grid(&params, &scene.splats)?,
     };
     let build_ms = start.elapsed().as_secs_f64() * 1e3;
+    // In the file's coordinates (a far scene was moved to the origin on load).
     let (lo, hi) = scene.bounds();
+    let (lo, hi) = (lo + scene.origin, hi + scene.origin);
     let n = scene.splats.len() as u64;
     let entries = grid.cell_splats.len() as u64;
     let memory = {

@@ -48,6 +48,9 @@ pub struct Scene {
     pub lights: Vec<Light>,
     /// One line per object: what it is and how many splats it made.
     pub objects: Vec<ObjectSummary>,
+    /// Where this scene's origin lies in the file's coordinates (`recentre`); zero for a
+    /// scene near the origin.
+    pub origin: Vec3,
 }
 
 #[derive(Clone, Debug, serde::Serialize)]
@@ -59,7 +62,31 @@ pub struct ObjectSummary {
     pub dropped: usize,
 }
 
+/// A scene whose centre lies farther from the origin than this many times its size is moved
+/// to the origin.
+pub const FAR_FROM_ORIGIN: f32 = 4.0;
+
 impl Scene {
+    /// Moves a scene that lies far from the origin (`FAR_FROM_ORIGIN`) so that its centre is
+    /// at the origin, and adds the shift to `origin`. Light transport does not depend on where
+    /// the scene is, but f32 does: 1e5 from the origin one ulp is 0.008, a third of a typical
+    /// splat spacing, and ray–disk tests lose their digits to the offset. Scanned scenes often
+    /// sit in georeferenced coordinates that far away.
+    pub fn recentre(&mut self) {
+        let (lo, hi) = self.bounds();
+        let centre = (lo + hi) * 0.5;
+        let size = (hi - lo).max_element().max(f32::MIN_POSITIVE);
+        if !centre.is_finite() || centre.length() <= FAR_FROM_ORIGIN * size {
+            return;
+        }
+        let shift = |p: &mut [f32; 3]| *p = (Vec3::from(*p) - centre).to_array();
+        self.splats.iter_mut().for_each(|s| shift(&mut s.center));
+        self.lights.iter_mut().for_each(|l| shift(&mut l.position));
+        shift(&mut self.camera.eye);
+        shift(&mut self.camera.target);
+        self.origin += centre;
+    }
+
     /// Bounds of the splat disks.
     pub fn bounds(&self) -> (Vec3, Vec3) {
         crate::grid::splat_bounds(&self.splats).unwrap_or((Vec3::ZERO, Vec3::ZERO))
@@ -176,7 +203,7 @@ pub fn parse(path: &Path, text: &str) -> Result<Scene> {
         ));
     }
 
-    Ok(Scene {
+    let mut scene = Scene {
         path: path.to_owned(),
         camera: file.camera,
         bake: file.bake,
@@ -186,7 +213,10 @@ pub fn parse(path: &Path, text: &str) -> Result<Scene> {
         material_names,
         lights,
         objects,
-    })
+        origin: Vec3::ZERO,
+    };
+    scene.recentre();
+    Ok(scene)
 }
 
 fn finite3(v: [f32; 3]) -> bool {
