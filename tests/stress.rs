@@ -323,3 +323,41 @@ spacing = 0.1
     assert!((Vec3::from(far.lights[0].position) - Vec3::Y).length() < 0.1);
     assert!((Vec3::from(far.camera.eye) - 2.0 * Vec3::Y).length() < 0.1);
 }
+
+/// The glossy Cornell box's light scaled by 1e-8 and 1e8: photon powers follow, and the bake (trace, bins, fit) and
+/// the frame stay finite and alike on both paths.
+#[test]
+fn extreme_light_powers_bake_and_draw_alike() {
+    let gpu = common::gpu();
+    for power in [1e-8f32, 1e8] {
+        let mut scene = scene::load(Path::new("scenes/cornell.toml")).unwrap();
+        for l in &mut scene.lights {
+            l.power = l.power.map(|p| p * power);
+        }
+        scene.bake.photons = 20_000;
+        let grid = common::host_grid(&scene);
+        let quiet = Progress::new(false);
+        let on_cpu = bake(&scene, BakeDevice::Cpu(&grid), &quiet).unwrap().lobes;
+        let on_gpu = GpuScene::upload(&gpu, &scene).unwrap();
+        let on_device = bake(&scene, BakeDevice::Gpu(&gpu, &on_gpu), &quiet)
+            .unwrap()
+            .lobes;
+        for (side, map) in [("CPU", &on_cpu), ("GPU", &on_device)] {
+            assert!(map.stats.fitted > 0, "{power:e} {side}: nothing fitted");
+            let finite = map
+                .light
+                .iter()
+                .all(|l| l.irradiance.iter().all(|x| x.is_finite()))
+                && map
+                    .lobes
+                    .iter()
+                    .all(|l| l.irradiance.iter().chain(&l.axis).all(|x| x.is_finite()));
+            assert!(finite, "{power:e}: {side} bake is not finite");
+        }
+        let view = View::new(&scene.camera, 32, 32);
+        check(
+            &format!("light power {power:e}"),
+            &frames(&gpu, &scene, &on_cpu, &view),
+        );
+    }
+}
