@@ -416,7 +416,9 @@ pub fn frame(
                 let view = View::new(&scene.camera, w, h);
                 let cam = camera_uniform(&view, scene.bounds(), cfg);
                 let targets = pipelines.targets(gpu, w, h)?;
-                let window = window_texture(gpu, w, h);
+                let usage = wgpu::TextureUsages::RENDER_ATTACHMENT;
+                // An offscreen stand-in for a window's surface texture.
+                let window = gpu.texture_2d("window stand-in", (w, h), WINDOW_FORMAT, usage);
                 let window = window.create_view(&Default::default());
                 let mut times = Vec::new();
                 let mut pass_ms = Vec::new();
@@ -512,24 +514,6 @@ pub fn window_frames(
 
 /// The usual window surface format (Vulkan's first choice on most platforms).
 const WINDOW_FORMAT: wgpu::TextureFormat = wgpu::TextureFormat::Bgra8Unorm;
-
-/// An offscreen stand-in for a window's surface texture.
-fn window_texture(gpu: &Gpu, width: u32, height: u32) -> wgpu::Texture {
-    gpu.device.create_texture(&wgpu::TextureDescriptor {
-        label: Some("window stand-in"),
-        size: wgpu::Extent3d {
-            width,
-            height,
-            depth_or_array_layers: 1,
-        },
-        mip_level_count: 1,
-        sample_count: 1,
-        dimension: wgpu::TextureDimension::D2,
-        format: WINDOW_FORMAT,
-        usage: wgpu::TextureUsages::RENDER_ATTACHMENT,
-        view_formats: &[],
-    })
-}
 
 fn timing(width: u32, height: u32, times: &[(f64, f64)]) -> FrameTiming {
     let frame_ms = median(times.iter().map(|(a, b)| a + b).collect());

@@ -62,6 +62,30 @@ fn check(what: &str, [g, c]: &[Vec<[f32; 4]>; 2]) -> f64 {
     d.mean_relative
 }
 
+/// The scene baked on the CPU mirror and on the device, each checked finite.
+fn both_bakes(gpu: &Gpu, scene: &Scene, what: &str) -> [LobeMap; 2] {
+    let grid = common::host_grid(scene);
+    let quiet = Progress::new(false);
+    let on_cpu = bake(scene, BakeDevice::Cpu(&grid), &quiet).unwrap().lobes;
+    let on_gpu = GpuScene::upload(gpu, scene).unwrap();
+    let on_device = bake(scene, BakeDevice::Gpu(gpu, &on_gpu), &quiet)
+        .unwrap()
+        .lobes;
+    for (side, map) in [("CPU", &on_cpu), ("GPU", &on_device)] {
+        let finite = map
+            .light
+            .iter()
+            .all(|l| l.irradiance.iter().all(|x| x.is_finite()))
+            && map.lobes.iter().all(|l| {
+                l.axis.iter().chain(&l.irradiance).all(|x| x.is_finite())
+                    && l.sharpness.is_finite()
+                    && l.weight.is_finite()
+            });
+        assert!(finite, "{what}: the {side} bake is not finite");
+    }
+    [on_cpu, on_device]
+}
+
 /// A glossy 2 × 2 plane (normal +y) under a point light.
 fn plane() -> Scene {
     let text = r#"
@@ -203,26 +227,12 @@ fn far_and_tiny_scenes_bake_and_draw_alike() {
             (scene.origin - offset).length() <= 1e-6 * offset.length() + s,
             "{offset}"
         );
-        let grid = common::host_grid(&scene);
-        let quiet = Progress::new(false);
-        let on_cpu = bake(&scene, BakeDevice::Cpu(&grid), &quiet).unwrap().lobes;
-        let on_gpu = GpuScene::upload(&gpu, &scene).unwrap();
-        let on_device = bake(&scene, BakeDevice::Gpu(&gpu, &on_gpu), &quiet)
-            .unwrap()
-            .lobes;
         let what = format!("scale {s:e}, offset {offset}");
-        for (side, map) in [("CPU", &on_cpu), ("GPU", &on_device)] {
-            let finite = map
-                .light
-                .iter()
-                .all(|l| l.irradiance.iter().all(|x| x.is_finite()))
-                && map.lobes.iter().all(|l| {
-                    l.axis.iter().chain(&l.irradiance).all(|x| x.is_finite())
-                        && l.sharpness.is_finite()
-                });
-            assert!(finite, "{what}: {side} bake is not finite");
-            assert!(map.stats.listed > 0, "{what}: {side} bake found no photons");
-        }
+        let [on_cpu, on_device] = both_bakes(&gpu, &scene, &what);
+        assert!(
+            on_cpu.stats.fitted > 0 && on_device.stats.fitted > 0,
+            "{what}"
+        );
         let view = View::new(&scene.camera, 40, 40);
         check(&what, &frames(&gpu, &scene, &on_cpu, &view));
     }
@@ -244,19 +254,7 @@ fn all_splats_in_one_cell() {
     scene.camera.target = [0.0; 3];
     scene.camera.up = [0.0, 1.0, 0.0];
     scene.bake.photons = 5_000;
-    let grid = common::host_grid(&scene);
-    let quiet = Progress::new(false);
-    let map = bake(&scene, BakeDevice::Cpu(&grid), &quiet).unwrap().lobes;
-    let on_gpu = GpuScene::upload(&gpu, &scene).unwrap();
-    let device_map = bake(&scene, BakeDevice::Gpu(&gpu, &on_gpu), &quiet)
-        .unwrap()
-        .lobes;
-    assert!(
-        device_map
-            .light
-            .iter()
-            .all(|l| l.irradiance.iter().all(|x| x.is_finite()))
-    );
+    let [map, _] = both_bakes(&gpu, &scene, "one cell");
     let view = View::new(&scene.camera, 32, 32);
     check("one cell", &frames(&gpu, &scene, &map, &view));
 }
@@ -335,25 +333,12 @@ fn extreme_light_powers_bake_and_draw_alike() {
             l.power = l.power.map(|p| p * power);
         }
         scene.bake.photons = 20_000;
-        let grid = common::host_grid(&scene);
-        let quiet = Progress::new(false);
-        let on_cpu = bake(&scene, BakeDevice::Cpu(&grid), &quiet).unwrap().lobes;
-        let on_gpu = GpuScene::upload(&gpu, &scene).unwrap();
-        let on_device = bake(&scene, BakeDevice::Gpu(&gpu, &on_gpu), &quiet)
-            .unwrap()
-            .lobes;
-        for (side, map) in [("CPU", &on_cpu), ("GPU", &on_device)] {
-            assert!(map.stats.fitted > 0, "{power:e} {side}: nothing fitted");
-            let finite = map
-                .light
-                .iter()
-                .all(|l| l.irradiance.iter().all(|x| x.is_finite()))
-                && map
-                    .lobes
-                    .iter()
-                    .all(|l| l.irradiance.iter().chain(&l.axis).all(|x| x.is_finite()));
-            assert!(finite, "{power:e}: {side} bake is not finite");
-        }
+        let what = format!("light power {power:e}");
+        let [on_cpu, on_device] = both_bakes(&gpu, &scene, &what);
+        assert!(
+            on_cpu.stats.fitted > 0 && on_device.stats.fitted > 0,
+            "{what}"
+        );
         let view = View::new(&scene.camera, 32, 32);
         check(
             &format!("light power {power:e}"),

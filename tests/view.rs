@@ -35,13 +35,15 @@ const COMMON: [&str; 7] = [
     "72",
 ];
 
-/// `view --frames 3 --screenshot` of `method` under `xvfb-run`: the screenshot's pixels.
-fn scripted_view(method: &str, shot: &str) -> (Vec<[f32; 4]>, u32, u32) {
+/// `view … --frames 3 --screenshot` under `xvfb-run` with `extra` arguments: the
+/// screenshot's pixels.
+fn scripted_view(extra: &[&str], shot: &str) -> (Vec<[f32; 4]>, u32, u32) {
     let exe = env!("CARGO_BIN_EXE_lobelight");
     let view = Command::new("xvfb-run")
         .args(["-a", "-s", "-screen 0 640x480x24", exe, "view"])
         .args(COMMON)
-        .args(["--method", method, "--frames", "3", "--screenshot", shot])
+        .args(extra)
+        .args(["--frames", "3", "--screenshot", shot])
         .output()
         .expect("xvfb-run is missing: install the xvfb package (CI does)");
     assert!(
@@ -54,28 +56,38 @@ fn scripted_view(method: &str, shot: &str) -> (Vec<[f32; 4]>, u32, u32) {
     (a, w, h)
 }
 
+/// `render` of the same scene and size with `extra` arguments: its pixels.
+fn offscreen(extra: &[&str], out: &str) -> Vec<[f32; 4]> {
+    let render = Command::new(env!("CARGO_BIN_EXE_lobelight"))
+        .arg("render")
+        .args(COMMON)
+        .args(extra)
+        .args(["-o", out])
+        .output()
+        .unwrap();
+    assert!(render.status.success());
+    let (b, w, h) = read_image(std::path::Path::new(out)).unwrap();
+    assert_eq!((w, h), (96, 72));
+    b
+}
+
+/// Within one 8-bit step: mean relative difference under 0.5 % and every pixel within 5 %.
+fn assert_one_step(a: &[[f32; 4]], b: &[[f32; 4]], w: u32, h: u32, what: &str) {
+    let d = difference_of(a, b, w, h, Values::Display).unwrap();
+    assert!(d.mean_relative <= 0.005, "{what}: {d:?}");
+    assert!(d.within_5_percent >= 1.0, "{what}: {d:?}");
+}
+
 /// A scripted view saves what the window showed; the same scene, bake settings and size
 /// rendered offscreen give the same image, for the lobes and for the reference (key R). The
-/// bake and both frames are deterministic, so the tolerance is one 8-bit step: mean relative
-/// difference under 0.5 % and every pixel within 5 %.
+/// bake and both frames are deterministic, so the tolerance is one 8-bit step.
 #[test]
 fn a_scripted_view_matches_the_offscreen_render() {
-    let exe = env!("CARGO_BIN_EXE_lobelight");
     for method in ["lobes", "reference"] {
-        let (shot, offscreen) = (path(&format!("shot-{method}.png")), path("offscreen.png"));
-        let (a, w, h) = scripted_view(method, &shot);
-        let render = Command::new(exe)
-            .arg("render")
-            .args(COMMON)
-            .args(["--method", method, "-o", &offscreen])
-            .output()
-            .unwrap();
-        assert!(render.status.success());
-        let (b, wb, hb) = read_image(std::path::Path::new(&offscreen)).unwrap();
-        assert_eq!((w, h), (wb, hb));
-        let d = difference_of(&a, &b, w, h, Values::Display).unwrap();
-        assert!(d.mean_relative <= 0.005, "{method}: {d:?}");
-        assert!(d.within_5_percent >= 1.0, "{method}: {d:?}");
+        let shot = path(&format!("shot-{method}.png"));
+        let (a, w, h) = scripted_view(&["--method", method], &shot);
+        let b = offscreen(&["--method", method], &path("offscreen.png"));
+        assert_one_step(&a, &b, w, h, method);
     }
 }
 
@@ -85,7 +97,7 @@ fn a_scripted_view_matches_the_offscreen_render() {
 #[test]
 fn the_photon_view_shows_the_bakes_photons() {
     let shot = path("shot-photons.png");
-    let (a, w, h) = scripted_view("photons", &shot);
+    let (a, w, h) = scripted_view(&["--method", "photons"], &shot);
     let gpu = common::gpu();
     let mut scene = scene::load(std::path::Path::new(COMMON[0])).unwrap();
     scene.bake.photons = 100_000;
@@ -105,9 +117,7 @@ fn the_photon_view_shows_the_bakes_photons() {
         .iter()
         .map(|p| std::array::from_fn(|c| ((p >> (8 * c)) & 0xff) as f32 / 255.0))
         .collect();
-    let d = difference_of(&a, &b, w, h, Values::Display).unwrap();
-    assert!(d.mean_relative <= 0.005, "{d:?}");
-    assert!(d.within_5_percent >= 1.0, "{d:?}");
+    assert_one_step(&a, &b, w, h, "photon view");
 }
 
 /// On a GL-only machine the viewer runs on GL: its scripted view matches the Vulkan
@@ -115,31 +125,9 @@ fn the_photon_view_shows_the_bakes_photons() {
 /// tolerance above.
 #[test]
 fn the_viewer_runs_on_gl() {
-    let exe = env!("CARGO_BIN_EXE_lobelight");
-    let (shot, offscreen) = (path("shot-gl.png"), path("offscreen-vk.png"));
-    let view = Command::new("xvfb-run")
-        .args(["-a", "-s", "-screen 0 640x480x24", exe, "view"])
-        .args(COMMON)
-        .args(["--backend", "gl", "--frames", "1", "--screenshot", &shot])
-        .output()
-        .expect("xvfb-run is missing: install the xvfb package (CI does)");
-    assert!(
-        view.status.success(),
-        "{}",
-        String::from_utf8_lossy(&view.stderr)
-    );
-    let render = Command::new(exe)
-        .arg("render")
-        .args(COMMON)
-        .args(["--backend", "vulkan", "-o", &offscreen])
-        .output()
-        .unwrap();
-    assert!(render.status.success());
-    let (a, w, h) = read_image(std::path::Path::new(&shot)).unwrap();
-    let (b, _, _) = read_image(std::path::Path::new(&offscreen)).unwrap();
-    let d = difference_of(&a, &b, w, h, Values::Display).unwrap();
-    assert!(d.mean_relative <= 0.005, "{d:?}");
-    assert!(d.within_5_percent >= 1.0, "{d:?}");
+    let (a, w, h) = scripted_view(&["--backend", "gl"], &path("shot-gl.png"));
+    let b = offscreen(&["--backend", "vulkan"], &path("offscreen-vk.png"));
+    assert_one_step(&a, &b, w, h, "GL window against Vulkan");
 }
 
 /// `bench frame --window` adds the window's figures (swap chain included) under `window`,

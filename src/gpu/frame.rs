@@ -313,21 +313,7 @@ impl SplatPipelines {
 
     pub fn targets(&self, gpu: &Gpu, width: u32, height: u32) -> Result<FrameTargets> {
         let texture = |label, format, usage| {
-            gpu.device
-                .create_texture(&wgpu::TextureDescriptor {
-                    label: Some(label),
-                    size: wgpu::Extent3d {
-                        width,
-                        height,
-                        depth_or_array_layers: 1,
-                    },
-                    mip_level_count: 1,
-                    sample_count: 1,
-                    dimension: wgpu::TextureDimension::D2,
-                    format,
-                    usage,
-                    view_formats: &[],
-                })
+            gpu.texture_2d(label, (width, height), format, usage)
                 .create_view(&Default::default())
         };
         let attachment = wgpu::TextureUsages::RENDER_ATTACHMENT;

@@ -401,6 +401,30 @@ impl Gpu {
             .min(self.limits.max_buffer_size)
     }
 
+    /// A 2D texture of one mip level and one sample.
+    pub fn texture_2d(
+        &self,
+        label: &str,
+        (width, height): (u32, u32),
+        format: wgpu::TextureFormat,
+        usage: wgpu::TextureUsages,
+    ) -> wgpu::Texture {
+        self.device.create_texture(&wgpu::TextureDescriptor {
+            label: Some(label),
+            size: wgpu::Extent3d {
+                width,
+                height,
+                depth_or_array_layers: 1,
+            },
+            mip_level_count: 1,
+            sample_count: 1,
+            dimension: wgpu::TextureDimension::D2,
+            format,
+            usage,
+            view_formats: &[],
+        })
+    }
+
     /// Refuses an image this device cannot hold in one HDR binding (16 bytes a pixel), before
     /// any work: the frame stages bind the whole image.
     pub fn check_image(&self, width: u32, height: u32) -> Result<()> {
