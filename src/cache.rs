@@ -10,7 +10,8 @@ use crate::scene::Scene;
 use crate::types::{Lobe, SplatLight};
 
 const MAGIC: &[u8; 8] = b"LOBELITE";
-const VERSION: u32 = 1;
+/// 2: lobes packed (`LobeMap::pack`), their count in the header's fourth field.
+const VERSION: u32 = 2;
 const HEADER: usize = 8 + 4 + 4 + 8 + 4 + 4;
 
 /// 64-bit FNV-1a: small, and stable across platforms and compiler versions (the standard
@@ -74,26 +75,28 @@ pub fn load(path: &Path, key: u64, splats: usize) -> Result<std::result::Result<
     if u32_at(8) != VERSION || u64::from_le_bytes(key_bytes) != key {
         return Ok(Err(Miss::Stale));
     }
-    let (per_splat, count) = (u32_at(24), u32_at(28) as usize);
-    let lobe_bytes = count * per_splat as usize * size_of::<Lobe>();
+    let (lobe_count, per_splat, count) = (u32_at(12) as usize, u32_at(24), u32_at(28) as usize);
+    let lobe_bytes = lobe_count * size_of::<Lobe>();
     let light_bytes = count * size_of::<SplatLight>();
     if count != splats || bytes.len() != HEADER + lobe_bytes + light_bytes {
         return Err(bad("its size does not match its header"));
     }
     let (lobes, light) = bytes[HEADER..].split_at(lobe_bytes);
-    Ok(Ok(LobeMap {
+    let map = LobeMap {
         lobes_per_splat: per_splat,
         lobes: bytemuck::pod_collect_to_vec(lobes),
         light: bytemuck::pod_collect_to_vec(light),
         stats: EmStats::default(),
-    }))
+    };
+    map.check_packed().map_err(|why| bad(&why))?;
+    Ok(Ok(map))
 }
 
 pub fn save(path: &Path, key: u64, map: &LobeMap) -> Result<()> {
     let mut bytes = Vec::with_capacity(HEADER + map.lobes.len() * size_of::<Lobe>());
     bytes.extend_from_slice(MAGIC);
     bytes.extend_from_slice(&VERSION.to_le_bytes());
-    bytes.extend_from_slice(&0u32.to_le_bytes());
+    bytes.extend_from_slice(&(map.lobes.len() as u32).to_le_bytes());
     bytes.extend_from_slice(&key.to_le_bytes());
     bytes.extend_from_slice(&map.lobes_per_splat.to_le_bytes());
     bytes.extend_from_slice(&(map.light.len() as u32).to_le_bytes());

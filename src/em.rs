@@ -215,8 +215,8 @@ pub struct EmStats {
     pub ms: f64,
 }
 
-/// The fit's output: `lobes_per_splat` lobes per splat (zero where none were written) and the
-/// light of every splat.
+/// The fit's output: the light of every splat, and the lobes written, packed (splat `i`'s at
+/// `light[i].first_lobe`, `light[i].lobes` of them, at most `lobes_per_splat`).
 #[derive(Clone, Debug, Default)]
 pub struct LobeMap {
     pub lobes_per_splat: u32,
@@ -226,20 +226,48 @@ pub struct LobeMap {
 }
 
 impl LobeMap {
-    /// Frees the lobe slots when no splat was fitted (nothing glossy has photons): the map,
-    /// the cache file and the frame then hold no lobes, and shading reads none.
-    pub fn keep_only_used(mut self) -> LobeMap {
-        if self.stats.fitted == 0 {
-            self.lobes_per_splat = 0;
-            self.lobes = Vec::new();
+    /// The map of a fit whose lobes are `dense` (`per_splat` slots a splat, as the fit writes
+    /// them), keeping only the lobes written: each splat's `first_lobe` points into the packed
+    /// list. Diffuse and dark splats take no room; with nothing fitted (nothing glossy lit)
+    /// the map, the cache file and the frame hold no lobes at all, and `lobes_per_splat` is 0.
+    pub fn pack(
+        per_splat: u32,
+        dense: &[Lobe],
+        mut light: Vec<SplatLight>,
+        stats: EmStats,
+    ) -> LobeMap {
+        let k = per_splat as usize;
+        let mut lobes = Vec::new();
+        for (i, l) in light.iter_mut().enumerate() {
+            let count = (l.lobes as usize).min(k);
+            l.lobes = count as u32;
+            // 0 for a splat without lobes: its light stays as the fit wrote it.
+            l.first_lobe = if count > 0 { lobes.len() as u32 } else { 0 };
+            lobes.extend_from_slice(&dense[i * k..i * k + count]);
         }
-        self
+        LobeMap {
+            lobes_per_splat: if lobes.is_empty() { 0 } else { per_splat },
+            lobes,
+            light,
+            stats,
+        }
+    }
+
+    /// Checks that every splat's lobes lie within the packed list (a cache file read back).
+    pub fn check_packed(&self) -> std::result::Result<(), String> {
+        let total = self.lobes.len() as u64;
+        match self.light.iter().position(|l| {
+            l.lobes > self.lobes_per_splat || l.first_lobe as u64 + l.lobes as u64 > total
+        }) {
+            Some(i) => Err(format!("splat {i}'s lobes lie outside the {total} stored")),
+            None => Ok(()),
+        }
     }
 
     /// The lobes of splat `i` that were written.
     pub fn splat_lobes(&self, i: usize) -> &[Lobe] {
-        let k = self.lobes_per_splat as usize;
-        &self.lobes[i * k..i * k + self.light[i].lobes as usize]
+        let l = &self.light[i];
+        &self.lobes[l.first_lobe as usize..(l.first_lobe + l.lobes) as usize]
     }
 
     /// Mean photons gathered per fitted splat.

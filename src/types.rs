@@ -211,7 +211,9 @@ pub struct SplatLight {
     pub weight: f32,
     /// Lobes written for this splat (0: no photons, or a splat that needs no lobes).
     pub lobes: u32,
-    pub _pad: u32,
+    /// Where they start in the packed lobe buffer (`LobeMap::pack`): only splats with lobes
+    /// take room there.
+    pub first_lobe: u32,
 }
 
 /// A binned photon's geometry: position and the octahedral-encoded incident direction

@@ -127,12 +127,15 @@ fn bench_em_json_has_the_documented_keys() {
     ] {
         assert!(gpu.get(key).is_some(), "missing key {key}: {gpu}");
     }
-    // The render's fit skips the diffuse splats: fewer fitted, the same lobe slots (some
-    // splats are glossy, so the lobes are kept).
+    // The render's fit skips the diffuse splats: fewer fitted, and only their lobes kept.
     let k = &gpu["skipping"];
     assert!(k["splats_fitted"].as_u64().unwrap() < gpu["splats_fitted"].as_u64().unwrap());
     assert!(k["em_ms"].as_f64().unwrap() > 0.0);
-    assert_eq!(k["lobe_bytes"], k["lobe_bytes_fit_all"]);
+    let (kept, all) = (
+        k["lobe_bytes"].as_u64().unwrap(),
+        k["lobe_bytes_fit_all"].as_u64().unwrap(),
+    );
+    assert!(0 < kept && kept < all, "{kept} of {all} lobe bytes");
     assert_eq!(gpu["family"], "ward", "the default family");
     assert_eq!(gpu["iterations"], 3);
     assert!(gpu["fits_per_s"].as_f64().unwrap() > 0.0);
@@ -427,4 +430,37 @@ fn an_image_beyond_the_device_is_refused_before_baking() {
     let err = String::from_utf8_lossy(&out.stderr);
     assert!(err.contains("largest storage binding"), "{err}");
     assert!(!err.contains("photons"), "it baked first: {err}");
+}
+
+/// A cache file whose lobe offsets point past its lobes is refused as not a cache, not read.
+#[test]
+fn a_corrupt_cache_is_a_clear_error() {
+    let dir = std::env::temp_dir().join(format!("lobelight-cache-{}", std::process::id()));
+    std::fs::create_dir_all(&dir).unwrap();
+    let cache = dir.join("c.cache").display().to_string();
+    let png = dir.join("c.png").display().to_string();
+    let args = [
+        "render",
+        "scenes/cornell.toml",
+        "--photons",
+        "20000",
+        "--width",
+        "32",
+        "--height",
+        "32",
+        "--cache",
+        &cache,
+        "-o",
+        &png,
+    ];
+    assert!(lobelight(&args, &[]).status.success());
+    let mut bytes = std::fs::read(&cache).unwrap();
+    // The last splat's `first_lobe` (the last 4 bytes) far past the stored lobes.
+    let at = bytes.len() - 4;
+    bytes[at..].copy_from_slice(&u32::MAX.to_le_bytes());
+    std::fs::write(&cache, &bytes).unwrap();
+    let out = lobelight(&args, &[]);
+    let err = String::from_utf8_lossy(&out.stderr);
+    assert!(!out.status.success(), "{err}");
+    assert!(err.contains("not a lobelight bake cache"), "{err}");
 }

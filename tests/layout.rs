@@ -121,7 +121,7 @@ fn rust_layouts() -> Vec<RustLayout> {
             log_likelihood,
             weight,
             lobes,
-            _pad
+            first_lobe
         }),
         layout!(BinnedPhoton {
             position,

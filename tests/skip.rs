@@ -82,6 +82,11 @@ fn only_glossy_splats_with_photons_are_fitted() {
             (map.stats.listed as usize) < n,
             "{side}: the box has dark splats"
         );
+        // Only the lobes written are kept, packed: no slot for diffuse or dark splats.
+        let written: usize = map.light.iter().map(|l| l.lobes as usize).sum();
+        assert_eq!(map.lobes.len(), written, "{side}");
+        assert!(written <= map.stats.fitted as usize * map.lobes_per_splat as usize);
+        assert!(map.check_packed().is_ok(), "{side}");
         let why = why.unwrap_or_default();
         assert!(
             why.contains("EM on") && why.contains("without photons skipped"),

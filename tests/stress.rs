@@ -133,20 +133,14 @@ fn lobes(splats: usize, sharpness: f32, power: f32, view: Vec3) -> LobeMap {
             weight: 1.0 / 3.0,
         })
         .collect();
-    LobeMap {
-        lobes_per_splat: 3,
-        lobes: per_splat.iter().copied().cycle().take(3 * splats).collect(),
-        light: vec![
-            SplatLight {
-                irradiance: [power; 3],
-                photons: 10,
-                lobes: 3,
-                ..Default::default()
-            };
-            splats
-        ],
-        stats: Default::default(),
-    }
+    let dense: Vec<Lobe> = per_splat.iter().copied().cycle().take(3 * splats).collect();
+    let light = SplatLight {
+        irradiance: [power; 3],
+        photons: 10,
+        lobes: 3,
+        ..Default::default()
+    };
+    LobeMap::pack(3, &dense, vec![light; splats], Default::default())
 }
 
 #[test]

@@ -30,7 +30,7 @@ fn lobe_norm(n: vec3<f32>, axis: vec3<f32>, beta2: f32) -> f32 {
 fn indirect(i: u32, s: Splat, m: Material, wo: vec3<f32>) -> vec3<f32> {
     let light = splat_light[i];
     var spec = vec3<f32>(0.0);
-    let first = i * params.lobes_per_splat;
+    let first = light.first_lobe;
     let shown = select(0u, light.lobes, (params.show & SHOW_INDIRECT_SPECULAR) != 0u);
     for (var k = 0u; k < shown; k++) {
         let lobe = lobes[first + k];

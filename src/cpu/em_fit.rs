@@ -508,7 +508,8 @@ fn fit_splat(inp: &Inputs, splats: &[Splat], entry: u32, resume: &[Lobe]) -> Opt
         log_likelihood: total[SUM_LOG],
         weight: total[SUM_WEIGHT],
         lobes: written,
-        _pad: 0,
+        // Set when the lobes are packed (`LobeMap::pack`).
+        first_lobe: 0,
     };
     Some((splat_index, fitted, Some(out)))
 }

@@ -362,16 +362,14 @@ pub fn fit_lobes(
     );
     let [listed, max_candidates, fitted] = counters;
     let chunk = crate::em::iterations_per_dispatch(cfg, max_candidates, shape.loop_limited)?;
-    let mut map = LobeMap {
-        lobes_per_splat: cfg.lobes,
-        lobes: vec![Lobe::default(); n * cfg.lobes as usize],
-        light: vec![SplatLight::default(); n],
-        stats: EmStats {
-            listed,
-            fitted,
-            max_candidates,
-            ..Default::default()
-        },
+    // The fit's slots, `cfg.lobes` a splat (also the mixture handed between dispatches).
+    let mut dense = vec![Lobe::default(); n * cfg.lobes as usize];
+    let mut light = vec![SplatLight::default(); n];
+    let mut stats = EmStats {
+        listed,
+        fitted,
+        max_candidates,
+        ..Default::default()
     };
     for (begin, end) in crate::em::dispatch_ranges(cfg.iterations, chunk) {
         let params = EmParams {
@@ -387,13 +385,14 @@ pub fn fit_lobes(
             &bins.cell_start,
             &bins.geom,
             &bins.power,
-            &mut map.lobes,
-            &mut map.light,
+            &mut dense,
+            &mut light,
             listed,
         );
-        map.stats.dispatches += 1;
+        stats.dispatches += 1;
     }
+    stats.ms = ms_since(t);
+    let mut map = LobeMap::pack(cfg.lobes, &dense, light, stats);
     map.stats.photons = map.fitted().map(|l| l.photons as u64).sum();
-    map.stats.ms = ms_since(t);
-    Ok(map.keep_only_used())
+    Ok(map)
 }

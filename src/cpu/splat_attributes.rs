@@ -42,7 +42,7 @@ fn indirect(
 ) -> Vec3 {
     let light = &splat_light[i as usize];
     let mut spec = Vec3::ZERO;
-    let first = i * params.lobes_per_splat;
+    let first = light.first_lobe;
     let shown = if params.show & SHOW_INDIRECT_SPECULAR != 0 {
         light.lobes
     } else {

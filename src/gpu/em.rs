@@ -25,20 +25,22 @@ pub struct GpuLobes {
 }
 
 impl GpuLobes {
-    /// The fit on the host; no lobes when none were fitted (`LobeMap::keep_only_used`).
+    /// The fit on the host, its lobes packed (`LobeMap::pack`); with nothing fitted no lobe
+    /// is read back.
     pub fn download(&self, gpu: &Gpu) -> Result<LobeMap> {
         let n = self.splat_count as usize;
-        let per_splat = if self.stats.fitted == 0 {
+        let dense = if self.stats.fitted == 0 {
+            Vec::new()
+        } else {
+            gpu.read::<Lobe>(&self.lobes, n * self.lobes_per_splat as usize)?
+        };
+        let light = gpu.read::<SplatLight>(&self.light, n)?;
+        let per_splat = if dense.is_empty() {
             0
         } else {
             self.lobes_per_splat
         };
-        let mut map = LobeMap {
-            lobes_per_splat: per_splat,
-            lobes: gpu.read::<Lobe>(&self.lobes, n * per_splat as usize)?,
-            light: gpu.read::<SplatLight>(&self.light, n)?,
-            stats: self.stats.clone(),
-        };
+        let mut map = LobeMap::pack(per_splat, &dense, light, self.stats.clone());
         map.stats.photons = map.fitted().map(|l| l.photons as u64).sum();
         Ok(map)
     }

@@ -118,7 +118,7 @@ struct SplatLight {
     log_likelihood: f32,
     weight: f32,
     lobes: u32,
-    _pad: u32,
+    first_lobe: u32,
 }
 
 struct BinnedPhoton {
