@@ -124,7 +124,7 @@ struct State {
     /// The bake under way, and the counter that tells an older one to stop.
     baking: Option<Baking>,
     generation: Arc<AtomicU64>,
-    /// How long the last finished bake took, and whether a preview is on screen.
+    /// How long the last full bake took (none while a bake runs).
     bake_s: Option<f64>,
     /// Frames drawn since the bake came in (scripted runs count these).
     frames_lit: u32,
