@@ -326,3 +326,65 @@ fn a_moved_light_bakes_a_preview_then_in_full() {
     assert_eq!(full.light, direct.lobes.light);
     assert_eq!(full.lobes, direct.lobes.lobes);
 }
+
+/// The keys, pressed for real (xdotool under Xvfb): R shows the reference, M the photon view,
+/// P saves each, the right arrow moves the light and bakes a preview then in full, Esc quits.
+/// Each step waits for the window's title to say it happened (no fixed sleeps).
+#[test]
+fn the_keys_switch_views_move_the_light_and_quit() {
+    let exe = env!("CARGO_BIN_EXE_lobelight");
+    let dir = std::path::PathBuf::from(path("keys"));
+    std::fs::create_dir_all(&dir).unwrap();
+    let script = format!(
+        r#"
+set -e
+"{exe}" view "{scene}" --photons 300000 --width 160 --height 120 > "{log}" 2>&1 &
+viewer=$!
+title() {{ xdotool getwindowname "$win" 2>/dev/null || true; }}
+until_title() {{
+  for i in $(seq 1 1200); do
+    case "$(title)" in *"$1"*) return 0 ;; esac
+    sleep 0.1
+  done
+  echo "timed out waiting for: $1 (title: $(title))" >&2; kill $viewer; exit 1
+}}
+for i in $(seq 1 600); do
+  win=$(xdotool search --name lobelight 2>/dev/null | head -1) && [ -n "$win" ] && break
+  sleep 0.1
+done
+until_title "global illumination"
+xdotool windowfocus --sync "$win"
+xdotool key r; until_title "Reference"
+xdotool key p
+xdotool key m; until_title "Photons"
+xdotool key p
+xdotool key m; until_title "Lobes"
+xdotool key Right; until_title "baking"
+until_title "global illumination"
+xdotool key Escape
+wait $viewer
+"#,
+        log = dir.join("log.txt").display(),
+        scene = concat!(env!("CARGO_MANIFEST_DIR"), "/scenes/cornell.toml"),
+    );
+    let out = Command::new("xvfb-run")
+        .args(["-a", "-s", "-screen 0 640x480x24", "bash", "-c", &script])
+        // Screenshots (P) land in the working directory.
+        .current_dir(&dir)
+        .output()
+        .expect("xvfb-run is missing: install the xvfb package (CI does)");
+    let log = std::fs::read_to_string(dir.join("log.txt")).unwrap_or_default();
+    assert!(
+        out.status.success(),
+        "{}\n{log}",
+        String::from_utf8_lossy(&out.stderr)
+    );
+    assert!(log.contains("preview bake: 37500 photons"), "{log}");
+    assert_eq!(log.matches("bake: 300000 photons").count(), 2, "{log}");
+    assert_eq!(log.matches("wrote ").count(), 2, "{log}");
+    for shot in ["lobelight-1.png", "lobelight-2.png"] {
+        let (pixels, w, h) = read_image(&dir.join(shot)).unwrap();
+        assert_eq!((w, h), (160, 120));
+        assert!(pixels.iter().any(|p| p[0] > 0.0), "{shot} is black");
+    }
+}
