@@ -19,7 +19,6 @@ use crate::gpu::present::PresentPipeline;
 use crate::gpu::scene::GpuScene;
 use crate::gpu::tone::tone_map as gpu_tone_map;
 use crate::gpu::{BackendChoice, Gpu};
-use crate::grid::grid_params;
 use crate::photons::{PhotonConfig, PhotonMap, PhotonStats, ms_since, photons_within};
 use crate::render::Method;
 use crate::scene::Scene;
@@ -388,9 +387,10 @@ pub struct FrameTiming {
 pub const FRAME_SIZES: [(u32, u32); 3] = [(512, 512), (1280, 720), (1920, 1080)];
 const TIMED_FRAMES: u32 = 5;
 
-fn median(mut v: Vec<f64>) -> f64 {
+/// The median of timings (the upper one of an even count); 0 for none.
+pub fn median(mut v: Vec<f64>) -> f64 {
     v.sort_by(f64::total_cmp);
-    v[v.len() / 2]
+    v.get(v.len() / 2).copied().unwrap_or(0.0)
 }
 
 /// Bakes the scene once, then times frames at each of `FRAME_SIZES` (one untimed warm-up
@@ -449,7 +449,7 @@ pub fn frame(
             (name, gpu.backend_name().to_string(), lobes.stats.fitted)
         }
         None => {
-            let grid = cpu::build_grid(&grid_params(&scene.splats, &scene.grid)?, &scene.splats)?;
+            let grid = cpu::scene_grid(scene)?;
             let lobes = bake(scene, BakeDevice::Cpu(&grid), &progress)?.lobes;
             let params = shade_params(scene, &lobes, cfg);
             for (w, h) in FRAME_SIZES {

@@ -8,6 +8,7 @@ use std::time::Instant;
 use serde::Serialize;
 
 use crate::bake::{BakeDevice, Progress, bake};
+use crate::bench::median;
 use crate::camera::View;
 use crate::compare::difference;
 use crate::cpu;
@@ -17,7 +18,7 @@ use crate::frame::{FrameConfig, camera_uniform, cpu_frame, shade_params};
 use crate::gpu::Gpu;
 use crate::gpu::frame::{FrameScene, SplatPipelines};
 use crate::gpu::scene::GpuScene;
-use crate::grid::{SplatGrid, grid_params};
+use crate::grid::SplatGrid;
 use crate::photons::ms_since;
 use crate::scene::Scene;
 use crate::view::{move_first_light, passes};
@@ -89,11 +90,6 @@ impl Place<'_> {
     }
 }
 
-fn median(mut v: Vec<f64>) -> f64 {
-    v.sort_by(f64::total_cmp);
-    v.get(v.len() / 2).copied().unwrap_or(0.0)
-}
-
 pub fn rebake(scene: &Scene, gpu: Option<&Gpu>) -> Result<RebakeBench> {
     let [quick, full] = &passes(&scene.bake, true)[..] else {
         return Err(Error::Invalid(format!(
@@ -111,7 +107,7 @@ pub fn rebake(scene: &Scene, gpu: Option<&Gpu>) -> Result<RebakeBench> {
             (Place::Gpu(gpu, on_gpu, splat), name.0, name.1)
         }
         None => {
-            let grid = cpu::build_grid(&grid_params(&scene.splats, &scene.grid)?, &scene.splats)?;
+            let grid = cpu::scene_grid(scene)?;
             let threads = rayon::current_num_threads();
             let adapter = format!("CPU mirror ({threads} threads)");
             (Place::Cpu(grid), adapter, "cpu".to_string())

@@ -20,7 +20,6 @@ use crate::gpu::photons::trace_photons;
 use crate::gpu::reference::ReferencePipeline;
 use crate::gpu::scene::GpuScene;
 use crate::gpu::tone::tone_map;
-use crate::grid::grid_params;
 use crate::photons::{PhotonConfig, ms_since};
 use crate::scene::Scene;
 use crate::shared::tone::srgb_byte;
@@ -384,8 +383,7 @@ fn render_lobes(
         }
         None => {
             let t = Instant::now();
-            let host_grid =
-                cpu::build_grid(&grid_params(&scene.splats, &scene.grid)?, &scene.splats)?;
+            let host_grid = cpu::scene_grid(scene)?;
             let grid = StageReport::ran(ms_since(t));
             let (baked, hit) = bake_or_load(scene, BakeDevice::Cpu(&host_grid), opts, &progress)?;
             let params = shade_params(scene, &baked.lobes, &opts.frame);
@@ -454,8 +452,7 @@ fn render_reference(
         }
         None => {
             let t = Instant::now();
-            let host_grid =
-                cpu::build_grid(&grid_params(&scene.splats, &scene.grid)?, &scene.splats)?;
+            let host_grid = cpu::scene_grid(scene)?;
             let grid = StageReport::ran(ms_since(t));
             let binned = bins_cpu(scene, &host_grid, &progress)?;
             let t = Instant::now();

@@ -17,6 +17,7 @@ use std::time::Instant;
 use serde::Serialize;
 
 use crate::bake::{BakeDevice, Progress, bake, bins_cpu, bins_gpu};
+use crate::bench::median;
 use crate::camera::View;
 use crate::compare::{Values, difference_of};
 use crate::cpu;
@@ -27,7 +28,6 @@ use crate::gpu::Gpu;
 use crate::gpu::frame::{FrameScene, SplatPipelines};
 use crate::gpu::reference::ReferencePipeline;
 use crate::gpu::scene::GpuScene;
-use crate::grid::grid_params;
 use crate::photons::ms_since;
 use crate::plot::{Chart, Series};
 use crate::scene::Scene;
@@ -227,11 +227,6 @@ struct LobeRun {
     frame_ms: f64,
 }
 
-fn median(mut v: Vec<f64>) -> f64 {
-    v.sort_by(f64::total_cmp);
-    v.get(v.len() / 2).copied().unwrap_or(0.0)
-}
-
 /// Where the sweep runs: a device with its pipelines built once, or the CPU mirror.
 enum Runner<'a> {
     Gpu {
@@ -269,8 +264,7 @@ impl Runner<'_> {
                 (gpu.read::<[f32; 4]>(&targets.hdr, pixels)?, baked)
             }
             Runner::Cpu => {
-                let grid =
-                    cpu::build_grid(&grid_params(&scene.splats, &scene.grid)?, &scene.splats)?;
+                let grid = cpu::scene_grid(scene)?;
                 let baked = bake(scene, BakeDevice::Cpu(&grid), &quiet)?;
                 let params = shade_params(scene, &baked.lobes, &cfg);
                 let mut hdr = Vec::new();
@@ -309,8 +303,7 @@ impl Runner<'_> {
                 gpu.read(&targets.hdr, (view.width * view.height) as usize)
             }
             Runner::Cpu => {
-                let grid =
-                    cpu::build_grid(&grid_params(&scene.splats, &scene.grid)?, &scene.splats)?;
+                let grid = cpu::scene_grid(scene)?;
                 let binned = bins_cpu(scene, &grid, &progress)?;
                 Ok(cpu_reference(
                     scene,
@@ -333,8 +326,7 @@ pub fn sweep(
     out_dir: &Path,
 ) -> Result<SweepReport> {
     let start = Instant::now();
-    std::fs::create_dir_all(out_dir)
-        .map_err(|e| Error::Invalid(format!("{}: {e}", out_dir.display())))?;
+    std::fs::create_dir_all(out_dir).map_err(|e| Error::io(out_dir, e))?;
     let runner = match gpu {
         Some(gpu) => {
             let splat = SplatPipelines::new(gpu)?;
@@ -436,8 +428,7 @@ pub fn sweep(
     }
     for (file, text) in [("sweep.csv", csv(&rows)), ("sweep.md", md)] {
         let path = out_dir.join(file);
-        std::fs::write(&path, text)
-            .map_err(|e| Error::Invalid(format!("{}: {e}", path.display())))?;
+        std::fs::write(&path, text).map_err(|e| Error::io(&path, e))?;
         files.push(path.display().to_string());
     }
     Ok(SweepReport {

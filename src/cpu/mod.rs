@@ -247,16 +247,21 @@ pub fn trace_photons(
 
 /// The scene's grid and photons on the CPU: what the GPU path keeps on the device, here on
 /// the host. Returns the photons, the grid and the grid build time in ms.
+/// The scene's splat grid, built by the mirror.
+pub fn scene_grid(scene: &crate::scene::Scene) -> Result<SplatGrid> {
+    build_grid(
+        &crate::grid::grid_params(&scene.splats, &scene.grid)?,
+        &scene.splats,
+    )
+}
+
 pub fn trace_scene(
     scene: &crate::scene::Scene,
     cfg: &PhotonConfig,
     progress: &mut dyn FnMut(u64, u64),
 ) -> Result<(PhotonMap, SplatGrid, f64)> {
     let t = Instant::now();
-    let grid = build_grid(
-        &crate::grid::grid_params(&scene.splats, &scene.grid)?,
-        &scene.splats,
-    )?;
+    let grid = scene_grid(scene)?;
     let grid_ms = ms_since(t);
     let geo = Geometry {
         grid: &grid,

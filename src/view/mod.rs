@@ -539,13 +539,11 @@ impl App {
                 state.screenshot(&rgba, path)?;
                 eprintln!("wrote {}", path.display());
             }
-            let mut ms = state.lit_ms.clone();
-            ms.sort_by(f64::total_cmp);
             self.report = ViewReport {
                 width: state.config.width,
                 height: state.config.height,
-                frames: ms.len() as u32,
-                frame_ms: ms.get(ms.len() / 2).copied().unwrap_or(0.0),
+                frames: state.lit_ms.len() as u32,
+                frame_ms: crate::bench::median(state.lit_ms.clone()),
                 bake_s: state.bake_s.unwrap_or(0.0),
             };
             let r = &self.report;

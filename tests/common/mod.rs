@@ -74,6 +74,5 @@ pub fn random_splats(n: usize, rmin: f32, rmax: f32, seed: u64) -> Vec<Splat> {
 
 /// The scene's splat grid built by the CPU mirror.
 pub fn host_grid(scene: &lobelight::scene::Scene) -> lobelight::grid::SplatGrid {
-    let params = lobelight::grid::grid_params(&scene.splats, &scene.grid).unwrap();
-    lobelight::cpu::build_grid(&params, &scene.splats).unwrap()
+    lobelight::cpu::scene_grid(scene).unwrap()
 }
