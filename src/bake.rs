@@ -8,7 +8,7 @@ use std::time::{Duration, Instant};
 
 use crate::bins::{PhotonBins, bin_params};
 use crate::cpu;
-use crate::em::{EmConfig, EmStats, FitShape, LobeMap};
+use crate::em::{EmConfig, FitShape, LobeMap};
 use crate::error::Result;
 use crate::gpu::Gpu;
 use crate::gpu::bins::{GpuBins, bin_photons};
@@ -258,7 +258,9 @@ pub fn bake(scene: &Scene, device: BakeDevice, progress: &Progress) -> Result<Ba
     let em = StageReport {
         splats_fitted: Some(s.fitted),
         splats_lit: Some(s.listed),
-        skipped_reason: Some(em_skipped(s, scene.splats.len())),
+        lobes_kept: Some(lobes.lobes.len() as u64),
+        lobes_fitted: Some(s.fitted as u64 * em_cfg.lobes as u64),
+        skipped_reason: Some(em_skipped(&lobes, &em_cfg, scene.splats.len())),
         ..StageReport::ran(s.ms)
     };
     Ok(Baked {
@@ -270,8 +272,10 @@ pub fn bake(scene: &Scene, device: BakeDevice, progress: &Progress) -> Result<Ba
 }
 
 /// What the lobe fit left out, and why: splats without photons cost nothing, diffuse ones
-/// only their irradiance gather, and with nothing glossy lit no EM runs and no lobes are kept.
-fn em_skipped(s: &EmStats, splats: usize) -> String {
+/// only their irradiance gather, with nothing glossy lit no EM runs and no lobes are kept, and
+/// pruning drops the lobes the photons do not need.
+fn em_skipped(map: &LobeMap, cfg: &EmConfig, splats: usize) -> String {
+    let s = &map.stats;
     let dark = splats.saturating_sub(s.listed as usize);
     if s.fitted == 0 {
         format!(
@@ -282,9 +286,18 @@ fn em_skipped(s: &EmStats, splats: usize) -> String {
     } else {
         format!(
             "EM on {} glossy splats only: {} diffuse splats gathered irradiance only, {dark} \
-             without photons skipped",
+             without photons skipped{}",
             s.fitted,
-            s.listed - s.fitted
+            s.listed - s.fitted,
+            if cfg.prune {
+                format!(
+                    "; {} of {} lobes kept, the rest pruned",
+                    map.lobes.len(),
+                    s.fitted as u64 * cfg.lobes as u64
+                )
+            } else {
+                String::new()
+            }
         )
     }
 }

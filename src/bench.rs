@@ -191,6 +191,20 @@ pub struct EmBench {
     /// The same fit as a render runs it, skipping what the scene does not need (EM on glossy
     /// splats only, no lobes kept when none are fitted): the saving against the above.
     pub skipping: EmSkipping,
+    /// That fit (pruning as the scene says) against the same with a fixed lobe count.
+    pub pruning: EmPruning,
+}
+
+#[derive(Debug, Serialize)]
+pub struct EmPruning {
+    pub prune: bool,
+    pub em_ms: f64,
+    /// Lobes kept over all fitted splats, and their fit error (as `nll`).
+    pub lobes: u64,
+    pub nll: f64,
+    pub fixed_em_ms: f64,
+    pub fixed_lobes: u64,
+    pub fixed_nll: f64,
 }
 
 #[derive(Debug, Serialize)]
@@ -218,7 +232,11 @@ pub fn em(
         fit_all: false,
         ..cfg.clone()
     };
-    let (map, skipping, traced_stats, binning_ms, adapter, backend) = match gpu {
+    let fixed_cfg = EmConfig {
+        prune: false,
+        ..skip_cfg.clone()
+    };
+    let ([map, skipping, fixed], traced_stats, binning_ms, adapter, backend) = match gpu {
         Some(gpu) => {
             let on_gpu = GpuScene::upload(gpu, scene)?;
             let traced = trace_photons(gpu, scene, &on_gpu, photons, &mut |_, _| {})?;
@@ -238,9 +256,16 @@ pub fn em(
             })?;
             let map = fit(&cfg)?.download(gpu)?;
             let skipping = fit(&skip_cfg)?.download(gpu)?;
+            let fixed = fit(&fixed_cfg)?.download(gpu)?;
             let name = gpu.info.name.clone();
             let backend = gpu.backend_name().to_string();
-            (map, skipping, traced_stats, binning_ms, name, backend)
+            (
+                [map, skipping, fixed],
+                traced_stats,
+                binning_ms,
+                name,
+                backend,
+            )
         }
         None => {
             let (traced, grid, _) = cpu::trace_scene(scene, photons, &mut |_, _| {})?;
@@ -257,17 +282,10 @@ pub fn em(
                     FitShape::default(),
                 )
             };
-            let (map, skipping) = (fit(&cfg)?, fit(&skip_cfg)?);
+            let fits = [fit(&cfg)?, fit(&skip_cfg)?, fit(&fixed_cfg)?];
             let threads = rayon::current_num_threads();
             let adapter = format!("CPU mirror ({threads} threads)");
-            (
-                map,
-                skipping,
-                traced.stats,
-                binning_ms,
-                adapter,
-                "cpu".into(),
-            )
+            (fits, traced.stats, binning_ms, adapter, "cpu".into())
         }
     };
     let s = &map.stats;
@@ -295,6 +313,15 @@ pub fn em(
             splats_fitted: skipping.stats.fitted,
             lobe_bytes: lobe_bytes(&skipping),
             lobe_bytes_fit_all: lobe_bytes(&map),
+        },
+        pruning: EmPruning {
+            prune: cfg.prune,
+            em_ms: skipping.stats.ms,
+            lobes: skipping.lobes.len() as u64,
+            nll: skipping.nll(),
+            fixed_em_ms: fixed.stats.ms,
+            fixed_lobes: fixed.lobes.len() as u64,
+            fixed_nll: fixed.nll(),
         },
     })
 }
@@ -338,6 +365,19 @@ impl std::fmt::Display for EmBench {
             self.em_ms,
             k.lobe_bytes as f64 / 1e6,
             k.lobe_bytes_fit_all as f64 / 1e6
+        )?;
+        let p = &self.pruning;
+        write!(
+            f,
+            "\npruning      {}: {} lobes, EM {:.1} ms, fit error {:.4} (fixed count: {} lobes, \
+             {:.1} ms, {:.4})",
+            if p.prune { "on" } else { "off" },
+            p.lobes,
+            p.em_ms,
+            p.nll,
+            p.fixed_lobes,
+            p.fixed_em_ms,
+            p.fixed_nll
         )
     }
 }

@@ -44,6 +44,8 @@ pub struct EmConfig {
     pub priors: bool,
     /// Fit lobes on every splat with photons, not only on glossy ones (benchmarks).
     pub fit_all: bool,
+    /// Drop the lobes a splat's photons do not need (BIC), so `lobes` is an upper bound.
+    pub prune: bool,
     /// Photon search radius R.
     pub radius: f32,
     /// Half thickness of the slab around a splat's plane, in splat radii.
@@ -60,6 +62,7 @@ impl EmConfig {
             sparse: b.sparse,
             priors: true,
             fit_all: false,
+            prune: b.prune,
             radius: scene.search_radius(),
             slab: b.slab,
         }
@@ -106,6 +109,11 @@ impl EmConfig {
             iteration_begin: 0,
             iteration_end: self.iterations,
             workgroup_size: workgroup_size(shape.loop_limited),
+            prune: if self.prune {
+                self.lobes.saturating_sub(1)
+            } else {
+                0
+            },
             ..Default::default()
         }
     }

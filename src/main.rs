@@ -70,6 +70,10 @@ struct BakeArgs {
     /// Sparse EM (responsibilities under 0.02 frozen between full updates).
     #[arg(long)]
     sparse: bool,
+    /// Keep all `--lobes` on every fitted splat (no pruning of the lobes its photons do not
+    /// need).
+    #[arg(long)]
+    fixed_lobes: bool,
 }
 
 impl BakeArgs {
@@ -96,6 +100,7 @@ impl BakeArgs {
             scene.bake.family = f;
         }
         scene.bake.sparse |= self.sparse;
+        scene.bake.prune &= !self.fixed_lobes;
         PhotonConfig::from_scene(scene).validate()?;
         EmConfig::from_scene(scene).validate()
     }
@@ -246,6 +251,10 @@ enum Command {
         /// one scene), the figures under the key `window`.
         #[arg(long)]
         window: bool,
+        /// `sweep` only: turn only these knobs (photons, iterations, radius, lobes, splats,
+        /// family, prune), comma-separated; default all.
+        #[arg(long, value_delimiter = ',')]
+        knobs: Vec<String>,
     },
 }
 
@@ -439,6 +448,7 @@ fn run(cli: Cli) -> Result<()> {
             bake,
             device,
             json,
+            knobs,
             ..
         } => {
             if scenes.is_empty() {
@@ -457,7 +467,10 @@ fn run(cli: Cli) -> Result<()> {
                 loaded.push((name, scene));
             }
             let gpu = device.gpu()?;
-            let plan = lobelight::sweep::SweepPlan::default();
+            let mut plan = lobelight::sweep::SweepPlan::default();
+            if !knobs.is_empty() {
+                plan = plan.only(&knobs)?;
+            }
             let r = lobelight::sweep::sweep(&loaded, gpu.as_ref(), &plan, &output)?;
             print_report(json, &r)?;
         }

@@ -69,6 +69,11 @@ pub struct StageReport {
     /// EM: splats with photons near them (their irradiance was gathered).
     #[serde(skip_serializing_if = "Option::is_none")]
     pub splats_lit: Option<u32>,
+    /// EM: lobes kept, and what the fitted splats would keep without pruning.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub lobes_kept: Option<u64>,
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub lobes_fitted: Option<u64>,
     pub skipped_reason: Option<String>,
 }
 

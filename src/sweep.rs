@@ -50,6 +50,8 @@ pub struct SweepPlan {
     /// Fractions of the splats kept (the rest dropped at random, radii grown to keep the area).
     pub splat_fractions: Vec<f32>,
     pub families: Vec<LobeFamily>,
+    /// Lobe pruning on and off.
+    pub prune: Vec<bool>,
     /// Timed frames per setting (after one untimed); the median is reported.
     pub frames: u32,
 }
@@ -66,6 +68,7 @@ impl Default for SweepPlan {
             lobes: vec![1, 2, 3, 5, 8],
             splat_fractions: vec![0.25, 0.5, 1.0],
             families: vec![LobeFamily::Ward, LobeFamily::Vmf],
+            prune: vec![true, false],
             frames: 3,
         }
     }
@@ -80,7 +83,19 @@ enum Setting {
     Lobes(u32),
     Splats(f32),
     Family(LobeFamily),
+    Prune(bool),
 }
+
+/// The knobs a sweep can turn, by name.
+pub const KNOBS: [&str; 7] = [
+    "photons",
+    "iterations",
+    "radius",
+    "lobes",
+    "splats",
+    "family",
+    "prune",
+];
 
 impl Setting {
     fn knob(self) -> &'static str {
@@ -91,6 +106,7 @@ impl Setting {
             Setting::Lobes(_) => "lobes",
             Setting::Splats(_) => "splats",
             Setting::Family(_) => "family",
+            Setting::Prune(_) => "prune",
         }
     }
 
@@ -102,6 +118,7 @@ impl Setting {
             Setting::Radius(s) => format!("{s}R"),
             Setting::Splats(f) => format!("{}%", f * 100.0),
             Setting::Family(f) => format!("{f:?}").to_lowercase(),
+            Setting::Prune(on) => if on { "on" } else { "off" }.into(),
         }
     }
 }
@@ -114,7 +131,41 @@ impl SweepPlan {
         out.extend(self.lobes.iter().map(|&n| Setting::Lobes(n)));
         out.extend(self.splat_fractions.iter().map(|&f| Setting::Splats(f)));
         out.extend(self.families.iter().map(|&f| Setting::Family(f)));
+        out.extend(self.prune.iter().map(|&on| Setting::Prune(on)));
         out
+    }
+
+    /// The plan with only the named knobs (of `KNOBS`) turned.
+    pub fn only(mut self, knobs: &[String]) -> Result<SweepPlan> {
+        if let Some(k) = knobs.iter().find(|k| !KNOBS.contains(&k.as_str())) {
+            return Err(Error::Invalid(format!(
+                "unknown sweep knob {k:?}; the knobs are {}",
+                KNOBS.join(", ")
+            )));
+        }
+        let keep = |k: &str| knobs.iter().any(|x| x == k);
+        if !keep("photons") {
+            self.photons.clear();
+        }
+        if !keep("iterations") {
+            self.iterations.clear();
+        }
+        if !keep("radius") {
+            self.radius_scales.clear();
+        }
+        if !keep("lobes") {
+            self.lobes.clear();
+        }
+        if !keep("splats") {
+            self.splat_fractions.clear();
+        }
+        if !keep("family") {
+            self.families.clear();
+        }
+        if !keep("prune") {
+            self.prune.clear();
+        }
+        Ok(self)
     }
 }
 
@@ -154,6 +205,7 @@ fn apply(base: &Scene, setting: Setting, radius: f32) -> Scene {
         Setting::Radius(s) => scene.bake.radius = Some(radius * s),
         Setting::Lobes(n) => scene.bake.lobes = n,
         Setting::Family(f) => scene.bake.family = f,
+        Setting::Prune(on) => scene.bake.prune = on,
         Setting::Splats(_) => {}
     }
     scene
@@ -181,6 +233,9 @@ pub struct SweepRow {
     pub rel_mse: f64,
     pub smape: f64,
     pub flip: Option<f64>,
+    /// Lobe pruning, and the lobes the bake kept.
+    pub prune: bool,
+    pub lobes_kept: u64,
 }
 
 /// A setting that could not run on this device, with the reason (e.g. a software device's
@@ -224,6 +279,7 @@ struct LobeRun {
     photons_ms: f64,
     binning_ms: f64,
     em_ms: f64,
+    lobes_kept: u64,
     frame_ms: f64,
 }
 
@@ -281,6 +337,7 @@ impl Runner<'_> {
             photons_ms: baked.photons.ms.unwrap_or(0.0),
             binning_ms: baked.binning.ms.unwrap_or(0.0),
             em_ms: baked.em.ms.unwrap_or(0.0),
+            lobes_kept: baked.lobes.lobes.len() as u64,
             frame_ms: median(times),
         })
     }
@@ -407,6 +464,8 @@ pub fn sweep(
                 rel_mse: d.rel_mse,
                 smape: d.smape,
                 flip: d.flip,
+                prune: s.bake.prune,
+                lobes_kept: run.lobes_kept,
             };
             eprintln!(
                 "sweep {name}: {:<10} {:>6}  bake {:>8.0} ms  frame {:>6.1} ms  relMSE {:.4}  SMAPE {:.4}",
@@ -489,7 +548,7 @@ fn charts(scene: &str, rows: &[SweepRow]) -> [Chart; 2] {
 }
 
 const CSV_HEADER: &str = "scene,knob,value,photons,iterations,radius,lobes,family,splats,\
-photons_ms,binning_ms,em_ms,bake_ms,frame_ms,rel_mse,smape,flip";
+photons_ms,binning_ms,em_ms,bake_ms,frame_ms,rel_mse,smape,flip,prune,lobes_kept";
 
 pub fn csv(rows: &[SweepRow]) -> String {
     let mut out = format!("{CSV_HEADER}\n");
@@ -497,7 +556,7 @@ pub fn csv(rows: &[SweepRow]) -> String {
         let flip = r.flip.map_or(String::new(), |f| format!("{f:.6}"));
         let _ = writeln!(
             out,
-            "{},{},{},{},{},{},{},{:?},{},{:.1},{:.1},{:.1},{:.1},{:.2},{:.6},{:.6},{flip}",
+            "{},{},{},{},{},{},{},{:?},{},{:.1},{:.1},{:.1},{:.1},{:.2},{:.6},{:.6},{flip},{},{}",
             r.scene,
             r.knob,
             r.value,
@@ -513,7 +572,9 @@ pub fn csv(rows: &[SweepRow]) -> String {
             r.bake_ms,
             r.frame_ms,
             r.rel_mse,
-            r.smape
+            r.smape,
+            r.prune,
+            r.lobes_kept
         );
     }
     out
@@ -526,18 +587,20 @@ pub fn markdown(rows: &[SweepRow]) -> String {
     for scene in scenes {
         let _ = writeln!(out, "### {scene}\n");
         out.push_str(
-            "| knob | value | photons | splats | bake (s) | frame (ms) | relMSE | SMAPE | FLIP |\n",
+            "| knob | value | photons | splats | lobes kept | bake (s) | frame (ms) | relMSE | SMAPE \
+             | FLIP |\n",
         );
-        out.push_str("| --- | --- | ---: | ---: | ---: | ---: | ---: | ---: | ---: |\n");
+        out.push_str("| --- | --- | ---: | ---: | ---: | ---: | ---: | ---: | ---: | ---: |\n");
         for r in rows.iter().filter(|r| r.scene == scene) {
             let flip = r.flip.map_or("—".to_string(), |f| format!("{f:.4}"));
             let _ = writeln!(
                 out,
-                "| {} | {} | {} | {} | {:.2} | {:.1} | {:.4} | {:.4} | {flip} |",
+                "| {} | {} | {} | {} | {} | {:.2} | {:.1} | {:.4} | {:.4} | {flip} |",
                 r.knob,
                 r.value,
                 r.photons,
                 r.splats,
+                r.lobes_kept,
                 r.bake_ms / 1e3,
                 r.frame_ms,
                 r.rel_mse,

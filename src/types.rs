@@ -272,7 +272,9 @@ pub struct EmParams {
     pub iteration_end: u32,
     /// Invocations per `em_fit` workgroup (the shader's `WG`, fixed with its pipeline).
     pub workgroup_size: u32,
-    pub _pad0: u32,
+    /// Most lobes a splat may drop during its fit (0: every fitted splat keeps `lobes`); see
+    /// `em_fit.wgsl`, "Pruning".
+    pub prune: u32,
     pub _pad1: u32,
     pub _pad2: u32,
 }

@@ -124,9 +124,27 @@ fn bench_em_json_has_the_documented_keys() {
         "search_radius",
         "stats",
         "skipping",
+        "pruning",
     ] {
         assert!(gpu.get(key).is_some(), "missing key {key}: {gpu}");
     }
+    // Pruning (the default) keeps fewer lobes than a fixed count of five on every fitted
+    // splat, each fitting its photons less closely but within the penalty.
+    let p = &gpu["pruning"];
+    assert_eq!(p["prune"], true);
+    let (kept, fixed) = (
+        p["lobes"].as_u64().unwrap(),
+        p["fixed_lobes"].as_u64().unwrap(),
+    );
+    assert!(
+        0 < kept && kept < fixed,
+        "{kept} lobes pruned, {fixed} fixed"
+    );
+    assert!(
+        p["nll"].as_f64().unwrap() >= p["fixed_nll"].as_f64().unwrap() - 1e-3,
+        "{p}"
+    );
+    assert!(p["fixed_em_ms"].as_f64().unwrap() > 0.0);
     // The render's fit skips the diffuse splats: fewer fitted, and only their lobes kept.
     let k = &gpu["skipping"];
     assert!(k["splats_fitted"].as_u64().unwrap() < gpu["splats_fitted"].as_u64().unwrap());
@@ -300,7 +318,13 @@ fn render_lobes_png_exr_and_cache() {
     for stage in ["grid", "photons", "binning", "em", "shade", "tonemap"] {
         assert_eq!(v["stages"][stage]["ran"], true, "{stage}");
     }
-    assert!(v["stages"]["em"]["splats_fitted"].as_u64().unwrap() > 0);
+    let em = &v["stages"]["em"];
+    assert!(em["splats_fitted"].as_u64().unwrap() > 0);
+    let kept = em["lobes_kept"].as_u64().unwrap();
+    assert!(
+        0 < kept && kept < em["lobes_fitted"].as_u64().unwrap(),
+        "{em}"
+    );
     assert!(v["log_average"].as_f64().unwrap() > 0.0);
     let img = image::open(&png).unwrap().to_rgb8();
     assert_eq!(img.dimensions(), (64, 48));
@@ -325,6 +349,13 @@ fn render_lobes_png_exr_and_cache() {
     let v = render(&png, &["--cache", &cache, "--iterations", "3"]);
     assert_eq!(v["cache_hit"], false);
     assert_eq!(v["stages"]["em"]["ran"], true);
+    // A fixed lobe count is a bake setting too: five lobes on every fitted splat that has
+    // photons, none pruned.
+    let v = render(&png, &["--cache", &cache, "--fixed-lobes"]);
+    assert_eq!(v["cache_hit"], false);
+    let em = &v["stages"]["em"];
+    assert!(em["lobes_kept"].as_u64().unwrap() > kept, "{em}");
+    assert!(em["lobes_kept"].as_u64().unwrap() <= em["lobes_fitted"].as_u64().unwrap());
     // Unknown extensions are refused before any work.
     let out = lobelight(
         &["render", "scenes/cornell.toml", "-o", &path("a.jpg")],

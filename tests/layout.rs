@@ -151,7 +151,7 @@ fn rust_layouts() -> Vec<RustLayout> {
             iteration_begin,
             iteration_end,
             workgroup_size,
-            _pad0,
+            prune,
             _pad1,
             _pad2
         }),

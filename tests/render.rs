@@ -175,6 +175,52 @@ fn direct_light_matches_closed_forms() {
     }
 }
 
+/// Light kinds a scene does not have cost nothing: the shading loops over the scene's own
+/// lights, so the area lights' sample grid (N² shadow rays a pixel) touches no frame without
+/// one: 1 and 8 samples a side give bit-identical frames under point, directional and spot
+/// lights, and different ones under an area light (the test's check that the knob bites).
+#[test]
+fn light_kinds_not_in_the_scene_cost_nothing() {
+    let gpu = common::gpu();
+    let lights = [
+        (
+            "point",
+            "[[light]]\ntype = \"point\"\nposition = [0.0, 1.0, 0.0]\nintensity = 2.0",
+        ),
+        (
+            "directional",
+            "[[light]]\ntype = \"directional\"\ndirection = [0.0, -0.5, -0.8660254]\nirradiance = 3.0",
+        ),
+        (
+            "spot",
+            "[[light]]\ntype = \"spot\"\nposition = [0.0, 2.0, 0.0]\ndirection = [0.0, -1.0, 0.0]\npower = 10.0\nangle = 30.0",
+        ),
+        (
+            "area",
+            "[[light]]\ntype = \"area\"\ncenter = [0.0, 1.0, 0.0]\nsize = [0.5, 0.5]\nnormal = [0.0, -1.0, 0.0]\nradiance = 50.0",
+        ),
+    ];
+    for (kind, light) in lights {
+        let scene = plane_scene(light);
+        let grid = common::host_grid(&scene);
+        let lobes = cpu_bake(&scene, &grid);
+        let view = View::new(&scene.camera, 33, 33);
+        let [one, many] = [1, 8].map(|area_samples| {
+            let cfg = FrameConfig {
+                area_samples,
+                ..FrameConfig::default()
+            };
+            gpu_frame(&gpu, &scene, &lobes, &view, &cfg)
+        });
+        let same = one == many;
+        assert_eq!(
+            same,
+            kind != "area",
+            "{kind} light: frames the same: {same}"
+        );
+    }
+}
+
 /// An area light seen directly shows its radiance, in front of what lies behind it.
 #[test]
 fn area_light_is_seen_directly() {

@@ -20,6 +20,7 @@ fn small_plan() -> SweepPlan {
         lobes: vec![1, 3],
         splat_fractions: vec![0.5],
         families: vec![LobeFamily::Vmf],
+        prune: vec![false],
         frames: 1,
     }
 }
@@ -31,7 +32,7 @@ fn a_small_sweep_writes_its_tables_and_charts() {
     let dir = std::env::temp_dir().join(format!("lobelight-sweep-{}", std::process::id()));
     let plan = small_plan();
     let r = sweep(&[("cornell".into(), scene)], Some(&gpu), &plan, &dir).unwrap();
-    assert_eq!(r.rows.len(), 10);
+    assert_eq!(r.rows.len(), 11);
     for row in &r.rows {
         assert!(row.rel_mse.is_finite() && row.rel_mse > 0.0, "{row:?}");
         assert!(row.smape > 0.0 && row.smape < 1.0, "{row:?}");
@@ -49,7 +50,8 @@ fn a_small_sweep_writes_its_tables_and_charts() {
     assert!(by("photons", "200k") < by("photons", "30k"), "{:?}", r.rows);
     let csv = std::fs::read_to_string(dir.join("sweep.csv")).unwrap();
     assert!(csv.starts_with("scene,knob,value,photons"));
-    assert_eq!(csv.lines().count(), 11);
+    assert_eq!(csv.lines().count(), 12);
+    assert!(csv.lines().next().unwrap().ends_with(",prune,lobes_kept"));
     let md = std::fs::read_to_string(dir.join("sweep.md")).unwrap();
     assert!(md.contains("| iterations | 10 |"), "{md}");
     let chart = image::open(dir.join("sweep_cornell.png")).unwrap();
@@ -71,4 +73,22 @@ fn thinning_keeps_the_area() {
         let ratio = area(&thinned) / area(&scene);
         assert!((ratio - 1.0).abs() < 0.03, "{fraction}: {ratio}");
     }
+}
+
+/// `bench sweep --knobs` keeps only the named knobs and refuses unknown ones.
+#[test]
+fn a_sweep_turns_only_the_knobs_named() {
+    let plan = SweepPlan::default()
+        .only(&["prune".into(), "lobes".into()])
+        .unwrap();
+    assert_eq!(plan.prune, vec![true, false]);
+    assert_eq!(plan.lobes, SweepPlan::default().lobes);
+    assert!(plan.photons.is_empty() && plan.iterations.is_empty());
+    assert!(plan.radius_scales.is_empty() && plan.splat_fractions.is_empty());
+    assert!(plan.families.is_empty());
+    let e = SweepPlan::default().only(&["colour".into()]).unwrap_err();
+    assert!(
+        e.to_string().contains("unknown sweep knob \"colour\""),
+        "{e}"
+    );
 }

@@ -16,6 +16,21 @@
 // Passes: `iterations` EM passes (E-step + sums for the M-step), then one final pass with the
 // fitted lobes: RGB irradiance per lobe, total irradiance, and the log-likelihood.
 // Splats listed without the fit bit (not glossy) run only the final pass with no lobes.
+//
+// Pruning (em.prune > 0): from iteration PRUNE_FROM on, some E-steps (the next after a drop,
+// else every PRUNE_PERIOD-th) also sum for each lobe k the log-likelihood the mixture would lose without it, sum w log(p / p_k) with
+// p_k = (p - pi_k f_k) / (1 - pi_k) the mixture without k, renormalized: that is
+// sum w (log(1 - pi_k) - log(1 - h_k)) in the responsibilities h, with 1 - h_k and 1 - pi_k
+// added up from the other lobes (no cancellation when lobe k holds a photon alone).
+// Rescaled to unit mean weight, the smallest loss is set against the BIC penalty
+// PRUNE_PENALTY ln(1 + n) for n photons; a lobe under it is dropped after that iteration's
+// M-step (one a pass, at most em.prune), and the iterations left refit the others to its
+// photons (after a full E-step: sparse EM's frozen responsibilities knew the dropped lobe).
+// The loss leaves the others as they were, so (for an EM step that raises the likelihood) it
+// bounds the loss after the refit from above: a lobe is dropped only when the photons do not
+// need it, though a cluster fitted by two lobes side by side may keep both. Dropped lobes get
+// responsibility 0 and hand over between dispatches with sharpness 0; the lobes kept are
+// written first, in order, so `light.lobes` counts them.
 // The host may split the iterations over several dispatches (see EmParams) to keep each
 // invocation's loops under llvmpipe's limit; the mixture waits in the lobe buffer between.
 // CPU mirror: src/cpu/em_fit.rs.
@@ -59,18 +74,26 @@ const CACHE_SLOTS: u32 = 512u;
 const FROZEN: u32 = 8u;
 // The slot of a photon that is not cached.
 const NOT_CACHED: u32 = 0xffffffffu;
-// Sums: [0] sum w log p, [1] sum w, [2] photon count, [3..6) sum of RGB power, then five per
-// lobe from LOBE_SUMS: EM passes sum w h, w h stat, w h w (3); the final pass sums h RGB (3).
+// The log weight of a dropped lobe: its responsibilities come out exactly 0.
+const DROPPED_LOG: f32 = -3.0e38;
+// Floor of 1 - h in a loss sum: a photon only the lobe explains costs 69 nats without it.
+const REST_MIN: f32 = 1e-30;
+// Sums: [0] sum w log p, [1] sum w, [2] photon count, [3..6) sum of RGB power, then six per
+// lobe from LOBE_SUMS: EM passes sum w h, w h stat, w h w (3) and, when pruning, the
+// loss sum -w log(1 - h); the final pass sums h RGB (3).
 const SUM_LOG: u32 = 0u;
 const SUM_WEIGHT: u32 = 1u;
 const SUM_COUNT: u32 = 2u;
 const SUM_RGB: u32 = 3u;
 const LOBE_SUMS: u32 = 6u;
-const SUMS: u32 = 46u;
+const LOBE_SLOTS: u32 = 6u;
+const LOBE_LOSS: u32 = 5u;
+const SUMS: u32 = 54u;
 const PASS_EM: u32 = 0u;
 const PASS_FINAL: u32 = 1u;
 
 var<workgroup> shared_entry: u32;
+var<workgroup> shared_drop: u32;
 var<workgroup> cache_dir: array<vec4<f32>, CACHE_SLOTS>;
 var<workgroup> cache_index: array<u32, CACHE_SLOTS>;
 
@@ -86,6 +109,8 @@ var<private> mix_sharpness: array<f32, MAX_LOBES>;
 var<private> mix_weight: array<f32, MAX_LOBES>;
 var<private> mix_mirror: array<vec3<f32>, MAX_LOBES>;
 var<private> mix_log: array<f32, MAX_LOBES>;
+// The lobes not dropped by pruning, one bit each.
+var<private> alive: u32;
 // One photon's responsibilities and per-lobe statistics (for frozen lobes: h * stat).
 var<private> resp: array<f32, MAX_LOBES>;
 var<private> stat: array<f32, MAX_LOBES>;
@@ -133,6 +158,9 @@ fn prepare_mixture() {
         mix_mirror[k] = mirror_axis(normal, mix_axis[k]);
         mix_log[k] = max(log(max(mix_weight[k], 1e-35)), LOG_WEIGHT_MIN)
             + lobe_log_norm(FAMILY, normal, mix_axis[k], mix_sharpness[k]);
+        if (alive & (1u << k)) == 0u {
+            mix_log[k] = DROPPED_LOG;
+        }
     }
 }
 
@@ -178,8 +206,9 @@ fn e_step(w: vec3<f32>, slot: u32, sparse: bool, full: bool) -> f32 {
     return m + log(s);
 }
 
-// Adds one photon to this invocation's sums.
-fn absorb(w: vec3<f32>, weight: f32, index: u32, slot: u32, kind: u32, sparse: bool, full: bool) {
+// Adds one photon to this invocation's sums (with `losses`, pruning's too).
+fn absorb(w: vec3<f32>, weight: f32, index: u32, slot: u32, kind: u32, sparse: bool, full: bool,
+          losses: bool) {
     acc[SUM_WEIGHT] += weight;
     acc[SUM_COUNT] += 1.0;
     if kind == PASS_FINAL {
@@ -192,7 +221,7 @@ fn absorb(w: vec3<f32>, weight: f32, index: u32, slot: u32, kind: u32, sparse: b
         }
         acc[SUM_LOG] += weight * e_step(w, slot, false, true);
         for (var k = 0u; k < LOBES; k++) {
-            let o = LOBE_SUMS + 5u * k;
+            let o = LOBE_SUMS + LOBE_SLOTS * k;
             acc[o] += resp[k] * power.x;
             acc[o + 1u] += resp[k] * power.y;
             acc[o + 2u] += resp[k] * power.z;
@@ -201,7 +230,7 @@ fn absorb(w: vec3<f32>, weight: f32, index: u32, slot: u32, kind: u32, sparse: b
     }
     e_step(w, slot, sparse, full);
     for (var k = 0u; k < LOBES; k++) {
-        let o = LOBE_SUMS + 5u * k;
+        let o = LOBE_SUMS + LOBE_SLOTS * k;
         let wh = weight * resp[k];
         let frozen = (frozen_mask & (1u << k)) != 0u;
         acc[o] += wh;
@@ -209,6 +238,15 @@ fn absorb(w: vec3<f32>, weight: f32, index: u32, slot: u32, kind: u32, sparse: b
         acc[o + 2u] += wh * w.x;
         acc[o + 3u] += wh * w.y;
         acc[o + 4u] += wh * w.z;
+        if losses {
+            var rest = 0.0;
+            for (var j = 0u; j < LOBES; j++) {
+                if j != k {
+                    rest += resp[j];
+                }
+            }
+            acc[o + LOBE_LOSS] -= weight * log(max(rest, REST_MIN));
+        }
     }
 }
 
@@ -244,13 +282,13 @@ fn gather(lid: u32, box: BinBox) {
 }
 
 // One pass over this invocation's photons, cached ones first, into fresh private sums.
-fn photon_pass(lid: u32, box: BinBox, kind: u32, sparse: bool, full: bool) {
+fn photon_pass(lid: u32, box: BinBox, kind: u32, sparse: bool, full: bool, losses: bool) {
     for (var q = 0u; q < SUMS; q++) {
         acc[q] = 0.0;
     }
     for (var c = 0u; c < cached; c++) {
         let d = cache_dir[c * WG + lid];
-        absorb(d.xyz, d.w, cache_index[c * WG + lid], c, kind, sparse, full);
+        absorb(d.xyz, d.w, cache_index[c * WG + lid], c, kind, sparse, full, losses);
     }
     if !streaming {
         return;
@@ -264,10 +302,57 @@ fn photon_pass(lid: u32, box: BinBox, kind: u32, sparse: bool, full: bool) {
         for (; j < end; j += WG) {
             let c = accept(j);
             if c.ok {
-                absorb(c.dir, c.weight, j, NOT_CACHED, kind, sparse, full);
+                absorb(c.dir, c.weight, j, NOT_CACHED, kind, sparse, full, losses);
             }
         }
         offset += end - begin;
+    }
+}
+
+// The lightest live lobe whose loss (see "Pruning" above) is under the penalty, after an EM
+// pass's `reduce` and before its M-step; LOBES when there is none, or only one lobe lives.
+// The lightest, not the one of least loss: near-identical lobes have losses equal but for
+// rounding, which would pick a different one on each device; weights part less easily.
+fn weakest_lobe() -> u32 {
+    let n = sum(SUM_COUNT);
+    let total_weight = sum(SUM_WEIGHT);
+    var weakest = LOBES;
+    if countOneBits(alive) < 2u || n < 1.0 || total_weight <= 0.0 {
+        return weakest;
+    }
+    let penalty = PRUNE_PENALTY * log(1.0 + n);
+    var lightest = 2.0;
+    for (var k = 0u; k < LOBES; k++) {
+        if (alive & (1u << k)) == 0u {
+            continue;
+        }
+        var rest_weight = 0.0;
+        for (var j = 0u; j < LOBES; j++) {
+            if j != k && (alive & (1u << j)) != 0u {
+                rest_weight += mix_weight[j];
+            }
+        }
+        let loss = sum(LOBE_SUMS + LOBE_SLOTS * k + LOBE_LOSS) * (n / total_weight)
+            + n * log(max(rest_weight, REST_MIN));
+        if loss < penalty && mix_weight[k] < lightest {
+            lightest = mix_weight[k];
+            weakest = k;
+        }
+    }
+    return weakest;
+}
+
+// Drops lobe k and renormalizes the others' weights.
+fn drop_lobe(k: u32) {
+    alive &= ~(1u << k);
+    var rest_weight = 0.0;
+    for (var j = 0u; j < LOBES; j++) {
+        if (alive & (1u << j)) != 0u {
+            rest_weight += mix_weight[j];
+        }
+    }
+    for (var j = 0u; j < LOBES; j++) {
+        mix_weight[j] = select(0.0, mix_weight[j] / rest_weight, (alive & (1u << j)) != 0u);
     }
 }
 
@@ -290,24 +375,30 @@ fn sum(q: u32) -> f32 {
     return acc[q];
 }
 // #else
-var<workgroup> partial: array<array<f32, SUMS>, MAX_WG>;
+// Sums per round of `reduce`: all SUMS columns of MAX_WG invocations would not fit beside the
+// photon cache.
+const PARTIAL_COLUMNS: u32 = 32u;
+var<workgroup> partial: array<array<f32, PARTIAL_COLUMNS>, MAX_WG>;
 var<workgroup> total: array<f32, SUMS>;
 
 // Fixed-order sum of the first `count` sums over the invocations into `total`: column by
-// column, invocation 0 first.
+// column, invocation 0 first, PARTIAL_COLUMNS columns a round.
 fn reduce(lid: u32, count: u32) {
-    for (var q = 0u; q < count; q++) {
-        partial[lid][q] = acc[q];
-    }
-    workgroupBarrier();
-    for (var q = lid; q < count; q += WG) {
-        var s = 0.0;
-        for (var t = 0u; t < WG; t++) {
-            s += partial[t][q];
+    for (var first = 0u; first < count; first += PARTIAL_COLUMNS) {
+        let columns = min(count - first, PARTIAL_COLUMNS);
+        for (var q = 0u; q < columns; q++) {
+            partial[lid][q] = acc[first + q];
         }
-        total[q] = s;
+        workgroupBarrier();
+        for (var q = lid; q < columns; q += WG) {
+            var s = 0.0;
+            for (var t = 0u; t < WG; t++) {
+                s += partial[t][q];
+            }
+            total[first + q] = s;
+        }
+        workgroupBarrier();
     }
-    workgroupBarrier();
 }
 
 fn sum(q: u32) -> f32 {
@@ -353,46 +444,85 @@ fn main(@builtin(workgroup_id) wg: vec3<u32>, @builtin(num_workgroups) num_wg: v
             mix_weight[k] = l.weight;
         }
     }
+    // A lobe handed over with sharpness 0 was dropped.
+    alive = 0u;
+    for (var k = 0u; k < LOBES; k++) {
+        if mix_sharpness[k] > 0.0 {
+            alive |= 1u << k;
+        }
+    }
     let box = bin_box(center, em.radius, bins);
     gather(lid, box);
     let sparse = SPARSE;
-    let sums = LOBE_SUMS + 5u * LOBES;
+    let sums = LOBE_SUMS + LOBE_SLOTS * LOBES;
 
+    var dropped_one = false;
+    // The next iteration whose E-step sums the losses (see PRUNE_PERIOD); each dispatch starts
+    // with one.
+    var next_check = max(begin, PRUNE_FROM);
     for (var it = begin; it < end; it++) {
         prepare_mixture();
-        // A dispatch starts with no frozen responsibilities, hence a full update.
-        let full = it % SPARSE_PERIOD == 0u || it == begin;
-        photon_pass(lid, box, PASS_EM, sparse, full);
+        // A dispatch starts with no frozen responsibilities, hence a full update; so does the
+        // pass after a drop.
+        let full = it % SPARSE_PERIOD == 0u || it == begin || dropped_one;
+        let pruning = em.prune > 0u && it == next_check;
+        photon_pass(lid, box, PASS_EM, sparse, full, pruning);
         reduce(lid, sums);
+        if pruning {
+            if lid == 0u {
+                shared_drop = select(LOBES, weakest_lobe(), LOBES - countOneBits(alive) < em.prune);
+            }
+        }
+        let weakest = select(LOBES, workgroupUniformLoad(&shared_drop), pruning);
+        let live = countOneBits(alive);
         for (var k = 0u; k < LOBES; k++) {
-            let o = LOBE_SUMS + 5u * k;
+            if (alive & (1u << k)) == 0u {
+                continue;
+            }
+            let o = LOBE_SUMS + LOBE_SLOTS * k;
             let old = LobeFit(mix_axis[k], mix_sharpness[k], mix_weight[k]);
             let s2 = vec3<f32>(sum(o + 2u), sum(o + 3u), sum(o + 4u));
-            let next = m_step(FAMILY, em.flags, LOBES, sum(o), sum(o + 1u), s2,
+            let next = m_step(FAMILY, em.flags, live, sum(o), sum(o + 1u), s2,
                               sum(SUM_WEIGHT), sum(SUM_COUNT), old);
             mix_axis[k] = next.axis;
             mix_sharpness[k] = next.sharpness;
             mix_weight[k] = next.weight;
         }
+        dropped_one = weakest < LOBES;
+        if dropped_one {
+            drop_lobe(weakest);
+        }
+        if pruning {
+            next_check = it + select(PRUNE_PERIOD, 1u, dropped_one);
+        }
     }
 
     if !last {
         if lid < LOBES && fit {
+            let sharpness = select(0.0, mix_sharpness[lid], (alive & (1u << lid)) != 0u);
             lobes[splat_index * em.lobes + lid] =
-                Lobe(mix_axis[lid], mix_sharpness[lid], vec3<f32>(0.0), mix_weight[lid]);
+                Lobe(mix_axis[lid], sharpness, vec3<f32>(0.0), mix_weight[lid]);
         }
         return;
     }
     prepare_mixture();
-    photon_pass(lid, box, PASS_FINAL, false, true);
+    photon_pass(lid, box, PASS_FINAL, false, true, false);
     reduce(lid, sums);
     let photons = u32(sum(SUM_COUNT));
-    let written = select(0u, LOBES, photons > 0u && fit);
-    if lid < written {
-        let o = LOBE_SUMS + 5u * lid;
-        let irradiance = vec3<f32>(sum(o), sum(o + 1u), sum(o + 2u)) * em.inv_area;
-        lobes[splat_index * em.lobes + lid] =
-            Lobe(mix_axis[lid], mix_sharpness[lid], irradiance, mix_weight[lid]);
+    let written = select(0u, countOneBits(alive), photons > 0u && fit);
+    // Invocation t writes the t-th live lobe into slot t.
+    var slot = 0u;
+    for (var k = 0u; k < LOBES; k++) {
+        if (alive & (1u << k)) == 0u {
+            continue;
+        }
+        if slot == lid && lid < written {
+            let o = LOBE_SUMS + LOBE_SLOTS * k;
+            let irradiance = vec3<f32>(sum(o), sum(o + 1u), sum(o + 2u)) * em.inv_area;
+            lobes[splat_index * em.lobes + lid] =
+                Lobe(mix_axis[k], mix_sharpness[k], irradiance, mix_weight[k]);
+        }
+        slot += 1u;
     }
     if lid == 0u {
         var out: SplatLight;

@@ -19,12 +19,18 @@ pub const CACHE_SLOTS: u32 = 512;
 const FROZEN: u32 = 8;
 /// The slot of a photon that is not cached.
 const NOT_CACHED: u32 = u32::MAX;
+/// The log weight of a dropped lobe.
+const DROPPED_LOG: f32 = -3.0e38;
+/// Floor of 1 − h in a loss sum.
+const REST_MIN: f32 = 1e-30;
 const SUM_LOG: usize = 0;
 const SUM_WEIGHT: usize = 1;
 const SUM_COUNT: usize = 2;
 const SUM_RGB: usize = 3;
 const LOBE_SUMS: usize = 6;
-const SUMS: usize = 46;
+const LOBE_SLOTS: usize = 6;
+const LOBE_LOSS: usize = 5;
+const SUMS: usize = 54;
 const PASS_EM: u32 = 0;
 const PASS_FINAL: u32 = 1;
 const L: usize = MAX_LOBES as usize;
@@ -53,6 +59,8 @@ struct Splat1 {
     mix_weight: [f32; L],
     mix_mirror: [Vec3; L],
     mix_log: [f32; L],
+    /// The lobes not dropped by pruning, one bit each.
+    alive: u32,
 }
 
 /// The workgroup's photon cache (workgroup memory in WGSL): slot c of invocation t at
@@ -127,6 +135,9 @@ fn prepare_mixture(em: &EmParams, sp: &mut Splat1) {
         sp.mix_mirror[k] = mirror_axis(sp.normal, sp.mix_axis[k]);
         sp.mix_log[k] = sp.mix_weight[k].max(1e-35).ln().max(LOG_WEIGHT_MIN)
             + lobe_log_norm(em.family, sp.normal, sp.mix_axis[k], sp.mix_sharpness[k]);
+        if sp.alive & (1 << k) == 0 {
+            sp.mix_log[k] = DROPPED_LOG;
+        }
     }
 }
 
@@ -189,6 +200,7 @@ fn absorb(
     kind: u32,
     sparse: bool,
     full: bool,
+    losses: bool,
 ) {
     v.acc[SUM_WEIGHT] += weight;
     v.acc[SUM_COUNT] += 1.0;
@@ -202,7 +214,7 @@ fn absorb(
         }
         v.acc[SUM_LOG] += weight * e_step(inp.em, sp, v, w, slot, false, true);
         for k in 0..sp.lobe_count as usize {
-            let o = LOBE_SUMS + 5 * k;
+            let o = LOBE_SUMS + LOBE_SLOTS * k;
             v.acc[o] += v.resp[k] * p[0];
             v.acc[o + 1] += v.resp[k] * p[1];
             v.acc[o + 2] += v.resp[k] * p[2];
@@ -211,7 +223,7 @@ fn absorb(
     }
     e_step(inp.em, sp, v, w, slot, sparse, full);
     for k in 0..sp.lobe_count as usize {
-        let o = LOBE_SUMS + 5 * k;
+        let o = LOBE_SUMS + LOBE_SLOTS * k;
         let wh = weight * v.resp[k];
         let frozen = v.frozen_mask & (1 << k) != 0;
         v.acc[o] += wh;
@@ -223,6 +235,15 @@ fn absorb(
         v.acc[o + 2] += wh * w.x;
         v.acc[o + 3] += wh * w.y;
         v.acc[o + 4] += wh * w.z;
+        if losses {
+            let mut rest = 0.0;
+            for j in 0..sp.lobe_count as usize {
+                if j != k {
+                    rest += v.resp[j];
+                }
+            }
+            v.acc[o + LOBE_LOSS] -= weight * rest.max(REST_MIN).ln();
+        }
     }
 }
 
@@ -269,6 +290,7 @@ fn photon_pass(
     kind: u32,
     sparse: bool,
     full: bool,
+    losses: bool,
 ) {
     v.acc = [0.0; SUMS];
     for c in 0..v.cached {
@@ -286,6 +308,7 @@ fn photon_pass(
             kind,
             sparse,
             full,
+            losses,
         );
     }
     if !v.streaming {
@@ -305,12 +328,61 @@ fn photon_pass(
             let c = accept(inp, sp, j);
             if c.ok {
                 absorb(
-                    inp, sp, v, c.dir, c.weight, j, NOT_CACHED, kind, sparse, full,
+                    inp, sp, v, c.dir, c.weight, j, NOT_CACHED, kind, sparse, full, losses,
                 );
             }
             j += inp.em.workgroup_size;
         }
         offset += end - begin;
+    }
+}
+
+/// `weakest_lobe` in WGSL: the lightest live lobe whose loss is under the penalty after an EM
+/// pass with sums `total` (before its M-step), or `lobe_count` when none is.
+fn weakest_lobe(sp: &Splat1, total: &[f32; SUMS]) -> u32 {
+    let n = total[SUM_COUNT];
+    let total_weight = total[SUM_WEIGHT];
+    let mut weakest = sp.lobe_count;
+    if sp.alive.count_ones() < 2 || n < 1.0 || total_weight <= 0.0 {
+        return weakest;
+    }
+    let penalty = PRUNE_PENALTY * (1.0 + n).ln();
+    let mut lightest = 2.0;
+    for k in 0..sp.lobe_count as usize {
+        if sp.alive & (1 << k) == 0 {
+            continue;
+        }
+        let mut rest_weight = 0.0;
+        for j in 0..sp.lobe_count as usize {
+            if j != k && sp.alive & (1 << j) != 0 {
+                rest_weight += sp.mix_weight[j];
+            }
+        }
+        let loss = total[LOBE_SUMS + LOBE_SLOTS * k + LOBE_LOSS] * (n / total_weight)
+            + n * rest_weight.max(REST_MIN).ln();
+        if loss < penalty && sp.mix_weight[k] < lightest {
+            lightest = sp.mix_weight[k];
+            weakest = k as u32;
+        }
+    }
+    weakest
+}
+
+/// `drop_lobe` in WGSL: drops lobe k and renormalizes the others' weights.
+fn drop_lobe(sp: &mut Splat1, k: u32) {
+    sp.alive &= !(1 << k);
+    let mut rest_weight = 0.0;
+    for j in 0..sp.lobe_count as usize {
+        if sp.alive & (1 << j) != 0 {
+            rest_weight += sp.mix_weight[j];
+        }
+    }
+    for j in 0..sp.lobe_count as usize {
+        sp.mix_weight[j] = if sp.alive & (1 << j) != 0 {
+            sp.mix_weight[j] / rest_weight
+        } else {
+            0.0
+        };
     }
 }
 
@@ -431,6 +503,12 @@ fn fit_splat(inp: &Inputs, splats: &[Splat], entry: u32, resume: &[Lobe]) -> Opt
             sp.mix_weight[k] = l.weight;
         }
     }
+    // A lobe handed over with sharpness 0 was dropped.
+    for k in 0..sp.lobe_count as usize {
+        if sp.mix_sharpness[k] > 0.0 {
+            sp.alive |= 1 << k;
+        }
+    }
     let bx = bin_box(sp.center, em.radius, inp.bins);
     let mut cache = Cache {
         dir: vec![[0.0; 4]; CACHE_SLOTS as usize],
@@ -442,17 +520,31 @@ fn fit_splat(inp: &Inputs, splats: &[Splat], entry: u32, resume: &[Lobe]) -> Opt
     }
     let sparse = em.flags & EM_SPARSE != 0;
     let butterfly = em.flags & EM_SUBGROUP_REDUCE != 0;
-    let sums = LOBE_SUMS + 5 * sp.lobe_count as usize;
+    let sums = LOBE_SUMS + LOBE_SLOTS * sp.lobe_count as usize;
 
+    let mut dropped_one = false;
+    let mut next_check = begin.max(PRUNE_FROM);
     for it in begin..end {
         prepare_mixture(em, &mut sp);
-        let full = it % SPARSE_PERIOD == 0 || it == begin;
+        let full = it % SPARSE_PERIOD == 0 || it == begin || dropped_one;
+        let pruning = em.prune > 0 && it == next_check;
         for (lid, v) in inv.iter_mut().enumerate() {
-            photon_pass(inp, &sp, v, &cache, lid as u32, &bx, PASS_EM, sparse, full);
+            photon_pass(
+                inp, &sp, v, &cache, lid as u32, &bx, PASS_EM, sparse, full, pruning,
+            );
         }
         let total = reduce(&inv, sums, butterfly);
+        let weakest = if pruning && sp.lobe_count - sp.alive.count_ones() < em.prune {
+            weakest_lobe(&sp, &total)
+        } else {
+            sp.lobe_count
+        };
+        let live = sp.alive.count_ones();
         for k in 0..sp.lobe_count as usize {
-            let o = LOBE_SUMS + 5 * k;
+            if sp.alive & (1 << k) == 0 {
+                continue;
+            }
+            let o = LOBE_SUMS + LOBE_SLOTS * k;
             let old = LobeFit {
                 axis: sp.mix_axis[k],
                 sharpness: sp.mix_sharpness[k],
@@ -462,7 +554,7 @@ fn fit_splat(inp: &Inputs, splats: &[Splat], entry: u32, resume: &[Lobe]) -> Opt
             let next = m_step(
                 em.family,
                 em.flags,
-                sp.lobe_count,
+                live,
                 total[o],
                 total[o + 1],
                 s2,
@@ -474,26 +566,47 @@ fn fit_splat(inp: &Inputs, splats: &[Splat], entry: u32, resume: &[Lobe]) -> Opt
             sp.mix_sharpness[k] = next.sharpness;
             sp.mix_weight[k] = next.weight;
         }
+        dropped_one = weakest < sp.lobe_count;
+        if dropped_one {
+            drop_lobe(&mut sp, weakest);
+        }
+        if pruning {
+            next_check = it + if dropped_one { 1 } else { PRUNE_PERIOD };
+        }
     }
 
     if !last {
         let kept = (0..sp.lobe_count as usize)
-            .map(|k| mixture(&sp, k))
+            .map(|k| Lobe {
+                sharpness: if sp.alive & (1 << k) != 0 {
+                    sp.mix_sharpness[k]
+                } else {
+                    0.0
+                },
+                ..mixture(&sp, k)
+            })
             .collect();
         return Some((splat_index, kept, None));
     }
     prepare_mixture(em, &mut sp);
     for (lid, v) in inv.iter_mut().enumerate() {
         photon_pass(
-            inp, &sp, v, &cache, lid as u32, &bx, PASS_FINAL, false, true,
+            inp, &sp, v, &cache, lid as u32, &bx, PASS_FINAL, false, true, false,
         );
     }
     let total = reduce(&inv, sums, butterfly);
     let photons = total[SUM_COUNT] as u32;
-    let written = if photons > 0 { sp.lobe_count } else { 0 };
-    let fitted = (0..written as usize)
+    let written = if photons > 0 {
+        sp.alive.count_ones()
+    } else {
+        0
+    };
+    // The live lobes in order, into the first `written` slots.
+    let fitted = (0..sp.lobe_count as usize)
+        .filter(|&k| sp.alive & (1 << k) != 0)
+        .take(written as usize)
         .map(|k| {
-            let o = LOBE_SUMS + 5 * k;
+            let o = LOBE_SUMS + LOBE_SLOTS * k;
             let e = Vec3::new(total[o], total[o + 1], total[o + 2]) * em.inv_area;
             Lobe {
                 irradiance: e.into(),

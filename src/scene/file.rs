@@ -97,7 +97,7 @@ pub struct BakeDesc {
     pub photons: u64,
     /// Photon search radius for the lobe fit; default: 1/40 of the scene's largest extent.
     pub radius: Option<f32>,
-    /// Lobes per splat.
+    /// Lobes per splat (with `prune`, the most a splat keeps).
     pub lobes: u32,
     /// EM iterations.
     pub iterations: u32,
@@ -113,6 +113,9 @@ pub struct BakeDesc {
     pub sparse: bool,
     /// Photons count for a splat within this many splat radii of its plane.
     pub slab: f32,
+    /// Drop the lobes a splat's photons do not need (a BIC test after the fit), so splats
+    /// lit from few directions keep fewer lobes and shade faster.
+    pub prune: bool,
 }
 
 #[derive(
@@ -148,6 +151,7 @@ impl Default for BakeDesc {
             family: crate::em::LobeFamily::Ward,
             sparse: false,
             slab: 2.0,
+            prune: true,
         }
     }
 }

@@ -26,6 +26,9 @@ pub const WARD_B2_MAX: f32 = 1.0;
 pub const LOG_WEIGHT_MIN: f32 = -80.0;
 pub const PRIOR_WEIGHT: f32 = 0.01;
 pub const PRIOR_RESULTANT: f32 = 0.02;
+pub const PRUNE_PENALTY: f32 = 2.0;
+pub const PRUNE_FROM: u32 = 2;
+pub const PRUNE_PERIOD: u32 = 4;
 
 pub const INITIAL_COS: f32 = 0.5;
 pub const INITIAL_VMF: f32 = 4.0;

@@ -43,6 +43,15 @@ const LOG_WEIGHT_MIN: f32 = -80.0;
 // to a handful of photons, a single photon gives k ~ 50).
 const PRIOR_WEIGHT: f32 = 0.01;
 const PRIOR_RESULTANT: f32 = 0.02;
+// Pruning (em_fit.wgsl) drops a lobe when the log-likelihood it adds, rescaled to unit mean
+// photon weight, is under PRUNE_PENALTY ln(1 + n) for n photons: the BIC's half of a lobe's 4
+// parameters (axis 2, sharpness, weight) per ln n, with 1 + n so that a splat of one photon
+// still sheds the lobes that add nothing. Losses are summed from iteration PRUNE_FROM on,
+// once the initial lobes have moved to the photons: in the pass after a drop, else every
+// PRUNE_PERIOD passes (a pass that sums them costs a log per lobe and photon more).
+const PRUNE_PENALTY: f32 = 2.0;
+const PRUNE_FROM: u32 = 2u;
+const PRUNE_PERIOD: u32 = 4u;
 
 // The initial lobes, the same for every splat in its own frame: one along the normal, the
 // others evenly around a 60-degree cone, as wide as k = 4 (b^2 = 1/8), equal weights.

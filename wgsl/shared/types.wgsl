@@ -151,7 +151,7 @@ struct EmParams {
     iteration_begin: u32,
     iteration_end: u32,
     workgroup_size: u32,
-    _pad0: u32,
+    prune: u32,
     _pad1: u32,
     _pad2: u32,
 }
