@@ -143,28 +143,19 @@ impl SweepPlan {
                 KNOBS.join(", ")
             )));
         }
-        let keep = |k: &str| knobs.iter().any(|x| x == k);
-        if !keep("photons") {
-            self.photons.clear();
+        let turned = |k: &str| knobs.iter().any(|x| x == k);
+        fn keep<T>(values: &mut Vec<T>, turned: bool) {
+            if !turned {
+                values.clear();
+            }
         }
-        if !keep("iterations") {
-            self.iterations.clear();
-        }
-        if !keep("radius") {
-            self.radius_scales.clear();
-        }
-        if !keep("lobes") {
-            self.lobes.clear();
-        }
-        if !keep("splats") {
-            self.splat_fractions.clear();
-        }
-        if !keep("family") {
-            self.families.clear();
-        }
-        if !keep("prune") {
-            self.prune.clear();
-        }
+        keep(&mut self.photons, turned("photons"));
+        keep(&mut self.iterations, turned("iterations"));
+        keep(&mut self.radius_scales, turned("radius"));
+        keep(&mut self.lobes, turned("lobes"));
+        keep(&mut self.splat_fractions, turned("splats"));
+        keep(&mut self.families, turned("family"));
+        keep(&mut self.prune, turned("prune"));
         Ok(self)
     }
 }
