@@ -465,12 +465,13 @@ fn main(@builtin(workgroup_id) wg: vec3<u32>, @builtin(num_workgroups) num_wg: v
         // A dispatch starts with no frozen responsibilities, hence a full update; so does the
         // pass after a drop.
         let full = it % SPARSE_PERIOD == 0u || it == begin || dropped_one;
-        let pruning = em.prune > 0u && it == next_check;
+        // Until em.prune lobes are gone.
+        let pruning = it == next_check && LOBES - countOneBits(alive) < em.prune;
         photon_pass(lid, box, PASS_EM, sparse, full, pruning);
         reduce(lid, sums);
         if pruning {
             if lid == 0u {
-                shared_drop = select(LOBES, weakest_lobe(), LOBES - countOneBits(alive) < em.prune);
+                shared_drop = weakest_lobe();
             }
         }
         let weakest = select(LOBES, workgroupUniformLoad(&shared_drop), pruning);

@@ -527,14 +527,14 @@ fn fit_splat(inp: &Inputs, splats: &[Splat], entry: u32, resume: &[Lobe]) -> Opt
     for it in begin..end {
         prepare_mixture(em, &mut sp);
         let full = it % SPARSE_PERIOD == 0 || it == begin || dropped_one;
-        let pruning = em.prune > 0 && it == next_check;
+        let pruning = it == next_check && sp.lobe_count - sp.alive.count_ones() < em.prune;
         for (lid, v) in inv.iter_mut().enumerate() {
             photon_pass(
                 inp, &sp, v, &cache, lid as u32, &bx, PASS_EM, sparse, full, pruning,
             );
         }
         let total = reduce(&inv, sums, butterfly);
-        let weakest = if pruning && sp.lobe_count - sp.alive.count_ones() < em.prune {
+        let weakest = if pruning {
             weakest_lobe(&sp, &total)
         } else {
             sp.lobe_count
