@@ -206,17 +206,7 @@ fn closest(fit: &[lobelight::types::Lobe], axis: Vec3) -> lobelight::types::Lobe
 }
 
 fn check_recovery(family: LobeFamily, truth: &[(Vec3, f32, f32)], on: &str, map: &LobeMap) {
-    check_splat_recovery(family, truth, on, map, 0);
-}
-
-fn check_splat_recovery(
-    family: LobeFamily,
-    truth: &[(Vec3, f32, f32)],
-    on: &str,
-    map: &LobeMap,
-    splat: usize,
-) {
-    let fit = map.splat_lobes(splat);
+    let fit = map.splat_lobes(0);
     assert_eq!(fit.len(), truth.len());
     for &(axis, width, weight) in truth {
         let l = closest(fit, axis);
@@ -334,7 +324,7 @@ fn pruning_keeps_the_lobes_the_photons_need() {
         ];
         for (on, map) in &maps {
             // One true lobe: one kept, and it is the truth.
-            check_splat_recovery(family, &truths[0], &format!("{on}, splat 0"), map, 0);
+            check_recovery(family, &truths[0], &format!("{on}, splat 0"), map);
             for (i, truth) in truths.iter().enumerate() {
                 let label = format!("{on}, splat {i}");
                 let fit = map.splat_lobes(i);

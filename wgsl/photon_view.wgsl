@@ -21,14 +21,14 @@ const WG: u32 = 64u;
 // At most 2^16 units from one photon: a pixel overflows only past 65536 capped photons.
 const PHOTON_CAP: f32 = 65536.0;
 
-// The pixel p projects into, as (x, y); x = -1 when p is behind the camera or outside.
+// The pixel p projects into (the raster passes' projection, `clip_position`), as (x, y);
+// x = -1 when p is behind the camera or outside.
 fn project_pixel(p: vec3<f32>) -> vec2<i32> {
-    let v = p - cam.eye;
-    let z = dot(v, cam.forward);
-    if z <= 0.0 {
+    let clip = clip_position(cam, p);
+    if clip.w <= 0.0 {
         return vec2<i32>(-1);
     }
-    let ndc = vec2<f32>(dot(v, cam.right) / (z * cam.tan_x), dot(v, cam.up) / (z * cam.tan_y));
+    let ndc = clip.xy / clip.w;
     let x = (ndc.x * 0.5 + 0.5) * cam.size.x;
     let y = (0.5 - ndc.y * 0.5) * cam.size.y;
     if !(x >= 0.0 && x < cam.size.x && y >= 0.0 && y < cam.size.y) {

@@ -6,7 +6,7 @@ use rayon::prelude::*;
 
 use crate::error::Result;
 use crate::photons::emitters;
-use crate::shared::splat::SHADOW_RAY_BUDGET;
+use crate::shared::splat::{SHADOW_RAY_BUDGET, clip_position};
 use crate::shared::trace::{Geometry, trace_ray};
 use crate::types::{Camera, Light, Material, NO_SPLAT, Photon, PhotonViewParams};
 
@@ -34,15 +34,14 @@ pub fn scene_scale(lights: &[Light], photons: u64) -> Result<f32> {
     Ok(fixed_scale(largest))
 }
 
-/// The pixel `p` projects into, or none behind the camera or outside the image.
+/// The pixel `p` projects into (the raster passes' projection, `clip_position`), or none
+/// behind the camera or outside the image.
 pub fn project_pixel(cam: &Camera, p: Vec3) -> Option<(u32, u32)> {
-    let v = p - Vec3::from(cam.eye);
-    let z = v.dot(Vec3::from(cam.forward));
-    if z <= 0.0 {
+    let clip = clip_position(cam, p);
+    if clip.w <= 0.0 {
         return None;
     }
-    let ndc_x = v.dot(Vec3::from(cam.right)) / (z * cam.tan_x);
-    let ndc_y = v.dot(Vec3::from(cam.up)) / (z * cam.tan_y);
+    let (ndc_x, ndc_y) = (clip.x / clip.w, clip.y / clip.w);
     let x = (ndc_x * 0.5 + 0.5) * cam.size[0];
     let y = (0.5 - ndc_y * 0.5) * cam.size[1];
     let inside = (0.0..cam.size[0]).contains(&x) && (0.0..cam.size[1]).contains(&y);
