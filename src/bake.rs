@@ -1,10 +1,10 @@
-//! The bake (DESIGN.md §4–6): photons from the lights, binned, and the lobes fitted to them,
+//! The bake (docs/design.md §4–6): photons from the lights, binned, and the lobes fitted to them,
 //! on the device or on the CPU mirror, with a line of figures per stage. A frame needs only
 //! its result, so a camera change never bakes again.
 
 use std::sync::Arc;
 use std::sync::atomic::{AtomicU64, Ordering};
-use std::time::{Duration, Instant};
+use std::time::Instant;
 
 use crate::bins::{PhotonBins, bin_params};
 use crate::cpu;
@@ -17,10 +17,50 @@ use crate::gpu::photons::{GpuPhotons, trace_photons};
 use crate::gpu::scene::GpuScene;
 use crate::grid::SplatGrid;
 use crate::photons::{PhotonConfig, PhotonStats, ms_since};
-use crate::render::StageReport;
 use crate::scene::Scene;
 use crate::shared::trace::Geometry;
 use crate::types::EmParams;
+
+/// One stage's line of `--stats` / `--json` (docs/cli.md).
+#[derive(Clone, Debug, Default, serde::Serialize)]
+pub struct StageReport {
+    pub ran: bool,
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub ms: Option<f64>,
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub emitted: Option<u64>,
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub stored: Option<u64>,
+    /// EM: splats whose lobes were fitted (glossy, with photons).
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub splats_fitted: Option<u32>,
+    /// EM: splats with photons near them (their irradiance was gathered).
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub splats_lit: Option<u32>,
+    /// EM: lobes kept, and what the fitted splats would keep without pruning.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub lobes_kept: Option<u64>,
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub lobes_fitted: Option<u64>,
+    pub skipped_reason: Option<String>,
+}
+
+impl StageReport {
+    pub fn ran(ms: f64) -> StageReport {
+        StageReport {
+            ran: true,
+            ms: Some(ms),
+            ..Default::default()
+        }
+    }
+
+    pub fn skipped(reason: &str) -> StageReport {
+        StageReport {
+            skipped_reason: Some(reason.into()),
+            ..Default::default()
+        }
+    }
+}
 
 /// Where the bake runs: a device with the scene uploaded, or the CPU with the host grid.
 #[derive(Clone, Copy)]
@@ -65,36 +105,67 @@ impl Progress {
     }
 
     /// A bar over `total` photons.
-    pub fn bar(&self, total: u64) -> indicatif::ProgressBar {
-        if !self.show {
-            return indicatif::ProgressBar::hidden();
+    pub fn bar(&self, total: u64) -> Bar {
+        #[cfg(feature = "progress")]
+        if self.show {
+            let bar = indicatif::ProgressBar::new(total);
+            bar.set_style(
+                indicatif::ProgressStyle::with_template(
+                    "{msg:>8} [{bar:30}] {human_pos}/{human_len} photons, {per_sec}, eta {eta}",
+                )
+                .unwrap_or_else(|_| indicatif::ProgressStyle::default_bar())
+                .progress_chars("=> "),
+            );
+            bar.set_message("photons");
+            return Bar(Some(bar));
         }
-        let bar = indicatif::ProgressBar::new(total);
-        bar.set_style(
-            indicatif::ProgressStyle::with_template(
-                "{msg:>8} [{bar:30}] {human_pos}/{human_len} photons, {per_sec}, eta {eta}",
-            )
-            .unwrap_or_else(|_| indicatif::ProgressStyle::default_bar())
-            .progress_chars("=> "),
-        );
-        bar.set_message("photons");
-        bar
+        let _ = total;
+        Bar::hidden()
     }
 
-    fn spinner(&self, stage: &str) -> indicatif::ProgressBar {
-        if !self.show {
-            return indicatif::ProgressBar::hidden();
+    fn spinner(&self, stage: &str) -> Bar {
+        #[cfg(feature = "progress")]
+        if self.show {
+            let bar = indicatif::ProgressBar::new_spinner();
+            bar.set_message(format!("{stage:>8} …"));
+            bar.enable_steady_tick(std::time::Duration::from_millis(120));
+            return Bar(Some(bar));
         }
-        let bar = indicatif::ProgressBar::new_spinner();
-        bar.set_message(format!("{stage:>8} …"));
-        bar.enable_steady_tick(Duration::from_millis(120));
-        bar
+        let _ = stage;
+        Bar::hidden()
     }
 
     /// Prints a finished stage's line.
     pub fn done(&self, stage: &str, ms: f64, rate: &str) {
         if self.show {
             eprintln!("{stage:>8} {:>9.1} ms  {rate}", ms);
+        }
+    }
+}
+
+/// A progress bar or spinner on stderr (feature `progress`); hidden when quiet.
+pub struct Bar(#[cfg(feature = "progress")] Option<indicatif::ProgressBar>);
+
+impl Bar {
+    fn hidden() -> Bar {
+        Bar(
+            #[cfg(feature = "progress")]
+            None,
+        )
+    }
+
+    pub fn set_position(&self, done: u64) {
+        #[cfg(feature = "progress")]
+        if let Some(bar) = &self.0 {
+            bar.set_position(done);
+        }
+        let _ = done;
+    }
+
+    pub fn finish_and_clear(&self) {
+        #[cfg(feature = "progress")]
+        if let Some(bar) = &self.0 {
+            bar.finish_and_clear();
         }
     }
 }

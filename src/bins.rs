@@ -1,4 +1,4 @@
-//! Photon binning (DESIGN.md §5): stored photons sorted into a uniform grid whose cells are a
+//! Photon binning (docs/design.md §5): stored photons sorted into a uniform grid whose cells are a
 //! little over half the search radius, each cell's list in photon-key order `(path, bounce)`.
 //! Count → exclusive scan → scatter → rank → place, on the GPU (`gpu::bins`) and in the CPU
 //! mirror (`cpu::bin_photons`), which give identical lists.

@@ -1,4 +1,4 @@
-//! The lobe fit (DESIGN.md §6): settings, the plan of `em_fit` dispatches, and the result.
+//! The lobe fit (docs/design.md §6): settings, the plan of `em_fit` dispatches, and the result.
 //! The passes are `em_select` (list the splats with photons near them) and `em_fit` (one
 //! workgroup per listed splat); `gpu::em::fit_lobes` and `cpu::fit_lobes` run them alike.
 
@@ -11,13 +11,14 @@ use crate::shared::lobes::{
 use crate::types::{EmParams, Lobe, SplatLight};
 
 /// The lobe family fitted to each splat's photon directions.
-#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Deserialize, Serialize, clap::ValueEnum)]
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Deserialize, Serialize)]
+#[cfg_attr(feature = "cli", derive(clap::ValueEnum))]
 #[serde(rename_all = "lowercase")]
 pub enum LobeFamily {
     /// von Mises–Fisher lobes, closed-form M-step with light priors.
     Vmf,
     /// The thesis's Ward-like lobe with its heuristic axis update: the lower fit error at equal
-    /// time (README, "Time and fit error"), hence the default.
+    /// time (docs/measurements.md, "Time and fit error"), hence the default.
     #[default]
     Ward,
 }
@@ -53,21 +54,6 @@ pub struct EmConfig {
 }
 
 impl EmConfig {
-    pub fn from_scene(scene: &crate::scene::Scene) -> EmConfig {
-        let b = &scene.bake;
-        EmConfig {
-            lobes: b.lobes,
-            iterations: b.iterations,
-            family: b.family,
-            sparse: b.sparse,
-            priors: true,
-            fit_all: false,
-            prune: b.prune,
-            radius: scene.search_radius(),
-            slab: b.slab,
-        }
-    }
-
     pub fn validate(&self) -> Result<()> {
         let check = || -> std::result::Result<(), String> {
             check_lobes(self.lobes)?;

@@ -1,4 +1,4 @@
-//! One frame of the baked scene (DESIGN.md §7–8): the camera uniform, the shading settings,
+//! One frame of the baked scene (docs/design.md §7–8): the camera uniform, the shading settings,
 //! and the CPU mirror of the splat passes. `gpu::frame` records the same passes on a device.
 
 use glam::{Vec2, Vec3};
@@ -14,7 +14,8 @@ use crate::shared::trace::Geometry;
 use crate::types::{Camera, EmParams, ShadeParams, Splat};
 
 /// Which light a frame shows: everything, or one part of it (the viewer's keys 1–5).
-#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, clap::ValueEnum, serde::Serialize)]
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, serde::Serialize)]
+#[cfg_attr(feature = "cli", derive(clap::ValueEnum))]
 #[serde(rename_all = "lowercase")]
 pub enum Show {
     /// Direct and indirect, diffuse and specular.
@@ -150,7 +151,7 @@ pub fn cpu_frame(
         &scene.materials,
         &lobes.light,
         &lobes.lobes,
-        crate::lobe_norms::lobe_norms(),
+        crate::convolution::lobe_norms(),
         &depth,
         &tiles,
     );

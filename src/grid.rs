@@ -25,6 +25,18 @@ impl Default for GridConfig {
     }
 }
 
+/// A splat every stage can work with: finite, a positive radius, a unit normal, a finite
+/// non-negative albedo.
+pub fn splat_is_sane(s: &Splat) -> bool {
+    let n = glam::Vec3::from(s.normal);
+    glam::Vec3::from(s.center).is_finite()
+        && s.radius.is_finite()
+        && s.radius > 0.0
+        && n.is_finite()
+        && (n.length() - 1.0).abs() < 1e-3
+        && s.diffuse.iter().all(|c| c.is_finite() && *c >= 0.0)
+}
+
 /// Half extents of a disk's axis-aligned bounding box: `r * sqrt(1 - n_i²)` along axis i.
 pub fn disk_half_extent(s: &Splat) -> Vec3 {
     let n = Vec3::from(s.normal);
@@ -101,7 +113,7 @@ pub fn grid_params(splats: &[Splat], cfg: &GridConfig) -> Result<GridParams> {
     }
     // Every stage assumes sane splats: a NaN or zero normal, or a radius of 0, stops here
     // with the splat's index, on the device's path and the CPU's alike.
-    if let Some(i) = splats.iter().position(|s| !crate::scene::splat_is_sane(s)) {
+    if let Some(i) = splats.iter().position(|s| !splat_is_sane(s)) {
         let s = &splats[i];
         return Err(Error::Invalid(format!(
             "splat {i} is degenerate (centre {:?}, radius {}, normal {:?}): every splat needs a \

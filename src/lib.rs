@@ -1,14 +1,35 @@
 //! lobelight: global illumination on splats with per-splat Gaussian lobes of incident light.
 //!
 //! Every stage runs as a WGSL compute or render pass (`gpu`), and has a CPU mirror (`cpu`) used
-//! as the reference in tests. See README.md for the command line and DESIGN notes for the math.
+//! as the reference in tests. The modules, from the bottom up (each uses only those above it
+//! in this list; docs/architecture.md):
+//!
+//! - `error`, `types` (the `#[repr(C)]` records shared with WGSL), `shared` (math shared by
+//!   the mirrors and the host);
+//! - `grid`, `photons`, `bins`, `em`, `tone`, `convolution` (each stage's settings, limits and
+//!   host-side data);
+//! - `scene` (the scene file, procedural shapes and model files) and `camera`;
+//! - `cpu` (the mirrors) and `gpu` (the device host), `frame` (what a frame draws);
+//! - `bake` (photons → bins → lobes on either) and `cache` (a bake on disk);
+//! - `cli` (feature `app`): the `lobelight` commands.
+//!
+//! Baking a scene on the CPU mirror (the README's example, compiled by the doc tests):
+//!
+//! ```no_run
+//! use lobelight::bake::{BakeDevice, Progress, bake};
+//! use lobelight::{cpu, scene};
+//!
+//! let scene = scene::load(std::path::Path::new("scenes/cornell.toml"))?;
+//! let grid = cpu::scene_grid(&scene)?;
+//! let baked = bake(&scene, BakeDevice::Cpu(&grid), &Progress::new(false))?;
+//! println!("{} splats lit", baked.em.splats_lit.unwrap_or(0));
+//! # Ok::<(), lobelight::Error>(())
+//! ```
 
 pub mod bake;
-pub mod bench;
 pub mod bins;
 pub mod cache;
 pub mod camera;
-pub mod compare;
 pub mod convolution;
 pub mod cpu;
 pub mod em;
@@ -16,18 +37,13 @@ pub mod error;
 pub mod frame;
 pub mod gpu;
 pub mod grid;
-pub mod info;
-pub mod lobe_norms;
-pub mod model;
 pub mod photons;
-pub mod plot;
-pub mod rebake;
-pub mod render;
 pub mod scene;
 pub mod shared;
-pub mod sweep;
 pub mod tone;
 pub mod types;
-pub mod view;
+
+#[cfg(feature = "app")]
+pub mod cli;
 
 pub use error::{Error, Result};

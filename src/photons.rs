@@ -4,9 +4,8 @@
 use std::time::Instant;
 
 use crate::error::{Error, Result};
-use crate::scene::Scene;
-use crate::scene::file::StoreRange;
 use crate::types::{Emitter, Light, Photon, TraceCounters, TraceParams, light_kind};
+use serde::Deserialize;
 
 /// Most photons one bake may emit: path indices are u32.
 pub const MAX_PHOTONS: u64 = u32::MAX as u64;
@@ -46,20 +45,27 @@ pub struct PhotonConfig {
     pub page_limit: u64,
 }
 
-impl PhotonConfig {
-    pub fn from_scene(scene: &Scene) -> PhotonConfig {
-        PhotonConfig {
-            photons: scene.bake.photons,
-            seed: scene.bake.seed,
-            max_depth: scene.bake.max_depth,
-            store: scene.bake.store,
-            batch: DEFAULT_BATCH,
-            iteration_budget: ITERATION_BUDGET,
-            initial_capacity: 0,
-            page_limit: 0,
+/// Which hits of a photon path store a photon.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Deserialize, serde::Serialize)]
+#[cfg_attr(feature = "cli", derive(clap::ValueEnum))]
+#[serde(rename_all = "lowercase")]
+pub enum StoreRange {
+    #[default]
+    Indirect,
+    All,
+}
+
+impl StoreRange {
+    /// The smallest stored bounce count.
+    pub fn min_bounce(self) -> u32 {
+        match self {
+            StoreRange::Indirect => 1,
+            StoreRange::All => 0,
         }
     }
+}
 
+impl PhotonConfig {
     pub fn validate(&self) -> Result<()> {
         check_photon_count(self.photons).map_err(Error::Invalid)?;
         if self.max_depth == 0 || self.batch == 0 || self.iteration_budget == 0 {

@@ -1,16 +1,16 @@
-//! Tone mapping settings (DESIGN.md §9) and the level plan of the log-average reduction that
+//! Tone mapping settings (docs/design.md §9) and the level plan of the log-average reduction that
 //! the GPU path (`gpu::tone`) and the CPU mirror (`cpu::tone_map`) share.
 
 use serde::Serialize;
 
-use crate::cpu::groups_for;
-use crate::cpu::tonemap_reduce::BLOCK;
 use crate::error::{Error, Result};
+use crate::shared::dispatch::groups_for;
 use crate::shared::tone::{TONE_LINEAR, TONE_REINHARD};
 use crate::types::ToneParams;
 
 /// How HDR radiance becomes display values.
-#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, clap::ValueEnum, Serialize)]
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Serialize)]
+#[cfg_attr(feature = "cli", derive(clap::ValueEnum))]
 #[serde(rename_all = "lowercase")]
 pub enum ToneMode {
     /// The thesis's operator: log-average luminance to the key, Reinhard's curve, scotopic blend.
@@ -88,12 +88,13 @@ impl ToneConfig {
 }
 
 /// The value counts of the reduction's levels over `pixels`: pixels, then partial sums, down
-/// to one workgroup (whose single sum is the result).
-pub fn reduce_levels(pixels: u32) -> Vec<u32> {
+/// to one workgroup (whose single sum is the result); a workgroup reduces `block` values
+/// (`tonemap_reduce`'s workgroup size × items per invocation).
+pub fn reduce_levels(pixels: u32, block: u32) -> Vec<u32> {
     let mut levels = vec![pixels];
     let mut n = pixels;
-    while groups_for(n, BLOCK) > 1 {
-        n = groups_for(n, BLOCK);
+    while groups_for(n, block) > 1 {
+        n = groups_for(n, block);
         levels.push(n);
     }
     levels

@@ -17,7 +17,7 @@ pub struct Splat {
     pub _pad: u32,
 }
 
-/// Isotropic Ward material (DESIGN.md §3): the specular part; the diffuse albedo lives per splat.
+/// Isotropic Ward material (docs/design.md §3): the specular part; the diffuse albedo lives per splat.
 #[repr(C)]
 #[derive(Clone, Copy, Debug, Default, PartialEq, Pod, Zeroable)]
 pub struct Material {
@@ -186,7 +186,7 @@ pub struct DistanceParams {
     pub _pad2: u32,
 }
 
-/// One lobe of a splat's incident light (DESIGN.md §6): unit `axis`, `sharpness` in the
+/// One lobe of a splat's incident light (docs/design.md §6): unit `axis`, `sharpness` in the
 /// family's own exponent (vMF: κ in `exp(κ(ω·μ − 1))`; Ward-like: 1/β² in `exp(−tan²δ/β²)`),
 /// the RGB irradiance it carries and its mixture weight λ.
 #[repr(C)]
@@ -349,7 +349,7 @@ pub struct ScanParams {
     pub _pad2: u32,
 }
 
-/// Tone mapping (DESIGN.md §9): one level of the log-average reduction, and the operator.
+/// Tone mapping (docs/design.md §9): one level of the log-average reduction, and the operator.
 #[repr(C)]
 #[derive(Clone, Copy, Debug, Default, PartialEq, Pod, Zeroable)]
 pub struct ToneParams {

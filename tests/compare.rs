@@ -1,6 +1,6 @@
 //! The image metrics of `lobelight compare` on images with known answers.
 
-use lobelight::compare::{Values, difference, difference_of, flip};
+use lobelight::cli::compare::{Values, difference, difference_of, flip};
 
 const W: u32 = 32;
 const H: u32 = 24;

@@ -1,13 +1,13 @@
-//! The reference quadrature of the convolution study (`src/convolution.rs`): the lobe's
+//! The reference quadrature of the convolution study (`src/convolution/`): the lobe's
 //! normalisation, the sharp-lobe limit, a brute-force check where both lobes are broad, and
 //! convergence as the sample grids are refined. The study's benchmark and its better formula
 //! build on these.
 
 use glam::DVec3;
+use lobelight::convolution::lobe_norms;
 use lobelight::convolution::{
     Case, Convention, Formula, Quality, Reference, case_error, errors, lobe_shape, summary, ward,
 };
-use lobelight::lobe_norms::lobe_norms;
 use lobelight::shared::lobes::ward_kappa;
 use std::f64::consts::PI;
 
@@ -30,7 +30,7 @@ fn hemisphere(n: usize, f: impl Fn(DVec3) -> f64) -> f64 {
     sum * (2.0 * PI) / (2 * n * n) as f64
 }
 
-/// The lobe's integral is about cos θL · κ(β²) (DESIGN.md §6), the approximation the EM
+/// The lobe's integral is about cos θL · κ(β²) (docs/design.md §6), the approximation the EM
 /// normalises by; the quadrature agrees where that approximation is meant to hold (it
 /// ignores the horizon, which cuts a broad lobe at a steep angle: 1.2 % at 60° and β² = 0.04).
 #[test]

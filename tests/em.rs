@@ -411,7 +411,7 @@ fn gpu_fit_equals_cpu_fit_on_the_same_photons() {
         // bits of exp/log (the GPU's are not the CPU's) grows about threefold per iteration
         // (measured on this scene: largest weight difference 6.5e-7 after 1 iteration, 3e-4
         // after 5, 2e-3 after 10, 0.2 after 20). Parity of the passes is checked at 5
-        // iterations, where that growth stays under the tolerance; README, "Lobe fit".
+        // iterations, where that growth stays under the tolerance; docs/measurements.md, "Photon binning and lobe fit".
         // Pruning is on (the scene's default), so the lobe counts must agree too.
         let em = EmConfig {
             family,

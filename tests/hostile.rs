@@ -6,8 +6,8 @@
 
 use std::path::Path;
 
-use lobelight::model::{Mesh, obj, ply, to_splats};
 use lobelight::scene;
+use lobelight::scene::model::{Mesh, obj, ply, to_splats};
 use proptest::prelude::*;
 
 /// Values an attacker would try where a number goes.

@@ -8,7 +8,7 @@ use std::io::Write;
 use std::path::{Path, PathBuf};
 
 use glam::Vec3;
-use lobelight::model::{self, Mesh};
+use lobelight::scene::model::{self, Mesh};
 
 fn tmp(name: &str, bytes: &[u8]) -> PathBuf {
     let dir = std::env::temp_dir().join(format!("lobelight-models-{}", std::process::id()));

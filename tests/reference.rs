@@ -8,7 +8,7 @@ use std::path::Path;
 use lobelight::bake::{Binned, Progress, bins_cpu};
 use lobelight::bins::PhotonBins;
 use lobelight::camera::View;
-use lobelight::compare::difference;
+use lobelight::cli::compare::difference;
 use lobelight::cpu;
 use lobelight::frame::{FrameConfig, camera_uniform, cpu_frame, cpu_reference, shade_params};
 use lobelight::gpu::Gpu;
@@ -51,7 +51,15 @@ fn gpu_reference(
     let size = (view.width, view.height);
     let targets = reference
         .image(
-            gpu, &pipelines, scene, &on_gpu, &on_device, &cam, &cfg, size,
+            gpu,
+            &pipelines,
+            scene,
+            &on_gpu,
+            &on_device.bins,
+            &on_device.em,
+            &cam,
+            &cfg,
+            size,
         )
         .unwrap();
     gpu.read(&targets.hdr, (view.width * view.height) as usize)

@@ -1,4 +1,4 @@
-//! The splat passes: GPU against the CPU mirror on shared bakes (DESIGN.md §8), direct light
+//! The splat passes: GPU against the CPU mirror on shared bakes (docs/design.md §8), direct light
 //! against closed forms, and the bake cache's keys.
 
 mod common;
@@ -7,7 +7,7 @@ use std::path::Path;
 
 use lobelight::bake::{BakeDevice, Progress, bake};
 use lobelight::camera::View;
-use lobelight::compare::difference;
+use lobelight::cli::compare::difference;
 use lobelight::em::LobeMap;
 use lobelight::frame::{FrameConfig, Show, camera_uniform, cpu_frame, shade_params};
 use lobelight::gpu::Gpu;

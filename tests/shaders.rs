@@ -139,3 +139,54 @@ fn unbalanced_ifdef_names_file_and_line() {
     let err = shaders::resolve("wgsl/x.wgsl", "a\n// #endif\n", &lookup).unwrap_err();
     assert!(err.to_string().contains("wgsl/x.wgsl: line 2"), "{err}");
 }
+
+/// The device host takes every stage's workgroup size (and items per invocation) from the
+/// WGSL, read with naga; the CPU mirrors write theirs for their loops. The two must agree, and
+/// every compute stage with a fixed workgroup size must have a mirror listed here.
+#[test]
+fn mirror_workgroup_shapes_match_the_wgsl() {
+    use lobelight::cpu::*;
+    use lobelight::gpu::shaders::{STAGES, stage_shape};
+    let mirrors: &[(&str, u32, u32)] = &[
+        ("grid_count", grid_count::WG, 1),
+        ("grid_scatter", grid_scatter::WG, 1),
+        ("grid_rank", grid_rank::WG, 1),
+        ("grid_distance", grid_distance::WG, 1),
+        ("trace_rays", trace_rays::WG, 1),
+        ("photon_trace", photon_trace::WG, 1),
+        ("bin_count", bin_count::WG, 1),
+        ("bin_scatter", bin_scatter::WG, 1),
+        ("bin_rank", bin_rank::WG, 1),
+        ("bin_place", bin_place::WG, 1),
+        ("em_select", em_select::WG, 1),
+        ("scan_reduce", scan_reduce::WG, scan_reduce::ITEMS),
+        ("scan_apply", scan_apply::WG, scan_apply::ITEMS),
+        ("tonemap_reduce", tonemap_reduce::WG, tonemap_reduce::ITEMS),
+        ("tonemap_apply", tonemap_apply::WG, 1),
+        ("shade", shade::WG, 1),
+        ("photon_view", photon_view::WG, 1),
+        ("photon_resolve", photon_resolve::WG, 1),
+    ];
+    for &(name, wg, items) in mirrors {
+        let shape = stage_shape(name).unwrap();
+        assert_eq!(shape.workgroup_size, Some(wg), "{name}: workgroup size");
+        assert_eq!(shape.items, items, "{name}: items per invocation");
+        assert_eq!(shape.per_group(name).unwrap(), wg * items, "{name}");
+    }
+    assert_eq!(
+        tonemap_reduce::BLOCK,
+        tonemap_reduce::WG * tonemap_reduce::ITEMS
+    );
+    // em_fit's workgroup size is a pipeline constant (`em::workgroup_size`), and the splat
+    // passes, the reference gather and present draw triangles: none has a fixed size.
+    for stage in STAGES {
+        let fixed = stage_shape(stage.name).unwrap().workgroup_size.is_some();
+        let listed = mirrors.iter().any(|m| m.0 == stage.name);
+        assert_eq!(
+            fixed, listed,
+            "{}: fixed workgroup size without a mirror listed",
+            stage.name
+        );
+    }
+    assert_eq!(stage_shape("em_fit").unwrap().workgroup_size, None);
+}

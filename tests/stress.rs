@@ -13,7 +13,7 @@ use std::path::Path;
 use glam::Vec3;
 use lobelight::bake::{BakeDevice, Progress, bake};
 use lobelight::camera::View;
-use lobelight::compare::difference;
+use lobelight::cli::compare::difference;
 use lobelight::em::{LobeFamily, LobeMap};
 use lobelight::frame::{FrameConfig, camera_uniform, cpu_frame, shade_params};
 use lobelight::gpu::Gpu;

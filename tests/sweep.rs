@@ -5,9 +5,9 @@ mod common;
 
 use std::path::Path;
 
+use lobelight::cli::sweep::{SweepPlan, sweep, thin};
 use lobelight::em::LobeFamily;
 use lobelight::scene;
-use lobelight::sweep::{SweepPlan, sweep, thin};
 
 fn small_plan() -> SweepPlan {
     SweepPlan {

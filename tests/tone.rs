@@ -1,4 +1,4 @@
-//! Tone mapping (DESIGN.md §9): the GPU's log-average against an f64 sum and the CPU mirror,
+//! Tone mapping (docs/design.md §9): the GPU's log-average against an f64 sum and the CPU mirror,
 //! NaN/Inf pixels, and the operator's defining property.
 
 mod common;

@@ -6,7 +6,7 @@ mod common;
 use std::process::Command;
 
 use lobelight::camera::View;
-use lobelight::compare::{Values, difference_of, read_image};
+use lobelight::cli::compare::{Values, difference_of, read_image};
 use lobelight::cpu::photon_view::scene_scale;
 use lobelight::cpu::present::present;
 use lobelight::frame::{FrameConfig, camera_uniform};
@@ -283,8 +283,8 @@ fn a_moved_light_bakes_a_preview_then_in_full() {
     use std::sync::atomic::AtomicU64;
 
     use lobelight::bake::{BakeDevice, Progress, bake};
-    use lobelight::view::baking::{BakeResult, Baking, spawn};
-    use lobelight::view::{move_first_light, passes};
+    use lobelight::cli::view::baking::{BakeResult, Baking, spawn};
+    use lobelight::cli::view::{move_first_light, passes};
 
     let gpu = Arc::new(common::gpu());
     let mut scene = scene::load(std::path::Path::new(COMMON[0])).unwrap();

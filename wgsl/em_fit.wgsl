@@ -1,4 +1,4 @@
-// Lobe fit, pass 2 of 2 (DESIGN.md section 6): one workgroup per listed splat fits K lobes to
+// Lobe fit, pass 2 of 2 (docs/design.md section 6): one workgroup per listed splat fits K lobes to
 // the directions of the photons within R of its center, on its front side and inside a slab
 // around its plane, by weighted EM with a fixed iteration count from constant initial lobes.
 //

@@ -1,4 +1,4 @@
-// Photon emission and tracing (DESIGN.md section 4): one invocation per emitted photon.
+// Photon emission and tracing (docs/design.md section 4): one invocation per emitted photon.
 // The photon leaves a light chosen by its index (each light owns a range of indices in
 // proportion to its power), then bounces through the splat grid: at each hit it is stored
 // when its bounce count is at least params.min_bounce, then Russian roulette picks a diffuse

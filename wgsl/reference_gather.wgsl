@@ -1,4 +1,4 @@
-// The reference renderer's first pass (thesis section 4.2, DESIGN.md section 7): per pixel,
+// The reference renderer's first pass (thesis section 4.2, docs/design.md section 7): per pixel,
 // the visible point by casting the view ray through the splat grid, and the radiance the
 // photon map reflects there directly: every binned photon within R of the point (in the
 // splat's slab, arriving from above it) with the exact Ward BRDF of its own direction,

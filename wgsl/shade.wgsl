@@ -1,4 +1,4 @@
-// Splat pass 3, shading (DESIGN.md section 8): per pixel, normalise the blended sums of the
+// Splat pass 3, shading (docs/design.md section 8): per pixel, normalise the blended sums of the
 // attribute pass, add direct light from every light by shadow rays through the splat grid
 // (area lights on a jittered area_samples^2 grid), and show area lights the view ray meets
 // before the surface. Writes linear HDR radiance for tone mapping. Twin: src/cpu/shade.rs.

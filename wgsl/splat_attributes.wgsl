@@ -1,4 +1,4 @@
-// Splat pass 2, attributes (DESIGN.md sections 7 and 8): the splats within the depth
+// Splat pass 2, attributes (docs/design.md sections 7-8): the splats within the depth
 // tolerance of the visible surface (depth test against pass 1, no depth writes) add
 // weight x (what the shade pass needs) into four float targets by additive blending, in
 // draw order. Each fragment is shaded from its own splat's lobes with its own view ray:

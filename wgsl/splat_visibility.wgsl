@@ -1,4 +1,4 @@
-// Splat pass 1, visibility (DESIGN.md section 8): every front-facing splat as a triangle; the
+// Splat pass 1, visibility (docs/design.md section 8): every front-facing splat as a triangle; the
 // fragment shader intersects the pixel's view ray with the disk, discards outside it, and
 // writes the hit's depth pushed back by `depth_tolerance` splat radii along view z. The
 // attribute pass then blends every splat within that tolerance of the nearest surface.

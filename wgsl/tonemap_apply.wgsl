@@ -1,4 +1,4 @@
-// Tone mapping, pass 2 (DESIGN.md section 9): each pixel through the operator with the
+// Tone mapping, pass 2 (docs/design.md section 9): each pixel through the operator with the
 // log-average of pass 1, encoded as 8-bit sRGB. CPU mirror: src/cpu/tonemap_apply.rs.
 
 // #import types

@@ -1,4 +1,4 @@
-// Tone mapping, pass 1 (DESIGN.md section 9): one level of the log-average luminance. Each
+// Tone mapping, pass 1 (docs/design.md section 9): one level of the log-average luminance. Each
 // workgroup sums (log(eps + Y), count) over a block of BLOCK values in a fixed order (each
 // invocation its ITEMS consecutive values, then a tree over the invocations) into one partial
 // sum; the host runs levels until one sum is left. Level 0 reads HDR pixels (NaN and Inf

@@ -1,5 +1,5 @@
 #!/usr/bin/env python3
-"""External check of lobelight's diffuse transport against Mitsuba 3 (DESIGN.md §11).
+"""External check of lobelight's diffuse transport against Mitsuba 3 (docs/scenes.md).
 
 Mitsuba path-traces its own Cornell box (meshes) with the geometry, materials, light and camera
 that scenes/diffuse.toml gives lobelight (splats). Both images are linear EXR with a box pixel

@@ -213,7 +213,7 @@ pub fn thesis_grid() -> Vec<Case> {
     cases
 }
 
-/// The study's grid (DESIGN.md §7): α ∈ {0.02, 0.065, 0.15, 0.3}, 12 values of β spaced
+/// The study's grid (docs/design.md §7): α ∈ {0.02, 0.065, 0.15, 0.3}, 12 values of β spaced
 /// evenly in log from 0.01 to 1, lobe angles 0–85° in steps of 5°.
 pub fn study_grid() -> Vec<Case> {
     let mut cases = Vec::new();

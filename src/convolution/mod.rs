@@ -1,4 +1,4 @@
-//! The lobe × BRDF convolution study (DESIGN.md §7, thesis §4.1): how far a closed-form
+//! The lobe × BRDF convolution study (docs/design.md §7, thesis §4.1): how far a closed-form
 //! shading formula is from the integral it stands for.
 //!
 //! A splat's lobes fit the directions of the photons it gathered, weighted by power, so a lobe
@@ -24,17 +24,16 @@
 
 use glam::DVec3;
 
-use crate::lobe_norms::lobe_norms;
 use crate::shared::lobe_brdf::{lobe_specular, norm_at, norm_lookup};
 use std::f64::consts::PI;
 
-mod bench;
-mod errors;
+pub mod errors;
+mod norms;
 
-pub use bench::{ConvolutionBench, StudyGrid, convolution_bench};
 pub use errors::{
     CaseError, Quality, Summary, ViewGrid, case_error, errors, study_grid, summary, thesis_grid,
 };
+pub use norms::lobe_norms;
 
 /// One light lobe of the thesis's (Ward-like) family on a surface of roughness `alpha`.
 #[derive(Clone, Copy, Debug, PartialEq)]

@@ -44,10 +44,7 @@ use crate::types::{
 };
 use crate::types::{Light, Material, Photon, TraceCounters};
 
-/// Number of workgroups that cover `n` items with `wg` invocations each.
-pub fn groups_for(n: u32, wg: u32) -> u32 {
-    n.div_ceil(wg)
-}
+pub use crate::shared::dispatch::groups_for;
 
 /// Tone mapping as `gpu::tone::tone_map` records it: the reduction level by level, then the
 /// operator; returns RGBA8 pixels and (Σ log(ε + Y), count).
@@ -56,7 +53,10 @@ pub fn tone_map(cfg: &crate::tone::ToneConfig, hdr: &[[f32; 4]]) -> Result<(Vec<
     let pixels = u32::try_from(hdr.len())
         .map_err(|_| Error::Invalid("too many pixels to tone-map".into()))?;
     let mut sums_in = vec![[0.0f32; 2]];
-    for (level, &count) in crate::tone::reduce_levels(pixels).iter().enumerate() {
+    for (level, &count) in crate::tone::reduce_levels(pixels, tonemap_reduce::BLOCK)
+        .iter()
+        .enumerate()
+    {
         let blocks = groups_for(count, tonemap_reduce::BLOCK).max(1);
         let mut sums_out = vec![[0.0f32; 2]; blocks as usize];
         let params = cfg.params(count, level as u32);
@@ -245,8 +245,6 @@ pub fn trace_photons(
     Ok(map)
 }
 
-/// The scene's grid and photons on the CPU: what the GPU path keeps on the device, here on
-/// the host. Returns the photons, the grid and the grid build time in ms.
 /// The scene's splat grid, built by the mirror.
 pub fn scene_grid(scene: &crate::scene::Scene) -> Result<SplatGrid> {
     build_grid(
@@ -255,6 +253,8 @@ pub fn scene_grid(scene: &crate::scene::Scene) -> Result<SplatGrid> {
     )
 }
 
+/// The scene's grid and photons on the CPU: what the GPU path keeps on the device, here on
+/// the host. Returns the photons, the grid and the grid build time in ms.
 pub fn trace_scene(
     scene: &crate::scene::Scene,
     cfg: &PhotonConfig,

@@ -6,7 +6,6 @@ use super::Gpu;
 use super::photons::GpuPhotons;
 use super::scan;
 use crate::bins::{PhotonBins, check_binned};
-use crate::cpu::{bin_count, groups_for};
 use crate::error::{Error, Result};
 use crate::types::{BinParams, BinnedPhoton};
 
@@ -73,7 +72,7 @@ pub fn bin_photons(gpu: &Gpu, photons: &GpuPhotons, params: &BinParams) -> Resul
             &mut encoder,
             "bin_count",
             &[uniform, &page.buffer, &cell_start, &chunks],
-            groups_for(*count, bin_count::WG),
+            gpu.groups("bin_count", *count)?,
         )?;
     }
     scan::exclusive_scan(gpu, &mut encoder, &cell_start, params.cell_count + 1)?;
@@ -99,7 +98,7 @@ pub fn bin_photons(gpu: &Gpu, photons: &GpuPhotons, params: &BinParams) -> Resul
                 &scratch_geom,
                 &scratch_power,
             ],
-            groups_for(*count, bin_count::WG),
+            gpu.groups("bin_scatter", *count)?,
         )?;
     }
     gpu.submit_and_wait(encoder)?;
@@ -112,7 +111,6 @@ pub fn bin_photons(gpu: &Gpu, photons: &GpuPhotons, params: &BinParams) -> Resul
         photon_count: n,
         ..*params
     };
-    let groups = groups_for(n, bin_count::WG);
     let slots = gpu.storage_zeroed("bin slots", len * 4)?;
     let mut encoder = gpu.encoder("bin rank");
     for chunk in 0..rank_chunks {
@@ -127,7 +125,7 @@ pub fn bin_photons(gpu: &Gpu, photons: &GpuPhotons, params: &BinParams) -> Resul
             &mut encoder,
             "bin_rank",
             &[&pass, &cell_start, &scratch_keys, &scratch_cells, &slots],
-            groups,
+            gpu.groups("bin_rank", n)?,
         )?;
     }
     let params_buf = gpu.uniform("bin params", &params);
@@ -147,7 +145,7 @@ pub fn bin_photons(gpu: &Gpu, photons: &GpuPhotons, params: &BinParams) -> Resul
             &geom,
             &power,
         ],
-        groups,
+        gpu.groups("bin_place", n)?,
     )?;
     gpu.submit_and_wait(encoder)?;
     Ok(GpuBins {

@@ -7,7 +7,6 @@ use std::time::Instant;
 
 use super::Gpu;
 use super::bins::GpuBins;
-use crate::cpu::{em_select, groups_for};
 use crate::em::{
     EmConfig, EmStats, FitShape, LobeMap, dispatch_ranges, iterations_per_dispatch, workgroup_size,
 };
@@ -115,7 +114,7 @@ pub fn fit_lobes_shaped(
             &fit_list,
             &counters,
         ],
-        groups_for(splat_count, em_select::WG),
+        gpu.groups("em_select", splat_count)?,
     )?;
     gpu.submit_and_wait(encoder)?;
     let (listed, max_candidates, fitted) = match gpu.read::<u32>(&counters, 3)?[..] {

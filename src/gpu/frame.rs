@@ -1,12 +1,10 @@
-//! The splat passes on the device (DESIGN.md §8): `splat_visibility` and `splat_attributes`
+//! The splat passes on the device (docs/design.md §8): `splat_visibility` and `splat_attributes`
 //! as render passes over instanced triangles, then `shade` as a compute pass over the blended
 //! targets. The pipelines are built once per device; the targets once per image size, so a
 //! viewer or a benchmark draws frame after frame with nothing but a new camera uniform.
 
 use super::scene::GpuScene;
 use super::{Gpu, buffer_entries};
-use crate::cpu::groups_for;
-use crate::cpu::shade::WG;
 use crate::em::LobeMap;
 use crate::error::{Error, Result};
 use crate::scene::Scene;
@@ -80,7 +78,7 @@ impl FrameScene {
         Ok(FrameScene {
             splat_light: gpu.storage("splat light", &lobes.light)?,
             lobes: gpu.storage("lobes", &lobes.lobes)?,
-            lobe_norms: gpu.storage("lobe norms", crate::lobe_norms::lobe_norms())?,
+            lobe_norms: gpu.storage("lobe norms", crate::convolution::lobe_norms())?,
             lights: gpu.storage("lights", &scene.lights)?,
         })
     }
@@ -509,7 +507,7 @@ impl SplatPipelines {
                 })
             })
             .collect::<Vec<_>>();
-        let (x, y) = gpu.dispatch_dims(groups_for(out.width * out.height, WG))?;
+        let (x, y) = gpu.dispatch_dims(gpu.groups("shade", out.width * out.height)?)?;
         let mut pass = encoder.begin_compute_pass(&wgpu::ComputePassDescriptor {
             label: Some("shade"),
             timestamp_writes: None,

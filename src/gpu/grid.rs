@@ -2,7 +2,6 @@
 //! `cpu::build_grid`. The result stays on the device for tracing; `download` brings it back.
 
 use super::{Gpu, scan};
-use crate::cpu::{grid_count, grid_distance, grid_rank, groups_for};
 use crate::error::{Error, Result};
 use crate::grid::{SplatGrid, check_cell_len};
 use crate::types::{DistanceParams, GridParams};
@@ -24,7 +23,6 @@ pub fn build_grid(gpu: &Gpu, params: &GridParams, splats: &wgpu::Buffer) -> Resu
     let params_buf = gpu.uniform("grid params", params);
     let cells = params.cell_count as u64;
     let cell_start = gpu.storage_zeroed("cell start", (cells + 1) * 4)?;
-    let splat_groups = groups_for(params.splat_count, grid_count::WG);
 
     let max_cell_len = gpu.storage_zeroed("grid max cell length", 4)?;
     let mut encoder = gpu.encoder("grid count");
@@ -32,7 +30,7 @@ pub fn build_grid(gpu: &Gpu, params: &GridParams, splats: &wgpu::Buffer) -> Resu
         &mut encoder,
         "grid_count",
         &[&params_buf, splats, &cell_start, &max_cell_len],
-        splat_groups,
+        gpu.groups("grid_count", params.splat_count)?,
     )?;
     scan::exclusive_scan(gpu, &mut encoder, &cell_start, params.cell_count + 1)?;
     // stats = [entry total (last scan value), longest cell list]
@@ -72,7 +70,7 @@ pub fn build_grid(gpu: &Gpu, params: &GridParams, splats: &wgpu::Buffer) -> Resu
             &scratch_splats,
             &scratch_cells,
         ],
-        splat_groups,
+        gpu.groups("grid_scatter", params.splat_count)?,
     )?;
     gpu.dispatch(
         &mut encoder,
@@ -84,7 +82,7 @@ pub fn build_grid(gpu: &Gpu, params: &GridParams, splats: &wgpu::Buffer) -> Resu
             &scratch_cells,
             &cell_splats,
         ],
-        groups_for(entries, grid_rank::WG),
+        gpu.groups("grid_rank", entries)?,
     )?;
     let cell_dist = distance_field(gpu, &mut encoder, &params_buf, &params, &cell_start)?;
     gpu.submit_and_wait(encoder)?;
@@ -109,7 +107,7 @@ fn distance_field(
     let bytes = params.cell_count as u64 * 4;
     let a = gpu.storage_zeroed("cell distance", bytes)?;
     let b = gpu.storage_zeroed("cell distance scratch", bytes)?;
-    let groups = groups_for(params.cell_count, grid_distance::WG);
+    let groups = gpu.groups("grid_distance", params.cell_count)?;
     let passes: [(u32, &wgpu::Buffer, &wgpu::Buffer); 3] =
         [(0, cell_start, &a), (1, &a, &b), (2, &b, &a)];
     for (axis, src, dst) in passes {

@@ -23,7 +23,8 @@ use wgpu::util::DeviceExt;
 use crate::error::{Error, Result};
 
 /// Which graphics API to run on.
-#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, clap::ValueEnum, serde::Serialize)]
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, serde::Serialize)]
+#[cfg_attr(feature = "cli", derive(clap::ValueEnum))]
 #[serde(rename_all = "lowercase")]
 pub enum BackendChoice {
     /// `WGPU_BACKEND` if set, else Vulkan, else OpenGL (GLES via EGL).
@@ -37,10 +38,12 @@ const INSTALL_HINT: &str = "install a Vulkan driver; without a GPU, Mesa's softw
     rasterizer lavapipe works: `sudo apt-get install mesa-vulkan-drivers` (Debian/Ubuntu) or \
     `sudo dnf install mesa-vulkan-drivers` (Fedora); Mesa's OpenGL (EGL) is used as a fallback";
 
-/// The window a device must present to: the event loop's display and the window.
+/// The window a device must present to: the instance description with its display (made
+/// anew for each backend tried) and the window. Any windowing library's handles will do; the
+/// viewer's are winit's.
 type Window<'a> = (
-    &'a winit::event_loop::OwnedDisplayHandle,
-    &'a Arc<winit::window::Window>,
+    &'a dyn Fn() -> wgpu::InstanceDescriptor,
+    &'a Arc<dyn wgpu::DisplayAndWindowHandle>,
 );
 type Surface = wgpu::Surface<'static>;
 
@@ -67,12 +70,20 @@ impl Gpu {
     }
 
     /// A device that can present to `window` (the viewer), with the window's surface.
-    pub fn for_window(
+    pub fn for_window<D, W>(
         choice: BackendChoice,
-        display: &winit::event_loop::OwnedDisplayHandle,
-        window: &Arc<winit::window::Window>,
-    ) -> Result<(Gpu, wgpu::Surface<'static>)> {
-        let (gpu, surface) = Self::choose(choice, Some((display, window)))?;
+        display: &D,
+        window: &Arc<W>,
+    ) -> Result<(Gpu, wgpu::Surface<'static>)>
+    where
+        D: wgpu::rwh::HasDisplayHandle + Clone + std::fmt::Debug + Send + Sync + 'static,
+        W: wgpu::DisplayAndWindowHandle + 'static,
+    {
+        let instance = || {
+            wgpu::InstanceDescriptor::new_with_display_handle_from_env(Box::new(display.clone()))
+        };
+        let window: Arc<dyn wgpu::DisplayAndWindowHandle> = window.clone();
+        let (gpu, surface) = Self::choose(choice, Some((&instance, &window)))?;
         let surface = surface.ok_or_else(|| Error::Gpu("no surface for the window".into()))?;
         Ok((gpu, surface))
     }
@@ -112,9 +123,7 @@ impl Gpu {
         window: Option<Window<'_>>,
     ) -> Result<Option<(Gpu, Option<Surface>)>> {
         let mut desc = match window {
-            Some((display, _)) => wgpu::InstanceDescriptor::new_with_display_handle_from_env(
-                Box::new(display.clone()),
-            ),
+            Some((instance, _)) => instance(),
             None => wgpu::InstanceDescriptor::new_without_display_handle_from_env(),
         };
         desc.backends = backends;
@@ -251,6 +260,13 @@ impl Gpu {
         self.check()?;
         cache.insert(key, pipeline.clone());
         Ok(pipeline)
+    }
+
+    /// Workgroups of `stage` that cover `n` values, from the workgroup size and items per
+    /// invocation its WGSL declares (`shaders::stage_shape`).
+    pub fn groups(&self, stage: &str, n: u32) -> Result<u32> {
+        let per_group = shaders::stage_shape(stage)?.per_group(stage)?;
+        Ok(crate::shared::dispatch::groups_for(n, per_group))
     }
 
     /// Records one dispatch of `stage` over `groups` workgroups, binding `buffers` to group 0

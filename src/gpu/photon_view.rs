@@ -4,7 +4,6 @@
 use super::Gpu;
 use super::photons::GpuPhotons;
 use super::scene::GpuScene;
-use crate::cpu::{groups_for, photon_resolve, photon_view};
 use crate::error::Result;
 use crate::types::{Camera, PhotonViewParams};
 
@@ -41,7 +40,7 @@ pub fn photon_image(
             encoder,
             "photon_view",
             &[&own, &on_gpu.geometry()],
-            groups_for(params.count, photon_view::WG),
+            gpu.groups("photon_view", params.count)?,
         )?;
     }
     let hdr = gpu.storage_zeroed("photon view", pixels.max(1) as u64 * 16)?;
@@ -58,7 +57,7 @@ pub fn photon_image(
         encoder,
         "photon_resolve",
         &[&params, &sums, &hdr],
-        groups_for(pixels, photon_resolve::WG),
+        gpu.groups("photon_resolve", pixels)?,
     )?;
     Ok(hdr)
 }

@@ -9,7 +9,6 @@ use std::time::Instant;
 
 use super::Gpu;
 use super::scene::GpuScene;
-use crate::cpu::{groups_for, photon_trace};
 use crate::error::{Error, Result};
 use crate::photons::{
     PhotonConfig, PhotonMap, PhotonStats, StoreAction, StorePlanner, emitters, first_capacity,
@@ -206,7 +205,7 @@ fn run_batch(
             ],
             &on_gpu.geometry(),
         ],
-        groups_for(paths, photon_trace::WG),
+        gpu.groups("photon_trace", paths)?,
     )?;
     gpu.submit_and_wait(encoder)?;
     gpu.read::<TraceCounters>(counters_buf, 1)?

@@ -7,7 +7,6 @@ use super::bins::GpuBins;
 use super::frame::{FrameScene, FrameTargets, SceneBuffers, SplatPipelines, raster_pipeline};
 use super::scene::GpuScene;
 use super::{Gpu, buffer_entries};
-use crate::bake::Binned;
 use crate::em::LobeMap;
 use crate::error::Result;
 use crate::frame::{FrameConfig, shade_params};
@@ -96,7 +95,8 @@ impl ReferencePipeline {
         splat: &SplatPipelines,
         scene: &Scene,
         on_gpu: &GpuScene,
-        binned: &Binned<GpuBins>,
+        bins: &GpuBins,
+        em: &EmParams,
         cam: &Camera,
         cfg: &FrameConfig,
         (width, height): (u32, u32),
@@ -113,8 +113,8 @@ impl ReferencePipeline {
             &mut encoder,
             splat,
             &buffers,
-            &binned.bins,
-            &binned.em,
+            bins,
+            em,
             cam,
             &params,
             &targets,

@@ -1,10 +1,8 @@
 //! Multi-level exclusive scan of a u32 buffer in place: `scan_reduce` writes one sum per block
-//! of `BLOCK` values, the block sums are scanned recursively, and `scan_apply` finishes each
+//! of `WG × ITEMS` values, the block sums are scanned recursively, and `scan_apply` finishes each
 //! block. Any length the buffer limits allow. Mirrors `cpu::exclusive_scan`.
 
 use super::Gpu;
-use crate::cpu::groups_for;
-use crate::cpu::scan_reduce::BLOCK;
 use crate::error::Result;
 use crate::types::ScanParams;
 
@@ -15,7 +13,7 @@ pub fn exclusive_scan(
     values: &wgpu::Buffer,
     len: u32,
 ) -> Result<()> {
-    let blocks = groups_for(len, BLOCK);
+    let blocks = gpu.groups("scan_reduce", len)?;
     let params = gpu.uniform(
         "scan params",
         &ScanParams {

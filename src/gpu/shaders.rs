@@ -6,8 +6,9 @@
 //! pipeline is built with (a variant that uses an optional device feature, such as
 //! subgroups). Errors name the file and line.
 
-use std::collections::HashSet;
+use std::collections::{HashMap, HashSet};
 use std::path::Path;
+use std::sync::{Mutex, OnceLock};
 
 use crate::error::{Error, Result};
 
@@ -84,6 +85,76 @@ pub const SHARED: &[WgslFile] = &[
 
 pub fn stage(name: &str) -> Option<&'static WgslFile> {
     STAGES.iter().find(|s| s.name == name)
+}
+
+/// What the host reads from a stage's WGSL instead of writing it a second time: the shape of
+/// its workgroups. The CPU mirrors keep their own constants (their loops need them), and a
+/// test checks those against this.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub struct StageShape {
+    /// `@workgroup_size` of the compute entry point `main` (its x; y and z are 1), or `None`
+    /// where a pipeline-overridable constant sets it (`em_fit`) or the stage draws triangles.
+    pub workgroup_size: Option<u32>,
+    /// The stage's `const ITEMS`, values per invocation; 1 where it has none.
+    pub items: u32,
+}
+
+impl StageShape {
+    /// Values one workgroup covers: the unit a dispatch's group count is taken in.
+    pub fn per_group(&self, name: &str) -> Result<u32> {
+        self.workgroup_size
+            .map(|wg| wg * self.items)
+            .ok_or_else(|| {
+                Error::Invalid(format!(
+                    "stage '{name}' has no fixed workgroup size in its WGSL"
+                ))
+            })
+    }
+}
+
+/// The shape of a stage, read once per process from its WGSL with naga.
+pub fn stage_shape(name: &str) -> Result<StageShape> {
+    static SHAPES: OnceLock<Mutex<HashMap<String, StageShape>>> = OnceLock::new();
+    let shapes = SHAPES.get_or_init(Default::default);
+    if let Some(s) = shapes.lock().ok().and_then(|m| m.get(name).copied()) {
+        return Ok(s);
+    }
+    let source = resolve_stage(name)?;
+    let module = naga::front::wgsl::parse_str(&source).map_err(|e| {
+        Error::parse(
+            Path::new(&format!("wgsl/{name}.wgsl")),
+            "after import resolution",
+            e.emit_to_string(&source),
+        )
+    })?;
+    let shape = read_shape(&module);
+    if let Ok(mut m) = shapes.lock() {
+        m.insert(name.to_owned(), shape);
+    }
+    Ok(shape)
+}
+
+fn read_shape(module: &naga::Module) -> StageShape {
+    let workgroup_size = module
+        .entry_points
+        .iter()
+        .find(|e| e.name == "main" && e.stage == naga::ShaderStage::Compute)
+        .filter(|e| e.workgroup_size_overrides.is_none())
+        .filter(|e| e.workgroup_size[1] == 1 && e.workgroup_size[2] == 1)
+        .map(|e| e.workgroup_size[0]);
+    let items = module
+        .constants
+        .iter()
+        .find(|(_, c)| c.name.as_deref() == Some("ITEMS"))
+        .and_then(|(_, c)| match module.global_expressions[c.init] {
+            naga::Expression::Literal(naga::Literal::U32(v)) => Some(v),
+            _ => None,
+        })
+        .unwrap_or(1);
+    StageShape {
+        workgroup_size,
+        items,
+    }
 }
 
 /// The full source of a stage with its imports resolved, nothing defined.

@@ -2,8 +2,6 @@
 //! then `tonemap_apply` per pixel. Mirrors `cpu::tone_map`.
 
 use super::Gpu;
-use crate::cpu::groups_for;
-use crate::cpu::{tonemap_apply, tonemap_reduce::BLOCK};
 use crate::error::Result;
 use crate::tone::{ToneConfig, reduce_levels};
 
@@ -25,8 +23,9 @@ pub fn tone_map(
 ) -> Result<GpuToned> {
     cfg.validate()?;
     let mut sums_in = gpu.storage_zeroed("tone sums", 8)?;
-    for (level, &count) in reduce_levels(pixels).iter().enumerate() {
-        let blocks = groups_for(count, BLOCK).max(1);
+    let block = super::shaders::stage_shape("tonemap_reduce")?.per_group("tonemap_reduce")?;
+    for (level, &count) in reduce_levels(pixels, block).iter().enumerate() {
+        let blocks = crate::shared::dispatch::groups_for(count, block).max(1);
         let sums_out = gpu.storage_zeroed("tone sums", blocks as u64 * 8)?;
         let params = gpu.uniform("tone params", &cfg.params(count, level as u32));
         gpu.dispatch(
@@ -43,7 +42,7 @@ pub fn tone_map(
         encoder,
         "tonemap_apply",
         &[&params, hdr, &sums_in, &rgba],
-        groups_for(pixels, tonemap_apply::WG),
+        gpu.groups("tonemap_apply", pixels)?,
     )?;
     Ok(GpuToned {
         rgba,

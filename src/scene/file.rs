@@ -1,12 +1,13 @@
 //! The scene file format (TOML), as serde structs. Every table denies unknown keys, so a typo
 //! is an error that names the file, line and key instead of a silently ignored setting.
-//! README.md documents the format; `scene::load` turns it into splats, lights and materials.
+//! docs/scenes.md documents the format; `scene::load` turns it into splats, lights and materials.
 
 use std::collections::BTreeMap;
 
 use serde::Deserialize;
 
 use crate::grid::GridConfig;
+pub use crate::photons::StoreRange;
 
 pub type Vec3 = [f32; 3];
 
@@ -76,7 +77,7 @@ pub enum FovAxis {
 }
 
 impl Default for CameraDesc {
-    /// The Cornell box camera of DESIGN.md §11.
+    /// The camera of Mitsuba 3's Cornell box (`scenes/diffuse.toml`, docs/scenes.md).
     fn default() -> Self {
         CameraDesc {
             eye: [0.0, 0.0, 3.9],
@@ -118,26 +119,6 @@ pub struct BakeDesc {
     pub prune: bool,
 }
 
-#[derive(
-    Clone, Copy, Debug, Default, PartialEq, Eq, Deserialize, serde::Serialize, clap::ValueEnum,
-)]
-#[serde(rename_all = "lowercase")]
-pub enum StoreRange {
-    #[default]
-    Indirect,
-    All,
-}
-
-impl StoreRange {
-    /// The smallest stored bounce count.
-    pub fn min_bounce(self) -> u32 {
-        match self {
-            StoreRange::Indirect => 1,
-            StoreRange::All => 0,
-        }
-    }
-}
-
 impl Default for BakeDesc {
     fn default() -> Self {
         BakeDesc {
@@ -156,7 +137,7 @@ impl Default for BakeDesc {
     }
 }
 
-/// Isotropic Ward material (DESIGN.md §3).
+/// Isotropic Ward material (docs/design.md §3).
 #[derive(Clone, Debug, PartialEq, Deserialize)]
 #[serde(deny_unknown_fields, default)]
 pub struct MaterialDesc {

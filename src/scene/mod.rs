@@ -1,7 +1,9 @@
-//! Scenes: the TOML file (`file`), procedural shapes (`shapes`) and models (`crate::model`)
+//! Scenes: the TOML file (`file`), procedural shapes (`shapes`) and models (`crate::scene::model`)
 //! turned into the flat arrays the stages consume: splats, materials, lights.
 
 pub mod file;
+pub mod model;
+mod settings;
 pub mod shapes;
 
 use std::path::{Path, PathBuf};
@@ -9,24 +11,12 @@ use std::path::{Path, PathBuf};
 use glam::{Affine3A, Quat, Vec3};
 
 use crate::error::{Error, Result};
-use crate::grid::GridConfig;
-use crate::model;
+use crate::grid::{GridConfig, splat_is_sane};
+
 use crate::types::{Light, Material, Splat, light_kind};
 pub use file::BakeDesc;
 use file::{Anchor, CameraDesc, LightDesc, MaterialDesc, ObjectDesc, Scale, SceneFile, ShapeKind};
 use shapes::Disk;
-
-/// A splat every stage can work with: finite, a positive radius, a unit normal, a finite
-/// non-negative albedo.
-pub fn splat_is_sane(s: &Splat) -> bool {
-    let n = glam::Vec3::from(s.normal);
-    glam::Vec3::from(s.center).is_finite()
-        && s.radius.is_finite()
-        && s.radius > 0.0
-        && n.is_finite()
-        && (n.length() - 1.0).abs() < 1e-3
-        && s.diffuse.iter().all(|c| c.is_finite() && *c >= 0.0)
-}
 
 /// Most splats one procedural object may make (about 3 GB of splats and grid): past it a
 /// typo in `spacing` is far likelier than intent.

@@ -1,5 +1,5 @@
 //! Twin of `wgsl/shared/lobe_brdf.wgsl`: the specular radiance one light lobe reflects
-//! towards a view, `I(ωo) = ∫ f_s(ω, ωo) p(ω) dω` (DESIGN.md §7), in closed form.
+//! towards a view, `I(ωo) = ∫ f_s(ω, ωo) p(ω) dω` (docs/design.md §7), in closed form.
 //!
 //! Both factors are Gaussians of half-vector slopes: the Ward lobe of the slope m of
 //! h(ω, ωo), exactly, and the light lobe of the slope m' of h(ω, L'), L' the mirrored

@@ -1,5 +1,5 @@
 // The specular radiance one light lobe reflects towards a view, I(wo) = integral of
-// f_s(w, wo) p(w) dw (DESIGN.md section 7), in closed form. Twin: src/shared/lobe_brdf.rs.
+// f_s(w, wo) p(w) dw (docs/design.md section 7), in closed form. Twin: src/shared/lobe_brdf.rs.
 //
 // Both factors are Gaussians of half-vector slopes: the Ward lobe of the slope m of
 // h(w, wo), exactly, and the light lobe of the slope m' of h(w, L'), L' the mirrored axis.

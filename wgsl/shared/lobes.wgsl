@@ -1,4 +1,4 @@
-// The two lobe families the EM fit can use (DESIGN.md section 6), their constant initial
+// The two lobe families the EM fit can use (docs/design.md section 6), their constant initial
 // mixture, and the M-step of one lobe. Twin: src/shared/lobes.rs.
 //
 // vMF: p(w) = k / (2 pi (1 - exp(-2k))) exp(k (w.mu - 1)), a density on the sphere; M-step

@@ -1,4 +1,4 @@
-// Surface splatting (DESIGN.md section 8): the triangle a splat is drawn as, a pixel's view
+// Surface splatting (docs/design.md section 8): the triangle a splat is drawn as, a pixel's view
 // ray, the ray-disk hit with its radial weight, the reversed depth, and a lobe's width in the
 // form the shading takes (section 7). Twin: src/shared/splat.rs.
 //

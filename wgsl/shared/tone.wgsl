@@ -1,4 +1,4 @@
-// Tone mapping's shared pieces (DESIGN.md section 9): luminance, the finite test that keeps
+// Tone mapping's shared pieces (docs/design.md section 9): luminance, the finite test that keeps
 // NaN/Inf pixels out of the log-average, the operator, and sRGB encoding.
 // Twin: src/shared/tone.rs.
 
@@ -31,7 +31,7 @@ fn log_luminance(c: vec3<f32>, epsilon: f32) -> vec2<f32> {
     return vec2<f32>(log(epsilon + luminance(max(c, vec3<f32>(0.0)))), 1.0);
 }
 
-// The scotopic tint of DESIGN.md section 9: night vision sees blue.
+// The scotopic tint of docs/design.md section 9: night vision sees blue.
 const SCOTOPIC_TINT: vec3<f32> = vec3<f32>(1.05, 0.97, 1.27);
 
 // Display RGB in [0, 1] of a linear HDR pixel; `log_sum` is (sum of log(eps + Y), count).

@@ -1,4 +1,4 @@
-// Nearest front-facing disk along a ray, through the splat grid (DESIGN.md section 4).
+// Nearest front-facing disk along a ray, through the splat grid (docs/design.md section 4).
 // Twin: src/shared/trace.rs. The geometry is bind group 1, the same for every stage that
 // traces (photon tracing, test rays; later shadow rays and the reference renderer).
 //

@@ -7,8 +7,10 @@ use std::time::Instant;
 
 use serde::Serialize;
 
-use super::errors::{STUDY_ALPHAS, STUDY_ANGLES, STUDY_BETAS};
-use super::{CaseError, Convention, Formula, Quality, Summary, errors, study_grid, summary};
+use crate::convolution::errors::{STUDY_ALPHAS, STUDY_ANGLES, STUDY_BETAS};
+use crate::convolution::{
+    CaseError, Convention, Formula, Quality, Summary, errors, study_grid, summary,
+};
 use crate::error::{Error, Result};
 
 /// The thesis's empirical factor (§4.1): its form divided by 1.81.
@@ -60,7 +62,7 @@ pub fn convolution_bench(out_dir: &Path, q: Quality) -> Result<ConvolutionBench>
     ];
     let cases = study_grid();
     let study = errors(&cases, Convention::Renderer, &formulas, q);
-    let thesis_cases = super::thesis_grid();
+    let thesis_cases = crate::convolution::thesis_grid();
     let own = errors(&thesis_cases, Convention::Thesis, &formulas[..2], q);
     std::fs::create_dir_all(out_dir)
         .map_err(|e| Error::Invalid(format!("{}: {e}", out_dir.display())))?;

@@ -7,6 +7,9 @@ use serde::Serialize;
 use crate::bake::{BakeDevice, Progress, bake};
 use crate::bins::bin_params;
 use crate::camera::View;
+use crate::cli::measure::median;
+use crate::cli::render::Method;
+use crate::cli::view::{ViewOptions, ViewReport};
 use crate::cpu;
 use crate::em::{EmConfig, EmStats, FitShape, LobeFamily, LobeMap};
 use crate::error::Result;
@@ -20,10 +23,8 @@ use crate::gpu::scene::GpuScene;
 use crate::gpu::tone::tone_map as gpu_tone_map;
 use crate::gpu::{BackendChoice, Gpu};
 use crate::photons::{PhotonConfig, PhotonMap, PhotonStats, ms_since, photons_within};
-use crate::render::Method;
 use crate::scene::Scene;
 use crate::tone::ToneConfig;
-use crate::view::{ViewOptions, ViewReport};
 
 #[derive(Debug, Serialize)]
 pub struct PhotonBench {
@@ -427,12 +428,6 @@ pub struct FrameTiming {
 pub const FRAME_SIZES: [(u32, u32); 3] = [(512, 512), (1280, 720), (1920, 1080)];
 const TIMED_FRAMES: u32 = 5;
 
-/// The median of timings (the upper one of an even count); 0 for none.
-pub fn median(mut v: Vec<f64>) -> f64 {
-    v.sort_by(f64::total_cmp);
-    v.get(v.len() / 2).copied().unwrap_or(0.0)
-}
-
 /// Bakes the scene once, then times frames at each of `FRAME_SIZES` (one untimed warm-up
 /// frame per size compiles the pipelines and allocates the targets).
 pub fn frame(
@@ -549,7 +544,7 @@ pub fn window_frames(
         screenshot: None,
         cache: None,
     };
-    crate::view::view(scene.clone(), opts)
+    crate::cli::view::view(scene.clone(), opts)
 }
 
 /// The usual window surface format (Vulkan's first choice on most platforms).

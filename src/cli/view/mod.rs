@@ -23,6 +23,7 @@ use winit::keyboard::{Key, NamedKey};
 use winit::window::{Window, WindowId};
 
 use crate::camera::View;
+use crate::cli::render::Method;
 use crate::cpu::photon_view::scene_scale;
 use crate::em::LobeMap;
 use crate::error::{Error, Result};
@@ -34,7 +35,6 @@ use crate::gpu::reference::ReferencePipeline;
 use crate::gpu::scene::GpuScene;
 use crate::gpu::tone::tone_map;
 use crate::gpu::{BackendChoice, Gpu};
-use crate::render::Method;
 use crate::scene::Scene;
 use crate::tone::ToneConfig;
 use baking::{BakeResult, Baking};
@@ -439,7 +439,7 @@ impl State {
     fn screenshot(&self, rgba: &wgpu::Buffer, path: &std::path::Path) -> Result<()> {
         let (w, h) = (self.config.width, self.config.height);
         let pixels = self.gpu.read::<u32>(rgba, (w * h) as usize)?;
-        crate::render::write_rgba8(path, &pixels, w, h)
+        crate::cli::render::write_rgba8(path, &pixels, w, h)
     }
 
     fn key(&mut self, key: &Key) -> Option<KeyAction> {
@@ -543,7 +543,7 @@ impl App {
                 width: state.config.width,
                 height: state.config.height,
                 frames: state.lit_ms.len() as u32,
-                frame_ms: crate::bench::median(state.lit_ms.clone()),
+                frame_ms: crate::cli::measure::median(state.lit_ms.clone()),
                 bake_s: state.bake_s.unwrap_or(0.0),
             };
             let r = &self.report;

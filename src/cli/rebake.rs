@@ -8,9 +8,10 @@ use std::time::Instant;
 use serde::Serialize;
 
 use crate::bake::{BakeDevice, Progress, bake};
-use crate::bench::median;
 use crate::camera::View;
-use crate::compare::difference;
+use crate::cli::compare::difference;
+use crate::cli::measure::median;
+use crate::cli::view::{move_first_light, passes};
 use crate::cpu;
 use crate::em::LobeMap;
 use crate::error::{Error, Result};
@@ -21,7 +22,6 @@ use crate::gpu::scene::GpuScene;
 use crate::grid::SplatGrid;
 use crate::photons::ms_since;
 use crate::scene::Scene;
-use crate::view::{move_first_light, passes};
 
 /// Light moves timed (one arrow-key step each, along x).
 pub const MOVES: u32 = 3;

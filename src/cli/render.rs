@@ -6,7 +6,7 @@ use std::time::Instant;
 
 use serde::Serialize;
 
-use crate::bake::{BakeDevice, Baked, Progress, bake, bins_cpu, bins_gpu};
+use crate::bake::{BakeDevice, Baked, Progress, StageReport, bake, bins_cpu, bins_gpu};
 use crate::cache::{self, Miss};
 use crate::camera::View;
 use crate::cpu;
@@ -51,47 +51,6 @@ pub struct Options {
     pub tone: ToneConfig,
     /// Load the bake from this file when it matches the scene, else bake and save it there.
     pub cache: Option<PathBuf>,
-}
-
-/// One stage's line of `--stats` / `--json` (DESIGN.md §12).
-#[derive(Clone, Debug, Default, Serialize)]
-pub struct StageReport {
-    pub ran: bool,
-    #[serde(skip_serializing_if = "Option::is_none")]
-    pub ms: Option<f64>,
-    #[serde(skip_serializing_if = "Option::is_none")]
-    pub emitted: Option<u64>,
-    #[serde(skip_serializing_if = "Option::is_none")]
-    pub stored: Option<u64>,
-    /// EM: splats whose lobes were fitted (glossy, with photons).
-    #[serde(skip_serializing_if = "Option::is_none")]
-    pub splats_fitted: Option<u32>,
-    /// EM: splats with photons near them (their irradiance was gathered).
-    #[serde(skip_serializing_if = "Option::is_none")]
-    pub splats_lit: Option<u32>,
-    /// EM: lobes kept, and what the fitted splats would keep without pruning.
-    #[serde(skip_serializing_if = "Option::is_none")]
-    pub lobes_kept: Option<u64>,
-    #[serde(skip_serializing_if = "Option::is_none")]
-    pub lobes_fitted: Option<u64>,
-    pub skipped_reason: Option<String>,
-}
-
-impl StageReport {
-    pub fn ran(ms: f64) -> StageReport {
-        StageReport {
-            ran: true,
-            ms: Some(ms),
-            ..Default::default()
-        }
-    }
-
-    pub fn skipped(reason: &str) -> StageReport {
-        StageReport {
-            skipped_reason: Some(reason.into()),
-            ..Default::default()
-        }
-    }
 }
 
 #[derive(Clone, Debug, Serialize)]
@@ -441,7 +400,8 @@ fn render_reference(
                 &pipelines,
                 scene,
                 &on_gpu,
-                &binned,
+                &binned.bins,
+                &binned.em,
                 &cam,
                 &opts.frame,
                 size,

@@ -17,9 +17,10 @@ use std::time::Instant;
 use serde::Serialize;
 
 use crate::bake::{BakeDevice, Progress, bake, bins_cpu, bins_gpu};
-use crate::bench::median;
 use crate::camera::View;
-use crate::compare::{Values, difference_of};
+use crate::cli::compare::{Values, difference_of};
+use crate::cli::measure::median;
+use crate::cli::plot::{Chart, Series};
 use crate::cpu;
 use crate::em::LobeFamily;
 use crate::error::{Error, Result};
@@ -29,7 +30,6 @@ use crate::gpu::frame::{FrameScene, SplatPipelines};
 use crate::gpu::reference::ReferencePipeline;
 use crate::gpu::scene::GpuScene;
 use crate::photons::ms_since;
-use crate::plot::{Chart, Series};
 use crate::scene::Scene;
 use crate::shared::rng::{pcg_hash, unit_float};
 
@@ -346,8 +346,17 @@ impl Runner<'_> {
                 let on_gpu = GpuScene::upload(gpu, scene)?;
                 let binned = bins_gpu(scene, gpu, &on_gpu, &progress)?;
                 let size = (view.width, view.height);
-                let targets =
-                    reference.image(gpu, splat, scene, &on_gpu, &binned, &cam, &cfg, size)?;
+                let targets = reference.image(
+                    gpu,
+                    splat,
+                    scene,
+                    &on_gpu,
+                    &binned.bins,
+                    &binned.em,
+                    &cam,
+                    &cfg,
+                    size,
+                )?;
                 gpu.read(&targets.hdr, (view.width * view.height) as usize)
             }
             Runner::Cpu => {
@@ -409,7 +418,7 @@ pub fn sweep(
         let t = Instant::now();
         let reference = runner.reference(&reference_scene, &view)?;
         let image = out_dir.join(format!("reference_{name}.exr"));
-        crate::render::write_exr(&image, &reference, plan.size, plan.size)?;
+        crate::cli::render::write_exr(&image, &reference, plan.size, plan.size)?;
         references.push(SweepReference {
             scene: name.clone(),
             photons: plan.reference_photons,
@@ -465,7 +474,7 @@ pub fn sweep(
             rows.push(row);
         }
         let chart = out_dir.join(format!("sweep_{name}.png"));
-        chart_text &= crate::plot::draw(&charts(name, &rows), &chart)?;
+        chart_text &= crate::cli::plot::draw(&charts(name, &rows), &chart)?;
         files.push(chart.display().to_string());
     }
     let mut md = markdown(&rows);

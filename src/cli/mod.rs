@@ -1,0 +1,569 @@
+//! The `lobelight` application: the command line and the commands, above the library.
+//! Nothing below `cli` imports from it. The flags and `--json` keys are a contract for
+//! scripts and benchmarks (docs/cli.md): extend them, never rename them.
+
+pub mod bench;
+pub mod compare;
+pub mod convolution;
+pub mod info;
+pub mod measure;
+pub mod plot;
+pub mod rebake;
+pub mod render;
+pub mod sweep;
+pub mod view;
+
+use std::path::PathBuf;
+use std::process::ExitCode;
+
+use crate::em::{EmConfig, LobeFamily};
+use crate::frame::{FrameConfig, Show};
+use crate::gpu::{BackendChoice, Gpu};
+use crate::photons::PhotonConfig;
+use crate::scene::file::StoreRange;
+use crate::tone::{ToneConfig, ToneMode};
+use crate::{Error, Result, scene};
+use clap::{Args, Parser, Subcommand, ValueEnum};
+
+#[derive(Parser)]
+#[command(
+    name = "lobelight",
+    version,
+    about = "Global illumination on splats with Gaussian lobes, on the GPU"
+)]
+struct Cli {
+    #[command(subcommand)]
+    command: Command,
+}
+
+/// Where stages run, shared by the subcommands.
+#[derive(Args, Clone, Copy)]
+struct DeviceArgs {
+    /// Run the CPU mirror instead of the GPU.
+    #[arg(long)]
+    cpu: bool,
+    /// Graphics API (default: WGPU_BACKEND, else Vulkan, else GL).
+    #[arg(long, value_enum, default_value_t = BackendChoice::Auto)]
+    backend: BackendChoice,
+}
+
+impl DeviceArgs {
+    fn gpu(&self) -> Result<Option<Gpu>> {
+        if self.cpu {
+            Ok(None)
+        } else {
+            Gpu::new(self.backend).map(Some)
+        }
+    }
+}
+
+/// Bake settings that override the scene file's `[bake]`.
+#[derive(Args, Clone)]
+struct BakeArgs {
+    /// Photons to emit.
+    #[arg(long)]
+    photons: Option<u64>,
+    #[arg(long)]
+    seed: Option<u32>,
+    /// Which hits store photons.
+    #[arg(long, value_enum)]
+    store: Option<StoreRange>,
+    /// EM iterations of the lobe fit.
+    #[arg(long)]
+    iterations: Option<u32>,
+    /// Lobes per splat (1–8).
+    #[arg(long)]
+    lobes: Option<u32>,
+    /// Photon search radius (scene units).
+    #[arg(long)]
+    radius: Option<f32>,
+    /// Lobe family.
+    #[arg(long, value_enum)]
+    family: Option<LobeFamily>,
+    /// Sparse EM (responsibilities under 0.02 frozen between full updates).
+    #[arg(long)]
+    sparse: bool,
+    /// Keep all `--lobes` on every fitted splat (no pruning of the lobes its photons do not
+    /// need).
+    #[arg(long)]
+    fixed_lobes: bool,
+}
+
+impl BakeArgs {
+    fn apply(&self, scene: &mut scene::Scene) -> Result<()> {
+        if let Some(n) = self.photons {
+            scene.bake.photons = n;
+        }
+        if let Some(s) = self.seed {
+            scene.bake.seed = s;
+        }
+        if let Some(s) = self.store {
+            scene.bake.store = s;
+        }
+        if let Some(i) = self.iterations {
+            scene.bake.iterations = i;
+        }
+        if let Some(k) = self.lobes {
+            scene.bake.lobes = k;
+        }
+        if let Some(r) = self.radius {
+            scene.bake.radius = Some(r);
+        }
+        if let Some(f) = self.family {
+            scene.bake.family = f;
+        }
+        scene.bake.sparse |= self.sparse;
+        scene.bake.prune &= !self.fixed_lobes;
+        PhotonConfig::from_scene(scene).validate()?;
+        EmConfig::from_scene(scene).validate()
+    }
+}
+
+/// Settings of a frame: shading and tone mapping; none of them needs a new bake.
+#[derive(Args, Clone)]
+struct LookArgs {
+    /// Tone mapping of PNG output (EXR keeps linear radiance).
+    #[arg(long, value_enum, default_value_t = ToneMode::Reinhard)]
+    tonemap: ToneMode,
+    /// The display value the log-average luminance maps to.
+    #[arg(long, default_value_t = 0.18)]
+    key: f32,
+    /// Exposure in stops, after the operator.
+    #[arg(long, default_value_t = 0.0, allow_negative_numbers = true)]
+    exposure: f32,
+    /// Area lights: shadow-ray samples per pixel along each edge (N² in all).
+    #[arg(long, default_value_t = 4)]
+    area_samples: u32,
+    /// Which light to show: all of it, or one part.
+    #[arg(long, value_enum, default_value_t = Show::Full)]
+    show: Show,
+}
+
+impl LookArgs {
+    fn frame(&self) -> FrameConfig {
+        FrameConfig {
+            area_samples: self.area_samples,
+            show: self.show.mask(),
+            ..FrameConfig::default()
+        }
+    }
+
+    fn tone(&self) -> ToneConfig {
+        ToneConfig {
+            mode: self.tonemap,
+            key: self.key,
+            exposure: self.exposure,
+            ..ToneConfig::default()
+        }
+    }
+}
+
+#[derive(Subcommand)]
+enum Command {
+    /// Splats, lights, materials, bounds, grid and memory of a scene, and the device in use.
+    Info {
+        scene: PathBuf,
+        /// Print one JSON object on stdout.
+        #[arg(long)]
+        json: bool,
+        #[command(flatten)]
+        device: DeviceArgs,
+    },
+    /// Render a scene to an image: PNG (tone-mapped) or EXR (linear HDR).
+    Render {
+        scene: PathBuf,
+        /// Output image, .png or .exr.
+        #[arg(short, long)]
+        output: PathBuf,
+        /// What to draw: `lobes` renders; `photons` shows the stored photons as points.
+        #[arg(long, value_enum, default_value_t = render::Method::Lobes)]
+        method: render::Method,
+        #[arg(long)]
+        width: Option<u32>,
+        #[arg(long)]
+        height: Option<u32>,
+        /// Load the bake from FILE when it was made for this scene and these bake settings;
+        /// else bake and save it there.
+        #[arg(long, value_name = "FILE")]
+        cache: Option<PathBuf>,
+        #[command(flatten)]
+        bake: BakeArgs,
+        #[command(flatten)]
+        look: LookArgs,
+        #[command(flatten)]
+        device: DeviceArgs,
+        /// Print per-stage figures on stderr.
+        #[arg(long)]
+        stats: bool,
+        /// Print the figures as one JSON object on stdout.
+        #[arg(long)]
+        json: bool,
+    },
+    /// Difference of image A against the reference B: relMSE, PSNR, SMAPE, FLIP, mean
+    /// relative difference, pixels within 5 %, RMSE, energy (EXR for radiance, FLIP on the
+    /// tone-mapped pair; PNG compares display values).
+    Compare {
+        a: PathBuf,
+        b: PathBuf,
+        /// Write the per-pixel relative difference as a heat map (red 5 %, yellow ≥ 25 %).
+        #[arg(long, value_name = "OUT.png")]
+        heatmap: Option<PathBuf>,
+        /// Print one JSON object on stdout.
+        #[arg(long)]
+        json: bool,
+    },
+    /// A window that draws the scene in real time: direct light at once, global illumination
+    /// when the bake (on a second thread) is in. Keys: see docs/viewer.md (H in the window).
+    View {
+        scene: PathBuf,
+        #[arg(long)]
+        width: Option<u32>,
+        #[arg(long)]
+        height: Option<u32>,
+        /// Scripted run: draw N frames once the bake is in, then exit.
+        #[arg(long, value_name = "N")]
+        frames: Option<u32>,
+        /// With --frames: save the last frame here (PNG).
+        #[arg(long, value_name = "OUT.png", requires = "frames")]
+        screenshot: Option<PathBuf>,
+        /// Load the bake from FILE when it was made for this scene and these bake settings
+        /// (an instant start); else bake and save it there.
+        #[arg(long, value_name = "FILE")]
+        cache: Option<PathBuf>,
+        /// What the window shows first (keys R and M switch).
+        #[arg(long, value_enum, default_value_t = render::Method::Lobes)]
+        method: render::Method,
+        #[command(flatten)]
+        bake: BakeArgs,
+        #[command(flatten)]
+        look: LookArgs,
+        /// Graphics API (default: WGPU_BACKEND, else Vulkan, else GL).
+        #[arg(long, value_enum, default_value_t = BackendChoice::Auto)]
+        backend: BackendChoice,
+    },
+    /// Measure a stage: throughput and the figures that show it did the right work.
+    Bench {
+        #[arg(value_enum)]
+        what: BenchKind,
+        /// Scenes to measure (all kinds but `convolution`, which needs none).
+        scenes: Vec<PathBuf>,
+        /// Where files the benchmark writes go (`convolution` heat maps; `sweep` tables,
+        /// charts and reference images).
+        #[arg(short, long, value_name = "DIR", default_value = ".")]
+        output: PathBuf,
+        #[command(flatten)]
+        bake: BakeArgs,
+        #[command(flatten)]
+        look: LookArgs,
+        #[command(flatten)]
+        device: DeviceArgs,
+        /// Print one JSON object per scene on stdout (an array for several scenes).
+        #[arg(long)]
+        json: bool,
+        /// `frame` only: also draw WINDOW_FRAMES frames in a 1280×720 window (needs a display;
+        /// one scene), the figures under the key `window`.
+        #[arg(long)]
+        window: bool,
+        /// `sweep` only: turn only these knobs (photons, iterations, radius, lobes, splats,
+        /// family, prune), comma-separated; default all.
+        #[arg(long, value_delimiter = ',')]
+        knobs: Vec<String>,
+    },
+}
+
+#[derive(Clone, Copy, ValueEnum)]
+enum BenchKind {
+    /// Photon emission and tracing: photons_per_s, stored count, per-stage ms.
+    Photons,
+    /// Photon binning and the lobe fit: fits_per_s, em_ms, mean photons, fit error.
+    Em,
+    /// Frames of the baked scene at 512² and 1920×1080: frame_ms, fps, shade and tone map.
+    Frame,
+    /// What a moved light costs: the viewer's preview and full re-bake on the scene already
+    /// on the device, rebake_ms, preview_ms and the preview's error.
+    Rebake,
+    /// The lobe × BRDF shading formulas against quadrature: relative L2 and energy errors
+    /// of the thesis's form and ours, with heat maps (no scene).
+    Convolution,
+    /// Bake time, frame time and error against the photon-map reference while one setting
+    /// varies at a time (photons, iterations, radius, lobes, splats, family): tables and charts.
+    Sweep,
+}
+
+fn to_json<T: serde::Serialize>(value: &T) -> Result<serde_json::Value> {
+    serde_json::to_value(value).map_err(|e| Error::Invalid(e.to_string()))
+}
+
+/// A line on stdout. A reader that went away (`| head`) is not an error of ours: the output
+/// simply stops, where `println!` would panic.
+fn say(args: std::fmt::Arguments) {
+    use std::io::Write;
+    let _ = writeln!(std::io::stdout().lock(), "{args}");
+}
+
+/// A command's figures: one JSON object, or its human-readable text.
+fn print_report<T: serde::Serialize + std::fmt::Display>(json: bool, report: &T) -> Result<()> {
+    if json {
+        print_json(report)
+    } else {
+        say(format_args!("{report}"));
+        Ok(())
+    }
+}
+
+fn print_json<T: serde::Serialize>(value: &T) -> Result<()> {
+    let text = serde_json::to_string_pretty(value).map_err(|e| Error::Invalid(e.to_string()))?;
+    say(format_args!("{text}"));
+    Ok(())
+}
+
+fn run(cli: Cli) -> Result<()> {
+    match cli.command {
+        Command::Info {
+            scene,
+            json,
+            device,
+        } => {
+            let scene = scene::load(&scene)?;
+            let gpu = device.gpu()?;
+            let info = info::info(&scene, gpu.as_ref())?;
+            print_report(json, &info)?;
+        }
+        Command::Render {
+            scene,
+            output,
+            method,
+            width,
+            height,
+            cache,
+            bake,
+            look,
+            device,
+            stats,
+            json,
+        } => {
+            let mut scene = scene::load(&scene)?;
+            bake.apply(&mut scene)?;
+            let gpu = device.gpu()?;
+            let opts = render::Options {
+                method,
+                width,
+                height,
+                progress: !json,
+                frame: look.frame(),
+                tone: look.tone(),
+                cache,
+            };
+            let report = render::render(&scene, gpu.as_ref(), &opts, &output)?;
+            if json {
+                print_json(&report)?;
+            } else if stats {
+                eprintln!("{report}");
+            } else {
+                eprintln!(
+                    "wrote {} ({}×{})",
+                    report.output, report.width, report.height
+                );
+            }
+        }
+        Command::View {
+            scene,
+            width,
+            height,
+            frames,
+            screenshot,
+            cache,
+            method,
+            bake,
+            look,
+            backend,
+        } => {
+            let mut scene = scene::load(&scene)?;
+            bake.apply(&mut scene)?;
+            let [w0, h0] = scene.camera.resolution;
+            let (width, height) = (width.unwrap_or(w0), height.unwrap_or(h0));
+            scene::check_resolution(width, height).map_err(Error::Invalid)?;
+            let opts = crate::cli::view::ViewOptions {
+                width,
+                height,
+                backend,
+                frame: look.frame(),
+                tone: look.tone(),
+                method,
+                frames,
+                screenshot,
+                cache,
+            };
+            opts.frame.validate()?;
+            opts.tone.validate()?;
+            crate::cli::view::view(scene, opts)?;
+        }
+        Command::Compare {
+            a,
+            b,
+            heatmap,
+            json,
+        } => {
+            let (pa, wa, ha) = compare::read_image(&a)?;
+            let (pb, wb, hb) = compare::read_image(&b)?;
+            if (wa, ha) != (wb, hb) {
+                return Err(Error::Invalid(format!(
+                    "{} is {wa}×{ha} but {} is {wb}×{hb}",
+                    a.display(),
+                    b.display()
+                )));
+            }
+            let values = compare::values_of(&b);
+            if compare::values_of(&a) != values {
+                return Err(Error::Invalid(format!(
+                    "{} and {} hold different kinds of values (radiance in EXR, display values \
+                     otherwise): compare two EXR or two PNG images",
+                    a.display(),
+                    b.display()
+                )));
+            }
+            let d = compare::difference_of(&pa, &pb, wa, ha, values)?;
+            if let Some(path) = heatmap {
+                compare::heatmap(&compare::relative(&pa, &pb), wa, ha, &path)?;
+            }
+            if json {
+                print_json(&d)?;
+            } else {
+                let flip = d.flip.map_or("—".to_string(), |f| format!("{f:.4}"));
+                say(format_args!(
+                    "relMSE {:.4e}, PSNR {:.2} dB, SMAPE {:.4}, FLIP {flip}\n\
+                     mean relative {:.4} %, within 5 %: {:.2} % of {} pixels, max {:.3}, rmse {:.4e}, energy {:+.4} %",
+                    d.rel_mse,
+                    d.psnr,
+                    d.smape,
+                    100.0 * d.mean_relative,
+                    100.0 * d.within_5_percent,
+                    d.pixels,
+                    d.max_relative,
+                    d.rmse,
+                    100.0 * d.energy
+                ));
+            }
+        }
+        Command::Bench {
+            what: BenchKind::Convolution,
+            output,
+            json,
+            ..
+        } => {
+            let r = crate::cli::convolution::convolution_bench(&output, Default::default())?;
+            print_report(json, &r)?;
+        }
+        Command::Bench {
+            what: BenchKind::Sweep,
+            scenes,
+            output,
+            bake,
+            device,
+            json,
+            knobs,
+            ..
+        } => {
+            if scenes.is_empty() {
+                return Err(Error::Invalid(
+                    "bench sweep needs at least one scene (e.g. scenes/bunny.toml scenes/dragon.toml)"
+                        .into(),
+                ));
+            }
+            let mut loaded = Vec::new();
+            for path in &scenes {
+                let mut scene = scene::load(path)?;
+                bake.apply(&mut scene)?;
+                let name = path
+                    .file_stem()
+                    .map_or("scene".into(), |s| s.to_string_lossy().into_owned());
+                loaded.push((name, scene));
+            }
+            let gpu = device.gpu()?;
+            let mut plan = crate::cli::sweep::SweepPlan::default();
+            if !knobs.is_empty() {
+                plan = plan.only(&knobs)?;
+            }
+            let r = crate::cli::sweep::sweep(&loaded, gpu.as_ref(), &plan, &output)?;
+            print_report(json, &r)?;
+        }
+        Command::Bench {
+            what,
+            scenes,
+            bake,
+            look,
+            device,
+            json,
+            window,
+            ..
+        } => {
+            if scenes.is_empty() {
+                return Err(Error::Invalid(
+                    "bench needs at least one scene (e.g. scenes/bunny.toml)".into(),
+                ));
+            }
+            if window && (scenes.len() > 1 || !matches!(what, BenchKind::Frame) || device.cpu) {
+                return Err(Error::Invalid(
+                    "--window is for `bench frame` of one scene on a GPU (a process opens one window)"
+                        .into(),
+                ));
+            }
+            let gpu = device.gpu()?;
+            let mut reports = Vec::new();
+            for path in &scenes {
+                let mut scene = scene::load(path)?;
+                bake.apply(&mut scene)?;
+                let photons = PhotonConfig::from_scene(&scene);
+                let (text, value) = match what {
+                    BenchKind::Photons => {
+                        let r = bench::photons(&scene, gpu.as_ref(), &photons)?;
+                        (r.to_string(), to_json(&r)?)
+                    }
+                    BenchKind::Frame => {
+                        let mut r =
+                            bench::frame(&scene, gpu.as_ref(), &look.frame(), &look.tone())?;
+                        if window {
+                            let (frame, tone) = (look.frame(), look.tone());
+                            let backend = device.backend;
+                            r.window = Some(bench::window_frames(&scene, frame, tone, backend)?);
+                        }
+                        (r.to_string(), to_json(&r)?)
+                    }
+                    BenchKind::Rebake => {
+                        let r = crate::cli::rebake::rebake(&scene, gpu.as_ref())?;
+                        (r.to_string(), to_json(&r)?)
+                    }
+                    BenchKind::Em => {
+                        let em = EmConfig::from_scene(&scene);
+                        let r = bench::em(&scene, gpu.as_ref(), &photons, &em)?;
+                        (r.to_string(), to_json(&r)?)
+                    }
+                    BenchKind::Convolution | BenchKind::Sweep => unreachable!("handled above"),
+                };
+                if !json {
+                    say(format_args!("{text}\n"));
+                }
+                reports.push(value);
+            }
+            if json {
+                match reports.len() {
+                    1 => print_json(&reports[0])?,
+                    _ => print_json(&reports)?,
+                }
+            }
+        }
+    }
+    Ok(())
+}
+
+/// The `lobelight` binary: parses the command line and runs it.
+pub fn main() -> ExitCode {
+    env_logger::Builder::from_env(env_logger::Env::default().default_filter_or("error")).init();
+    match run(Cli::parse()) {
+        Ok(()) => ExitCode::SUCCESS,
+        Err(e) => {
+            eprintln!("lobelight: {e}");
+            ExitCode::FAILURE
+        }
+    }
+}
