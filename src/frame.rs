@@ -122,8 +122,13 @@ pub fn shadow_bias(splats: &[Splat]) -> f32 {
 
 /// The shading uniform of a bake; the image size comes with the camera.
 pub fn shade_params(scene: &Scene, lobes: &LobeMap, cfg: &FrameConfig) -> ShadeParams {
+    shade_params_for(scene, lobes.lobes_per_splat, cfg)
+}
+
+/// `shade_params` for a lobe map of `lobes_per_splat` (what the passes need of it).
+pub fn shade_params_for(scene: &Scene, lobes_per_splat: u32, cfg: &FrameConfig) -> ShadeParams {
     ShadeParams {
-        lobes_per_splat: lobes.lobes_per_splat,
+        lobes_per_splat,
         family: scene.bake.family.code(),
         light_count: scene.lights.len() as u32,
         area_samples: cfg.area_samples,

@@ -10,7 +10,8 @@
 //!   host-side data);
 //! - `scene` (the scene file, procedural shapes and model files) and `camera`;
 //! - `cpu` (the mirrors) and `gpu` (the device host), `frame` (what a frame draws);
-//! - `bake` (photons → bins → lobes on either) and `cache` (a bake on disk);
+//! - `bake` (photons → bins → lobes on either), `cache` (a bake on disk) and `renderer` (the
+//!   device's frame: bake, draw from a view, tone map, read back);
 //! - `cli` (feature `app`): the `lobelight` commands.
 //!
 //! Baking a scene on the CPU mirror (the README's example, compiled by the doc tests):
@@ -38,6 +39,7 @@ pub mod frame;
 pub mod gpu;
 pub mod grid;
 pub mod photons;
+pub mod renderer;
 pub mod scene;
 pub mod shared;
 pub mod tone;

@@ -11,9 +11,9 @@ use lobelight::cli::compare::difference;
 use lobelight::em::LobeMap;
 use lobelight::frame::{FrameConfig, Show, camera_uniform, cpu_frame, shade_params};
 use lobelight::gpu::Gpu;
-use lobelight::gpu::frame::{FrameScene, SplatPipelines};
 use lobelight::gpu::scene::GpuScene;
 use lobelight::grid::SplatGrid;
+use lobelight::renderer::FrameRenderer;
 use lobelight::scene::{self, Scene};
 
 /// Parity tolerances of the issue: mean relative difference and pixels within 5 %.
@@ -42,26 +42,10 @@ fn gpu_frame(
     view: &View,
     cfg: &FrameConfig,
 ) -> Vec<[f32; 4]> {
-    let on_gpu = GpuScene::upload(gpu, scene).unwrap();
-    let frame_scene = FrameScene::upload(gpu, scene, lobes).unwrap();
-    let pipelines = SplatPipelines::new(gpu).unwrap();
-    let targets = pipelines.targets(gpu, view.width, view.height).unwrap();
-    let cam = camera_uniform(view, scene.bounds(), cfg);
-    let params = shade_params(scene, lobes, cfg);
-    let mut encoder = gpu.encoder("test frame");
-    pipelines
-        .draw(
-            gpu,
-            &mut encoder,
-            &frame_scene.buffers(&on_gpu),
-            &cam,
-            &params,
-            &targets,
-        )
-        .unwrap();
-    gpu.submit_and_wait(encoder).unwrap();
-    gpu.read(&targets.hdr, (view.width * view.height) as usize)
-        .unwrap()
+    let mut renderer = FrameRenderer::new(gpu, scene).unwrap();
+    renderer.set_lobes(gpu, scene, lobes).unwrap();
+    renderer.draw(gpu, scene, view, cfg).unwrap();
+    renderer.read_hdr(gpu).unwrap()
 }
 
 fn cpu_hdr(

@@ -17,8 +17,8 @@ use lobelight::cli::compare::difference;
 use lobelight::em::{LobeFamily, LobeMap};
 use lobelight::frame::{FrameConfig, camera_uniform, cpu_frame, shade_params};
 use lobelight::gpu::Gpu;
-use lobelight::gpu::frame::{FrameScene, SplatPipelines};
 use lobelight::gpu::scene::GpuScene;
+use lobelight::renderer::FrameRenderer;
 use lobelight::scene::{self, Scene};
 use lobelight::types::{Lobe, SplatLight};
 
@@ -30,19 +30,10 @@ fn frames(gpu: &Gpu, scene: &Scene, lobes: &LobeMap, view: &View) -> [Vec<[f32; 
     let cfg = FrameConfig::default();
     let cam = camera_uniform(view, scene.bounds(), &cfg);
     let params = shade_params(scene, lobes, &cfg);
-    let on_gpu = GpuScene::upload(gpu, scene).unwrap();
-    let frame_scene = FrameScene::upload(gpu, scene, lobes).unwrap();
-    let pipelines = SplatPipelines::new(gpu).unwrap();
-    let targets = pipelines.targets(gpu, view.width, view.height).unwrap();
-    let mut encoder = gpu.encoder("stress frame");
-    let buffers = frame_scene.buffers(&on_gpu);
-    pipelines
-        .draw(gpu, &mut encoder, &buffers, &cam, &params, &targets)
-        .unwrap();
-    gpu.submit_and_wait(encoder).unwrap();
-    let on_device = gpu
-        .read(&targets.hdr, (view.width * view.height) as usize)
-        .unwrap();
+    let mut renderer = FrameRenderer::new(gpu, scene).unwrap();
+    renderer.set_lobes(gpu, scene, lobes).unwrap();
+    renderer.draw(gpu, scene, view, &cfg).unwrap();
+    let on_device = renderer.read_hdr(gpu).unwrap();
     let grid = common::host_grid(scene);
     [on_device, cpu_frame(scene, &grid, lobes, &cam, &params)]
 }

@@ -14,13 +14,14 @@ use crate::cpu::photon_view::scene_scale;
 use crate::error::{Error, Result};
 use crate::frame::{FrameConfig, camera_uniform, cpu_frame, cpu_reference, shade_params};
 use crate::gpu::Gpu;
-use crate::gpu::frame::{FrameScene, SplatPipelines};
+use crate::gpu::frame::SplatPipelines;
 use crate::gpu::photon_view::photon_image;
 use crate::gpu::photons::trace_photons;
 use crate::gpu::reference::ReferencePipeline;
 use crate::gpu::scene::GpuScene;
 use crate::gpu::tone::tone_map;
 use crate::photons::{PhotonConfig, ms_since};
+use crate::renderer::FrameRenderer;
 use crate::scene::Scene;
 use crate::shared::tone::srgb_byte;
 use crate::shared::trace::Geometry;
@@ -330,20 +331,15 @@ fn render_lobes(
     let pixels = view.width * view.height;
     let (baked, hit, grid, drawn) = match gpu {
         Some(gpu) => {
-            let on_gpu = GpuScene::upload(gpu, scene)?;
-            let (baked, hit) = bake_or_load(scene, BakeDevice::Gpu(gpu, &on_gpu), opts, &progress)?;
-            let params = shade_params(scene, &baked.lobes, &opts.frame);
+            let mut renderer = FrameRenderer::new(gpu, scene)?;
+            let on_gpu = BakeDevice::Gpu(gpu, &renderer.on_gpu);
+            let (baked, hit) = bake_or_load(scene, on_gpu, opts, &progress)?;
             let t = Instant::now();
-            let pipelines = SplatPipelines::new(gpu)?;
-            let targets = pipelines.targets(gpu, view.width, view.height)?;
-            let frame_scene = FrameScene::upload(gpu, scene, &baked.lobes)?;
-            let buffers = frame_scene.buffers(&on_gpu);
-            let mut encoder = gpu.encoder("frame");
-            pipelines.draw(gpu, &mut encoder, &buffers, &cam, &params, &targets)?;
-            gpu.submit_and_wait(encoder)?;
+            renderer.set_lobes(gpu, scene, &baked.lobes)?;
+            let targets = renderer.draw(gpu, scene, view, &opts.frame)?;
             let shade = StageReport::ran(ms_since(t));
             let drawn = drawn_on_gpu(gpu, &targets.hdr, pixels, format, &opts.tone, shade)?;
-            (baked, hit, StageReport::ran(on_gpu.grid_ms), drawn)
+            (baked, hit, StageReport::ran(renderer.on_gpu.grid_ms), drawn)
         }
         None => {
             let t = Instant::now();
