@@ -1,27 +1,35 @@
 //! One frame renderer on the device. It owns what every frame needs — the scene's splats and
 //! grid on the device, the compiled splat passes, the bake's lobes and the lights, and targets
 //! for the image size (rebuilt only when the size changes) — and offers the frame's whole
-//! sequence: bake, draw from a view, tone map, read back. The camera and shading uniforms are
-//! made per draw from the view and the frame settings.
+//! sequence: bake, draw from a view, tone map, read back. `render`, `view`, `bench frame`,
+//! `bench rebake`, `bench sweep` and the tests draw through it.
+//!
+//! `draw*` record, submit and wait; `record*` only record into a caller's encoder (the viewer
+//! adds its tone map and present pass to the same submission).
 
 use std::sync::Arc;
 
-use crate::bake::{BakeDevice, Baked, Progress, bake};
+use crate::bake::{BakeDevice, Baked, Binned, Progress, bake, bins_gpu};
 use crate::camera::View;
 use crate::em::LobeMap;
-use crate::error::Result;
+use crate::error::{Error, Result};
 use crate::frame::{FrameConfig, camera_uniform, shade_params_for};
 use crate::gpu::Gpu;
+use crate::gpu::bins::GpuBins;
 use crate::gpu::frame::{FrameScene, FrameTargets, SplatPipelines};
+use crate::gpu::reference::ReferencePipeline;
 use crate::gpu::scene::GpuScene;
 use crate::gpu::tone::{GpuToned, tone_map};
 use crate::scene::Scene;
 use crate::tone::ToneConfig;
+use crate::types::{Camera, EmParams};
 
 pub struct FrameRenderer {
     /// The splats, materials and grid (shared with a bake on another thread).
     pub on_gpu: Arc<GpuScene>,
     pub pipelines: SplatPipelines,
+    /// Built the first time a reference is drawn.
+    reference: Option<ReferencePipeline>,
     frame_scene: FrameScene,
     /// The most lobes a splat of the uploaded map has (the shade pass's loop bound).
     lobes_per_splat: u32,
@@ -40,10 +48,18 @@ impl FrameRenderer {
         Ok(FrameRenderer {
             frame_scene: FrameScene::upload(gpu, scene, &lobes)?,
             pipelines: SplatPipelines::new(gpu)?,
+            reference: None,
             on_gpu,
             lobes_per_splat: lobes.lobes_per_splat,
             targets: None,
         })
+    }
+
+    /// Draws another scene from now on, with the passes already compiled; no lobes until
+    /// `bake` or `set_lobes`.
+    pub fn set_scene(&mut self, gpu: &Gpu, scene: &Scene) -> Result<()> {
+        self.on_gpu = Arc::new(GpuScene::upload(gpu, scene)?);
+        self.set_lobes(gpu, scene, &LobeMap::default())
     }
 
     /// Bakes the scene's light on the device and keeps the lobes for the frames to come.
@@ -53,23 +69,99 @@ impl FrameRenderer {
         Ok(baked)
     }
 
-    /// Draws with `lobes` from now on (a bake loaded from a cache or made elsewhere).
+    /// Traces and bins the scene's photons on the device, for a reference (no lobes).
+    pub fn bins(&self, gpu: &Gpu, scene: &Scene, progress: &Progress) -> Result<Binned<GpuBins>> {
+        bins_gpu(scene, gpu, &self.on_gpu, progress)
+    }
+
+    /// Draws with `lobes` and the scene's lights from now on (a bake loaded from a cache or
+    /// made elsewhere).
     pub fn set_lobes(&mut self, gpu: &Gpu, scene: &Scene, lobes: &LobeMap) -> Result<()> {
         self.frame_scene = FrameScene::upload(gpu, scene, lobes)?;
         self.lobes_per_splat = lobes.lobes_per_splat;
         Ok(())
     }
 
+    /// Draws with the scene's lights from now on, the lobes unchanged (a moved light's direct
+    /// light, before its bake is in).
+    pub fn set_lights(&mut self, gpu: &Gpu, scene: &Scene) -> Result<()> {
+        self.frame_scene.lights = gpu.storage("lights", &scene.lights)?;
+        Ok(())
+    }
+
     /// Targets of `width × height`, made anew only when the size changed.
-    pub fn targets(&mut self, gpu: &Gpu, width: u32, height: u32) -> Result<&FrameTargets> {
+    pub fn resize(&mut self, gpu: &Gpu, width: u32, height: u32) -> Result<&FrameTargets> {
         let fits = |t: &FrameTargets| t.width == width && t.height == height;
         if !self.targets.as_ref().is_some_and(fits) {
             self.targets = Some(self.pipelines.targets(gpu, width, height)?);
         }
-        self.targets_drawn()
+        self.targets()
     }
 
-    /// Draws the frame of `view` (its size and camera) into the targets' HDR image and waits.
+    /// The current targets (after `resize` or a draw).
+    pub fn targets(&self) -> Result<&FrameTargets> {
+        self.targets
+            .as_ref()
+            .ok_or_else(|| Error::Invalid("the frame renderer has no targets yet".into()))
+    }
+
+    /// Records the lobes' frame of `cam` into the current targets; returns their HDR image.
+    pub fn record(
+        &self,
+        gpu: &Gpu,
+        encoder: &mut wgpu::CommandEncoder,
+        scene: &Scene,
+        cam: &Camera,
+        cfg: &FrameConfig,
+    ) -> Result<&wgpu::Buffer> {
+        let targets = self.targets()?;
+        let params = shade_params_for(scene, self.lobes_per_splat, cfg);
+        let buffers = self.frame_scene.buffers(&self.on_gpu);
+        self.pipelines
+            .draw(gpu, encoder, &buffers, cam, &params, targets)?;
+        Ok(&targets.hdr)
+    }
+
+    /// Records the reference image of `cam` from binned photons (`bins`, with the binning's
+    /// `em` parameters) into the current targets: the photon gather with the exact BRDF, then
+    /// the same shade pass with no lobes. Returns the HDR image.
+    #[allow(clippy::too_many_arguments)]
+    pub fn record_reference(
+        &mut self,
+        gpu: &Gpu,
+        encoder: &mut wgpu::CommandEncoder,
+        scene: &Scene,
+        bins: &GpuBins,
+        em: &EmParams,
+        cam: &Camera,
+        cfg: &FrameConfig,
+    ) -> Result<&wgpu::Buffer> {
+        if self.reference.is_none() {
+            self.reference = Some(ReferencePipeline::new(gpu, &self.pipelines)?);
+        }
+        let (Some(reference), Some(targets)) = (&self.reference, &self.targets) else {
+            return Err(Error::Invalid(
+                "the frame renderer has no targets yet".into(),
+            ));
+        };
+        // The shade pass reads no lobes here: none per splat gives it its other settings.
+        let params = shade_params_for(scene, 0, cfg);
+        let buffers = self.frame_scene.buffers(&self.on_gpu);
+        reference.draw(
+            gpu,
+            encoder,
+            &self.pipelines,
+            &buffers,
+            bins,
+            em,
+            cam,
+            &params,
+            targets,
+        )?;
+        Ok(&targets.hdr)
+    }
+
+    /// Draws the lobes' frame of `view` (its size and camera) and waits.
     pub fn draw(
         &mut self,
         gpu: &Gpu,
@@ -77,42 +169,72 @@ impl FrameRenderer {
         view: &View,
         cfg: &FrameConfig,
     ) -> Result<&FrameTargets> {
-        self.targets(gpu, view.width, view.height)?;
+        self.resize(gpu, view.width, view.height)?;
+        let cam = camera_uniform(view, scene.bounds(), cfg);
+        let mut encoder = gpu.encoder("frame");
+        self.record(gpu, &mut encoder, scene, &cam, cfg)?;
+        gpu.submit_and_wait(encoder)?;
+        self.targets()
+    }
+
+    /// Draws the reference image of `view` from binned photons and waits.
+    pub fn draw_reference(
+        &mut self,
+        gpu: &Gpu,
+        scene: &Scene,
+        binned: &Binned<GpuBins>,
+        view: &View,
+        cfg: &FrameConfig,
+    ) -> Result<&FrameTargets> {
+        self.resize(gpu, view.width, view.height)?;
+        let cam = camera_uniform(view, scene.bounds(), cfg);
+        let mut encoder = gpu.encoder("reference");
+        let (bins, em) = (&binned.bins, &binned.em);
+        self.record_reference(gpu, &mut encoder, scene, bins, em, &cam, cfg)?;
+        gpu.submit_and_wait(encoder)?;
+        self.targets()
+    }
+
+    /// The lobes' frame of `view` with a wait after each splat pass: the milliseconds of
+    /// each (benchmarks; slower than `draw`, which waits once).
+    pub fn draw_timed(
+        &mut self,
+        gpu: &Gpu,
+        scene: &Scene,
+        view: &View,
+        cfg: &FrameConfig,
+    ) -> Result<[f64; 3]> {
+        self.resize(gpu, view.width, view.height)?;
         let cam = camera_uniform(view, scene.bounds(), cfg);
         let params = shade_params_for(scene, self.lobes_per_splat, cfg);
         let buffers = self.frame_scene.buffers(&self.on_gpu);
-        let targets = self.targets_drawn()?;
-        let mut encoder = gpu.encoder("frame");
         self.pipelines
-            .draw(gpu, &mut encoder, &buffers, &cam, &params, targets)?;
-        gpu.submit_and_wait(encoder)?;
-        Ok(targets)
+            .draw_timed(gpu, &buffers, &cam, &params, self.targets()?)
+    }
+
+    /// Records the tone mapping of the current targets' HDR image.
+    pub fn record_tone_map(
+        &self,
+        gpu: &Gpu,
+        encoder: &mut wgpu::CommandEncoder,
+        tone: &ToneConfig,
+    ) -> Result<GpuToned> {
+        let targets = self.targets()?;
+        let pixels = targets.width * targets.height;
+        tone_map(gpu, encoder, &targets.hdr, pixels, tone)
     }
 
     /// Tone-maps the last frame drawn and waits.
     pub fn tone_map(&self, gpu: &Gpu, tone: &ToneConfig) -> Result<GpuToned> {
-        let targets = self.targets_drawn()?;
         let mut encoder = gpu.encoder("tone map");
-        let toned = tone_map(
-            gpu,
-            &mut encoder,
-            &targets.hdr,
-            targets.width * targets.height,
-            tone,
-        )?;
+        let toned = self.record_tone_map(gpu, &mut encoder, tone)?;
         gpu.submit_and_wait(encoder)?;
         Ok(toned)
     }
 
     /// The last frame's linear HDR pixels, rows from the top.
     pub fn read_hdr(&self, gpu: &Gpu) -> Result<Vec<[f32; 4]>> {
-        let targets = self.targets_drawn()?;
+        let targets = self.targets()?;
         gpu.read(&targets.hdr, (targets.width * targets.height) as usize)
-    }
-
-    fn targets_drawn(&self) -> Result<&FrameTargets> {
-        self.targets
-            .as_ref()
-            .ok_or_else(|| crate::Error::Invalid("no frame has been drawn yet".into()))
     }
 }

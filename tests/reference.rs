@@ -13,10 +13,8 @@ use lobelight::cpu;
 use lobelight::frame::{FrameConfig, camera_uniform, cpu_frame, cpu_reference, shade_params};
 use lobelight::gpu::Gpu;
 use lobelight::gpu::bins::GpuBins;
-use lobelight::gpu::frame::SplatPipelines;
-use lobelight::gpu::reference::ReferencePipeline;
-use lobelight::gpu::scene::GpuScene;
 use lobelight::grid::SplatGrid;
+use lobelight::renderer::FrameRenderer;
 use lobelight::scene::{self, Scene};
 
 /// The splat passes' parity tolerances (tests/render.rs).
@@ -37,9 +35,7 @@ fn gpu_reference(
     view: &View,
 ) -> Vec<[f32; 4]> {
     let cfg = FrameConfig::default();
-    let on_gpu = GpuScene::upload(gpu, scene).unwrap();
-    let pipelines = SplatPipelines::new(gpu).unwrap();
-    let reference = ReferencePipeline::new(gpu, &pipelines).unwrap();
+    let mut renderer = FrameRenderer::new(gpu, scene).unwrap();
     // The CPU's bins on the device: both paths gather the very same photons.
     let on_device = Binned {
         bins: GpuBins::upload(gpu, &binned.bins).unwrap(),
@@ -47,23 +43,10 @@ fn gpu_reference(
         photons: binned.photons.clone(),
         binning: binned.binning.clone(),
     };
-    let cam = camera_uniform(view, scene.bounds(), &cfg);
-    let size = (view.width, view.height);
-    let targets = reference
-        .image(
-            gpu,
-            &pipelines,
-            scene,
-            &on_gpu,
-            &on_device.bins,
-            &on_device.em,
-            &cam,
-            &cfg,
-            size,
-        )
+    renderer
+        .draw_reference(gpu, scene, &on_device, view, &cfg)
         .unwrap();
-    gpu.read(&targets.hdr, (view.width * view.height) as usize)
-        .unwrap()
+    renderer.read_hdr(gpu).unwrap()
 }
 
 /// The glossy Cornell box from the front and from high on the left, on photons binned once.

@@ -16,13 +16,14 @@ use crate::error::Result;
 use crate::frame::{FrameConfig, camera_uniform, cpu_frame, shade_params};
 use crate::gpu::bins as gpu_bins;
 use crate::gpu::em as gpu_em;
-use crate::gpu::frame::{FrameScene, SplatPipelines};
+
 use crate::gpu::photons::trace_photons;
 use crate::gpu::present::PresentPipeline;
 use crate::gpu::scene::GpuScene;
-use crate::gpu::tone::tone_map as gpu_tone_map;
+
 use crate::gpu::{BackendChoice, Gpu};
 use crate::photons::{PhotonConfig, PhotonMap, PhotonStats, ms_since, photons_within};
+use crate::renderer::FrameRenderer;
 use crate::scene::Scene;
 use crate::tone::ToneConfig;
 
@@ -440,17 +441,11 @@ pub fn frame(
     let mut sizes = Vec::new();
     let (adapter, backend, fitted) = match gpu {
         Some(gpu) => {
-            let on_gpu = GpuScene::upload(gpu, scene)?;
-            let lobes = bake(scene, BakeDevice::Gpu(gpu, &on_gpu), &progress)?.lobes;
-            let frame_scene = FrameScene::upload(gpu, scene, &lobes)?;
-            let buffers = frame_scene.buffers(&on_gpu);
-            let pipelines = SplatPipelines::new(gpu)?;
+            let mut renderer = FrameRenderer::new(gpu, scene)?;
+            let lobes = renderer.bake(gpu, scene, &progress)?.lobes;
             let present = PresentPipeline::new(gpu, WINDOW_FORMAT)?;
-            let params = shade_params(scene, &lobes, cfg);
             for (w, h) in FRAME_SIZES {
                 let view = View::new(&scene.camera, w, h);
-                let cam = camera_uniform(&view, scene.bounds(), cfg);
-                let targets = pipelines.targets(gpu, w, h)?;
                 let usage = wgpu::TextureUsages::RENDER_ATTACHMENT;
                 // An offscreen stand-in for a window's surface texture.
                 let window = gpu.texture_2d("window stand-in", (w, h), WINDOW_FORMAT, usage);
@@ -459,13 +454,11 @@ pub fn frame(
                 let mut pass_ms = Vec::new();
                 let mut present_ms = Vec::new();
                 for _ in 0..=TIMED_FRAMES {
-                    let passes = pipelines.draw_timed(gpu, &buffers, &cam, &params, &targets)?;
+                    let passes = renderer.draw_timed(gpu, scene, &view, cfg)?;
                     let shade = passes.iter().sum();
                     pass_ms.push(passes);
                     let t = Instant::now();
-                    let mut encoder = gpu.encoder("tone map");
-                    let toned = gpu_tone_map(gpu, &mut encoder, &targets.hdr, w * h, tone)?;
-                    gpu.submit_and_wait(encoder)?;
+                    let toned = renderer.tone_map(gpu, tone)?;
                     times.push((shade, ms_since(t)));
                     let t = Instant::now();
                     let mut encoder = gpu.encoder("present");

@@ -17,10 +17,9 @@ use crate::em::LobeMap;
 use crate::error::{Error, Result};
 use crate::frame::{FrameConfig, camera_uniform, cpu_frame, shade_params};
 use crate::gpu::Gpu;
-use crate::gpu::frame::{FrameScene, SplatPipelines};
-use crate::gpu::scene::GpuScene;
 use crate::grid::SplatGrid;
 use crate::photons::ms_since;
+use crate::renderer::FrameRenderer;
 use crate::scene::Scene;
 
 /// Light moves timed (one arrow-key step each, along x).
@@ -53,7 +52,7 @@ pub struct RebakeBench {
 
 /// Where it runs: the device with the scene on it, or the CPU mirror with its grid.
 enum Place<'a> {
-    Gpu(&'a Gpu, GpuScene, SplatPipelines),
+    Gpu(&'a Gpu, Box<FrameRenderer>),
     Cpu(SplatGrid),
 }
 
@@ -62,7 +61,7 @@ impl Place<'_> {
         let quiet = Progress::new(false);
         let t = Instant::now();
         let device = match self {
-            Place::Gpu(gpu, on_gpu, _) => BakeDevice::Gpu(gpu, on_gpu),
+            Place::Gpu(gpu, renderer) => BakeDevice::Gpu(gpu, &renderer.on_gpu),
             Place::Cpu(grid) => BakeDevice::Cpu(grid),
         };
         let lobes = bake(scene, device, &quiet)?.lobes;
@@ -70,22 +69,20 @@ impl Place<'_> {
     }
 
     /// The frame of the scene's camera with `lobes`, linear HDR.
-    fn image(&self, scene: &Scene, lobes: &LobeMap) -> Result<Vec<[f32; 4]>> {
+    fn image(&mut self, scene: &Scene, lobes: &LobeMap) -> Result<Vec<[f32; 4]>> {
         let cfg = FrameConfig::default();
         let view = View::new(&scene.camera, IMAGE.0, IMAGE.1);
-        let cam = camera_uniform(&view, scene.bounds(), &cfg);
-        let params = shade_params(scene, lobes, &cfg);
         match self {
-            Place::Gpu(gpu, on_gpu, splat) => {
-                let frame_scene = FrameScene::upload(gpu, scene, lobes)?;
-                let targets = splat.targets(gpu, IMAGE.0, IMAGE.1)?;
-                let mut encoder = gpu.encoder("rebake frame");
-                let buffers = frame_scene.buffers(on_gpu);
-                splat.draw(gpu, &mut encoder, &buffers, &cam, &params, &targets)?;
-                gpu.submit_and_wait(encoder)?;
-                gpu.read(&targets.hdr, (IMAGE.0 * IMAGE.1) as usize)
+            Place::Gpu(gpu, renderer) => {
+                renderer.set_lobes(gpu, scene, lobes)?;
+                renderer.draw(gpu, scene, &view, &cfg)?;
+                renderer.read_hdr(gpu)
             }
-            Place::Cpu(grid) => Ok(cpu_frame(scene, grid, lobes, &cam, &params)),
+            Place::Cpu(grid) => {
+                let cam = camera_uniform(&view, scene.bounds(), &cfg);
+                let params = shade_params(scene, lobes, &cfg);
+                Ok(cpu_frame(scene, grid, lobes, &cam, &params))
+            }
         }
     }
 }
@@ -99,12 +96,11 @@ pub fn rebake(scene: &Scene, gpu: Option<&Gpu>) -> Result<RebakeBench> {
         )));
     };
     let t = Instant::now();
-    let (place, adapter, backend) = match gpu {
+    let (mut place, adapter, backend) = match gpu {
         Some(gpu) => {
-            let on_gpu = GpuScene::upload(gpu, scene)?;
-            let splat = SplatPipelines::new(gpu)?;
+            let renderer = FrameRenderer::new(gpu, scene)?;
             let name = (gpu.info.name.clone(), gpu.backend_name().to_string());
-            (Place::Gpu(gpu, on_gpu, splat), name.0, name.1)
+            (Place::Gpu(gpu, Box::new(renderer)), name.0, name.1)
         }
         None => {
             let grid = cpu::scene_grid(scene)?;
@@ -125,7 +121,8 @@ pub fn rebake(scene: &Scene, gpu: Option<&Gpu>) -> Result<RebakeBench> {
         preview_ms.push(ms);
         let (full, ms) = place.bake(&moved)?;
         full_ms.push(ms);
-        let d = difference(&place.image(&moved, &quick)?, &place.image(&moved, &full)?)?;
+        let preview_image = place.image(&moved, &quick)?;
+        let d = difference(&preview_image, &place.image(&moved, &full)?)?;
         errors.push(d.rel_mse);
     }
     let rebake_ms = median(full_ms);

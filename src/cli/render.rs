@@ -6,7 +6,7 @@ use std::time::Instant;
 
 use serde::Serialize;
 
-use crate::bake::{BakeDevice, Baked, Progress, StageReport, bake, bins_cpu, bins_gpu};
+use crate::bake::{BakeDevice, Baked, Progress, StageReport, bake, bins_cpu};
 use crate::cache::{self, Miss};
 use crate::camera::View;
 use crate::cpu;
@@ -14,10 +14,8 @@ use crate::cpu::photon_view::scene_scale;
 use crate::error::{Error, Result};
 use crate::frame::{FrameConfig, camera_uniform, cpu_frame, cpu_reference, shade_params};
 use crate::gpu::Gpu;
-use crate::gpu::frame::SplatPipelines;
 use crate::gpu::photon_view::photon_image;
 use crate::gpu::photons::trace_photons;
-use crate::gpu::reference::ReferencePipeline;
 use crate::gpu::scene::GpuScene;
 use crate::gpu::tone::tone_map;
 use crate::photons::{PhotonConfig, ms_since};
@@ -385,27 +383,14 @@ fn render_reference(
     let pixels = view.width * view.height;
     let (grid, photons, binning, drawn) = match gpu {
         Some(gpu) => {
-            let on_gpu = GpuScene::upload(gpu, scene)?;
-            let binned = bins_gpu(scene, gpu, &on_gpu, &progress)?;
+            let mut renderer = FrameRenderer::new(gpu, scene)?;
+            let binned = renderer.bins(gpu, scene, &progress)?;
             let t = Instant::now();
-            let pipelines = SplatPipelines::new(gpu)?;
-            let reference = ReferencePipeline::new(gpu, &pipelines)?;
-            let size = (view.width, view.height);
-            let targets = reference.image(
-                gpu,
-                &pipelines,
-                scene,
-                &on_gpu,
-                &binned.bins,
-                &binned.em,
-                &cam,
-                &opts.frame,
-                size,
-            )?;
+            let targets = renderer.draw_reference(gpu, scene, &binned, view, &opts.frame)?;
             let shade = StageReport::ran(ms_since(t));
             let drawn = drawn_on_gpu(gpu, &targets.hdr, pixels, format, &opts.tone, shade)?;
             (
-                StageReport::ran(on_gpu.grid_ms),
+                StageReport::ran(renderer.on_gpu.grid_ms),
                 binned.photons,
                 binned.binning,
                 drawn,

@@ -16,7 +16,7 @@ use std::time::Instant;
 
 use serde::Serialize;
 
-use crate::bake::{BakeDevice, Progress, bake, bins_cpu, bins_gpu};
+use crate::bake::{BakeDevice, Progress, bake, bins_cpu};
 use crate::camera::View;
 use crate::cli::compare::{Values, difference_of};
 use crate::cli::measure::median;
@@ -26,10 +26,8 @@ use crate::em::LobeFamily;
 use crate::error::{Error, Result};
 use crate::frame::{FrameConfig, camera_uniform, cpu_frame, cpu_reference, shade_params};
 use crate::gpu::Gpu;
-use crate::gpu::frame::{FrameScene, SplatPipelines};
-use crate::gpu::reference::ReferencePipeline;
-use crate::gpu::scene::GpuScene;
 use crate::photons::ms_since;
+use crate::renderer::FrameRenderer;
 use crate::scene::Scene;
 use crate::shared::rng::{pcg_hash, unit_float};
 
@@ -276,41 +274,47 @@ struct LobeRun {
 
 /// Where the sweep runs: a device with its pipelines built once, or the CPU mirror.
 enum Runner<'a> {
-    Gpu {
-        gpu: &'a Gpu,
-        splat: SplatPipelines,
-        reference: ReferencePipeline,
-    },
+    /// The device, and its frame renderer once the first scene is on it.
+    Gpu(&'a Gpu, Option<Box<FrameRenderer>>),
     Cpu,
 }
 
+/// The renderer of `slot` drawing `scene`: the passes compiled once, the scene uploaded anew.
+fn renderer_on<'r>(
+    gpu: &Gpu,
+    slot: &'r mut Option<Box<FrameRenderer>>,
+    scene: &Scene,
+) -> Result<&'r mut FrameRenderer> {
+    let renderer = match slot.take() {
+        Some(mut r) => {
+            r.set_scene(gpu, scene)?;
+            r
+        }
+        None => Box::new(FrameRenderer::new(gpu, scene)?),
+    };
+    Ok(slot.insert(renderer))
+}
+
 impl Runner<'_> {
-    fn lobes(&self, scene: &Scene, view: &View, frames: u32) -> Result<LobeRun> {
+    fn lobes(&mut self, scene: &Scene, view: &View, frames: u32) -> Result<LobeRun> {
         let quiet = Progress::new(false);
         let cfg = FrameConfig::default();
-        let cam = camera_uniform(view, scene.bounds(), &cfg);
-        let pixels = (view.width * view.height) as usize;
         let mut times = Vec::new();
         let (hdr, baked) = match self {
-            Runner::Gpu { gpu, splat, .. } => {
-                let on_gpu = GpuScene::upload(gpu, scene)?;
-                let baked = bake(scene, BakeDevice::Gpu(gpu, &on_gpu), &quiet)?;
-                let frame_scene = FrameScene::upload(gpu, scene, &baked.lobes)?;
-                let buffers = frame_scene.buffers(&on_gpu);
-                let params = shade_params(scene, &baked.lobes, &cfg);
-                let targets = splat.targets(gpu, view.width, view.height)?;
+            Runner::Gpu(gpu, slot) => {
+                let renderer = renderer_on(gpu, slot, scene)?;
+                let baked = renderer.bake(gpu, scene, &quiet)?;
                 for i in 0..=frames {
                     let t = Instant::now();
-                    let mut encoder = gpu.encoder("sweep frame");
-                    splat.draw(gpu, &mut encoder, &buffers, &cam, &params, &targets)?;
-                    gpu.submit_and_wait(encoder)?;
+                    renderer.draw(gpu, scene, view, &cfg)?;
                     if i > 0 {
                         times.push(ms_since(t));
                     }
                 }
-                (gpu.read::<[f32; 4]>(&targets.hdr, pixels)?, baked)
+                (renderer.read_hdr(gpu)?, baked)
             }
             Runner::Cpu => {
+                let cam = camera_uniform(view, scene.bounds(), &cfg);
                 let grid = cpu::scene_grid(scene)?;
                 let baked = bake(scene, BakeDevice::Cpu(&grid), &quiet)?;
                 let params = shade_params(scene, &baked.lobes, &cfg);
@@ -333,33 +337,18 @@ impl Runner<'_> {
         })
     }
 
-    fn reference(&self, scene: &Scene, view: &View) -> Result<Vec<[f32; 4]>> {
+    fn reference(&mut self, scene: &Scene, view: &View) -> Result<Vec<[f32; 4]>> {
         let progress = Progress::new(true);
         let cfg = FrameConfig::default();
-        let cam = camera_uniform(view, scene.bounds(), &cfg);
         match self {
-            Runner::Gpu {
-                gpu,
-                splat,
-                reference,
-            } => {
-                let on_gpu = GpuScene::upload(gpu, scene)?;
-                let binned = bins_gpu(scene, gpu, &on_gpu, &progress)?;
-                let size = (view.width, view.height);
-                let targets = reference.image(
-                    gpu,
-                    splat,
-                    scene,
-                    &on_gpu,
-                    &binned.bins,
-                    &binned.em,
-                    &cam,
-                    &cfg,
-                    size,
-                )?;
-                gpu.read(&targets.hdr, (view.width * view.height) as usize)
+            Runner::Gpu(gpu, slot) => {
+                let renderer = renderer_on(gpu, slot, scene)?;
+                let binned = renderer.bins(gpu, scene, &progress)?;
+                renderer.draw_reference(gpu, scene, &binned, view, &cfg)?;
+                renderer.read_hdr(gpu)
             }
             Runner::Cpu => {
+                let cam = camera_uniform(view, scene.bounds(), &cfg);
                 let grid = cpu::scene_grid(scene)?;
                 let binned = bins_cpu(scene, &grid, &progress)?;
                 Ok(cpu_reference(
@@ -384,16 +373,8 @@ pub fn sweep(
 ) -> Result<SweepReport> {
     let start = Instant::now();
     std::fs::create_dir_all(out_dir).map_err(|e| Error::io(out_dir, e))?;
-    let runner = match gpu {
-        Some(gpu) => {
-            let splat = SplatPipelines::new(gpu)?;
-            let reference = ReferencePipeline::new(gpu, &splat)?;
-            Runner::Gpu {
-                gpu,
-                splat,
-                reference,
-            }
-        }
+    let mut runner = match gpu {
+        Some(gpu) => Runner::Gpu(gpu, None),
         None => Runner::Cpu,
     };
     let (adapter, backend) = match gpu {

@@ -4,13 +4,9 @@
 //! for a reference never compile it.
 
 use super::bins::GpuBins;
-use super::frame::{FrameScene, FrameTargets, SceneBuffers, SplatPipelines, raster_pipeline};
-use super::scene::GpuScene;
+use super::frame::{FrameTargets, SceneBuffers, SplatPipelines, raster_pipeline};
 use super::{Gpu, buffer_entries};
-use crate::em::LobeMap;
 use crate::error::Result;
-use crate::frame::{FrameConfig, shade_params};
-use crate::scene::Scene;
 use crate::types::{Camera, EmParams, ShadeParams};
 
 pub struct ReferencePipeline {
@@ -84,42 +80,5 @@ impl ReferencePipeline {
             pass.draw(0..3, 0..1);
         }
         splat.shade(gpu, encoder, scene, cam, params, out)
-    }
-
-    /// The reference image of `cam` (`width × height`) from photons binned on the device, in
-    /// fresh targets whose `hdr` holds it once this returns.
-    #[allow(clippy::too_many_arguments)]
-    pub fn image(
-        &self,
-        gpu: &Gpu,
-        splat: &SplatPipelines,
-        scene: &Scene,
-        on_gpu: &GpuScene,
-        bins: &GpuBins,
-        em: &EmParams,
-        cam: &Camera,
-        cfg: &FrameConfig,
-        (width, height): (u32, u32),
-    ) -> Result<FrameTargets> {
-        // The shade pass reads no lobes: an empty map gives it its other settings.
-        let no_lobes = LobeMap::default();
-        let params = shade_params(scene, &no_lobes, cfg);
-        let frame_scene = FrameScene::upload(gpu, scene, &no_lobes)?;
-        let targets = splat.targets(gpu, width, height)?;
-        let mut encoder = gpu.encoder("reference");
-        let buffers = frame_scene.buffers(on_gpu);
-        self.draw(
-            gpu,
-            &mut encoder,
-            splat,
-            &buffers,
-            bins,
-            em,
-            cam,
-            &params,
-            &targets,
-        )?;
-        gpu.submit_and_wait(encoder)?;
-        Ok(targets)
     }
 }

@@ -25,16 +25,13 @@ use winit::window::{Window, WindowId};
 use crate::camera::View;
 use crate::cli::render::Method;
 use crate::cpu::photon_view::scene_scale;
-use crate::em::LobeMap;
 use crate::error::{Error, Result};
-use crate::frame::{FrameConfig, Show, camera_uniform, shade_params};
-use crate::gpu::frame::{FrameScene, FrameTargets, SplatPipelines};
+use crate::frame::{FrameConfig, Show, camera_uniform};
 use crate::gpu::photon_view::photon_image;
 use crate::gpu::present::PresentPipeline;
-use crate::gpu::reference::ReferencePipeline;
-use crate::gpu::scene::GpuScene;
 use crate::gpu::tone::tone_map;
 use crate::gpu::{BackendChoice, Gpu};
+use crate::renderer::FrameRenderer;
 use crate::scene::Scene;
 use crate::tone::ToneConfig;
 use baking::{BakeResult, Baking};
@@ -108,16 +105,11 @@ struct State {
     gpu: Arc<Gpu>,
     surface: wgpu::Surface<'static>,
     config: wgpu::SurfaceConfiguration,
-    on_gpu: Arc<GpuScene>,
-    pipelines: SplatPipelines,
-    /// Built the first time the reference is shown.
-    reference: Option<ReferencePipeline>,
+    /// The scene on the device, the splat passes, the lobes and the targets.
+    renderer: FrameRenderer,
     present: PresentPipeline,
-    frame_scene: FrameScene,
-    lobes: LobeMap,
     /// The last bake's photons and bins, on the device (reference and photon views).
     baked: Option<BakeResult>,
-    targets: FrameTargets,
     orbit: Orbit,
     tone: ToneConfig,
     method: Method,
@@ -178,10 +170,9 @@ impl App {
             color_space: wgpu::SurfaceColorSpace::Auto,
         };
         surface.configure(&gpu.device, &config);
-        let on_gpu = Arc::new(GpuScene::upload(&gpu, &self.scene)?);
-        let pipelines = SplatPipelines::new(&gpu)?;
+        let mut renderer = FrameRenderer::new(&gpu, &self.scene)?;
         let present = PresentPipeline::new(&gpu, format)?;
-        let targets = pipelines.targets(&gpu, config.width, config.height)?;
+        renderer.resize(&gpu, config.width, config.height)?;
         let cached = match &self.opts.cache {
             Some(path) => crate::cache::load(
                 path,
@@ -203,26 +194,23 @@ impl App {
                     None
                 };
                 let full = passes(&self.scene.bake, false);
-                let b = baking::spawn(&gpu, &on_gpu, &self.scene, full, save, &generation);
+                let on_gpu = &renderer.on_gpu;
+                let b = baking::spawn(&gpu, on_gpu, &self.scene, full, save, &generation);
                 (Some(b), None)
             }
         };
-        let lobes = cached.unwrap_or_default();
-        let frame_scene = FrameScene::upload(&gpu, &self.scene, &lobes)?;
+        if let Some(lobes) = &cached {
+            renderer.set_lobes(&gpu, &self.scene, lobes)?;
+        }
         eprintln!("{HELP}");
         Ok(State {
             window,
             gpu,
             surface,
             config,
-            on_gpu,
-            pipelines,
-            reference: None,
+            renderer,
             present,
-            frame_scene,
-            lobes,
             baked: None,
-            targets,
             orbit: Orbit::new(&self.scene.camera),
             tone: self.opts.tone,
             method: self.opts.method,
@@ -265,8 +253,7 @@ impl State {
                 result.emitted, result.seconds
             );
         }
-        self.frame_scene = FrameScene::upload(&self.gpu, scene, &result.lobes)?;
-        self.lobes = result.lobes.clone();
+        self.renderer.set_lobes(&self.gpu, scene, &result.lobes)?;
         self.baked = Some(result);
         Ok(())
     }
@@ -276,7 +263,7 @@ impl State {
         let counts = passes(&scene.bake, preview);
         let b = baking::spawn(
             &self.gpu,
-            &self.on_gpu,
+            &self.renderer.on_gpu,
             scene,
             counts,
             None,
@@ -299,7 +286,7 @@ impl State {
             eprintln!("lobelight: {e}");
             return Ok(());
         }
-        self.targets = self.pipelines.targets(&self.gpu, size.width, size.height)?;
+        self.renderer.resize(&self.gpu, size.width, size.height)?;
         Ok(())
     }
 
@@ -314,41 +301,24 @@ impl State {
         let view = View::new(&self.orbit.camera(), w, h);
         let cam = camera_uniform(&view, scene.bounds(), frame);
         let gpu = &self.gpu;
-        let buffers = self.frame_scene.buffers(&self.on_gpu);
         match (self.method, &self.baked) {
             (Method::Photons, Some(baked)) => {
                 let scale = scene_scale(&scene.lights, baked.emitted)?;
-                let hdr = photon_image(gpu, encoder, &self.on_gpu, &baked.photons, &cam, scale)?;
+                let on_gpu = &self.renderer.on_gpu;
+                let hdr = photon_image(gpu, encoder, on_gpu, &baked.photons, &cam, scale)?;
                 Ok(std::borrow::Cow::Owned(hdr))
             }
             (Method::Reference, Some(baked)) => {
-                if self.reference.is_none() {
-                    self.reference = Some(ReferencePipeline::new(gpu, &self.pipelines)?);
-                }
-                let no_lobes = LobeMap::default();
-                let params = shade_params(scene, &no_lobes, frame);
-                if let Some(reference) = &self.reference {
-                    let bins = &baked.binned;
-                    reference.draw(
-                        gpu,
-                        encoder,
-                        &self.pipelines,
-                        &buffers,
-                        &bins.bins,
-                        &bins.em,
-                        &cam,
-                        &params,
-                        &self.targets,
-                    )?;
-                }
-                Ok(std::borrow::Cow::Borrowed(&self.targets.hdr))
+                let (bins, em) = (&baked.binned.bins, &baked.binned.em);
+                let hdr = self
+                    .renderer
+                    .record_reference(gpu, encoder, scene, bins, em, &cam, frame)?;
+                Ok(std::borrow::Cow::Borrowed(hdr))
             }
             // The lobes, and what shows while the photons a view needs are on their way.
             _ => {
-                let params = shade_params(scene, &self.lobes, frame);
-                self.pipelines
-                    .draw(gpu, encoder, &buffers, &cam, &params, &self.targets)?;
-                Ok(std::borrow::Cow::Borrowed(&self.targets.hdr))
+                let hdr = self.renderer.record(gpu, encoder, scene, &cam, frame)?;
+                Ok(std::borrow::Cow::Borrowed(hdr))
             }
         }
     }
@@ -357,7 +327,8 @@ impl State {
     /// when the surface could not give a texture this time.
     fn draw(&mut self, scene: &Scene, frame: &FrameConfig) -> Result<Option<wgpu::Buffer>> {
         let (w, h) = (self.config.width, self.config.height);
-        if self.targets.width != w || self.targets.height != h {
+        let targets = self.renderer.targets()?;
+        if targets.width != w || targets.height != h {
             return Ok(None);
         }
         let texture = match self.surface.get_current_texture() {
@@ -654,8 +625,7 @@ impl App {
                         self.scene = Arc::new(moved);
                         // Direct light follows at once; the indirect light with the preview
                         // bake, then the full one (a bake for the old position stops).
-                        state.frame_scene =
-                            FrameScene::upload(&state.gpu, &self.scene, &state.lobes)?;
+                        state.renderer.set_lights(&state.gpu, &self.scene)?;
                         state.rebake(&self.scene, true);
                     }
                     None => {}
