@@ -5,11 +5,13 @@
 //! in this list; docs/architecture.md):
 //!
 //! - `error`, `types` (the `#[repr(C)]` records shared with WGSL), `shared` (math shared by
-//!   the mirrors and the host);
+//!   the mirrors and the host), `shaders` (the WGSL sources, the stage table and what naga
+//!   reads of them);
 //! - `grid`, `photons`, `bins`, `em`, `tone`, `convolution` (each stage's settings, limits and
 //!   host-side data);
 //! - `scene` (the scene file, procedural shapes and model files) and `camera`;
-//! - `cpu` (the mirrors) and `gpu` (the device host), `frame` (what a frame draws);
+//! - `sequence` (each multi-dispatch stage's dispatches, written once), run by `cpu` (the
+//!   mirrors) and `gpu` (the device host); `frame` (what a frame draws);
 //! - `bake` (photons → bins → lobes on either), `cache` (a bake on disk) and `renderer` (the
 //!   device's frame: bake, draw from a view, tone map, read back);
 //! - `cli` (feature `app`): the `lobelight` commands.
@@ -41,6 +43,8 @@ pub mod grid;
 pub mod photons;
 pub mod renderer;
 pub mod scene;
+pub mod sequence;
+pub mod shaders;
 pub mod shared;
 pub mod tone;
 pub mod types;

@@ -3,7 +3,7 @@
 
 use std::mem::{offset_of, size_of};
 
-use lobelight::gpu::shaders::SHARED;
+use lobelight::shaders::SHARED;
 use lobelight::types::*;
 
 struct RustLayout {

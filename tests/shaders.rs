@@ -1,7 +1,7 @@
 //! Every WGSL file is registered, resolves its imports and passes naga's validation; the
 //! resolver's errors name the file and line. No GPU needed.
 
-use lobelight::gpu::shaders::{self, SHARED, STAGES};
+use lobelight::shaders::{self, SHARED, STAGES};
 
 fn names_in(dir: &str) -> Vec<String> {
     let mut names: Vec<String> = std::fs::read_dir(dir)
@@ -146,7 +146,7 @@ fn unbalanced_ifdef_names_file_and_line() {
 #[test]
 fn mirror_workgroup_shapes_match_the_wgsl() {
     use lobelight::cpu::*;
-    use lobelight::gpu::shaders::{STAGES, stage_shape};
+    use lobelight::shaders::{STAGES, stage_shape};
     let mirrors: &[(&str, u32, u32)] = &[
         ("grid_count", grid_count::WG, 1),
         ("grid_scatter", grid_scatter::WG, 1),

@@ -9,6 +9,7 @@ pub mod bin_rank;
 pub mod bin_scatter;
 pub mod em_fit;
 pub mod em_select;
+pub mod exec;
 pub mod grid_count;
 pub mod grid_distance;
 pub mod grid_rank;
@@ -32,40 +33,31 @@ use std::time::Instant;
 use crate::bins::PhotonBins;
 use crate::em::{EmConfig, EmStats, FitShape, LobeMap};
 use crate::error::{Error, Result};
-use crate::grid::{SplatGrid, check_cell_len};
+use crate::grid::SplatGrid;
 use crate::photons::{
     PhotonConfig, PhotonMap, PhotonStats, StoreAction, StorePlanner, emitters, first_capacity,
     ms_since,
 };
 use crate::shared::trace::Geometry;
-use crate::types::{
-    BinParams, BinnedPhoton, DistanceParams, EmParams, GridParams, Lobe, ScanParams, Splat,
-    SplatLight,
-};
+use crate::types::{BinParams, GridParams, Lobe, Splat, SplatLight};
 use crate::types::{Light, Material, Photon, TraceCounters};
 
 pub use crate::shared::dispatch::groups_for;
+pub use exec::{CpuBuffer, CpuExecutor};
 
-/// Tone mapping as `gpu::tone::tone_map` records it: the reduction level by level, then the
-/// operator; returns RGBA8 pixels and (Σ log(ε + Y), count).
+use crate::sequence::{self, Executor, FitInput};
+
+/// Tone mapping on the CPU mirror (`sequence::tone_map`); returns RGBA8 pixels and
+/// (Σ log(ε + Y), count).
 pub fn tone_map(cfg: &crate::tone::ToneConfig, hdr: &[[f32; 4]]) -> Result<(Vec<u32>, [f32; 2])> {
-    cfg.validate()?;
     let pixels = u32::try_from(hdr.len())
         .map_err(|_| Error::Invalid("too many pixels to tone-map".into()))?;
-    let mut sums_in = vec![[0.0f32; 2]];
-    for (level, &count) in crate::tone::reduce_levels(pixels, tonemap_reduce::BLOCK)
-        .iter()
-        .enumerate()
-    {
-        let blocks = groups_for(count, tonemap_reduce::BLOCK).max(1);
-        let mut sums_out = vec![[0.0f32; 2]; blocks as usize];
-        let params = cfg.params(count, level as u32);
-        tonemap_reduce::tonemap_reduce(&params, hdr, &sums_in, &mut sums_out, blocks);
-        sums_in = sums_out;
-    }
-    let mut rgba = vec![0u32; hdr.len()];
-    tonemap_apply::tonemap_apply(&cfg.params(pixels, 0), hdr, &sums_in, &mut rgba);
-    Ok((rgba, sums_in[0]))
+    let mut ex = CpuExecutor;
+    let hdr = ex.upload("hdr image", hdr)?;
+    let toned = sequence::tone_map(&mut ex, &hdr, pixels, cfg)?;
+    let rgba = ex.read(&toned.rgba, pixels as usize)?;
+    let log_sum = ex.read::<[f32; 2]>(&toned.log_sum, 1)?;
+    Ok((rgba, log_sum.first().copied().unwrap_or_default()))
 }
 
 /// The photon view of `cam` as `gpu::photon_view::photon_image` records it: every page (here
@@ -93,87 +85,28 @@ pub fn photon_image(
     hdr
 }
 
-/// Exclusive scan of `values` in place, level by level exactly as `gpu::scan` records it:
-/// reduce blocks, scan the block sums recursively, apply.
-pub fn exclusive_scan(values: &mut [u32]) {
-    let len = values.len() as u32;
-    let params = ScanParams {
-        len,
-        ..Default::default()
-    };
-    let blocks = groups_for(len, scan_reduce::BLOCK);
-    if blocks <= 1 {
-        scan_apply::scan_apply(&params, values, &[0], blocks);
-        return;
-    }
-    let mut block_sums = vec![0u32; blocks as usize];
-    scan_reduce::scan_reduce(&params, values, &mut block_sums, blocks);
-    exclusive_scan(&mut block_sums);
-    scan_apply::scan_apply(&params, values, &block_sums, blocks);
+/// Exclusive scan of `values` in place on the CPU mirror (`sequence::exclusive_scan`).
+pub fn exclusive_scan(values: &mut [u32]) -> Result<()> {
+    let len = u32::try_from(values.len())
+        .map_err(|_| Error::Invalid("too many values to scan".into()))?;
+    let mut ex = CpuExecutor;
+    let buffer = ex.upload("scan values", values)?;
+    sequence::exclusive_scan(&mut ex, &buffer, len)?;
+    values.copy_from_slice(&ex.read::<u32>(&buffer, values.len())?);
+    Ok(())
 }
 
-/// The distance field of a grid's cell lists: passes x, y, z of `grid_distance`.
-pub fn distance_field(grid: &GridParams, cell_start: &[u32]) -> Vec<u32> {
-    let cells = grid.cell_count as usize;
-    let groups = groups_for(grid.cell_count, grid_distance::WG);
-    let (mut a, mut b) = (vec![0u32; cells], vec![0u32; cells]);
-    let pass = |axis| DistanceParams {
-        axis,
-        ..Default::default()
-    };
-    grid_distance::grid_distance(&pass(0), grid, cell_start, cell_start, &mut a, groups);
-    grid_distance::grid_distance(&pass(1), grid, cell_start, &a, &mut b, groups);
-    grid_distance::grid_distance(&pass(2), grid, cell_start, &b, &mut a, groups);
-    a
-}
-
-/// The whole grid build on the CPU: count → exclusive scan → scatter → rank, then the
-/// distance field.
+/// The grid build on the CPU mirror (`sequence::build_grid`).
 pub fn build_grid(params: &GridParams, splats: &[Splat]) -> Result<SplatGrid> {
-    let splat_groups = groups_for(params.splat_count, grid_count::WG);
-    let mut cell_start = vec![0u32; params.cell_count as usize + 1];
-    let mut max_cell_len = 0;
-    grid_count::grid_count(
-        params,
-        splats,
-        &mut cell_start,
-        &mut max_cell_len,
-        splat_groups,
-    );
-    check_cell_len(max_cell_len)?;
-    exclusive_scan(&mut cell_start);
-    let params = GridParams {
-        entry_count: cell_start[params.cell_count as usize],
-        ..*params
-    };
-    let entries = params.entry_count as usize;
-    let mut cursor = vec![0u32; params.cell_count as usize];
-    let (mut scratch_splats, mut scratch_cells) = (vec![0u32; entries], vec![0u32; entries]);
-    grid_scatter::grid_scatter(
-        &params,
-        splats,
-        &cell_start,
-        &mut cursor,
-        &mut scratch_splats,
-        &mut scratch_cells,
-        splat_groups,
-    );
-    let mut cell_splats = vec![0u32; entries];
-    let entry_groups = groups_for(params.entry_count, grid_rank::WG);
-    grid_rank::grid_rank(
-        &params,
-        &cell_start,
-        &scratch_splats,
-        &scratch_cells,
-        &mut cell_splats,
-        entry_groups,
-    );
-    let cell_dist = distance_field(&params, &cell_start);
+    let mut ex = CpuExecutor;
+    let splat_buf = ex.upload("splats", splats)?;
+    let built = sequence::build_grid(&mut ex, params, &splat_buf)?;
+    let params = built.params;
     Ok(SplatGrid {
         params,
-        cell_start,
-        cell_splats,
-        cell_dist,
+        cell_start: ex.read(&built.cell_start, params.cell_count as usize + 1)?,
+        cell_splats: ex.read(&built.cell_splats, params.entry_count as usize)?,
+        cell_dist: ex.read(&built.cell_dist, params.cell_count as usize)?,
     })
 }
 
@@ -271,72 +204,22 @@ pub fn trace_scene(
     Ok((map, grid, grid_ms))
 }
 
-/// Photon binning on the CPU: the passes of `gpu::bins::bin_photons` over one page holding
-/// every photon.
+/// Photon binning on the CPU mirror (`sequence::bin_photons`) over one page holding every
+/// photon.
 pub fn bin_photons(params: &BinParams, photons: &[Photon]) -> Result<PhotonBins> {
     let n = u32::try_from(photons.len())
         .map_err(|_| Error::Invalid("too many photons to bin".into()))?;
-    let params = BinParams {
-        photon_count: n,
-        ..*params
-    };
-    let cells = params.cell_count as usize;
-    let groups = groups_for(n, bin_count::WG);
-    let mut cell_start = vec![0u32; cells + 1];
-    let mut chunks = 0;
-    bin_count::bin_count(&params, photons, &mut cell_start, &mut chunks, groups);
-    exclusive_scan(&mut cell_start);
-    let len = n as usize;
-    let mut cursor = vec![0u32; cells];
-    let mut scratch_keys = vec![[0u32; 2]; len];
-    let mut scratch_cells = vec![0u32; len];
-    let mut scratch_geom = vec![BinnedPhoton::default(); len];
-    let mut scratch_power = vec![[0f32; 4]; len];
-    bin_scatter::bin_scatter(
-        &params,
-        photons,
-        &cell_start,
-        &mut cursor,
-        &mut scratch_keys,
-        &mut scratch_cells,
-        &mut scratch_geom,
-        &mut scratch_power,
-        groups,
-    );
-    let mut slots = vec![0u32; len];
-    for chunk in 0..chunks {
-        let pass = BinParams {
-            rank_chunk: chunk,
-            ..params
-        };
-        bin_rank::bin_rank(
-            &pass,
-            &cell_start,
-            &scratch_keys,
-            &scratch_cells,
-            &mut slots,
-            groups,
-        );
-    }
-    let mut bins = PhotonBins {
-        params,
-        cell_start,
-        keys: vec![[0u32; 2]; len],
-        geom: vec![BinnedPhoton::default(); len],
-        power: vec![[0f32; 4]; len],
-    };
-    bin_place::bin_place(
-        &params,
-        &slots,
-        &scratch_keys,
-        &scratch_geom,
-        &scratch_power,
-        &mut bins.keys,
-        &mut bins.geom,
-        &mut bins.power,
-        groups,
-    );
-    Ok(bins)
+    let mut ex = CpuExecutor;
+    let page = ex.upload("photons", photons)?;
+    let bins = sequence::bin_photons(&mut ex, &[(&page, n)], params)?;
+    let (len, cells) = (n as usize, bins.params.cell_count as usize);
+    Ok(PhotonBins {
+        params: bins.params,
+        cell_start: ex.read(&bins.cell_start, cells + 1)?,
+        keys: ex.read(&bins.keys, len)?,
+        geom: ex.read(&bins.geom, len)?,
+        power: ex.read(&bins.power, len)?,
+    })
 }
 
 /// The lobe fit on the CPU: `em_select`, then `em_fit` over the same dispatch ranges and
@@ -348,55 +231,37 @@ pub fn fit_lobes(
     materials: &[Material],
     shape: FitShape,
 ) -> Result<LobeMap> {
-    cfg.validate()?;
     let t = Instant::now();
     let splat_count = u32::try_from(splats.len())
         .map_err(|_| Error::Invalid("too many splats for the lobe fit".into()))?;
+    let mut ex = CpuExecutor;
+    let bin_params = ex.uniform("bin params", &bins.params)?;
+    let cell_start = ex.upload("bin cell start", &bins.cell_start)?;
+    let geom = ex.upload("binned geometry", &bins.geom)?;
+    let power = ex.upload("binned power", &bins.power)?;
+    let splat_buf = ex.upload("splats", splats)?;
+    let material_buf = ex.upload("materials", materials)?;
+    let input = FitInput {
+        bin_params: &bin_params,
+        cell_start: &cell_start,
+        geom: &geom,
+        power: &power,
+        splats: &splat_buf,
+        materials: &material_buf,
+        splat_count,
+    };
+    let fit = sequence::fit_lobes(&mut ex, &input, cfg, shape)?;
     let n = splats.len();
-    let mut fit_list = vec![0u32; n];
-    let mut counters = [0u32; 3];
-    em_select::em_select(
-        &cfg.params(splat_count, 0, shape),
-        &bins.params,
-        splats,
-        materials,
-        &bins.cell_start,
-        &mut fit_list,
-        &mut counters,
-        groups_for(splat_count, em_select::WG),
-    );
-    let [listed, max_candidates, fitted] = counters;
-    let chunk = crate::em::iterations_per_dispatch(cfg, max_candidates, shape.loop_limited)?;
-    // The fit's slots, `cfg.lobes` a splat (also the mixture handed between dispatches).
-    let mut dense = vec![Lobe::default(); n * cfg.lobes as usize];
-    let mut light = vec![SplatLight::default(); n];
-    let mut stats = EmStats {
-        listed,
-        fitted,
-        max_candidates,
+    let dense = ex.read::<Lobe>(&fit.lobes, n * cfg.lobes as usize)?;
+    let light = ex.read::<SplatLight>(&fit.light, n)?;
+    let stats = EmStats {
+        listed: fit.listed,
+        fitted: fit.fitted,
+        max_candidates: fit.max_candidates,
+        dispatches: fit.dispatches,
+        ms: ms_since(t),
         ..Default::default()
     };
-    for (begin, end) in crate::em::dispatch_ranges(cfg.iterations, chunk) {
-        let params = EmParams {
-            iteration_begin: begin,
-            iteration_end: end,
-            ..cfg.params(splat_count, listed, shape)
-        };
-        em_fit::em_fit(
-            &params,
-            &bins.params,
-            splats,
-            &fit_list,
-            &bins.cell_start,
-            &bins.geom,
-            &bins.power,
-            &mut dense,
-            &mut light,
-            listed,
-        );
-        stats.dispatches += 1;
-    }
-    stats.ms = ms_since(t);
     let mut map = LobeMap::pack(cfg.lobes, &dense, light, stats);
     map.stats.photons = map.fitted().map(|l| l.photons as u64).sum();
     Ok(map)

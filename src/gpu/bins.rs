@@ -1,12 +1,12 @@
-//! Photon binning on the device: `bin_count` and `bin_scatter` once per store page, an
-//! exclusive scan between them, then `bin_rank` (once per chunk of the longest cell list) and
-//! `bin_place`. The same passes as `cpu::bin_photons`, with identical lists as the result.
+//! Photon binning on the device: `sequence::bin_photons` over every store page, as
+//! `cpu::bin_photons` runs it over one, with identical lists as the result.
 
 use super::Gpu;
+use super::exec::GpuExecutor;
 use super::photons::GpuPhotons;
-use super::scan;
 use crate::bins::{PhotonBins, check_binned};
-use crate::error::{Error, Result};
+use crate::error::Result;
+use crate::sequence;
 use crate::types::{BinParams, BinnedPhoton};
 
 /// Binned photons on the device (see `PhotonBins`).
@@ -47,114 +47,25 @@ impl GpuBins {
     }
 }
 
+/// Bins the photons of every store page on the device (`sequence::bin_photons`).
 pub fn bin_photons(gpu: &Gpu, photons: &GpuPhotons, params: &BinParams) -> Result<GpuBins> {
     let total: u64 = photons.pages.iter().map(|p| p.count).sum();
     check_binned(total, gpu.max_binding_bytes())?;
-    let n = total as u32;
-    let page_params: Vec<(wgpu::Buffer, u32)> = photons
+    let pages: Vec<(&wgpu::Buffer, u32)> = photons
         .pages
         .iter()
-        .map(|p| {
-            let count = p.count as u32;
-            let params = BinParams {
-                photon_count: count,
-                ..*params
-            };
-            (gpu.uniform("bin page params", &params), count)
-        })
+        .map(|p| (&p.buffer, p.count as u32))
         .collect();
-    let cells = params.cell_count as u64;
-    let cell_start = gpu.storage_zeroed("bin cell start", (cells + 1) * 4)?;
-    let chunks = gpu.storage_zeroed("bin rank chunks", 4)?;
-    let mut encoder = gpu.encoder("bin count");
-    for (page, (uniform, count)) in photons.pages.iter().zip(&page_params) {
-        gpu.dispatch(
-            &mut encoder,
-            "bin_count",
-            &[uniform, &page.buffer, &cell_start, &chunks],
-            gpu.groups("bin_count", *count)?,
-        )?;
-    }
-    scan::exclusive_scan(gpu, &mut encoder, &cell_start, params.cell_count + 1)?;
-
-    // Entries to allocate (at least one: empty bindings are invalid).
-    let len = total.max(1);
-    let cursor = gpu.storage_zeroed("bin cursor", cells * 4)?;
-    let scratch_keys = gpu.storage_zeroed("bin scratch keys", len * 8)?;
-    let scratch_cells = gpu.storage_zeroed("bin scratch cells", len * 4)?;
-    let scratch_geom = gpu.storage_zeroed("bin scratch geometry", len * 16)?;
-    let scratch_power = gpu.storage_zeroed("bin scratch power", len * 16)?;
-    for (page, (uniform, count)) in photons.pages.iter().zip(&page_params) {
-        gpu.dispatch(
-            &mut encoder,
-            "bin_scatter",
-            &[
-                uniform,
-                &page.buffer,
-                &cell_start,
-                &cursor,
-                &scratch_keys,
-                &scratch_cells,
-                &scratch_geom,
-                &scratch_power,
-            ],
-            gpu.groups("bin_scatter", *count)?,
-        )?;
-    }
-    gpu.submit_and_wait(encoder)?;
-    let rank_chunks = match gpu.read::<u32>(&chunks, 1)?[..] {
-        [c] => c,
-        _ => return Err(Error::Gpu("bin chunk readback was short".into())),
-    };
-
-    let params = BinParams {
-        photon_count: n,
-        ..*params
-    };
-    let slots = gpu.storage_zeroed("bin slots", len * 4)?;
-    let mut encoder = gpu.encoder("bin rank");
-    for chunk in 0..rank_chunks {
-        let pass = gpu.uniform(
-            "bin rank params",
-            &BinParams {
-                rank_chunk: chunk,
-                ..params
-            },
-        );
-        gpu.dispatch(
-            &mut encoder,
-            "bin_rank",
-            &[&pass, &cell_start, &scratch_keys, &scratch_cells, &slots],
-            gpu.groups("bin_rank", n)?,
-        )?;
-    }
-    let params_buf = gpu.uniform("bin params", &params);
-    let keys = gpu.storage_zeroed("binned keys", len * 8)?;
-    let geom = gpu.storage_zeroed("binned geometry", len * 16)?;
-    let power = gpu.storage_zeroed("binned power", len * 16)?;
-    gpu.dispatch(
-        &mut encoder,
-        "bin_place",
-        &[
-            &params_buf,
-            &slots,
-            &scratch_keys,
-            &scratch_geom,
-            &scratch_power,
-            &keys,
-            &geom,
-            &power,
-        ],
-        gpu.groups("bin_place", n)?,
-    )?;
+    let mut encoder = gpu.encoder("binning");
+    let bins = sequence::bin_photons(&mut GpuExecutor::new(gpu, &mut encoder), &pages, params)?;
     gpu.submit_and_wait(encoder)?;
     Ok(GpuBins {
-        params,
-        params_buf,
-        cell_start,
-        keys,
-        geom,
-        power,
-        rank_chunks,
+        params: bins.params,
+        params_buf: bins.params_buf,
+        cell_start: bins.cell_start,
+        keys: bins.keys,
+        geom: bins.geom,
+        power: bins.power,
+        rank_chunks: bins.rank_chunks,
     })
 }

@@ -1,18 +1,16 @@
-//! The lobe fit on the device: `em_select` lists the splats with photons near them, the host
-//! reads the list's length (and the most candidates any splat has, which sizes the dispatches
-//! on a loop-limited device), then `em_fit` runs one workgroup per listed splat, in one
-//! dispatch or in several that hand the mixture over through the lobe buffer.
+//! The lobe fit on the device: `sequence::fit_lobes` (`em_select`, the list's length read
+//! back, then `em_fit` one workgroup per listed splat), in the device's shape.
 
 use std::time::Instant;
 
 use super::Gpu;
 use super::bins::GpuBins;
-use crate::em::{
-    EmConfig, EmStats, FitShape, LobeMap, dispatch_ranges, iterations_per_dispatch, workgroup_size,
-};
+use super::exec::GpuExecutor;
+use crate::em::{EmConfig, EmStats, FitShape, LobeMap, workgroup_size};
 use crate::error::{Error, Result};
 use crate::photons::ms_since;
-use crate::types::{EmParams, Lobe, SplatLight};
+use crate::sequence::{self, FitInput};
+use crate::types::{Lobe, SplatLight};
 
 /// The fit's output on the device.
 pub struct GpuLobes {
@@ -95,85 +93,29 @@ pub fn fit_lobes_shaped(
         ));
     }
     let t = Instant::now();
-    let n = splat_count as u64;
-    let lobes = gpu.storage_zeroed("lobes", (n * cfg.lobes as u64).max(1) * 32)?;
-    let light = gpu.storage_zeroed("splat light", n.max(1) * 32)?;
-    let fit_list = gpu.storage_zeroed("fit list", n.max(1) * 4)?;
-    let counters = gpu.storage_zeroed("em counters", 12)?;
-    let select = gpu.uniform("em select params", &cfg.params(splat_count, 0, shape));
-    let mut encoder = gpu.encoder("em select");
-    gpu.dispatch(
-        &mut encoder,
-        "em_select",
-        &[
-            &select,
-            &bins.params_buf,
-            splats,
-            materials,
-            &bins.cell_start,
-            &fit_list,
-            &counters,
-        ],
-        gpu.groups("em_select", splat_count)?,
-    )?;
-    gpu.submit_and_wait(encoder)?;
-    let (listed, max_candidates, fitted) = match gpu.read::<u32>(&counters, 3)?[..] {
-        [a, b, c] => (a, b, c),
-        _ => return Err(Error::Gpu("em counters readback was short".into())),
+    let input = FitInput {
+        bin_params: &bins.params_buf,
+        cell_start: &bins.cell_start,
+        geom: &bins.geom,
+        power: &bins.power,
+        splats,
+        materials,
+        splat_count,
     };
-    let chunk = iterations_per_dispatch(cfg, max_candidates, shape.loop_limited)?;
-    let constants = [
-        ("LOBES", cfg.lobes as f64),
-        ("FAMILY", cfg.family.code() as f64),
-        ("WG", workgroup_size(shape.loop_limited) as f64),
-        ("SPARSE", f64::from(u8::from(cfg.sparse))),
-    ];
-    let defines: &[&str] = if shape.subgroup_reduce {
-        &["subgroups"]
-    } else {
-        &[]
-    };
-    let pipeline = gpu.variant("em_fit", defines, &constants)?;
-    let mut encoder = gpu.encoder("em fit");
-    let mut dispatches = 0;
-    for (begin, end) in dispatch_ranges(cfg.iterations, chunk) {
-        let params = EmParams {
-            iteration_begin: begin,
-            iteration_end: end,
-            ..cfg.params(splat_count, listed, shape)
-        };
-        let uniform = gpu.uniform("em params", &params);
-        gpu.dispatch_pipeline(
-            &mut encoder,
-            "em_fit",
-            &pipeline,
-            &[&[
-                &uniform,
-                &bins.params_buf,
-                splats,
-                &fit_list,
-                &bins.cell_start,
-                &bins.geom,
-                &bins.power,
-                &lobes,
-                &light,
-            ]],
-            listed,
-        )?;
-        dispatches += 1;
-    }
+    let mut encoder = gpu.encoder("lobe fit");
+    let fit = sequence::fit_lobes(&mut GpuExecutor::new(gpu, &mut encoder), &input, cfg, shape)?;
     gpu.submit_and_wait(encoder)?;
     Ok(GpuLobes {
         lobes_per_splat: cfg.lobes,
-        lobes,
-        light,
+        lobes: fit.lobes,
+        light: fit.light,
         splat_count,
         stats: EmStats {
-            listed,
-            fitted,
-            max_candidates,
+            listed: fit.listed,
+            fitted: fit.fitted,
+            max_candidates: fit.max_candidates,
             photons: 0,
-            dispatches,
+            dispatches: fit.dispatches,
             ms: ms_since(t),
         },
     })

@@ -138,7 +138,7 @@ impl FrameTargets {
 }
 
 fn module(gpu: &Gpu, name: &'static str) -> Result<wgpu::ShaderModule> {
-    let source = super::shaders::resolve_stage(name)?;
+    let source = crate::shaders::resolve_stage(name)?;
     Ok(gpu
         .device
         .create_shader_module(wgpu::ShaderModuleDescriptor {

@@ -3,6 +3,7 @@
 
 pub mod bins;
 pub mod em;
+pub mod exec;
 pub mod frame;
 pub mod grid;
 pub mod photon_view;
@@ -11,7 +12,7 @@ pub mod present;
 pub mod reference;
 pub mod scan;
 pub mod scene;
-pub mod shaders;
+
 pub mod tone;
 
 use std::collections::HashMap;
@@ -235,7 +236,7 @@ impl Gpu {
         if let Some(p) = cache.get(&key) {
             return Ok(p.clone());
         }
-        let source = shaders::resolve_stage_with(name, defines)?;
+        let source = crate::shaders::resolve_stage_with(name, defines)?;
         let module = self
             .device
             .create_shader_module(wgpu::ShaderModuleDescriptor {
@@ -265,7 +266,7 @@ impl Gpu {
     /// Workgroups of `stage` that cover `n` values, from the workgroup size and items per
     /// invocation its WGSL declares (`shaders::stage_shape`).
     pub fn groups(&self, stage: &str, n: u32) -> Result<u32> {
-        let per_group = shaders::stage_shape(stage)?.per_group(stage)?;
+        let per_group = crate::shaders::stage_shape(stage)?.per_group(stage)?;
         Ok(crate::shared::dispatch::groups_for(n, per_group))
     }
 

@@ -1,10 +1,10 @@
-//! Multi-level exclusive scan of a u32 buffer in place: `scan_reduce` writes one sum per block
-//! of `WG × ITEMS` values, the block sums are scanned recursively, and `scan_apply` finishes each
-//! block. Any length the buffer limits allow. Mirrors `cpu::exclusive_scan`.
+//! Multi-level exclusive scan of a u32 buffer in place on the device: `sequence::exclusive_scan`
+//! recorded into an encoder. Any length the buffer limits allow.
 
 use super::Gpu;
+use super::exec::GpuExecutor;
 use crate::error::Result;
-use crate::types::ScanParams;
+use crate::sequence;
 
 /// Records the scan of the first `len` values of `values` into `encoder`.
 pub fn exclusive_scan(
@@ -13,30 +13,5 @@ pub fn exclusive_scan(
     values: &wgpu::Buffer,
     len: u32,
 ) -> Result<()> {
-    let blocks = gpu.groups("scan_reduce", len)?;
-    let params = gpu.uniform(
-        "scan params",
-        &ScanParams {
-            len,
-            ..Default::default()
-        },
-    );
-    if blocks <= 1 {
-        let zero = gpu.storage("scan zero offset", &[0u32])?;
-        return gpu.dispatch(encoder, "scan_apply", &[&params, values, &zero], blocks);
-    }
-    let block_sums = gpu.storage_zeroed("scan block sums", blocks as u64 * 4)?;
-    gpu.dispatch(
-        encoder,
-        "scan_reduce",
-        &[&params, values, &block_sums],
-        blocks,
-    )?;
-    exclusive_scan(gpu, encoder, &block_sums, blocks)?;
-    gpu.dispatch(
-        encoder,
-        "scan_apply",
-        &[&params, values, &block_sums],
-        blocks,
-    )
+    sequence::exclusive_scan(&mut GpuExecutor::new(gpu, encoder), values, len)
 }

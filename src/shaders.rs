@@ -23,7 +23,7 @@ macro_rules! stage {
     ($name:literal) => {
         WgslFile {
             name: $name,
-            text: include_str!(concat!("../../wgsl/", $name, ".wgsl")),
+            text: include_str!(concat!("../wgsl/", $name, ".wgsl")),
         }
     };
 }
@@ -32,7 +32,7 @@ macro_rules! shared {
     ($name:literal) => {
         WgslFile {
             name: $name,
-            text: include_str!(concat!("../../wgsl/shared/", $name, ".wgsl")),
+            text: include_str!(concat!("../wgsl/shared/", $name, ".wgsl")),
         }
     };
 }

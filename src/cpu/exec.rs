@@ -1,0 +1,319 @@
+//! The CPU mirror's executor of `sequence`s: buffers are host words, and each dispatch runs
+//! the stage's mirror at once, with the same bindings in the same order as its WGSL.
+
+use std::cell::{Ref, RefCell, RefMut};
+use std::rc::Rc;
+
+use bytemuck::Pod;
+
+use super::{bin_count, bin_place, bin_rank, bin_scatter, em_fit, em_select};
+use super::{grid_count, grid_distance, grid_rank, grid_scatter};
+use super::{scan_apply, scan_reduce, tonemap_apply, tonemap_reduce};
+use crate::error::{Error, Result};
+use crate::sequence::Executor;
+
+/// A buffer in host memory: 4-byte words, so every record type views it in place.
+pub type CpuBuffer = Rc<RefCell<Vec<u32>>>;
+
+#[derive(Default)]
+pub struct CpuExecutor;
+
+fn words_for(bytes: u64) -> usize {
+    (bytes.div_ceil(4) as usize).max(1)
+}
+
+impl Executor for CpuExecutor {
+    type Buffer = CpuBuffer;
+
+    fn zeroed(&mut self, _label: &'static str, bytes: u64) -> Result<CpuBuffer> {
+        Ok(Rc::new(RefCell::new(vec![0; words_for(bytes)])))
+    }
+
+    fn upload<T: Pod>(&mut self, _label: &'static str, data: &[T]) -> Result<CpuBuffer> {
+        let bytes: &[u8] = bytemuck::cast_slice(data);
+        let mut words = vec![0u32; words_for(bytes.len().max(size_of::<T>()) as u64)];
+        bytemuck::cast_slice_mut::<u32, u8>(&mut words)[..bytes.len()].copy_from_slice(bytes);
+        Ok(Rc::new(RefCell::new(words)))
+    }
+
+    fn uniform<T: Pod>(&mut self, label: &'static str, value: &T) -> Result<CpuBuffer> {
+        self.upload(label, std::slice::from_ref(value))
+    }
+
+    fn dispatch(&mut self, stage: &'static str, b: &[&CpuBuffer], groups: u32) -> Result<()> {
+        run(stage, b, groups)
+    }
+
+    fn dispatch_variant(
+        &mut self,
+        stage: &'static str,
+        _defines: &[&'static str],
+        _constants: &[(&'static str, f64)],
+        b: &[&CpuBuffer],
+        groups: u32,
+    ) -> Result<()> {
+        // The mirrors read the lobe count, family and the rest from the stage's parameters.
+        run(stage, b, groups)
+    }
+
+    fn copy(
+        &mut self,
+        src: &CpuBuffer,
+        src_offset: u64,
+        dst: &CpuBuffer,
+        dst_offset: u64,
+        bytes: u64,
+    ) -> Result<()> {
+        let data: Vec<u8> = {
+            let src = src.borrow();
+            let src: &[u8] = bytemuck::cast_slice(&src);
+            let range = src_offset as usize..(src_offset + bytes) as usize;
+            src.get(range)
+                .ok_or_else(|| Error::Invalid("copy past the end of a buffer".into()))?
+                .to_vec()
+        };
+        let mut dst = dst.borrow_mut();
+        let dst: &mut [u8] = bytemuck::cast_slice_mut(&mut dst);
+        let range = dst_offset as usize..(dst_offset + bytes) as usize;
+        dst.get_mut(range)
+            .ok_or_else(|| Error::Invalid("copy past the end of a buffer".into()))?
+            .copy_from_slice(&data);
+        Ok(())
+    }
+
+    fn read<T: Pod>(&mut self, buffer: &CpuBuffer, count: usize) -> Result<Vec<T>> {
+        let words = buffer.borrow();
+        let values = view::<T>(&words);
+        values
+            .get(..count)
+            .map(<[T]>::to_vec)
+            .ok_or_else(|| Error::Invalid("readback past the end of a buffer".into()))
+    }
+}
+
+/// The whole elements of `T` the words hold.
+fn view<T: Pod>(words: &[u32]) -> &[T] {
+    let bytes: &[u8] = bytemuck::cast_slice(words);
+    bytemuck::cast_slice(&bytes[..bytes.len() / size_of::<T>() * size_of::<T>()])
+}
+
+fn view_mut<T: Pod>(words: &mut [u32]) -> &mut [T] {
+    let bytes: &mut [u8] = bytemuck::cast_slice_mut(words);
+    let whole = bytes.len() / size_of::<T>() * size_of::<T>();
+    bytemuck::cast_slice_mut(&mut bytes[..whole])
+}
+
+/// Binding `i` of a dispatch, read-only.
+fn get<'a>(stage: &str, b: &'a [&CpuBuffer], i: usize) -> Result<Ref<'a, Vec<u32>>> {
+    b.get(i)
+        .ok_or_else(|| Error::Invalid(format!("{stage}: no binding {i}")))?
+        .try_borrow()
+        .map_err(|_| Error::Invalid(format!("{stage}: binding {i} is also written")))
+}
+
+/// Binding `i` of a dispatch, written.
+fn get_mut<'a>(stage: &str, b: &'a [&CpuBuffer], i: usize) -> Result<RefMut<'a, Vec<u32>>> {
+    b.get(i)
+        .ok_or_else(|| Error::Invalid(format!("{stage}: no binding {i}")))?
+        .try_borrow_mut()
+        .map_err(|_| Error::Invalid(format!("{stage}: binding {i} is bound twice")))
+}
+
+/// A uniform binding's value.
+fn param<T: Pod>(stage: &str, b: &[&CpuBuffer], i: usize) -> Result<T> {
+    view::<T>(&get(stage, b, i)?)
+        .first()
+        .copied()
+        .ok_or_else(|| Error::Invalid(format!("{stage}: binding {i} is too short")))
+}
+
+/// Runs `stage`'s mirror over `groups` workgroups with the dispatch's bindings.
+fn run(stage: &str, b: &[&CpuBuffer], groups: u32) -> Result<()> {
+    match stage {
+        "scan_reduce" => {
+            let p = param(stage, b, 0)?;
+            let values = get(stage, b, 1)?;
+            let mut sums = get_mut(stage, b, 2)?;
+            scan_reduce::scan_reduce(&p, &values, &mut sums, groups);
+        }
+        "scan_apply" => {
+            let p = param(stage, b, 0)?;
+            let mut values = get_mut(stage, b, 1)?;
+            let offsets = get(stage, b, 2)?;
+            scan_apply::scan_apply(&p, &mut values, &offsets, groups);
+        }
+        "tonemap_reduce" => {
+            let p = param(stage, b, 0)?;
+            let hdr = get(stage, b, 1)?;
+            let sums_in = get(stage, b, 2)?;
+            let mut sums_out = get_mut(stage, b, 3)?;
+            let out = view_mut(&mut sums_out);
+            tonemap_reduce::tonemap_reduce(&p, view(&hdr), view(&sums_in), out, groups);
+        }
+        "tonemap_apply" => {
+            let p = param(stage, b, 0)?;
+            let hdr = get(stage, b, 1)?;
+            let log_sum = get(stage, b, 2)?;
+            let mut rgba = get_mut(stage, b, 3)?;
+            tonemap_apply::tonemap_apply(&p, view(&hdr), view(&log_sum), &mut rgba);
+        }
+        "grid_count" => {
+            let p = param(stage, b, 0)?;
+            let splats = get(stage, b, 1)?;
+            let mut counts = get_mut(stage, b, 2)?;
+            let mut max_len = get_mut(stage, b, 3)?;
+            grid_count::grid_count(&p, view(&splats), &mut counts, &mut max_len[0], groups);
+        }
+        "grid_scatter" => {
+            let p = param(stage, b, 0)?;
+            let splats = get(stage, b, 1)?;
+            let cell_start = get(stage, b, 2)?;
+            let mut cursor = get_mut(stage, b, 3)?;
+            let mut scratch_splats = get_mut(stage, b, 4)?;
+            let mut scratch_cells = get_mut(stage, b, 5)?;
+            grid_scatter::grid_scatter(
+                &p,
+                view(&splats),
+                &cell_start,
+                &mut cursor,
+                &mut scratch_splats,
+                &mut scratch_cells,
+                groups,
+            );
+        }
+        "grid_rank" => {
+            let p = param(stage, b, 0)?;
+            let cell_start = get(stage, b, 1)?;
+            let scratch_splats = get(stage, b, 2)?;
+            let scratch_cells = get(stage, b, 3)?;
+            let mut cell_splats = get_mut(stage, b, 4)?;
+            grid_rank::grid_rank(
+                &p,
+                &cell_start,
+                &scratch_splats,
+                &scratch_cells,
+                &mut cell_splats,
+                groups,
+            );
+        }
+        "grid_distance" => {
+            let pass = param(stage, b, 0)?;
+            let grid = param(stage, b, 1)?;
+            let cell_start = get(stage, b, 2)?;
+            let src = get(stage, b, 3)?;
+            let mut dst = get_mut(stage, b, 4)?;
+            grid_distance::grid_distance(&pass, &grid, &cell_start, &src, &mut dst, groups);
+        }
+        "bin_count" => {
+            let p = param(stage, b, 0)?;
+            let photons = get(stage, b, 1)?;
+            let mut cell_start = get_mut(stage, b, 2)?;
+            let mut chunks = get_mut(stage, b, 3)?;
+            let photons = view(&photons);
+            bin_count::bin_count(&p, photons, &mut cell_start, &mut chunks[0], groups);
+        }
+        "bin_scatter" => {
+            let p = param(stage, b, 0)?;
+            let photons = get(stage, b, 1)?;
+            let cell_start = get(stage, b, 2)?;
+            let mut cursor = get_mut(stage, b, 3)?;
+            let mut keys = get_mut(stage, b, 4)?;
+            let mut cells = get_mut(stage, b, 5)?;
+            let mut geom = get_mut(stage, b, 6)?;
+            let mut power = get_mut(stage, b, 7)?;
+            bin_scatter::bin_scatter(
+                &p,
+                view(&photons),
+                &cell_start,
+                &mut cursor,
+                view_mut(&mut keys),
+                &mut cells,
+                view_mut(&mut geom),
+                view_mut(&mut power),
+                groups,
+            );
+        }
+        "bin_rank" => {
+            let p = param(stage, b, 0)?;
+            let cell_start = get(stage, b, 1)?;
+            let keys = get(stage, b, 2)?;
+            let cells = get(stage, b, 3)?;
+            let mut slots = get_mut(stage, b, 4)?;
+            bin_rank::bin_rank(&p, &cell_start, view(&keys), &cells, &mut slots, groups);
+        }
+        "bin_place" => {
+            let p = param(stage, b, 0)?;
+            let slots = get(stage, b, 1)?;
+            let keys = get(stage, b, 2)?;
+            let geom = get(stage, b, 3)?;
+            let power = get(stage, b, 4)?;
+            let mut out_keys = get_mut(stage, b, 5)?;
+            let mut out_geom = get_mut(stage, b, 6)?;
+            let mut out_power = get_mut(stage, b, 7)?;
+            bin_place::bin_place(
+                &p,
+                &slots,
+                view(&keys),
+                view(&geom),
+                view(&power),
+                view_mut(&mut out_keys),
+                view_mut(&mut out_geom),
+                view_mut(&mut out_power),
+                groups,
+            );
+        }
+        "em_select" => {
+            let em = param(stage, b, 0)?;
+            let bins = param(stage, b, 1)?;
+            let splats = get(stage, b, 2)?;
+            let materials = get(stage, b, 3)?;
+            let cell_start = get(stage, b, 4)?;
+            let mut active = get_mut(stage, b, 5)?;
+            let mut counters = get_mut(stage, b, 6)?;
+            let counters: &mut [u32; 3] = counters
+                .get_mut(..3)
+                .and_then(|c| c.try_into().ok())
+                .ok_or_else(|| Error::Invalid(format!("{stage}: counters too short")))?;
+            let (splats, materials) = (view(&splats), view(&materials));
+            em_select::em_select(
+                &em,
+                &bins,
+                splats,
+                materials,
+                &cell_start,
+                &mut active,
+                counters,
+                groups,
+            );
+        }
+        "em_fit" => {
+            let em = param(stage, b, 0)?;
+            let bins = param(stage, b, 1)?;
+            let splats = get(stage, b, 2)?;
+            let fit_list = get(stage, b, 3)?;
+            let cell_start = get(stage, b, 4)?;
+            let geom = get(stage, b, 5)?;
+            let power = get(stage, b, 6)?;
+            let mut lobes = get_mut(stage, b, 7)?;
+            let mut light = get_mut(stage, b, 8)?;
+            em_fit::em_fit(
+                &em,
+                &bins,
+                view(&splats),
+                &fit_list,
+                &cell_start,
+                view(&geom),
+                view(&power),
+                view_mut(&mut lobes),
+                view_mut(&mut light),
+                groups,
+            );
+        }
+        _ => {
+            return Err(Error::Invalid(format!(
+                "stage '{stage}' has no CPU executor entry (its mirror is called directly)"
+            )));
+        }
+    }
+    Ok(())
+}

@@ -1,0 +1,77 @@
+//! The device's executor of `sequence`s: records every dispatch and copy into a command
+//! encoder; a readback submits what is recorded, waits, and goes on in a fresh encoder.
+
+use bytemuck::Pod;
+
+use super::Gpu;
+use crate::error::Result;
+use crate::sequence::Executor;
+
+pub struct GpuExecutor<'a> {
+    gpu: &'a Gpu,
+    encoder: &'a mut wgpu::CommandEncoder,
+}
+
+impl<'a> GpuExecutor<'a> {
+    /// Records into `encoder`; the caller submits it (after any readback, what is left).
+    pub fn new(gpu: &'a Gpu, encoder: &'a mut wgpu::CommandEncoder) -> GpuExecutor<'a> {
+        GpuExecutor { gpu, encoder }
+    }
+}
+
+impl Executor for GpuExecutor<'_> {
+    type Buffer = wgpu::Buffer;
+
+    fn zeroed(&mut self, label: &'static str, bytes: u64) -> Result<wgpu::Buffer> {
+        self.gpu.storage_zeroed(label, bytes)
+    }
+
+    fn upload<T: Pod>(&mut self, label: &'static str, data: &[T]) -> Result<wgpu::Buffer> {
+        self.gpu.storage(label, data)
+    }
+
+    fn uniform<T: Pod>(&mut self, label: &'static str, value: &T) -> Result<wgpu::Buffer> {
+        Ok(self.gpu.uniform(label, value))
+    }
+
+    fn dispatch(
+        &mut self,
+        stage: &'static str,
+        bindings: &[&wgpu::Buffer],
+        groups: u32,
+    ) -> Result<()> {
+        self.gpu.dispatch(self.encoder, stage, bindings, groups)
+    }
+
+    fn dispatch_variant(
+        &mut self,
+        stage: &'static str,
+        defines: &[&'static str],
+        constants: &[(&'static str, f64)],
+        bindings: &[&wgpu::Buffer],
+        groups: u32,
+    ) -> Result<()> {
+        let pipeline = self.gpu.variant(stage, defines, constants)?;
+        self.gpu
+            .dispatch_pipeline(self.encoder, stage, &pipeline, &[bindings], groups)
+    }
+
+    fn copy(
+        &mut self,
+        src: &wgpu::Buffer,
+        src_offset: u64,
+        dst: &wgpu::Buffer,
+        dst_offset: u64,
+        bytes: u64,
+    ) -> Result<()> {
+        self.encoder
+            .copy_buffer_to_buffer(src, src_offset, dst, dst_offset, bytes);
+        Ok(())
+    }
+
+    fn read<T: Pod>(&mut self, buffer: &wgpu::Buffer, count: usize) -> Result<Vec<T>> {
+        let recorded = std::mem::replace(self.encoder, self.gpu.encoder("after a readback"));
+        self.gpu.submit_and_wait(recorded)?;
+        self.gpu.read(buffer, count)
+    }
+}

@@ -1,0 +1,431 @@
+//! Each multi-dispatch stage's sequence of dispatches, written once. A sequence is generic over
+//! an `Executor`: the device's (`gpu::GpuExecutor`, which records into a command encoder) or
+//! the CPU mirror's (`cpu::CpuExecutor`, which runs each stage's mirror at once). Both run the
+//! same dispatches in the same order with the same group counts, taken from the WGSL
+//! (`shaders::stage_shape`). A readback that decides later work (`Executor::read`) is an
+//! explicit split point: the device submits what it recorded and waits.
+//!
+//! docs/architecture.md §3 lists the sequences and their split points.
+
+use bytemuck::Pod;
+
+use crate::em::{EmConfig, FitShape, dispatch_ranges, iterations_per_dispatch, workgroup_size};
+use crate::error::Result;
+use crate::grid::check_cell_len;
+use crate::shaders::stage_shape;
+use crate::shared::dispatch::groups_for;
+use crate::tone::{ToneConfig, reduce_levels};
+use crate::types::{BinParams, DistanceParams, EmParams, GridParams, ScanParams};
+
+/// Where a sequence runs: buffers, uniforms, dispatches by stage name, copies and readbacks.
+pub trait Executor {
+    type Buffer: Clone;
+    /// A zeroed buffer of `bytes` bytes (at least one 4-byte word).
+    fn zeroed(&mut self, label: &'static str, bytes: u64) -> Result<Self::Buffer>;
+    /// A buffer holding `data` (one zeroed element when it is empty).
+    fn upload<T: Pod>(&mut self, label: &'static str, data: &[T]) -> Result<Self::Buffer>;
+    /// A uniform holding `value`.
+    fn uniform<T: Pod>(&mut self, label: &'static str, value: &T) -> Result<Self::Buffer>;
+    /// One dispatch of `stage` over `groups` workgroups, `bindings` in binding order.
+    fn dispatch(
+        &mut self,
+        stage: &'static str,
+        bindings: &[&Self::Buffer],
+        groups: u32,
+    ) -> Result<()>;
+    /// `dispatch` of the stage's variant with `defines` and pipeline-overridable `constants`
+    /// (the mirrors read the same settings from the stage's parameters).
+    fn dispatch_variant(
+        &mut self,
+        stage: &'static str,
+        defines: &[&'static str],
+        constants: &[(&'static str, f64)],
+        bindings: &[&Self::Buffer],
+        groups: u32,
+    ) -> Result<()>;
+    /// Copies `bytes` bytes between two buffers.
+    fn copy(
+        &mut self,
+        src: &Self::Buffer,
+        src_offset: u64,
+        dst: &Self::Buffer,
+        dst_offset: u64,
+        bytes: u64,
+    ) -> Result<()>;
+    /// A split point: what is recorded runs, then the first `count` values of `buffer` come
+    /// back.
+    fn read<T: Pod>(&mut self, buffer: &Self::Buffer, count: usize) -> Result<Vec<T>>;
+}
+
+/// Workgroups of `stage` that cover `n` values (its WGSL's workgroup size × items).
+pub fn groups(stage: &str, n: u32) -> Result<u32> {
+    Ok(groups_for(n, stage_shape(stage)?.per_group(stage)?))
+}
+
+/// Exclusive scan of the first `len` values of `values` in place: `scan_reduce` writes one sum
+/// per block, the block sums are scanned recursively, and `scan_apply` finishes each block.
+pub fn exclusive_scan<E: Executor>(ex: &mut E, values: &E::Buffer, len: u32) -> Result<()> {
+    let blocks = groups("scan_reduce", len)?;
+    let params = ScanParams {
+        len,
+        ..Default::default()
+    };
+    let params = ex.uniform("scan params", &params)?;
+    if blocks <= 1 {
+        let zero = ex.upload("scan zero offset", &[0u32])?;
+        return ex.dispatch("scan_apply", &[&params, values, &zero], blocks);
+    }
+    let block_sums = ex.zeroed("scan block sums", blocks as u64 * 4)?;
+    ex.dispatch("scan_reduce", &[&params, values, &block_sums], blocks)?;
+    exclusive_scan(ex, &block_sums, blocks)?;
+    ex.dispatch("scan_apply", &[&params, values, &block_sums], blocks)
+}
+
+/// A tone-mapped image where it was made.
+pub struct Toned<B> {
+    /// RGBA8 sRGB, one u32 per pixel.
+    pub rgba: B,
+    /// (Σ log(ε + Y), count) over the finite pixels.
+    pub log_sum: B,
+}
+
+/// Tone mapping of `pixels` HDR pixels (`vec4<f32>` each): `tonemap_reduce` level by level
+/// down to one (Σ log, count), then `tonemap_apply` per pixel.
+pub fn tone_map<E: Executor>(
+    ex: &mut E,
+    hdr: &E::Buffer,
+    pixels: u32,
+    cfg: &ToneConfig,
+) -> Result<Toned<E::Buffer>> {
+    cfg.validate()?;
+    let block = stage_shape("tonemap_reduce")?.per_group("tonemap_reduce")?;
+    let mut sums_in = ex.zeroed("tone sums", 8)?;
+    for (level, &count) in reduce_levels(pixels, block).iter().enumerate() {
+        let blocks = groups_for(count, block).max(1);
+        let sums_out = ex.zeroed("tone sums", blocks as u64 * 8)?;
+        let params = ex.uniform("tone params", &cfg.params(count, level as u32))?;
+        let bindings = [&params, hdr, &sums_in, &sums_out];
+        ex.dispatch("tonemap_reduce", &bindings, blocks)?;
+        sums_in = sums_out;
+    }
+    let rgba = ex.zeroed("tone-mapped image", pixels.max(1) as u64 * 4)?;
+    let params = ex.uniform("tone params", &cfg.params(pixels, 0))?;
+    let bindings = [&params, hdr, &sums_in, &rgba];
+    ex.dispatch("tonemap_apply", &bindings, groups("tonemap_apply", pixels)?)?;
+    Ok(Toned {
+        rgba,
+        log_sum: sums_in,
+    })
+}
+
+/// A splat grid where it was built.
+pub struct BuiltGrid<B> {
+    /// The grid's settings, with the entry count the build found.
+    pub params: GridParams,
+    pub params_buf: B,
+    /// `cell_count + 1` offsets into `cell_splats`.
+    pub cell_start: B,
+    pub cell_splats: B,
+    /// Distance field for empty-space skipping (see `SplatGrid::cell_dist`).
+    pub cell_dist: B,
+}
+
+/// The grid build: count → exclusive scan → (split: the entry total sizes the list, the
+/// longest cell is checked) → scatter → rank → the distance field's passes x, y, z.
+pub fn build_grid<E: Executor>(
+    ex: &mut E,
+    params: &GridParams,
+    splats: &E::Buffer,
+) -> Result<BuiltGrid<E::Buffer>> {
+    let params_buf = ex.uniform("grid params", params)?;
+    let cells = params.cell_count as u64;
+    let cell_start = ex.zeroed("cell start", (cells + 1) * 4)?;
+    let max_cell_len = ex.zeroed("grid max cell length", 4)?;
+    let splat_groups = groups("grid_count", params.splat_count)?;
+    let bindings = [&params_buf, splats, &cell_start, &max_cell_len];
+    ex.dispatch("grid_count", &bindings, splat_groups)?;
+    exclusive_scan(ex, &cell_start, params.cell_count + 1)?;
+    // stats = [entry total (last scan value), longest cell list]
+    let stats = ex.zeroed("grid stats", 8)?;
+    ex.copy(&cell_start, cells * 4, &stats, 0, 4)?;
+    ex.copy(&max_cell_len, 0, &stats, 4, 4)?;
+    let (entries, max_cell_len) = match ex.read::<u32>(&stats, 2)?[..] {
+        [e, m] => (e, m),
+        _ => return Err(crate::Error::Gpu("grid stats readback was short".into())),
+    };
+    check_cell_len(max_cell_len)?;
+
+    let params = GridParams {
+        entry_count: entries,
+        ..*params
+    };
+    let params_buf = ex.uniform("grid params", &params)?;
+    let bytes = entries as u64 * 4;
+    let cursor = ex.zeroed("cell cursor", cells * 4)?;
+    let scratch_splats = ex.zeroed("scratch splats", bytes)?;
+    let scratch_cells = ex.zeroed("scratch cells", bytes)?;
+    let cell_splats = ex.zeroed("cell splats", bytes)?;
+    let bindings = [
+        &params_buf,
+        splats,
+        &cell_start,
+        &cursor,
+        &scratch_splats,
+        &scratch_cells,
+    ];
+    ex.dispatch(
+        "grid_scatter",
+        &bindings,
+        groups("grid_scatter", params.splat_count)?,
+    )?;
+    let bindings = [
+        &params_buf,
+        &cell_start,
+        &scratch_splats,
+        &scratch_cells,
+        &cell_splats,
+    ];
+    ex.dispatch("grid_rank", &bindings, groups("grid_rank", entries)?)?;
+    let cell_dist = distance_field(ex, &params_buf, &params, &cell_start)?;
+    Ok(BuiltGrid {
+        params,
+        params_buf,
+        cell_start,
+        cell_splats,
+        cell_dist,
+    })
+}
+
+/// Passes x, y, z of `grid_distance`, ping-ponging between two buffers; returns the field.
+fn distance_field<E: Executor>(
+    ex: &mut E,
+    grid: &E::Buffer,
+    params: &GridParams,
+    cell_start: &E::Buffer,
+) -> Result<E::Buffer> {
+    let bytes = params.cell_count as u64 * 4;
+    let a = ex.zeroed("cell distance", bytes)?;
+    let b = ex.zeroed("cell distance scratch", bytes)?;
+    let groups = groups("grid_distance", params.cell_count)?;
+    let passes: [(u32, &E::Buffer, &E::Buffer); 3] =
+        [(0, cell_start, &a), (1, &a, &b), (2, &b, &a)];
+    for (axis, src, dst) in passes {
+        let pass = DistanceParams {
+            axis,
+            ..Default::default()
+        };
+        let pass = ex.uniform("distance pass", &pass)?;
+        ex.dispatch(
+            "grid_distance",
+            &[&pass, grid, cell_start, src, dst],
+            groups,
+        )?;
+    }
+    Ok(a)
+}
+
+/// Binned photons where they were binned (see `bins::PhotonBins`).
+pub struct Bins<B> {
+    /// The binning's settings, with the photon count.
+    pub params: BinParams,
+    pub params_buf: B,
+    pub cell_start: B,
+    pub keys: B,
+    pub geom: B,
+    pub power: B,
+    /// `bin_rank` dispatches the longest cell list needed.
+    pub rank_chunks: u32,
+}
+
+/// Photon binning of the stored photons in `pages` (a buffer and its photon count each):
+/// `bin_count` per page → exclusive scan → `bin_scatter` per page → (split: the longest cell
+/// list sets the rank chunks) → `bin_rank` per chunk → `bin_place`. Every cell's list comes
+/// out in key order.
+pub fn bin_photons<E: Executor>(
+    ex: &mut E,
+    pages: &[(&E::Buffer, u32)],
+    params: &BinParams,
+) -> Result<Bins<E::Buffer>> {
+    let total: u64 = pages.iter().map(|p| p.1 as u64).sum();
+    let n = u32::try_from(total)
+        .map_err(|_| crate::Error::Invalid("too many photons to bin".into()))?;
+    let mut page_params = Vec::with_capacity(pages.len());
+    for &(_, count) in pages {
+        let page = BinParams {
+            photon_count: count,
+            ..*params
+        };
+        page_params.push(ex.uniform("bin page params", &page)?);
+    }
+    let cells = params.cell_count as u64;
+    let cell_start = ex.zeroed("bin cell start", (cells + 1) * 4)?;
+    let chunks = ex.zeroed("bin rank chunks", 4)?;
+    for (&(page, count), uniform) in pages.iter().zip(&page_params) {
+        let bindings = [uniform, page, &cell_start, &chunks];
+        ex.dispatch("bin_count", &bindings, groups("bin_count", count)?)?;
+    }
+    exclusive_scan(ex, &cell_start, params.cell_count + 1)?;
+
+    // Entries to allocate (at least one: empty bindings are invalid).
+    let len = total.max(1);
+    let cursor = ex.zeroed("bin cursor", cells * 4)?;
+    let scratch_keys = ex.zeroed("bin scratch keys", len * 8)?;
+    let scratch_cells = ex.zeroed("bin scratch cells", len * 4)?;
+    let scratch_geom = ex.zeroed("bin scratch geometry", len * 16)?;
+    let scratch_power = ex.zeroed("bin scratch power", len * 16)?;
+    for (&(page, count), uniform) in pages.iter().zip(&page_params) {
+        let bindings = [
+            uniform,
+            page,
+            &cell_start,
+            &cursor,
+            &scratch_keys,
+            &scratch_cells,
+            &scratch_geom,
+            &scratch_power,
+        ];
+        ex.dispatch("bin_scatter", &bindings, groups("bin_scatter", count)?)?;
+    }
+    let rank_chunks = match ex.read::<u32>(&chunks, 1)?[..] {
+        [c] => c,
+        _ => return Err(crate::Error::Gpu("bin chunk readback was short".into())),
+    };
+
+    let params = BinParams {
+        photon_count: n,
+        ..*params
+    };
+    let slots = ex.zeroed("bin slots", len * 4)?;
+    for chunk in 0..rank_chunks {
+        let pass = BinParams {
+            rank_chunk: chunk,
+            ..params
+        };
+        let pass = ex.uniform("bin rank params", &pass)?;
+        let bindings = [&pass, &cell_start, &scratch_keys, &scratch_cells, &slots];
+        ex.dispatch("bin_rank", &bindings, groups("bin_rank", n)?)?;
+    }
+    let params_buf = ex.uniform("bin params", &params)?;
+    let keys = ex.zeroed("binned keys", len * 8)?;
+    let geom = ex.zeroed("binned geometry", len * 16)?;
+    let power = ex.zeroed("binned power", len * 16)?;
+    let bindings = [
+        &params_buf,
+        &slots,
+        &scratch_keys,
+        &scratch_geom,
+        &scratch_power,
+        &keys,
+        &geom,
+        &power,
+    ];
+    ex.dispatch("bin_place", &bindings, groups("bin_place", n)?)?;
+    Ok(Bins {
+        params,
+        params_buf,
+        cell_start,
+        keys,
+        geom,
+        power,
+        rank_chunks,
+    })
+}
+
+/// What the lobe fit reads of the binned photons.
+pub struct FitInput<'a, B> {
+    pub bin_params: &'a B,
+    pub cell_start: &'a B,
+    pub geom: &'a B,
+    pub power: &'a B,
+    /// The splats and their materials.
+    pub splats: &'a B,
+    pub materials: &'a B,
+    pub splat_count: u32,
+}
+
+/// The lobe fit where it ran: `cfg.lobes` slots a splat (dense, unpacked) and each splat's
+/// light, with the counts the selection found.
+pub struct Fit<B> {
+    pub lobes: B,
+    pub light: B,
+    pub listed: u32,
+    pub fitted: u32,
+    pub max_candidates: u32,
+    pub dispatches: u32,
+}
+
+/// The lobe fit: `em_select` lists the splats with photons near them → (split: the list's
+/// length and the most candidates any splat has, which sizes the dispatches on a loop-limited
+/// device) → `em_fit`, one workgroup per listed splat, in one dispatch or in several that hand
+/// the mixture over through the lobe buffer.
+pub fn fit_lobes<E: Executor>(
+    ex: &mut E,
+    input: &FitInput<E::Buffer>,
+    cfg: &EmConfig,
+    shape: FitShape,
+) -> Result<Fit<E::Buffer>> {
+    cfg.validate()?;
+    let splat_count = input.splat_count;
+    let n = splat_count as u64;
+    let lobes = ex.zeroed("lobes", (n * cfg.lobes as u64).max(1) * 32)?;
+    let light = ex.zeroed("splat light", n.max(1) * 32)?;
+    let fit_list = ex.zeroed("fit list", n.max(1) * 4)?;
+    let counters = ex.zeroed("em counters", 12)?;
+    let select = ex.uniform("em select params", &cfg.params(splat_count, 0, shape))?;
+    let bindings = [
+        &select,
+        input.bin_params,
+        input.splats,
+        input.materials,
+        input.cell_start,
+        &fit_list,
+        &counters,
+    ];
+    ex.dispatch("em_select", &bindings, groups("em_select", splat_count)?)?;
+    let (listed, max_candidates, fitted) = match ex.read::<u32>(&counters, 3)?[..] {
+        [a, b, c] => (a, b, c),
+        _ => return Err(crate::Error::Gpu("em counters readback was short".into())),
+    };
+    let chunk = iterations_per_dispatch(cfg, max_candidates, shape.loop_limited)?;
+    let constants = [
+        ("LOBES", cfg.lobes as f64),
+        ("FAMILY", cfg.family.code() as f64),
+        ("WG", workgroup_size(shape.loop_limited) as f64),
+        ("SPARSE", f64::from(u8::from(cfg.sparse))),
+    ];
+    let defines: &[&str] = if shape.subgroup_reduce {
+        &["subgroups"]
+    } else {
+        &[]
+    };
+    let mut dispatches = 0;
+    for (begin, end) in dispatch_ranges(cfg.iterations, chunk) {
+        let params = EmParams {
+            iteration_begin: begin,
+            iteration_end: end,
+            ..cfg.params(splat_count, listed, shape)
+        };
+        let uniform = ex.uniform("em params", &params)?;
+        let bindings = [
+            &uniform,
+            input.bin_params,
+            input.splats,
+            &fit_list,
+            input.cell_start,
+            input.geom,
+            input.power,
+            &lobes,
+            &light,
+        ];
+        ex.dispatch_variant("em_fit", defines, &constants, &bindings, listed)?;
+        dispatches += 1;
+    }
+    Ok(Fit {
+        lobes,
+        light,
+        listed,
+        fitted,
+        max_candidates,
+        dispatches,
+    })
+}
