@@ -10,12 +10,18 @@
 use bytemuck::Pod;
 
 use crate::em::{EmConfig, FitShape, dispatch_ranges, iterations_per_dispatch, workgroup_size};
-use crate::error::Result;
+use crate::error::{Error, Result};
 use crate::grid::check_cell_len;
+use crate::photons::{
+    PhotonConfig, PhotonStats, StoreAction, StorePlanner, first_capacity, ms_since,
+};
 use crate::shaders::stage_shape;
 use crate::shared::dispatch::groups_for;
 use crate::tone::{ToneConfig, reduce_levels};
-use crate::types::{BinParams, DistanceParams, EmParams, GridParams, ScanParams};
+use crate::types::{
+    BinParams, Camera, DistanceParams, EmParams, Emitter, GridParams, Photon, PhotonViewParams,
+    ScanParams, TraceCounters,
+};
 
 /// Where a sequence runs: buffers, uniforms, dispatches by stage name, copies and readbacks.
 pub trait Executor {
@@ -28,6 +34,14 @@ pub trait Executor {
     fn uniform<T: Pod>(&mut self, label: &'static str, value: &T) -> Result<Self::Buffer>;
     /// One dispatch of `stage` over `groups` workgroups, `bindings` in binding order.
     fn dispatch(
+        &mut self,
+        stage: &'static str,
+        bindings: &[&Self::Buffer],
+        groups: u32,
+    ) -> Result<()>;
+    /// `dispatch` of a tracing stage, whose bind group 1 is the scene's geometry (splats and
+    /// grid) that the executor was made with.
+    fn dispatch_traced(
         &mut self,
         stage: &'static str,
         bindings: &[&Self::Buffer],
@@ -151,7 +165,7 @@ pub fn build_grid<E: Executor>(
     ex.copy(&max_cell_len, 0, &stats, 4, 4)?;
     let (entries, max_cell_len) = match ex.read::<u32>(&stats, 2)?[..] {
         [e, m] => (e, m),
-        _ => return Err(crate::Error::Gpu("grid stats readback was short".into())),
+        _ => return Err(Error::Gpu("grid stats readback was short".into())),
     };
     check_cell_len(max_cell_len)?;
 
@@ -247,8 +261,7 @@ pub fn bin_photons<E: Executor>(
     params: &BinParams,
 ) -> Result<Bins<E::Buffer>> {
     let total: u64 = pages.iter().map(|p| p.1 as u64).sum();
-    let n = u32::try_from(total)
-        .map_err(|_| crate::Error::Invalid("too many photons to bin".into()))?;
+    let n = u32::try_from(total).map_err(|_| Error::Invalid("too many photons to bin".into()))?;
     let mut page_params = Vec::with_capacity(pages.len());
     for &(_, count) in pages {
         let page = BinParams {
@@ -288,7 +301,7 @@ pub fn bin_photons<E: Executor>(
     }
     let rank_chunks = match ex.read::<u32>(&chunks, 1)?[..] {
         [c] => c,
-        _ => return Err(crate::Error::Gpu("bin chunk readback was short".into())),
+        _ => return Err(Error::Gpu("bin chunk readback was short".into())),
     };
 
     let params = BinParams {
@@ -384,7 +397,7 @@ pub fn fit_lobes<E: Executor>(
     ex.dispatch("em_select", &bindings, groups("em_select", splat_count)?)?;
     let (listed, max_candidates, fitted) = match ex.read::<u32>(&counters, 3)?[..] {
         [a, b, c] => (a, b, c),
-        _ => return Err(crate::Error::Gpu("em counters readback was short".into())),
+        _ => return Err(Error::Gpu("em counters readback was short".into())),
     };
     let chunk = iterations_per_dispatch(cfg, max_candidates, shape.loop_limited)?;
     let constants = [
@@ -428,4 +441,171 @@ pub fn fit_lobes<E: Executor>(
         max_candidates,
         dispatches,
     })
+}
+
+/// The photon view of `cam` (`width × height` from `cam.size`): `photon_view` once per photon
+/// page (a buffer and its photon count) into fixed-point sums with integer atomics, then
+/// `photon_resolve` into an HDR image (`vec4<f32>` per pixel, rows from the top).
+pub fn photon_image<E: Executor>(
+    ex: &mut E,
+    materials: &E::Buffer,
+    pages: &[(&E::Buffer, u32)],
+    cam: &Camera,
+    scale: f32,
+) -> Result<E::Buffer> {
+    let (width, height) = (cam.size[0] as u32, cam.size[1] as u32);
+    let pixels = width * height;
+    let sums = ex.zeroed("photon view sums", pixels.max(1) as u64 * 12)?;
+    let cam_buf = ex.uniform("camera", cam)?;
+    for &(page, count) in pages.iter().filter(|p| p.1 > 0) {
+        let params = PhotonViewParams {
+            count,
+            width,
+            height,
+            scale,
+        };
+        let params_buf = ex.uniform("photon view params", &params)?;
+        let bindings = [&params_buf, &cam_buf, materials, page, &sums];
+        ex.dispatch_traced("photon_view", &bindings, groups("photon_view", count)?)?;
+    }
+    let hdr = ex.zeroed("photon view", pixels.max(1) as u64 * 16)?;
+    let params = PhotonViewParams {
+        count: pixels,
+        width,
+        height,
+        scale,
+    };
+    let params = ex.uniform("photon resolve params", &params)?;
+    let bindings = [&params, &sums, &hdr];
+    ex.dispatch(
+        "photon_resolve",
+        &bindings,
+        groups("photon_resolve", pixels)?,
+    )?;
+    Ok(hdr)
+}
+
+const PHOTON_BYTES: u64 = size_of::<Photon>() as u64;
+
+/// One photon store buffer and how many photons it holds.
+pub struct Page<B> {
+    pub buffer: B,
+    pub capacity: u64,
+    pub count: u64,
+}
+
+/// Stored photons where they were traced: the pages in order, and the pass's figures.
+pub struct Traced<B> {
+    pub pages: Vec<Page<B>>,
+    pub stats: PhotonStats,
+}
+
+/// The photon pass: batches of `photon_trace` appending to a store of pages of at most
+/// `max_page` photons. Each batch ends in a split point, the counters read back: on overflow
+/// (the counter counts every store attempt, so it tells how much room the batch needed) the
+/// page grows, or a new page starts at `max_page`, and the batch runs again; nothing is
+/// written out of bounds and nothing is dropped. Before each batch the `StorePlanner` makes
+/// room for what the batch will likely store, so reruns are rare. `progress` hears (paths
+/// done, total).
+pub fn trace_photons<E: Executor>(
+    ex: &mut E,
+    emitters: &[Emitter],
+    materials: &E::Buffer,
+    cfg: &PhotonConfig,
+    max_page: u64,
+    progress: &mut dyn FnMut(u64, u64),
+) -> Result<Traced<E::Buffer>> {
+    cfg.validate()?;
+    let t = std::time::Instant::now();
+    let emitter_buf = ex.upload("emitters", emitters)?;
+    let mut planner = StorePlanner::new(max_page, cfg.photons);
+    let mut pages = Vec::new();
+    let mut page = new_page(ex, first_capacity(cfg, max_page))?;
+    let mut stats = PhotonStats::default();
+    let mut batch = cfg.batch;
+    let mut done = 0u64;
+    while done < cfg.photons {
+        let paths = (cfg.photons - done).min(batch as u64) as u32;
+        let action = planner.before(page.count, page.capacity, paths, done);
+        apply(ex, action, &mut pages, &mut page)?;
+        let before = page.count as u32;
+        let params = ex.uniform("trace params", &cfg.params(emitters, done as u32, paths))?;
+        let start = TraceCounters {
+            stored: before,
+            capacity: page.capacity as u32,
+            ..Default::default()
+        };
+        let counters_buf = ex.upload("trace counters", &[start])?;
+        let bindings = [
+            &params,
+            &emitter_buf,
+            materials,
+            &page.buffer,
+            &counters_buf,
+        ];
+        ex.dispatch_traced("photon_trace", &bindings, groups("photon_trace", paths)?)?;
+        let counters = ex
+            .read::<TraceCounters>(&counters_buf, 1)?
+            .pop()
+            .ok_or_else(|| Error::Gpu("trace counters readback was short".into()))?;
+        if counters.overflow == 0 {
+            page.count = counters.stored as u64;
+            stats.add_batch(paths, before, &counters);
+            planner.record(paths, (counters.stored - before) as u64);
+            done += paths as u64;
+            progress(done, cfg.photons);
+            continue;
+        }
+        stats.reruns += 1;
+        let need = (counters.stored - before) as u64;
+        match planner.after_overflow(page.count, page.capacity, need, paths, done) {
+            StoreAction::HalveBatch if paths > 1 => batch = paths / 2,
+            StoreAction::HalveBatch => {
+                return Err(Error::Invalid(format!(
+                    "one photon path stores more photons than the largest store page holds \
+                     ({max_page})"
+                )));
+            }
+            action => apply(ex, action, &mut pages, &mut page)?,
+        }
+    }
+    if page.count > 0 || pages.is_empty() {
+        pages.push(page);
+    }
+    stats.pages = pages.len() as u32;
+    stats.trace_ms = ms_since(t);
+    Ok(Traced { pages, stats })
+}
+
+fn new_page<E: Executor>(ex: &mut E, capacity: u64) -> Result<Page<E::Buffer>> {
+    Ok(Page {
+        buffer: ex.zeroed("photons", capacity * PHOTON_BYTES)?,
+        capacity,
+        count: 0,
+    })
+}
+
+/// Makes the room `action` asks for: a larger page holding the photons so far, or a new one.
+fn apply<E: Executor>(
+    ex: &mut E,
+    action: StoreAction,
+    pages: &mut Vec<Page<E::Buffer>>,
+    page: &mut Page<E::Buffer>,
+) -> Result<()> {
+    match action {
+        StoreAction::Keep | StoreAction::HalveBatch => {}
+        StoreAction::Grow(capacity) => {
+            let grown = new_page(ex, capacity)?;
+            ex.copy(&page.buffer, 0, &grown.buffer, 0, page.count * PHOTON_BYTES)?;
+            *page = Page {
+                count: page.count,
+                ..grown
+            };
+        }
+        StoreAction::NewPage(capacity) => {
+            let full = std::mem::replace(page, new_page(ex, capacity)?);
+            pages.push(full);
+        }
+    }
+    Ok(())
 }

@@ -46,7 +46,7 @@ fn device_matches_the_cpu_mirror() {
         grid: &grid,
         splats: &scene.splats,
     };
-    let ours = cpu::photon_image(&cam, &scene.materials, &map.photons, &geo, scale);
+    let ours = cpu::photon_image(&cam, &scene.materials, &map.photons, &geo, scale).unwrap();
     let on_gpu = GpuScene::upload(&gpu, &scene).unwrap();
     let photons = GpuPhotons::upload(&gpu, &map).unwrap();
     let mut encoder = gpu.encoder("photon view");
@@ -73,9 +73,9 @@ fn the_sums_do_not_depend_on_photon_order() {
         grid: &grid,
         splats: &scene.splats,
     };
-    let forward = cpu::photon_image(&cam, &scene.materials, &map.photons, &geo, scale);
+    let forward = cpu::photon_image(&cam, &scene.materials, &map.photons, &geo, scale).unwrap();
     map.photons.reverse();
-    let backward = cpu::photon_image(&cam, &scene.materials, &map.photons, &geo, scale);
+    let backward = cpu::photon_image(&cam, &scene.materials, &map.photons, &geo, scale).unwrap();
     assert!(
         forward == backward,
         "reversing the photons changed the image"

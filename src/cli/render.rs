@@ -467,7 +467,7 @@ fn render_photons(
                 grid: &grid,
                 splats: &scene.splats,
             };
-            let hdr = cpu::photon_image(&cam, &scene.materials, &map.photons, &geo, scale);
+            let hdr = cpu::photon_image(&cam, &scene.materials, &map.photons, &geo, scale)?;
             (hdr, map.stats, grid_ms, ms_since(t))
         }
     };

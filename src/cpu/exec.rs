@@ -8,21 +8,37 @@ use bytemuck::Pod;
 
 use super::{bin_count, bin_place, bin_rank, bin_scatter, em_fit, em_select};
 use super::{grid_count, grid_distance, grid_rank, grid_scatter};
-use super::{scan_apply, scan_reduce, tonemap_apply, tonemap_reduce};
+use super::{
+    photon_resolve, photon_trace, photon_view, scan_apply, scan_reduce, tonemap_apply,
+    tonemap_reduce,
+};
 use crate::error::{Error, Result};
 use crate::sequence::Executor;
+use crate::shared::trace::Geometry;
 
 /// A buffer in host memory: 4-byte words, so every record type views it in place.
 pub type CpuBuffer = Rc<RefCell<Vec<u32>>>;
 
+/// Runs sequences on the CPU; tracing stages read `geometry` as their bind group 1.
 #[derive(Default)]
-pub struct CpuExecutor;
+pub struct CpuExecutor<'g> {
+    pub geometry: Option<Geometry<'g>>,
+}
+
+impl<'g> CpuExecutor<'g> {
+    /// An executor whose tracing stages walk `geometry`.
+    pub fn tracing(geometry: Geometry<'g>) -> CpuExecutor<'g> {
+        CpuExecutor {
+            geometry: Some(geometry),
+        }
+    }
+}
 
 fn words_for(bytes: u64) -> usize {
     (bytes.div_ceil(4) as usize).max(1)
 }
 
-impl Executor for CpuExecutor {
+impl Executor for CpuExecutor<'_> {
     type Buffer = CpuBuffer;
 
     fn zeroed(&mut self, _label: &'static str, bytes: u64) -> Result<CpuBuffer> {
@@ -42,6 +58,18 @@ impl Executor for CpuExecutor {
 
     fn dispatch(&mut self, stage: &'static str, b: &[&CpuBuffer], groups: u32) -> Result<()> {
         run(stage, b, groups)
+    }
+
+    fn dispatch_traced(
+        &mut self,
+        stage: &'static str,
+        b: &[&CpuBuffer],
+        groups: u32,
+    ) -> Result<()> {
+        let geo = self
+            .geometry
+            .ok_or_else(|| Error::Invalid(format!("{stage}: no scene geometry to trace")))?;
+        run_traced(stage, b, &geo, groups)
     }
 
     fn dispatch_variant(
@@ -309,9 +337,49 @@ fn run(stage: &str, b: &[&CpuBuffer], groups: u32) -> Result<()> {
                 groups,
             );
         }
+        "photon_resolve" => {
+            let p = param(stage, b, 0)?;
+            let sums = get(stage, b, 1)?;
+            let mut hdr = get_mut(stage, b, 2)?;
+            photon_resolve::photon_resolve(&p, &sums, view_mut(&mut hdr));
+        }
         _ => {
             return Err(Error::Invalid(format!(
                 "stage '{stage}' has no CPU executor entry (its mirror is called directly)"
+            )));
+        }
+    }
+    Ok(())
+}
+
+/// Runs a tracing stage's mirror, its bind group 1 being `geo`.
+fn run_traced(stage: &str, b: &[&CpuBuffer], geo: &Geometry, groups: u32) -> Result<()> {
+    match stage {
+        "photon_view" => {
+            let p = param(stage, b, 0)?;
+            let cam = param(stage, b, 1)?;
+            let materials = get(stage, b, 2)?;
+            let photons = get(stage, b, 3)?;
+            let mut sums = get_mut(stage, b, 4)?;
+            let (materials, photons) = (view(&materials), view(&photons));
+            photon_view::photon_view(&p, &cam, materials, photons, &mut sums, geo);
+        }
+        "photon_trace" => {
+            let p = param(stage, b, 0)?;
+            let emitters = get(stage, b, 1)?;
+            let materials = get(stage, b, 2)?;
+            let mut store = get_mut(stage, b, 3)?;
+            let mut counters = get_mut(stage, b, 4)?;
+            let counters = view_mut(&mut counters)
+                .first_mut()
+                .ok_or_else(|| Error::Invalid(format!("{stage}: counters too short")))?;
+            let (emitters, materials) = (view(&emitters), view(&materials));
+            let store = view_mut(&mut store);
+            photon_trace::photon_trace(&p, emitters, materials, store, counters, geo, groups);
+        }
+        _ => {
+            return Err(Error::Invalid(format!(
+                "tracing stage '{stage}' has no CPU executor entry"
             )));
         }
     }

@@ -34,13 +34,10 @@ use crate::bins::PhotonBins;
 use crate::em::{EmConfig, EmStats, FitShape, LobeMap};
 use crate::error::{Error, Result};
 use crate::grid::SplatGrid;
-use crate::photons::{
-    PhotonConfig, PhotonMap, PhotonStats, StoreAction, StorePlanner, emitters, first_capacity,
-    ms_since,
-};
+use crate::photons::{PhotonConfig, PhotonMap, emitters, ms_since};
 use crate::shared::trace::Geometry;
 use crate::types::{BinParams, GridParams, Lobe, Splat, SplatLight};
-use crate::types::{Light, Material, Photon, TraceCounters};
+use crate::types::{Light, Material, Photon};
 
 pub use crate::shared::dispatch::groups_for;
 pub use exec::{CpuBuffer, CpuExecutor};
@@ -52,7 +49,7 @@ use crate::sequence::{self, Executor, FitInput};
 pub fn tone_map(cfg: &crate::tone::ToneConfig, hdr: &[[f32; 4]]) -> Result<(Vec<u32>, [f32; 2])> {
     let pixels = u32::try_from(hdr.len())
         .map_err(|_| Error::Invalid("too many pixels to tone-map".into()))?;
-    let mut ex = CpuExecutor;
+    let mut ex = CpuExecutor::default();
     let hdr = ex.upload("hdr image", hdr)?;
     let toned = sequence::tone_map(&mut ex, &hdr, pixels, cfg)?;
     let rgba = ex.read(&toned.rgba, pixels as usize)?;
@@ -60,36 +57,29 @@ pub fn tone_map(cfg: &crate::tone::ToneConfig, hdr: &[[f32; 4]]) -> Result<(Vec<
     Ok((rgba, log_sum.first().copied().unwrap_or_default()))
 }
 
-/// The photon view of `cam` as `gpu::photon_view::photon_image` records it: every page (here
-/// one) through `photon_view`, then `photon_resolve`; HDR pixels, rows from the top.
+/// The photon view of `cam` on the CPU mirror (`sequence::photon_image`) over one page of
+/// photons; HDR pixels, rows from the top.
 pub fn photon_image(
     cam: &crate::types::Camera,
     materials: &[Material],
     photons: &[Photon],
     geo: &Geometry,
     scale: f32,
-) -> Vec<[f32; 4]> {
-    let (width, height) = (cam.size[0] as u32, cam.size[1] as u32);
-    let pixels = (width * height) as usize;
-    let mut sums = vec![0u32; 3 * pixels];
-    let mut params = crate::types::PhotonViewParams {
-        count: photons.len() as u32,
-        width,
-        height,
-        scale,
-    };
-    photon_view::photon_view(&params, cam, materials, photons, &mut sums, geo);
-    params.count = pixels as u32;
-    let mut hdr = vec![[0.0f32; 4]; pixels];
-    photon_resolve::photon_resolve(&params, &sums, &mut hdr);
-    hdr
+) -> Result<Vec<[f32; 4]>> {
+    let count = u32::try_from(photons.len())
+        .map_err(|_| Error::Invalid("too many photons to view".into()))?;
+    let mut ex = CpuExecutor::tracing(*geo);
+    let material_buf = ex.upload("materials", materials)?;
+    let page = ex.upload("photons", photons)?;
+    let hdr = sequence::photon_image(&mut ex, &material_buf, &[(&page, count)], cam, scale)?;
+    ex.read(&hdr, (cam.size[0] as u32 * cam.size[1] as u32) as usize)
 }
 
 /// Exclusive scan of `values` in place on the CPU mirror (`sequence::exclusive_scan`).
 pub fn exclusive_scan(values: &mut [u32]) -> Result<()> {
     let len = u32::try_from(values.len())
         .map_err(|_| Error::Invalid("too many values to scan".into()))?;
-    let mut ex = CpuExecutor;
+    let mut ex = CpuExecutor::default();
     let buffer = ex.upload("scan values", values)?;
     sequence::exclusive_scan(&mut ex, &buffer, len)?;
     values.copy_from_slice(&ex.read::<u32>(&buffer, values.len())?);
@@ -98,7 +88,7 @@ pub fn exclusive_scan(values: &mut [u32]) -> Result<()> {
 
 /// The grid build on the CPU mirror (`sequence::build_grid`).
 pub fn build_grid(params: &GridParams, splats: &[Splat]) -> Result<SplatGrid> {
-    let mut ex = CpuExecutor;
+    let mut ex = CpuExecutor::default();
     let splat_buf = ex.upload("splats", splats)?;
     let built = sequence::build_grid(&mut ex, params, &splat_buf)?;
     let params = built.params;
@@ -110,8 +100,8 @@ pub fn build_grid(params: &GridParams, splats: &[Splat]) -> Result<SplatGrid> {
     })
 }
 
-/// The photon pass on the CPU: the batch loop of `gpu::photons::trace_photons` with one
-/// growable store (host memory has no binding limit) and the same store planning.
+/// The photon pass on the CPU mirror (`sequence::trace_photons`), in one page (host memory
+/// has no binding limit), sorted by `Photon::key`.
 pub fn trace_photons(
     lights: &[Light],
     materials: &[Material],
@@ -120,59 +110,19 @@ pub fn trace_photons(
     progress: &mut dyn FnMut(u64, u64),
 ) -> Result<PhotonMap> {
     cfg.validate()?;
-    let t = Instant::now();
     let emitters = emitters(lights, cfg.photons)?;
+    let mut ex = CpuExecutor::tracing(*geo);
+    let material_buf = ex.upload("materials", materials)?;
     let max_page = u32::MAX as u64;
-    let mut planner = StorePlanner::new(max_page, cfg.photons);
-    let mut store = vec![Photon::default(); first_capacity(cfg, max_page) as usize];
-    let mut count = 0u64;
-    let mut stats = PhotonStats::default();
-    let mut done = 0u64;
-    while done < cfg.photons {
-        let paths = (cfg.photons - done).min(cfg.batch as u64) as u32;
-        if let StoreAction::Grow(c) = planner.before(count, store.len() as u64, paths, done) {
-            store.resize(c as usize, Photon::default());
-        }
-        let params = cfg.params(&emitters, done as u32, paths);
-        let mut counters = TraceCounters {
-            stored: count as u32,
-            capacity: store.len() as u32,
-            ..Default::default()
-        };
-        photon_trace::photon_trace(
-            &params,
-            &emitters,
-            materials,
-            &mut store,
-            &mut counters,
-            geo,
-            groups_for(paths, photon_trace::WG),
-        );
-        let need = counters.stored as u64 - count;
-        if counters.overflow == 0 {
-            stats.add_batch(paths, count as u32, &counters);
-            planner.record(paths, need);
-            count = counters.stored as u64;
-            done += paths as u64;
-            progress(done, cfg.photons);
-            continue;
-        }
-        stats.reruns += 1;
-        match planner.after_overflow(count, store.len() as u64, need, paths, done) {
-            StoreAction::Grow(c) => store.resize(c as usize, Photon::default()),
-            _ => {
-                return Err(Error::Invalid(format!(
-                    "more than {max_page} stored photons: emit fewer photons"
-                )));
-            }
-        }
+    let traced =
+        sequence::trace_photons(&mut ex, &emitters, &material_buf, cfg, max_page, progress)?;
+    let mut photons = Vec::with_capacity(traced.stats.stored as usize);
+    for page in &traced.pages {
+        photons.extend(ex.read::<Photon>(&page.buffer, page.count as usize)?);
     }
-    store.truncate(count as usize);
-    stats.pages = 1;
-    stats.trace_ms = ms_since(t);
     let mut map = PhotonMap {
-        photons: store,
-        stats,
+        photons,
+        stats: traced.stats,
     };
     map.sort();
     Ok(map)
@@ -209,7 +159,7 @@ pub fn trace_scene(
 pub fn bin_photons(params: &BinParams, photons: &[Photon]) -> Result<PhotonBins> {
     let n = u32::try_from(photons.len())
         .map_err(|_| Error::Invalid("too many photons to bin".into()))?;
-    let mut ex = CpuExecutor;
+    let mut ex = CpuExecutor::default();
     let page = ex.upload("photons", photons)?;
     let bins = sequence::bin_photons(&mut ex, &[(&page, n)], params)?;
     let (len, cells) = (n as usize, bins.params.cell_count as usize);
@@ -234,7 +184,7 @@ pub fn fit_lobes(
     let t = Instant::now();
     let splat_count = u32::try_from(splats.len())
         .map_err(|_| Error::Invalid("too many splats for the lobe fit".into()))?;
-    let mut ex = CpuExecutor;
+    let mut ex = CpuExecutor::default();
     let bin_params = ex.uniform("bin params", &bins.params)?;
     let cell_start = ex.upload("bin cell start", &bins.cell_start)?;
     let geom = ex.upload("binned geometry", &bins.geom)?;

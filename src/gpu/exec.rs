@@ -4,18 +4,31 @@
 use bytemuck::Pod;
 
 use super::Gpu;
+use super::scene::GpuScene;
 use crate::error::Result;
 use crate::sequence::Executor;
 
 pub struct GpuExecutor<'a> {
     gpu: &'a Gpu,
     encoder: &'a mut wgpu::CommandEncoder,
+    /// Bind group 1 of the tracing stages (`GpuScene::geometry`).
+    geometry: Option<[&'a wgpu::Buffer; 5]>,
 }
 
 impl<'a> GpuExecutor<'a> {
     /// Records into `encoder`; the caller submits it (after any readback, what is left).
     pub fn new(gpu: &'a Gpu, encoder: &'a mut wgpu::CommandEncoder) -> GpuExecutor<'a> {
-        GpuExecutor { gpu, encoder }
+        GpuExecutor {
+            gpu,
+            encoder,
+            geometry: None,
+        }
+    }
+
+    /// Tracing stages walk `on_gpu`'s splats and grid.
+    pub fn tracing(mut self, on_gpu: &'a GpuScene) -> GpuExecutor<'a> {
+        self.geometry = Some(on_gpu.geometry());
+        self
     }
 }
 
@@ -41,6 +54,19 @@ impl Executor for GpuExecutor<'_> {
         groups: u32,
     ) -> Result<()> {
         self.gpu.dispatch(self.encoder, stage, bindings, groups)
+    }
+
+    fn dispatch_traced(
+        &mut self,
+        stage: &'static str,
+        bindings: &[&wgpu::Buffer],
+        groups: u32,
+    ) -> Result<()> {
+        let geometry = self
+            .geometry
+            .ok_or_else(|| crate::Error::Invalid(format!("{stage}: no scene geometry to trace")))?;
+        self.gpu
+            .dispatch_groups(self.encoder, stage, &[bindings, &geometry], groups)
     }
 
     fn dispatch_variant(
