@@ -97,6 +97,9 @@ pub struct StageShape {
     pub workgroup_size: Option<u32>,
     /// The stage's `const ITEMS`, values per invocation; 1 where it has none.
     pub items: u32,
+    /// Bindings the stage declares in bind groups 0 and 1 (one past the highest binding
+    /// index): what a dispatch must bind, in binding order.
+    pub bindings: [u32; 2],
 }
 
 impl StageShape {
@@ -151,9 +154,18 @@ fn read_shape(module: &naga::Module) -> StageShape {
             _ => None,
         })
         .unwrap_or(1);
+    let mut bindings = [0u32; 2];
+    for (_, var) in module.global_variables.iter() {
+        if let Some(rb) = &var.binding
+            && let Some(count) = bindings.get_mut(rb.group as usize)
+        {
+            *count = (*count).max(rb.binding + 1);
+        }
+    }
     StageShape {
         workgroup_size,
         items,
+        bindings,
     }
 }
 

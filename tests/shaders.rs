@@ -190,3 +190,41 @@ fn mirror_workgroup_shapes_match_the_wgsl() {
     }
     assert_eq!(stage_shape("em_fit").unwrap().workgroup_size, None);
 }
+
+/// What the host and the mirrors bind is read from the WGSL too: each compute stage's
+/// bindings are numbered from 0 without gaps in each group (so "binding order" is the order a
+/// dispatch lists its buffers, as the CPU executor checks), and only the tracing stages use
+/// group 1, the scene's five geometry buffers.
+#[test]
+fn stage_bindings_are_read_from_the_wgsl() {
+    use lobelight::shaders::{STAGES, resolve_stage, stage_shape};
+    let traced = [
+        "trace_rays",
+        "photon_trace",
+        "photon_view",
+        "shade",
+        "reference_gather",
+    ];
+    for stage in STAGES {
+        let shape = stage_shape(stage.name).unwrap();
+        let module = naga::front::wgsl::parse_str(&resolve_stage(stage.name).unwrap()).unwrap();
+        for group in 0..2u32 {
+            let mut numbers: Vec<u32> = module
+                .global_variables
+                .iter()
+                .filter_map(|(_, v)| v.binding.as_ref())
+                .filter(|b| b.group == group)
+                .map(|b| b.binding)
+                .collect();
+            numbers.sort();
+            let expected: Vec<u32> = (0..shape.bindings[group as usize]).collect();
+            assert_eq!(numbers, expected, "{} group {group}", stage.name);
+        }
+        if traced.contains(&stage.name) {
+            assert_eq!(shape.bindings[1], 5, "{}: the geometry group", stage.name);
+        } else {
+            assert_eq!(shape.bindings[1], 0, "{}: no geometry group", stage.name);
+        }
+        assert!(shape.bindings[0] > 0, "{}", stage.name);
+    }
+}

@@ -155,8 +155,21 @@ fn param<T: Pod>(stage: &str, b: &[&CpuBuffer], i: usize) -> Result<T> {
         .ok_or_else(|| Error::Invalid(format!("{stage}: binding {i} is too short")))
 }
 
+/// Refuses a dispatch whose bindings are not the ones `stage`'s WGSL declares in group 0.
+fn check_bindings(stage: &str, b: &[&CpuBuffer]) -> Result<()> {
+    let declared = crate::shaders::stage_shape(stage)?.bindings[0];
+    if b.len() != declared as usize {
+        return Err(Error::Invalid(format!(
+            "{stage}: {} bindings passed, its WGSL declares {declared}",
+            b.len()
+        )));
+    }
+    Ok(())
+}
+
 /// Runs `stage`'s mirror over `groups` workgroups with the dispatch's bindings.
 fn run(stage: &str, b: &[&CpuBuffer], groups: u32) -> Result<()> {
+    check_bindings(stage, b)?;
     match stage {
         "scan_reduce" => {
             let p = param(stage, b, 0)?;
@@ -354,6 +367,7 @@ fn run(stage: &str, b: &[&CpuBuffer], groups: u32) -> Result<()> {
 
 /// Runs a tracing stage's mirror, its bind group 1 being `geo`.
 fn run_traced(stage: &str, b: &[&CpuBuffer], geo: &Geometry, groups: u32) -> Result<()> {
+    check_bindings(stage, b)?;
     match stage {
         "photon_view" => {
             let p = param(stage, b, 0)?;
