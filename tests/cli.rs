@@ -495,3 +495,20 @@ fn a_corrupt_cache_is_a_clear_error() {
     assert!(!out.status.success(), "{err}");
     assert!(err.contains("not a lobelight bake cache"), "{err}");
 }
+
+/// A headless command's stderr holds only what lobelight says: no driver complaint about a
+/// missing XDG_RUNTIME_DIR (Mesa prints one at every device open without it).
+#[test]
+fn headless_commands_print_no_driver_noise() {
+    let mut cmd = Command::new(env!("CARGO_BIN_EXE_lobelight"));
+    cmd.args(["info", "scenes/cornell.toml", "--json"])
+        .env_remove("XDG_RUNTIME_DIR");
+    let out = cmd.output().unwrap();
+    assert!(
+        out.status.success(),
+        "{}",
+        String::from_utf8_lossy(&out.stderr)
+    );
+    let stderr = String::from_utf8_lossy(&out.stderr);
+    assert!(!stderr.contains("XDG_RUNTIME_DIR"), "stderr: {stderr}");
+}

@@ -19,6 +19,17 @@ use lobelight::photons::PhotonConfig;
 use lobelight::scene;
 use lobelight::tone::ToneConfig;
 
+/// `xvfb-run -a` starting its search for a free display at a number of its own: two runs at
+/// once from the same number can both pick it, and the second viewer then finds no X server.
+fn xvfb_run() -> Command {
+    static NEXT: std::sync::atomic::AtomicU32 = std::sync::atomic::AtomicU32::new(0);
+    let k = NEXT.fetch_add(1, std::sync::atomic::Ordering::Relaxed);
+    let server = 100 + (std::process::id() % 100) * 20 + k;
+    let mut cmd = Command::new("xvfb-run");
+    cmd.args(["-n", &server.to_string()]);
+    cmd
+}
+
 fn path(name: &str) -> String {
     let dir = std::env::temp_dir().join(format!("lobelight-view-{}", std::process::id()));
     std::fs::create_dir_all(&dir).unwrap();
@@ -39,7 +50,7 @@ const COMMON: [&str; 7] = [
 /// screenshot's pixels.
 fn scripted_view(extra: &[&str], shot: &str) -> (Vec<[f32; 4]>, u32, u32) {
     let exe = env!("CARGO_BIN_EXE_lobelight");
-    let view = Command::new("xvfb-run")
+    let view = xvfb_run()
         .args(["-a", "-s", "-screen 0 640x480x24", exe, "view"])
         .args(COMMON)
         .args(extra)
@@ -135,7 +146,7 @@ fn the_viewer_runs_on_gl() {
 #[test]
 fn bench_frame_window_reports_the_window() {
     let exe = env!("CARGO_BIN_EXE_lobelight");
-    let out = Command::new("xvfb-run")
+    let out = xvfb_run()
         .args(["-a", "-s", "-screen 0 1600x900x24", exe, "bench", "frame"])
         .args([
             "scenes/cornell.toml",
@@ -245,7 +256,7 @@ fn the_viewer_starts_from_the_bake_cache() {
     let cache = path("view.cache");
     std::fs::remove_file(&cache).ok();
     let run = |shot: &str| {
-        let out = Command::new("xvfb-run")
+        let out = xvfb_run()
             .args([
                 "-a",
                 "-s",
@@ -367,7 +378,7 @@ wait $viewer
         log = dir.join("log.txt").display(),
         scene = concat!(env!("CARGO_MANIFEST_DIR"), "/scenes/cornell.toml"),
     );
-    let out = Command::new("xvfb-run")
+    let out = xvfb_run()
         .args(["-a", "-s", "-screen 0 640x480x24", "bash", "-c", &script])
         // Screenshots (P) land in the working directory.
         .current_dir(&dir)

@@ -559,11 +559,39 @@ fn run(cli: Cli) -> Result<()> {
 /// The `lobelight` binary: parses the command line and runs it.
 pub fn main() -> ExitCode {
     env_logger::Builder::from_env(env_logger::Env::default().default_filter_or("error")).init();
-    match run(Cli::parse()) {
+    let cli = Cli::parse();
+    // The viewer keeps the session's own environment (a window system may live there).
+    if !matches!(cli.command, Command::View { .. }) {
+        give_the_driver_a_runtime_dir();
+    }
+    match run(cli) {
         Ok(()) => ExitCode::SUCCESS,
         Err(e) => {
             eprintln!("lobelight: {e}");
             ExitCode::FAILURE
+        }
+    }
+}
+
+/// Mesa's Vulkan drivers print "XDG_RUNTIME_DIR is invalid or not set" on stderr at every
+/// device open when the variable is unset (headless shells, services, CI): give the headless
+/// commands a private directory so that their stderr holds only what lobelight says.
+fn give_the_driver_a_runtime_dir() {
+    if std::env::var_os("XDG_RUNTIME_DIR").is_some() {
+        return;
+    }
+    #[cfg(unix)]
+    {
+        use std::os::unix::fs::{MetadataExt, PermissionsExt};
+        let uid = std::fs::metadata("/proc/self").map_or(0, |m| m.uid());
+        let dir = std::env::temp_dir().join(format!("lobelight-runtime-{uid}"));
+        let private = std::fs::Permissions::from_mode(0o700);
+        let ready = std::fs::create_dir_all(&dir)
+            .and_then(|()| std::fs::set_permissions(&dir, private))
+            .is_ok();
+        if ready {
+            // SAFETY: called from `main` before any thread exists.
+            unsafe { std::env::set_var("XDG_RUNTIME_DIR", &dir) };
         }
     }
 }
