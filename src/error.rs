@@ -44,6 +44,20 @@ impl Error {
         }
     }
 
+    /// Reads the whole of `path`, refusing at once anything but a regular file (a device such
+    /// as `/dev/zero` or a pipe would never end, a directory is no input).
+    pub fn read_regular_file(path: &Path) -> Result<Vec<u8>, Error> {
+        let meta = std::fs::metadata(path).map_err(|e| Error::io(path, e))?;
+        if !meta.is_file() {
+            return Err(Error::parse(
+                path,
+                "file type",
+                "not a regular file (a directory, device or pipe)",
+            ));
+        }
+        std::fs::read(path).map_err(|e| Error::io(path, e))
+    }
+
     pub fn at_line(path: &Path, line: usize, message: impl Into<String>) -> Self {
         Self::parse(path, format!("line {line}"), message)
     }

@@ -185,3 +185,23 @@ fn impossible_sizes_are_refused_before_allocating() {
     let e = err(&scaled);
     assert!(e.contains("splats") || e.contains("degenerate"), "{e}");
 }
+
+/// A path that is no regular file is refused at once with its name: a device such as
+/// `/dev/zero` would otherwise be read for ever, a directory is no input.
+#[cfg(unix)]
+#[test]
+fn paths_that_are_not_regular_files_are_refused() {
+    let model = err(&MINIMAL.replace(
+        "shape = \"quad\"",
+        "shape = \"model\"\npath = \"/dev/zero\"",
+    ));
+    assert!(model.contains("/dev/zero"), "{model}");
+    assert!(model.contains("not a regular file"), "{model}");
+    for path in ["/dev/zero", "scenes"] {
+        let msg = scene::load(Path::new(path)).unwrap_err().to_string();
+        assert!(
+            msg.contains(path) && msg.contains("not a regular file"),
+            "{msg}"
+        );
+    }
+}

@@ -39,7 +39,7 @@ const MAX_MODEL_BYTES: u64 = 4 << 30;
 
 /// Reads a `.ply`, `.obj` (optionally `.gz`) file.
 pub fn load(path: &Path) -> Result<Mesh> {
-    let raw = std::fs::read(path).map_err(|e| Error::io(path, e))?;
+    let raw = Error::read_regular_file(path)?;
     let bytes = if raw.starts_with(&[0x1f, 0x8b]) {
         let mut out = Vec::new();
         flate2::read::GzDecoder::new(&raw[..])
