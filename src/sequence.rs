@@ -9,11 +9,13 @@
 
 use bytemuck::Pod;
 
+use crate::bins::PhotonBins;
 use crate::em::{EmConfig, FitShape, dispatch_ranges, iterations_per_dispatch, workgroup_size};
 use crate::error::{Error, Result};
+use crate::grid::SplatGrid;
 use crate::grid::check_cell_len;
 use crate::photons::{
-    PhotonConfig, PhotonStats, StoreAction, StorePlanner, first_capacity, ms_since,
+    PhotonConfig, PhotonMap, PhotonStats, StoreAction, StorePlanner, first_capacity, ms_since,
 };
 use crate::shaders::stage_shape;
 use crate::shared::dispatch::groups_for;
@@ -144,6 +146,19 @@ pub struct BuiltGrid<B> {
     pub cell_dist: B,
 }
 
+impl<B> BuiltGrid<B> {
+    /// The grid in host memory.
+    pub fn read_back<E: Executor<Buffer = B>>(&self, ex: &mut E) -> Result<SplatGrid> {
+        let cells = self.params.cell_count as usize;
+        Ok(SplatGrid {
+            params: self.params,
+            cell_start: ex.read(&self.cell_start, cells + 1)?,
+            cell_splats: ex.read(&self.cell_splats, self.params.entry_count as usize)?,
+            cell_dist: ex.read(&self.cell_dist, cells)?,
+        })
+    }
+}
+
 /// The grid build: count → exclusive scan → (split: the entry total sizes the list, the
 /// longest cell is checked) → scatter → rank → the distance field's passes x, y, z.
 pub fn build_grid<E: Executor>(
@@ -249,6 +264,20 @@ pub struct Bins<B> {
     pub power: B,
     /// `bin_rank` dispatches the longest cell list needed.
     pub rank_chunks: u32,
+}
+
+impl<B> Bins<B> {
+    /// The binned photons in host memory.
+    pub fn read_back<E: Executor<Buffer = B>>(&self, ex: &mut E) -> Result<PhotonBins> {
+        let n = self.params.photon_count as usize;
+        Ok(PhotonBins {
+            params: self.params,
+            cell_start: ex.read(&self.cell_start, self.params.cell_count as usize + 1)?,
+            keys: ex.read(&self.keys, n)?,
+            geom: ex.read(&self.geom, n)?,
+            power: ex.read(&self.power, n)?,
+        })
+    }
 }
 
 /// Photon binning of the stored photons in `pages` (a buffer and its photon count each):
@@ -498,6 +527,22 @@ pub struct Page<B> {
 pub struct Traced<B> {
     pub pages: Vec<Page<B>>,
     pub stats: PhotonStats,
+}
+
+impl<B> Traced<B> {
+    /// All stored photons in host memory, sorted by `Photon::key`.
+    pub fn read_back<E: Executor<Buffer = B>>(&self, ex: &mut E) -> Result<PhotonMap> {
+        let mut photons = Vec::with_capacity(self.stats.stored as usize);
+        for page in &self.pages {
+            photons.extend(ex.read::<Photon>(&page.buffer, page.count as usize)?);
+        }
+        let mut map = PhotonMap {
+            photons,
+            stats: self.stats.clone(),
+        };
+        map.sort();
+        Ok(map)
+    }
 }
 
 /// The photon pass: batches of `photon_trace` appending to a store of pages of at most

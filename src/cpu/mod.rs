@@ -90,14 +90,7 @@ pub fn exclusive_scan(values: &mut [u32]) -> Result<()> {
 pub fn build_grid(params: &GridParams, splats: &[Splat]) -> Result<SplatGrid> {
     let mut ex = CpuExecutor::default();
     let splat_buf = ex.upload("splats", splats)?;
-    let built = sequence::build_grid(&mut ex, params, &splat_buf)?;
-    let params = built.params;
-    Ok(SplatGrid {
-        params,
-        cell_start: ex.read(&built.cell_start, params.cell_count as usize + 1)?,
-        cell_splats: ex.read(&built.cell_splats, params.entry_count as usize)?,
-        cell_dist: ex.read(&built.cell_dist, params.cell_count as usize)?,
-    })
+    sequence::build_grid(&mut ex, params, &splat_buf)?.read_back(&mut ex)
 }
 
 /// The photon pass on the CPU mirror (`sequence::trace_photons`), in one page (host memory
@@ -116,16 +109,7 @@ pub fn trace_photons(
     let max_page = u32::MAX as u64;
     let traced =
         sequence::trace_photons(&mut ex, &emitters, &material_buf, cfg, max_page, progress)?;
-    let mut photons = Vec::with_capacity(traced.stats.stored as usize);
-    for page in &traced.pages {
-        photons.extend(ex.read::<Photon>(&page.buffer, page.count as usize)?);
-    }
-    let mut map = PhotonMap {
-        photons,
-        stats: traced.stats,
-    };
-    map.sort();
-    Ok(map)
+    traced.read_back(&mut ex)
 }
 
 /// The scene's splat grid, built by the mirror.
@@ -161,15 +145,7 @@ pub fn bin_photons(params: &BinParams, photons: &[Photon]) -> Result<PhotonBins>
         .map_err(|_| Error::Invalid("too many photons to bin".into()))?;
     let mut ex = CpuExecutor::default();
     let page = ex.upload("photons", photons)?;
-    let bins = sequence::bin_photons(&mut ex, &[(&page, n)], params)?;
-    let (len, cells) = (n as usize, bins.params.cell_count as usize);
-    Ok(PhotonBins {
-        params: bins.params,
-        cell_start: ex.read(&bins.cell_start, cells + 1)?,
-        keys: ex.read(&bins.keys, len)?,
-        geom: ex.read(&bins.geom, len)?,
-        power: ex.read(&bins.power, len)?,
-    })
+    sequence::bin_photons(&mut ex, &[(&page, n)], params)?.read_back(&mut ex)
 }
 
 /// The lobe fit on the CPU: `em_select`, then `em_fit` over the same dispatch ranges and

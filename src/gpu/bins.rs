@@ -7,20 +7,10 @@ use super::photons::GpuPhotons;
 use crate::bins::{PhotonBins, check_binned};
 use crate::error::Result;
 use crate::sequence;
-use crate::types::{BinParams, BinnedPhoton};
+use crate::types::BinParams;
 
 /// Binned photons on the device (see `PhotonBins`).
-pub struct GpuBins {
-    pub params: BinParams,
-    pub params_buf: wgpu::Buffer,
-    pub cell_start: wgpu::Buffer,
-    pub keys: wgpu::Buffer,
-    pub geom: wgpu::Buffer,
-    pub power: wgpu::Buffer,
-    /// `bin_rank` dispatches the longest cell list needed.
-    pub rank_chunks: u32,
-}
-
+pub type GpuBins = sequence::Bins<wgpu::Buffer>;
 impl GpuBins {
     /// Binned photons made elsewhere (the CPU mirror), for fitting on the device.
     pub fn upload(gpu: &Gpu, bins: &PhotonBins) -> Result<GpuBins> {
@@ -36,14 +26,10 @@ impl GpuBins {
     }
 
     pub fn download(&self, gpu: &Gpu) -> Result<PhotonBins> {
-        let n = self.params.photon_count as usize;
-        Ok(PhotonBins {
-            params: self.params,
-            cell_start: gpu.read(&self.cell_start, self.params.cell_count as usize + 1)?,
-            keys: gpu.read(&self.keys, n)?,
-            geom: gpu.read::<BinnedPhoton>(&self.geom, n)?,
-            power: gpu.read(&self.power, n)?,
-        })
+        self.read_back(&mut GpuExecutor::new(
+            gpu,
+            &mut gpu.encoder("bins download"),
+        ))
     }
 }
 
@@ -59,13 +45,5 @@ pub fn bin_photons(gpu: &Gpu, photons: &GpuPhotons, params: &BinParams) -> Resul
     let mut encoder = gpu.encoder("binning");
     let bins = sequence::bin_photons(&mut GpuExecutor::new(gpu, &mut encoder), &pages, params)?;
     gpu.submit_and_wait(encoder)?;
-    Ok(GpuBins {
-        params: bins.params,
-        params_buf: bins.params_buf,
-        cell_start: bins.cell_start,
-        keys: bins.keys,
-        geom: bins.geom,
-        power: bins.power,
-        rank_chunks: bins.rank_chunks,
-    })
+    Ok(bins)
 }

@@ -507,7 +507,8 @@ impl SplatPipelines {
                 })
             })
             .collect::<Vec<_>>();
-        let (x, y) = gpu.dispatch_dims(gpu.groups("shade", out.width * out.height)?)?;
+        let (x, y) =
+            gpu.dispatch_dims(crate::sequence::groups("shade", out.width * out.height)?)?;
         let mut pass = encoder.begin_compute_pass(&wgpu::ComputePassDescriptor {
             label: Some("shade"),
             timestamp_writes: None,

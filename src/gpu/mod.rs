@@ -263,13 +263,6 @@ impl Gpu {
         Ok(pipeline)
     }
 
-    /// Workgroups of `stage` that cover `n` values, from the workgroup size and items per
-    /// invocation its WGSL declares (`shaders::stage_shape`).
-    pub fn groups(&self, stage: &str, n: u32) -> Result<u32> {
-        let per_group = crate::shaders::stage_shape(stage)?.per_group(stage)?;
-        Ok(crate::shared::dispatch::groups_for(n, per_group))
-    }
-
     /// Records one dispatch of `stage` over `groups` workgroups, binding `buffers` to group 0
     /// in binding order. Large counts are laid out in 2D (see `wgsl/shared/dispatch.wgsl`).
     pub fn dispatch(

@@ -6,39 +6,26 @@ use super::Gpu;
 use super::exec::GpuExecutor;
 use super::scene::GpuScene;
 use crate::error::Result;
-use crate::photons::{PhotonConfig, PhotonMap, PhotonStats, emitters, page_photons};
+use crate::photons::{PhotonConfig, PhotonMap, emitters, page_photons};
 use crate::scene::Scene;
 use crate::sequence;
 use crate::types::Photon;
 
 const PHOTON_BYTES: u64 = std::mem::size_of::<Photon>() as u64;
 
-/// One store buffer and how many photons it holds.
-pub struct PhotonPage {
-    pub buffer: wgpu::Buffer,
-    pub capacity: u64,
-    pub count: u64,
-}
+/// One store buffer on the device and how many photons it holds.
+pub type PhotonPage = sequence::Page<wgpu::Buffer>;
 
 /// Stored photons on the device.
-pub struct GpuPhotons {
-    pub pages: Vec<PhotonPage>,
-    pub stats: PhotonStats,
-}
+pub type GpuPhotons = sequence::Traced<wgpu::Buffer>;
 
 impl GpuPhotons {
     /// All stored photons, sorted by `Photon::key`.
     pub fn download(&self, gpu: &Gpu) -> Result<PhotonMap> {
-        let mut photons = Vec::with_capacity(self.stats.stored as usize);
-        for page in &self.pages {
-            photons.extend(gpu.read::<Photon>(&page.buffer, page.count as usize)?);
-        }
-        let mut map = PhotonMap {
-            photons,
-            stats: self.stats.clone(),
-        };
-        map.sort();
-        Ok(map)
+        self.read_back(&mut GpuExecutor::new(
+            gpu,
+            &mut gpu.encoder("photon download"),
+        ))
     }
 }
 
@@ -80,17 +67,5 @@ pub fn trace_photons(
         progress,
     )?;
     gpu.submit_and_wait(encoder)?;
-    let pages = traced
-        .pages
-        .into_iter()
-        .map(|p| PhotonPage {
-            buffer: p.buffer,
-            capacity: p.capacity,
-            count: p.count,
-        })
-        .collect();
-    Ok(GpuPhotons {
-        pages,
-        stats: traced.stats,
-    })
+    Ok(traced)
 }
