@@ -42,6 +42,9 @@ pub struct StageReport {
     pub lobes_kept: Option<u64>,
     #[serde(skip_serializing_if = "Option::is_none")]
     pub lobes_fitted: Option<u64>,
+    /// Shade: the refinement frames the still image averages.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub frames: Option<u32>,
     pub skipped_reason: Option<String>,
 }
 

@@ -10,8 +10,9 @@ use crate::em::LobeMap;
 use crate::error::{Error, Result};
 use crate::grid::SplatGrid;
 use crate::scene::Scene;
+use crate::sequence::Executor;
 use crate::shared::trace::Geometry;
-use crate::types::{Camera, EmParams, ShadeParams, Splat};
+use crate::types::{Camera, DIRECT_BAKED, DIRECT_RAYS, DirectParams, EmParams, ShadeParams, Splat};
 
 /// Which light a frame shows: everything, or one part of it (the viewer's keys 1–5).
 #[derive(Clone, Copy, Debug, Default, PartialEq, Eq, serde::Serialize)]
@@ -53,11 +54,44 @@ impl Show {
     }
 }
 
+/// Where a frame's direct light comes from.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, serde::Serialize)]
+#[cfg_attr(feature = "cli", derive(clap::ValueEnum))]
+#[serde(rename_all = "lowercase")]
+pub enum Direct {
+    /// The direct bake: each splat's visibility of each light, made once for static lights,
+    /// so a moving camera casts no shadow ray (the glossy part still follows the view).
+    #[default]
+    Baked,
+    /// Shadow rays from every pixel, every frame: exact per pixel.
+    Rays,
+}
+
+impl Direct {
+    /// `ShadeParams::direct`.
+    pub fn code(self) -> u32 {
+        match self {
+            Direct::Baked => DIRECT_BAKED,
+            Direct::Rays => DIRECT_RAYS,
+        }
+    }
+
+    pub fn name(self) -> &'static str {
+        match self {
+            Direct::Baked => "baked",
+            Direct::Rays => "rays",
+        }
+    }
+}
+
 /// Settings of the splat passes.
 #[derive(Clone, Debug, PartialEq)]
 pub struct FrameConfig {
-    /// Area lights are sampled on an `area_samples`² jittered grid per pixel.
+    /// Area lights are sampled on an `area_samples`² jittered grid per pixel (shadow rays), or
+    /// at its strata's centres (baked visibility's glossy part).
     pub area_samples: u32,
+    /// Direct light from the bake or from shadow rays (a refinement frame always casts rays).
+    pub direct: Direct,
     /// Splats within this many of their radii behind the visible surface blend into a pixel.
     pub depth_tolerance: f32,
     /// Seed of the area-light jitter.
@@ -70,6 +104,7 @@ impl Default for FrameConfig {
     fn default() -> Self {
         FrameConfig {
             area_samples: 4,
+            direct: Direct::Baked,
             depth_tolerance: 1.0,
             seed: 1,
             show: crate::shared::splat::SHOW_ALL,
@@ -120,6 +155,78 @@ pub fn shadow_bias(splats: &[Splat]) -> f32 {
     (0.5 * sum / splats.len().max(1) as f64) as f32
 }
 
+/// Area lights are sampled on a `DIRECT_SAMPLES`² jittered grid per splat by the direct bake.
+pub const DIRECT_SAMPLES: u32 = 8;
+
+pub use crate::sequence::DirectMap;
+
+/// The direct bake's uniform for the scene's splats and lights.
+pub fn direct_params(scene: &Scene) -> DirectParams {
+    DirectParams {
+        splat_count: scene.splats.len() as u32,
+        light_count: scene.lights.len() as u32,
+        samples: DIRECT_SAMPLES,
+        seed: scene.bake.seed,
+        shadow_bias: shadow_bias(&scene.splats),
+        ..Default::default()
+    }
+}
+
+/// The direct bake on the CPU mirror (`sequence::bake_direct`).
+pub fn cpu_direct(scene: &Scene, grid: &SplatGrid) -> Result<DirectMap> {
+    let geo = Geometry {
+        grid,
+        splats: &scene.splats,
+    };
+    let params = direct_params(scene);
+    let mut ex = cpu::CpuExecutor::tracing(geo);
+    let lights = ex.upload("lights", &scene.lights)?;
+    let baked = crate::sequence::bake_direct(&mut ex, &lights, &params)?;
+    baked.read_back(&mut ex, &params)
+}
+
+/// Point `k` of the Halton sequence in `base` (k ≥ 1), in [0, 1).
+fn halton(mut k: u32, base: u32) -> f32 {
+    let (mut f, mut r) = (1.0f32, 0.0f32);
+    while k > 0 {
+        f /= base as f32;
+        r += f * (k % base) as f32;
+        k /= base;
+    }
+    r
+}
+
+/// The sub-pixel offset of refinement frame `k`: none for the first, then the Halton (2, 3)
+/// points over the pixel, whose running mean is the pixel's box-filtered average.
+pub fn jitter(k: u32) -> [f32; 2] {
+    if k == 0 {
+        return [0.0; 2];
+    }
+    [halton(k, 2) - 0.5, halton(k, 3) - 0.5]
+}
+
+/// The shading uniform of refinement frame `k` of `spp`: shadow rays per pixel, the frame's
+/// share of the area-light strata (all `area_samples`² over `spp` frames, so that a still
+/// image holds at least as many light samples per pixel as a one-frame exact render; past
+/// that, fresh jitter each round) and its place in the running mean.
+pub fn refinement(base: &ShadeParams, k: u32, spp: u32) -> ShadeParams {
+    let strata = base.area_samples * base.area_samples;
+    let count = strata.div_ceil(spp.max(1)).max(1);
+    let round = k * count / strata;
+    ShadeParams {
+        direct: DIRECT_RAYS,
+        area_first: (k * count) % strata,
+        area_count: count,
+        sample: k,
+        seed: if round == 0 {
+            base.seed
+        } else {
+            crate::shared::rng::pcg_hash(base.seed.wrapping_add(round))
+        },
+        ..*base
+    }
+}
+
 /// The shading uniform of a bake; the image size comes with the camera.
 pub fn shade_params(scene: &Scene, lobes: &LobeMap, cfg: &FrameConfig) -> ShadeParams {
     shade_params_for(scene, lobes.lobes_per_splat, cfg)
@@ -135,20 +242,49 @@ pub fn shade_params_for(scene: &Scene, lobes_per_splat: u32, cfg: &FrameConfig) 
         shadow_bias: shadow_bias(&scene.splats),
         seed: cfg.seed,
         show: cfg.show,
+        direct: cfg.direct.code(),
+        area_first: 0,
+        area_count: cfg.area_samples * cfg.area_samples,
+        sample: 0,
         ..Default::default()
     }
 }
 
-/// The splat passes on the CPU: visibility, attributes, shade; linear HDR pixels.
+/// The splat passes on the CPU: visibility, attributes, shade; linear HDR pixels. Baked
+/// direct light (`params.direct`) is baked first.
 pub fn cpu_frame(
     scene: &Scene,
     grid: &SplatGrid,
     lobes: &LobeMap,
     cam: &Camera,
     params: &ShadeParams,
-) -> Vec<[f32; 4]> {
+) -> Result<Vec<[f32; 4]>> {
+    let direct = match params.direct {
+        DIRECT_BAKED => cpu_direct(scene, grid)?,
+        _ => DirectMap::default(),
+    };
+    let mut hdr = vec![[0.0; 4]; (cam.size[0] * cam.size[1]) as usize];
+    cpu_frame_into(scene, grid, lobes, &direct, cam, params, &mut hdr);
+    Ok(hdr)
+}
+
+/// `cpu_frame` with the direct bake made, into `hdr` (a refinement frame adds to it).
+pub fn cpu_frame_into(
+    scene: &Scene,
+    grid: &SplatGrid,
+    lobes: &LobeMap,
+    direct: &DirectMap,
+    cam: &Camera,
+    params: &ShadeParams,
+    hdr: &mut [[f32; 4]],
+) {
     let tiles = cpu::splat_visibility::bin_tiles(cam, &scene.splats);
     let depth = cpu::splat_visibility::splat_visibility(cam, &scene.splats, &tiles);
+    let baked = cpu::splat_attributes::BakedDirect {
+        lights: &scene.lights,
+        direct: &direct.direct,
+        visibility: &direct.visibility,
+    };
     let sums = cpu::splat_attributes::splat_attributes(
         cam,
         &scene.splats,
@@ -157,6 +293,7 @@ pub fn cpu_frame(
         &lobes.light,
         &lobes.lobes,
         crate::convolution::lobe_norms(),
+        &baked,
         &depth,
         &tiles,
     );
@@ -164,11 +301,42 @@ pub fn cpu_frame(
         grid,
         splats: &scene.splats,
     };
-    cpu::shade::shade(cam, params, &sums, &scene.lights, &geo)
+    cpu::shade::shade(cam, params, &sums, &scene.lights, &geo, hdr);
+}
+
+/// The still image of `cam` on the CPU: `spp` refinement frames, each jittered and with its
+/// share of shadow rays, averaged.
+pub fn cpu_refined(
+    scene: &Scene,
+    grid: &SplatGrid,
+    lobes: &LobeMap,
+    cam: &Camera,
+    params: &ShadeParams,
+    spp: u32,
+) -> Vec<[f32; 4]> {
+    let mut hdr = vec![[0.0; 4]; (cam.size[0] * cam.size[1]) as usize];
+    for k in 0..spp.max(1) {
+        let cam = Camera {
+            jitter: jitter(k),
+            ..*cam
+        };
+        let params = refinement(params, k, spp);
+        cpu_frame_into(
+            scene,
+            grid,
+            lobes,
+            &DirectMap::default(),
+            &cam,
+            &params,
+            &mut hdr,
+        );
+    }
+    hdr
 }
 
 /// The reference on the CPU: the gather pass in place of visibility and attributes, then the
-/// same shade pass (which reads no lobes: an empty map gives it its other settings).
+/// same shade pass (which reads no lobes: an empty map gives it its other settings) with
+/// shadow rays.
 pub fn cpu_reference(
     scene: &Scene,
     grid: &SplatGrid,
@@ -177,11 +345,17 @@ pub fn cpu_reference(
     cam: &Camera,
     cfg: &FrameConfig,
 ) -> Vec<[f32; 4]> {
-    let params = shade_params(scene, &LobeMap::default(), cfg);
+    let cfg = FrameConfig {
+        direct: Direct::Rays,
+        ..cfg.clone()
+    };
+    let params = shade_params(scene, &LobeMap::default(), &cfg);
     let geo = Geometry {
         grid,
         splats: &scene.splats,
     };
     let sums = cpu::reference_gather::reference_gather(cam, em, &scene.materials, bins, &geo);
-    cpu::shade::shade(cam, &params, &sums, &scene.lights, &geo)
+    let mut hdr = vec![[0.0; 4]; (cam.size[0] * cam.size[1]) as usize];
+    cpu::shade::shade(cam, &params, &sums, &scene.lights, &geo, &mut hdr);
+    hdr
 }

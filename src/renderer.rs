@@ -13,16 +13,20 @@ use crate::bake::{BakeDevice, Baked, Binned, Progress, bake, bins_gpu};
 use crate::camera::View;
 use crate::em::LobeMap;
 use crate::error::{Error, Result};
-use crate::frame::{FrameConfig, camera_uniform, shade_params_for};
+use crate::frame::{
+    Direct, DirectMap, FrameConfig, camera_uniform, direct_params, jitter, refinement,
+    shade_params_for,
+};
 use crate::gpu::Gpu;
 use crate::gpu::bins::GpuBins;
+use crate::gpu::exec::GpuExecutor;
 use crate::gpu::frame::{FrameScene, FrameTargets, SplatPipelines};
 use crate::gpu::reference::ReferencePipeline;
 use crate::gpu::scene::GpuScene;
 use crate::gpu::tone::{GpuToned, tone_map};
 use crate::scene::Scene;
 use crate::tone::ToneConfig;
-use crate::types::{Camera, EmParams};
+use crate::types::{Camera, DIRECT_BAKED, EmParams, Light, ShadeParams};
 
 pub struct FrameRenderer {
     /// The splats, materials and grid (shared with a bake on another thread).
@@ -33,6 +37,11 @@ pub struct FrameRenderer {
     frame_scene: FrameScene,
     /// The most lobes a splat of the uploaded map has (the shade pass's loop bound).
     lobes_per_splat: u32,
+    /// How long the direct bake of the current lights took; none until it is made (after a
+    /// new scene or new lights).
+    direct_ms: Option<f64>,
+    /// The lights on the device.
+    lights: Vec<Light>,
     targets: Option<FrameTargets>,
 }
 
@@ -51,6 +60,8 @@ impl FrameRenderer {
             reference: None,
             on_gpu,
             lobes_per_splat: lobes.lobes_per_splat,
+            direct_ms: None,
+            lights: scene.lights.clone(),
             targets: None,
         })
     }
@@ -59,7 +70,11 @@ impl FrameRenderer {
     /// `bake` or `set_lobes`.
     pub fn set_scene(&mut self, gpu: &Gpu, scene: &Scene) -> Result<()> {
         self.on_gpu = Arc::new(GpuScene::upload(gpu, scene)?);
-        self.set_lobes(gpu, scene, &LobeMap::default())
+        self.frame_scene = FrameScene::upload(gpu, scene, &LobeMap::default())?;
+        self.lobes_per_splat = 0;
+        self.direct_ms = None;
+        self.lights = scene.lights.clone();
+        Ok(())
     }
 
     /// Bakes the scene's light on the device and keeps the lobes for the frames to come.
@@ -77,16 +92,59 @@ impl FrameRenderer {
     /// Draws with `lobes` and the scene's lights from now on (a bake loaded from a cache or
     /// made elsewhere).
     pub fn set_lobes(&mut self, gpu: &Gpu, scene: &Scene, lobes: &LobeMap) -> Result<()> {
-        self.frame_scene = FrameScene::upload(gpu, scene, lobes)?;
+        self.frame_scene.splat_light = gpu.storage("splat light", &lobes.light)?;
+        self.frame_scene.lobes = gpu.storage("lobes", &lobes.lobes)?;
         self.lobes_per_splat = lobes.lobes_per_splat;
-        Ok(())
+        self.set_lights(gpu, scene)
     }
 
     /// Draws with the scene's lights from now on, the lobes unchanged (a moved light's direct
-    /// light, before its bake is in).
+    /// light, before its indirect bake is in). Lights that changed need a new direct bake,
+    /// made before the next frame that needs it, or at once by `bake_direct`.
     pub fn set_lights(&mut self, gpu: &Gpu, scene: &Scene) -> Result<()> {
-        self.frame_scene.lights = gpu.storage("lights", &scene.lights)?;
+        if self.lights != scene.lights {
+            self.frame_scene.lights = gpu.storage("lights", &scene.lights)?;
+            self.lights = scene.lights.clone();
+            self.direct_ms = None;
+        }
         Ok(())
+    }
+
+    /// Bakes the direct light of the current lights into every splat (`sequence::bake_direct`)
+    /// and waits; returns its milliseconds.
+    pub fn bake_direct(&mut self, gpu: &Gpu, scene: &Scene) -> Result<f64> {
+        let start = std::time::Instant::now();
+        let params = direct_params(scene);
+        let mut encoder = gpu.encoder("direct bake");
+        let mut ex = GpuExecutor::new(gpu, &mut encoder).tracing(&self.on_gpu);
+        let direct = crate::sequence::bake_direct(&mut ex, &self.frame_scene.lights, &params)?;
+        gpu.submit_and_wait(encoder)?;
+        self.frame_scene.direct = direct;
+        let ms = crate::photons::ms_since(start);
+        self.direct_ms = Some(ms);
+        Ok(ms)
+    }
+
+    /// Whether the current lights' direct bake is made.
+    pub fn direct_is_baked(&self) -> bool {
+        self.direct_ms.is_some()
+    }
+
+    /// The direct bake's milliseconds, baking it first if the lights changed since.
+    pub fn ensure_direct(&mut self, gpu: &Gpu, scene: &Scene) -> Result<f64> {
+        match self.direct_ms {
+            Some(ms) => Ok(ms),
+            None => self.bake_direct(gpu, scene),
+        }
+    }
+
+    /// The direct bake of the current lights in host memory (tests, comparisons).
+    pub fn read_direct(&mut self, gpu: &Gpu, scene: &Scene) -> Result<DirectMap> {
+        self.ensure_direct(gpu, scene)?;
+        let params = direct_params(scene);
+        let mut encoder = gpu.encoder("direct read");
+        let mut ex = GpuExecutor::new(gpu, &mut encoder);
+        self.frame_scene.direct.read_back(&mut ex, &params)
     }
 
     /// Targets of `width × height`, made anew only when the size changed.
@@ -114,11 +172,48 @@ impl FrameRenderer {
         cam: &Camera,
         cfg: &FrameConfig,
     ) -> Result<&wgpu::Buffer> {
-        let targets = self.targets()?;
         let params = shade_params_for(scene, self.lobes_per_splat, cfg);
+        self.record_params(gpu, encoder, cam, &params)
+    }
+
+    /// Records refinement frame `k` of `spp` of `cam` (`frame::refinement`): jittered, with
+    /// its share of shadow rays, added to the running mean in the HDR image, which holds the
+    /// still image once `k + 1 == spp`. Returns the HDR image.
+    #[allow(clippy::too_many_arguments)]
+    pub fn record_sample(
+        &self,
+        gpu: &Gpu,
+        encoder: &mut wgpu::CommandEncoder,
+        scene: &Scene,
+        cam: &Camera,
+        cfg: &FrameConfig,
+        k: u32,
+        spp: u32,
+    ) -> Result<&wgpu::Buffer> {
+        let base = shade_params_for(scene, self.lobes_per_splat, cfg);
+        let cam = Camera {
+            jitter: jitter(k),
+            ..*cam
+        };
+        self.record_params(gpu, encoder, &cam, &refinement(&base, k, spp))
+    }
+
+    fn record_params(
+        &self,
+        gpu: &Gpu,
+        encoder: &mut wgpu::CommandEncoder,
+        cam: &Camera,
+        params: &ShadeParams,
+    ) -> Result<&wgpu::Buffer> {
+        if params.direct == DIRECT_BAKED && self.direct_ms.is_none() {
+            return Err(Error::Invalid(
+                "baked direct light was asked for before the lights' direct bake".into(),
+            ));
+        }
+        let targets = self.targets()?;
         let buffers = self.frame_scene.buffers(&self.on_gpu);
         self.pipelines
-            .draw(gpu, encoder, &buffers, cam, &params, targets)?;
+            .draw(gpu, encoder, &buffers, cam, params, targets)?;
         Ok(&targets.hdr)
     }
 
@@ -144,8 +239,13 @@ impl FrameRenderer {
                 "the frame renderer has no targets yet".into(),
             ));
         };
-        // The shade pass reads no lobes here: none per splat gives it its other settings.
-        let params = shade_params_for(scene, 0, cfg);
+        // The shade pass reads no lobes here: none per splat gives it its other settings, and
+        // the gather has no baked direct light to add: shadow rays.
+        let cfg = FrameConfig {
+            direct: Direct::Rays,
+            ..cfg.clone()
+        };
+        let params = shade_params_for(scene, 0, &cfg);
         let buffers = self.frame_scene.buffers(&self.on_gpu);
         reference.draw(
             gpu,
@@ -170,10 +270,35 @@ impl FrameRenderer {
         cfg: &FrameConfig,
     ) -> Result<&FrameTargets> {
         self.resize(gpu, view.width, view.height)?;
+        if cfg.direct == Direct::Baked {
+            self.ensure_direct(gpu, scene)?;
+        }
         let cam = camera_uniform(view, scene.bounds(), cfg);
         let mut encoder = gpu.encoder("frame");
         self.record(gpu, &mut encoder, scene, &cam, cfg)?;
         gpu.submit_and_wait(encoder)?;
+        self.targets()
+    }
+
+    /// Draws the still image of `view`: `spp` refinement frames, one submission each, with
+    /// `each(k)` called after frame `k` (progress). The HDR image holds their mean.
+    pub fn draw_refined(
+        &mut self,
+        gpu: &Gpu,
+        scene: &Scene,
+        view: &View,
+        cfg: &FrameConfig,
+        spp: u32,
+        mut each: impl FnMut(u32),
+    ) -> Result<&FrameTargets> {
+        self.resize(gpu, view.width, view.height)?;
+        let cam = camera_uniform(view, scene.bounds(), cfg);
+        for k in 0..spp.max(1) {
+            let mut encoder = gpu.encoder("refinement frame");
+            self.record_sample(gpu, &mut encoder, scene, &cam, cfg, k, spp)?;
+            gpu.submit_and_wait(encoder)?;
+            each(k);
+        }
         self.targets()
     }
 
@@ -205,6 +330,9 @@ impl FrameRenderer {
         cfg: &FrameConfig,
     ) -> Result<[f64; 3]> {
         self.resize(gpu, view.width, view.height)?;
+        if cfg.direct == Direct::Baked {
+            self.ensure_direct(gpu, scene)?;
+        }
         let cam = camera_uniform(view, scene.bounds(), cfg);
         let params = shade_params_for(scene, self.lobes_per_splat, cfg);
         let buffers = self.frame_scene.buffers(&self.on_gpu);

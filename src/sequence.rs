@@ -21,8 +21,8 @@ use crate::shaders::stage_shape;
 use crate::shared::dispatch::groups_for;
 use crate::tone::{ToneConfig, reduce_levels};
 use crate::types::{
-    BinParams, Camera, DistanceParams, EmParams, Emitter, GridParams, Photon, PhotonViewParams,
-    ScanParams, TraceCounters,
+    BinParams, Camera, DirectParams, DistanceParams, EmParams, Emitter, GridParams, Photon,
+    PhotonViewParams, ScanParams, TraceCounters,
 };
 
 /// Where a sequence runs: buffers, uniforms, dispatches by stage name, copies and readbacks.
@@ -653,4 +653,54 @@ fn apply<E: Executor>(
         }
     }
     Ok(())
+}
+
+/// The direct bake where it was made: per splat its shadowed irradiance (`[E, 0]`), and per
+/// splat and light the light's visibility (`direct_bake.wgsl`).
+pub struct Direct<B> {
+    pub direct: B,
+    pub visibility: B,
+}
+
+impl<B> Direct<B> {
+    /// Both in host memory.
+    pub fn read_back<E: Executor<Buffer = B>>(
+        &self,
+        ex: &mut E,
+        params: &DirectParams,
+    ) -> Result<DirectMap> {
+        let n = params.splat_count as usize;
+        Ok(DirectMap {
+            direct: ex.read(&self.direct, n)?,
+            visibility: ex.read(&self.visibility, n * params.light_count as usize)?,
+        })
+    }
+}
+
+/// The direct bake in host memory: per splat `[E, 0]`, its shadowed irradiance from every
+/// light, and per splat and light (`splat * lights + light`) the light's visibility.
+#[derive(Clone, Debug, Default, PartialEq)]
+pub struct DirectMap {
+    pub direct: Vec<[f32; 4]>,
+    pub visibility: Vec<f32>,
+}
+
+/// Bakes the direct light of `lights` (`params.light_count` of them) into every splat of the
+/// executor's geometry: one `direct_bake` dispatch over the splats.
+pub fn bake_direct<E: Executor>(
+    ex: &mut E,
+    lights: &E::Buffer,
+    params: &DirectParams,
+) -> Result<Direct<E::Buffer>> {
+    let n = params.splat_count as u64;
+    let direct = ex.zeroed("direct light", n.max(1) * 16)?;
+    let visibility = ex.zeroed(
+        "light visibility",
+        (n * params.light_count as u64).max(1) * 4,
+    )?;
+    let uniform = ex.uniform("direct params", params)?;
+    let bindings = [&uniform, lights, &direct, &visibility];
+    let groups = groups("direct_bake", params.splat_count)?;
+    ex.dispatch_traced("direct_bake", &bindings, groups)?;
+    Ok(Direct { direct, visibility })
 }

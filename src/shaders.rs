@@ -58,6 +58,7 @@ pub const STAGES: &[WgslFile] = &[
     stage!("tonemap_apply"),
     stage!("splat_visibility"),
     stage!("splat_attributes"),
+    stage!("direct_bake"),
     stage!("shade"),
     stage!("reference_gather"),
     stage!("present"),
@@ -79,6 +80,7 @@ pub const SHARED: &[WgslFile] = &[
     shared!("lobes"),
     shared!("tone"),
     shared!("splat"),
+    shared!("lights"),
     shared!("lobe_brdf"),
     shared!("fullscreen"),
 ];

@@ -299,8 +299,9 @@ pub struct Camera {
     pub tan_y: f32,
     /// Image width and height in pixels.
     pub size: [f32; 2],
-    pub _pad0: u32,
-    pub _pad1: u32,
+    /// Sub-pixel offset of every view ray (pixels, within ±0.5): successive jittered frames
+    /// average into an anti-aliased image (`frame::jitter`).
+    pub jitter: [f32; 2],
 }
 
 /// Uniform of the shading passes (`splat_attributes`, `shade`).
@@ -318,7 +319,38 @@ pub struct ShadeParams {
     pub seed: u32,
     /// Which light terms the frame shows (`shared::splat::SHOW_*` bits).
     pub show: u32,
+    /// Where direct light comes from: `DIRECT_RAYS` (shadow rays per pixel, in `shade`) or
+    /// `DIRECT_BAKED` (each splat's baked visibility, in `splat_attributes`).
+    pub direct: u32,
+    /// The area-light strata this frame traces, `area_first..area_first + area_count` (mod
+    /// `area_samples`²): all of them in one frame, or spread over refinement frames.
+    pub area_first: u32,
+    pub area_count: u32,
+    /// The refinement sample this frame is: 0 writes the HDR image, k > 0 adds to the running
+    /// mean of the k frames before it.
+    pub sample: u32,
+    pub _pad0: u32,
+}
+
+/// `ShadeParams::direct`: shadow rays per pixel.
+pub const DIRECT_RAYS: u32 = 0;
+/// `ShadeParams::direct`: the bake's per-splat visibility (`direct_bake`).
+pub const DIRECT_BAKED: u32 = 1;
+
+/// Uniform of `direct_bake`: every splat's direct light from every light, shadowed.
+#[repr(C)]
+#[derive(Clone, Copy, Debug, Default, PartialEq, Pod, Zeroable)]
+pub struct DirectParams {
+    pub splat_count: u32,
+    pub light_count: u32,
+    /// Area lights are sampled on a `samples`² jittered grid per splat.
+    pub samples: u32,
+    pub seed: u32,
+    /// Shadow rays start this far off the splat, along its normal.
+    pub shadow_bias: f32,
+    pub _pad0: u32,
     pub _pad1: u32,
+    pub _pad2: u32,
 }
 
 /// The uniform grid over the splats: `cell = floor((p - origin) / cell_size)`, cells numbered

@@ -165,8 +165,7 @@ fn rust_layouts() -> Vec<RustLayout> {
             up,
             tan_y,
             size,
-            _pad0,
-            _pad1
+            jitter
         }),
         layout!(ShadeParams {
             lobes_per_splat,
@@ -176,7 +175,21 @@ fn rust_layouts() -> Vec<RustLayout> {
             shadow_bias,
             seed,
             show,
-            _pad1
+            direct,
+            area_first,
+            area_count,
+            sample,
+            _pad0
+        }),
+        layout!(DirectParams {
+            splat_count,
+            light_count,
+            samples,
+            seed,
+            shadow_bias,
+            _pad0,
+            _pad1,
+            _pad2
         }),
         layout!(GridParams {
             origin,

@@ -10,7 +10,9 @@ use lobelight::bins::PhotonBins;
 use lobelight::camera::View;
 use lobelight::cli::compare::difference;
 use lobelight::cpu;
-use lobelight::frame::{FrameConfig, camera_uniform, cpu_frame, cpu_reference, shade_params};
+use lobelight::frame::{
+    Direct, FrameConfig, camera_uniform, cpu_frame, cpu_reference, shade_params,
+};
 use lobelight::gpu::Gpu;
 use lobelight::gpu::bins::GpuBins;
 use lobelight::grid::SplatGrid;
@@ -93,7 +95,11 @@ fn reference_and_lobes_agree_where_nothing_is_glossy() {
     )
     .unwrap();
     assert_eq!(lobes.stats.fitted, 0, "nothing glossy, no lobes");
-    let cfg = FrameConfig::default();
+    // The same direct light in both (shadow rays): the comparison is of the indirect light.
+    let cfg = FrameConfig {
+        direct: Direct::Rays,
+        ..FrameConfig::default()
+    };
     let view = View::new(&scene.camera, 64, 64);
     let cam = camera_uniform(&view, scene.bounds(), &cfg);
     let a = cpu_frame(
@@ -102,7 +108,8 @@ fn reference_and_lobes_agree_where_nothing_is_glossy() {
         &lobes,
         &cam,
         &shade_params(&scene, &lobes, &cfg),
-    );
+    )
+    .unwrap();
     let b = cpu_reference(&scene, &grid, &binned.bins, &binned.em, &cam, &cfg);
     let d = difference(&a, &b).unwrap();
     eprintln!("{d:?}");

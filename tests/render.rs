@@ -9,7 +9,7 @@ use lobelight::bake::{BakeDevice, Progress, bake};
 use lobelight::camera::View;
 use lobelight::cli::compare::difference;
 use lobelight::em::LobeMap;
-use lobelight::frame::{FrameConfig, Show, camera_uniform, cpu_frame, shade_params};
+use lobelight::frame::{Direct, FrameConfig, Show, camera_uniform, cpu_frame, shade_params};
 use lobelight::gpu::Gpu;
 use lobelight::gpu::scene::GpuScene;
 use lobelight::grid::SplatGrid;
@@ -56,7 +56,7 @@ fn cpu_hdr(
     cfg: &FrameConfig,
 ) -> Vec<[f32; 4]> {
     let cam = camera_uniform(view, scene.bounds(), cfg);
-    cpu_frame(scene, grid, lobes, &cam, &shade_params(scene, lobes, cfg))
+    cpu_frame(scene, grid, lobes, &cam, &shade_params(scene, lobes, cfg)).unwrap()
 }
 
 /// The glossy Cornell box, baked once on the CPU and drawn from two views by both paths.
@@ -68,16 +68,21 @@ fn splat_passes_match_the_cpu_mirror() {
     let grid = common::host_grid(&scene);
     let lobes = cpu_bake(&scene, &grid);
     assert!(lobes.stats.fitted > 500, "the glossy block has lobes");
-    let cfg = FrameConfig::default();
-    for view in views(&scene, 96) {
-        let a = gpu_frame(&gpu, &scene, &lobes, &view, &cfg);
-        let b = cpu_hdr(&scene, &grid, &lobes, &view, &cfg);
-        let d = difference(&a, &b).unwrap();
-        eprintln!("{}x{}: {d:?}", view.width, view.height);
-        assert!(d.mean_relative <= MEAN_RELATIVE, "{d:?}");
-        assert!(d.within_5_percent >= WITHIN_5_PERCENT, "{d:?}");
-        let lit = b.iter().filter(|p| p[0] + p[1] + p[2] > 0.0).count();
-        assert!(lit > b.len() / 2, "most of the image shows the box");
+    for direct in [Direct::Baked, Direct::Rays] {
+        let cfg = FrameConfig {
+            direct,
+            ..FrameConfig::default()
+        };
+        for view in views(&scene, 96) {
+            let a = gpu_frame(&gpu, &scene, &lobes, &view, &cfg);
+            let b = cpu_hdr(&scene, &grid, &lobes, &view, &cfg);
+            let d = difference(&a, &b).unwrap();
+            eprintln!("{direct:?} {}x{}: {d:?}", view.width, view.height);
+            assert!(d.mean_relative <= MEAN_RELATIVE, "{d:?}");
+            assert!(d.within_5_percent >= WITHIN_5_PERCENT, "{d:?}");
+            let lit = b.iter().filter(|p| p[0] + p[1] + p[2] > 0.0).count();
+            assert!(lit > b.len() / 2, "most of the image shows the box");
+        }
     }
 }
 
@@ -111,7 +116,10 @@ spacing = 0.05
 }
 
 /// A lone diffuse plane has no indirect light: the centre pixel is ρ/π × the irradiance of
-/// the light in closed form, on both paths, for each light kind.
+/// the light in closed form, on both paths, for each light kind, from shadow rays at the pixel
+/// (within 2e-3: f32 rounding) and from the direct bake (within 5e-3: the pixel blends splat
+/// centres up to a radius, 0.04, off the axis, where a light 1 above gives (h / d)^3 or
+/// (h / d)^4 of the irradiance, 1 − 2 r² ≈ 0.997 at the rim).
 #[test]
 fn direct_light_matches_closed_forms() {
     let gpu = common::gpu();
@@ -138,8 +146,14 @@ fn direct_light_matches_closed_forms() {
             5000.0 * 0.0004,
         ),
     ];
-    let cfg = FrameConfig::default();
-    for (light, irradiance) in cases {
+    for ((light, irradiance), direct) in cases
+        .into_iter()
+        .flat_map(|c| [(c, Direct::Rays), (c, Direct::Baked)])
+    {
+        let cfg = FrameConfig {
+            direct,
+            ..FrameConfig::default()
+        };
         let scene = plane_scene(light);
         let grid = common::host_grid(&scene);
         let lobes = cpu_bake(&scene, &grid);
@@ -151,9 +165,16 @@ fn direct_light_matches_closed_forms() {
             ("gpu", gpu_frame(&gpu, &scene, &lobes, &view, &cfg)),
         ] {
             let got = hdr[centre];
+            let tolerance = match direct {
+                Direct::Rays => 2e-3,
+                Direct::Baked => 5e-3,
+            };
             for c in 0..3 {
                 let rel = (got[c] - expect).abs() / expect;
-                assert!(rel < 2e-3, "{name}, {light}: {got:?} vs {expect}");
+                assert!(
+                    rel < tolerance,
+                    "{name} {direct:?}, {light}: {got:?} vs {expect}"
+                );
             }
         }
     }
@@ -192,6 +213,7 @@ fn light_kinds_not_in_the_scene_cost_nothing() {
         let [one, many] = [1, 8].map(|area_samples| {
             let cfg = FrameConfig {
                 area_samples,
+                direct: Direct::Rays,
                 ..FrameConfig::default()
             };
             gpu_frame(&gpu, &scene, &lobes, &view, &cfg)
@@ -316,8 +338,9 @@ fn shown_light_terms_add_up_to_the_full_frame() {
     let grid = common::host_grid(&scene);
     let lobes = cpu_bake(&scene, &grid);
     let view = View::new(&scene.camera, 64, 64);
-    let with = |show: u32| FrameConfig {
+    let with = |show: u32, direct: Direct| FrameConfig {
         show,
+        direct,
         ..FrameConfig::default()
     };
     let add = |a: Vec<[f32; 4]>, b: Vec<[f32; 4]>| -> Vec<[f32; 4]> {
@@ -327,12 +350,13 @@ fn shown_light_terms_add_up_to_the_full_frame() {
             .collect()
     };
     let specular = SHOW_DIRECT_SPECULAR | SHOW_INDIRECT_SPECULAR;
-    for on_gpu in [true, false] {
+    let runs = [true, false].map(|g| [(g, Direct::Baked), (g, Direct::Rays)]);
+    for (on_gpu, direct) in runs.into_iter().flatten() {
         let frame = |show: u32| {
             if on_gpu {
-                gpu_frame(&gpu, &scene, &lobes, &view, &with(show))
+                gpu_frame(&gpu, &scene, &lobes, &view, &with(show, direct))
             } else {
-                cpu_hdr(&scene, &grid, &lobes, &view, &with(show))
+                cpu_hdr(&scene, &grid, &lobes, &view, &with(show, direct))
             }
         };
         let full = frame(Show::Full.mask());
@@ -342,7 +366,7 @@ fn shown_light_terms_add_up_to_the_full_frame() {
         ];
         for (a, b) in splits {
             let d = difference(&add(frame(a), frame(b)), &full).unwrap();
-            eprintln!("gpu {on_gpu}, {a:#x} + {b:#x}: {d:?}");
+            eprintln!("gpu {on_gpu}, {direct:?}, {a:#x} + {b:#x}: {d:?}");
             assert!(d.mean_relative <= 1e-6, "{d:?}");
             assert!(d.max_relative <= 1e-5, "{d:?}");
         }

@@ -154,6 +154,7 @@ fn mirror_workgroup_shapes_match_the_wgsl() {
         ("grid_distance", grid_distance::WG, 1),
         ("trace_rays", trace_rays::WG, 1),
         ("photon_trace", photon_trace::WG, 1),
+        ("direct_bake", direct_bake::WG, 1),
         ("bin_count", bin_count::WG, 1),
         ("bin_scatter", bin_scatter::WG, 1),
         ("bin_rank", bin_rank::WG, 1),
@@ -202,6 +203,7 @@ fn stage_bindings_are_read_from_the_wgsl() {
         "trace_rays",
         "photon_trace",
         "photon_view",
+        "direct_bake",
         "shade",
         "reference_gather",
     ];

@@ -35,7 +35,10 @@ fn frames(gpu: &Gpu, scene: &Scene, lobes: &LobeMap, view: &View) -> [Vec<[f32; 
     renderer.draw(gpu, scene, view, &cfg).unwrap();
     let on_device = renderer.read_hdr(gpu).unwrap();
     let grid = common::host_grid(scene);
-    [on_device, cpu_frame(scene, &grid, lobes, &cam, &params)]
+    [
+        on_device,
+        cpu_frame(scene, &grid, lobes, &cam, &params).unwrap(),
+    ]
 }
 
 /// Finite on both paths and within the mirror's tolerance; returns the mean relative

@@ -1,13 +1,16 @@
 // Splat pass 3, shading (docs/design.md section 8): per pixel, normalise the blended sums of the
 // attribute pass, add direct light from every light by shadow rays through the splat grid
-// (area lights on a jittered area_samples^2 grid), and show area lights the view ray meets
-// before the surface. Writes linear HDR radiance for tone mapping. Twin: src/cpu/shade.rs.
+// (area lights on a jittered area_samples^2 grid, or this refinement frame's strata of it)
+// unless it was baked, and show area lights the view ray meets before the surface. Writes
+// linear HDR radiance for tone mapping, or adds a refinement frame to the running mean.
+// Twin: src/cpu/shade.rs.
 
 // #import types
 // #import dispatch
 // #import rng
 // #import splat
 // #import trace
+// #import lights
 
 @group(0) @binding(0) var<uniform> cam: Camera;
 @group(0) @binding(1) var<uniform> params: ShadeParams;
@@ -20,9 +23,6 @@
 
 const WG: u32 = 64u;
 
-// Roughness below this gives no direct highlight (a mirror needs the lobes, not a sample).
-const MIN_ALPHA: f32 = 1e-3;
-
 // A surface point as the shade pass sees it.
 struct Surface {
     p: vec3<f32>,
@@ -31,54 +31,6 @@ struct Surface {
     rho_d: vec3<f32>,
     rho_s: vec3<f32>,
     alpha: f32,
-}
-
-// Light arriving at p from one light sample: its direction, distance (for the shadow ray)
-// and irradiance on a surface facing it.
-struct LightSample {
-    wi: vec3<f32>,
-    dist: f32,
-    e: vec3<f32>,
-}
-
-// The mean of a spot's smooth falloff over its cone, uniform in cos (see photons.rs).
-fn spot_falloff_mean(l: Light) -> f32 {
-    if l.cos_inner <= l.cos_outer {
-        return 1.0;
-    }
-    return ((l.cos_inner - l.cos_outer) * 0.5 + (1.0 - l.cos_inner)) / (1.0 - l.cos_outer);
-}
-
-// A point on a light towards p: (u, v) picks the point of an area light.
-fn sample_light(l: Light, p: vec3<f32>, u: f32, v: f32) -> LightSample {
-    var s: LightSample;
-    if l.kind == LIGHT_DIRECTIONAL {
-        s.wi = -l.direction;
-        s.dist = FAR;
-        s.e = l.power / l.area;
-        return s;
-    }
-    var q = l.position;
-    if l.kind == LIGHT_AREA {
-        q += u * l.edge_u + v * l.edge_v;
-    }
-    let to = q - p;
-    let d2 = dot(to, to);
-    s.dist = sqrt(d2);
-    s.wi = to / s.dist;
-    let cos_l = -dot(s.wi, l.direction);
-    if l.kind == LIGHT_AREA {
-        // Radiance power / (pi A) over the whole rectangle: pdf 1 / A per point.
-        s.e = l.power * (max(cos_l, 0.0) / (PI * d2));
-    } else if l.kind == LIGHT_SPOT {
-        let ramp = select(1.0, smoothstep(l.cos_outer, l.cos_inner, cos_l), l.cos_inner > l.cos_outer);
-        let inside = select(0.0, ramp, cos_l >= l.cos_outer);
-        let solid_angle = 2.0 * PI * (1.0 - l.cos_outer);
-        s.e = l.power * (inside / (spot_falloff_mean(l) * solid_angle * d2));
-    } else {
-        s.e = l.power / (4.0 * PI * d2);
-    }
-    return s;
 }
 
 fn brdf(sf: Surface, wi: vec3<f32>) -> vec3<f32> {
@@ -113,16 +65,15 @@ fn direct(sf: Surface, pixel: u32) -> vec3<f32> {
             sum += shade_sample(sf, sample_light(l, sf.p, 0.0, 0.0));
             continue;
         }
+        // This frame's strata of the n x n grid: all of them, or a refinement frame's share.
         let n = params.area_samples;
-        let inv_n = 1.0 / f32(n);
         var area_sum = vec3<f32>(0.0);
-        for (var j = 0u; j < n * n; j++) {
-            let r = key + (li * n * n + j) * 2u;
-            let u = (f32(j % n) + unit_float(pcg_hash(r))) * inv_n;
-            let v = (f32(j / n) + unit_float(pcg_hash(r + 1u))) * inv_n;
-            area_sum += shade_sample(sf, sample_light(l, sf.p, u, v));
+        for (var k = 0u; k < params.area_count; k++) {
+            let j = (params.area_first + k) % (n * n);
+            let uv = area_point(j, n, key + (li * n * n + j) * 2u, true);
+            area_sum += shade_sample(sf, sample_light(l, sf.p, uv.x, uv.y));
         }
-        sum += area_sum * (inv_n * inv_n);
+        sum += area_sum * (1.0 / f32(params.area_count));
     }
     return sum;
 }
@@ -177,7 +128,9 @@ fn main(@builtin(workgroup_id) wg: vec3<u32>, @builtin(num_workgroups) num_wg: v
         sf.rho_s = select(vec3<f32>(0.0), spec.xyz * inv_w, (params.show & SHOW_DIRECT_SPECULAR) != 0u);
         sf.alpha = select(0.0, dif.w / spec.w, spec.w > 0.0);
         color = acc.xyz * inv_w;
-        if (params.show & (SHOW_DIRECT_DIFFUSE | SHOW_DIRECT_SPECULAR)) != 0u {
+        // Baked direct light came with the attribute pass's sums.
+        let rays = params.direct == DIRECT_RAYS;
+        if rays && (params.show & (SHOW_DIRECT_DIFFUSE | SHOW_DIRECT_SPECULAR)) != 0u {
             color += direct(sf, i);
         }
     }
@@ -185,5 +138,11 @@ fn main(@builtin(workgroup_id) wg: vec3<u32>, @builtin(num_workgroups) num_wg: v
     // diffuse term, so that the parts a frame can show add up to the whole.
     let seen = emitted(d, t_surface);
     let light = select(vec3<f32>(0.0), seen, (params.show & SHOW_DIRECT_DIFFUSE) != 0u);
-    hdr[i] = vec4<f32>(select(color, light, seen.x >= 0.0), 1.0);
+    let out = vec4<f32>(select(color, light, seen.x >= 0.0), 1.0);
+    // Refinement: the running mean of this frame and the `sample` frames before it.
+    if params.sample == 0u {
+        hdr[i] = out;
+    } else {
+        hdr[i] += (out - hdr[i]) * (1.0 / f32(params.sample + 1u));
+    }
 }

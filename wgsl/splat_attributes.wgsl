@@ -2,11 +2,13 @@
 // tolerance of the visible surface (depth test against pass 1, no depth writes) add
 // weight x (what the shade pass needs) into four float targets by additive blending, in
 // draw order. Each fragment is shaded from its own splat's lobes with its own view ray:
-// the indirect light, diffuse from the total irradiance and specular from every lobe.
+// the indirect light, diffuse from the total irradiance and specular from every lobe, and
+// with baked direct light (params.direct) the direct light from the splat's baked visibility.
 // Twin: src/cpu/splat_attributes.rs.
 
 // #import splat
 // #import lobe_brdf
+// #import lights
 
 @group(0) @binding(0) var<uniform> cam: Camera;
 @group(0) @binding(1) var<storage, read> splats: array<Splat>;
@@ -15,6 +17,11 @@
 @group(0) @binding(4) var<storage, read> splat_light: array<SplatLight>;
 @group(0) @binding(5) var<storage, read> lobes: array<Lobe>;
 @group(0) @binding(6) var<storage, read> lobe_norms: array<f32>;
+@group(0) @binding(7) var<storage, read> lights: array<Light>;
+// The direct bake's (direct_bake.wgsl): per splat (shadowed irradiance, 0), and per splat and
+// light the light's visibility. Read only when params.direct is DIRECT_BAKED.
+@group(0) @binding(8) var<storage, read> direct: array<vec4<f32>>;
+@group(0) @binding(9) var<storage, read> visibility: array<f32>;
 
 // The hemispherical integral of a lobe of width beta2 about axis (lobe_norms).
 fn lobe_norm(n: vec3<f32>, axis: vec3<f32>, beta2: f32) -> f32 {
@@ -43,6 +50,49 @@ fn indirect(i: u32, s: Splat, m: Material, wo: vec3<f32>) -> vec3<f32> {
     return diffuse + m.specular * spec;
 }
 
+// The specular light one light sample reflects towards wo, unshadowed.
+fn specular_sample(n: vec3<f32>, wo: vec3<f32>, alpha: f32, ls: LightSample) -> vec3<f32> {
+    let cos_i = dot(n, ls.wi);
+    if !(cos_i > 0.0) {
+        return vec3<f32>(0.0);
+    }
+    return ward_specular(n, ls.wi, wo, alpha) * ls.e * cos_i;
+}
+
+// Radiance leaving splat i at p towards wo by the baked direct light: the diffuse part from
+// the shadowed irradiance, the glossy part from the BRDF towards each light (an area light's
+// n x n strata centres) times the light's visibility.
+fn baked_direct(i: u32, s: Splat, m: Material, p: vec3<f32>, wo: vec3<f32>) -> vec3<f32> {
+    var out = vec3<f32>(0.0);
+    if (params.show & SHOW_DIRECT_DIFFUSE) != 0u {
+        out = s.diffuse * (direct[i].xyz / PI);
+    }
+    let glossy = m.roughness >= MIN_ALPHA && any(m.specular > vec3<f32>(0.0));
+    if (params.show & SHOW_DIRECT_SPECULAR) == 0u || !glossy {
+        return out;
+    }
+    var spec = vec3<f32>(0.0);
+    for (var li = 0u; li < params.light_count; li++) {
+        let vis = visibility[i * params.light_count + li];
+        let l = lights[li];
+        if !(vis > 0.0) {
+            continue;
+        }
+        if l.kind != LIGHT_AREA {
+            spec += vis * specular_sample(s.normal, wo, m.roughness, sample_light(l, p, 0.0, 0.0));
+            continue;
+        }
+        let n = params.area_samples;
+        var area_sum = vec3<f32>(0.0);
+        for (var j = 0u; j < n * n; j++) {
+            let uv = area_point(j, n, 0u, false);
+            area_sum += specular_sample(s.normal, wo, m.roughness, sample_light(l, p, uv.x, uv.y));
+        }
+        spec += vis * area_sum * (1.0 / f32(n * n));
+    }
+    return out + m.specular * spec;
+}
+
 @vertex
 fn vs_main(@builtin(vertex_index) corner: u32, @builtin(instance_index) i: u32) -> SplatVertex {
     return splat_vertex(cam, splats[i], i, corner);
@@ -64,5 +114,32 @@ fn fs_main(v: SplatVertex) -> Attributes {
     out.geometry = w * vec4<f32>(s.normal, h.t);
     out.diffuse = w * vec4<f32>(s.diffuse, gloss * m.roughness);
     out.specular = w * vec4<f32>(m.specular, gloss);
+    return out;
+}
+
+// What the attribute pass blends with baked direct light: the shade pass casts no shadow
+// ray, so it needs only the radiance and the distance (for lights seen in front).
+struct BakedAttributes {
+    @location(0) radiance: vec4<f32>,
+    @location(1) geometry: vec4<f32>,
+}
+
+// The fragment of the baked-direct variant (params.direct == DIRECT_BAKED): the indirect and
+// the baked direct light into the first two targets; blending two targets, not four, is
+// what a software rasterizer saves most on.
+@fragment
+fn fs_baked(v: SplatVertex) -> BakedAttributes {
+    let s = splats[v.splat];
+    let d = pixel_ray(cam, v.position.xy);
+    let h = splat_hit(s, cam.eye, d);
+    if !covers(cam, h, d) {
+        discard;
+    }
+    let w = splat_weight(h.q);
+    let m = materials[s.material];
+    let radiance = indirect(v.splat, s, m, -d) + baked_direct(v.splat, s, m, cam.eye + h.t * d, -d);
+    var out: BakedAttributes;
+    out.radiance = w * vec4<f32>(radiance, 1.0);
+    out.geometry = w * vec4<f32>(s.normal, h.t);
     return out;
 }

@@ -7,13 +7,14 @@ use serde::Serialize;
 use crate::bake::{BakeDevice, Progress, bake};
 use crate::bins::bin_params;
 use crate::camera::View;
+use crate::cli::compare::difference;
 use crate::cli::measure::median;
 use crate::cli::render::Method;
 use crate::cli::view::{ViewOptions, ViewReport};
 use crate::cpu;
 use crate::em::{EmConfig, EmStats, FitShape, LobeFamily, LobeMap};
 use crate::error::Result;
-use crate::frame::{FrameConfig, camera_uniform, cpu_frame, shade_params};
+use crate::frame::{Direct, FrameConfig, camera_uniform, cpu_frame, shade_params};
 use crate::gpu::bins as gpu_bins;
 use crate::gpu::em as gpu_em;
 
@@ -396,9 +397,21 @@ pub struct FrameBench {
     pub splats_fitted: u32,
     pub lights: usize,
     pub area_samples: u32,
+    /// Where the timed frames' direct light came from: "baked" or "rays" (`--direct`).
+    pub direct: &'static str,
+    /// How splats became pixels: "raster" (the visibility and attribute render passes).
+    pub splatter: &'static str,
+    /// GPU, baked direct light: the direct bake of the lights, once before the frames (what
+    /// a moved light costs before its indirect bake).
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub direct_bake_ms: Option<f64>,
     /// `frame_ms` at the first size (512²), for scripts that want one number.
     pub frame_ms: f64,
     pub sizes: Vec<FrameTiming>,
+    /// GPU, at the first size: the still image a resting camera refines to, and how far the
+    /// moving frame is from it.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub refinement: Option<RefinementTiming>,
     /// `--window`: frames drawn in a 1280×720 window by the viewer, swap chain included.
     #[serde(skip_serializing_if = "Option::is_none")]
     pub window: Option<ViewReport>,
@@ -425,6 +438,19 @@ pub struct FrameTiming {
     pub frames: u32,
 }
 
+#[derive(Debug, Serialize)]
+pub struct RefinementTiming {
+    /// Refinement frames the still image averages.
+    pub spp: u32,
+    /// Median milliseconds of one refinement frame (jittered, shadow rays), tone map apart.
+    pub frame_ms: f64,
+    /// relMSE of the timed (moving-camera) frame against the still image.
+    pub moving_rel_mse: f64,
+}
+
+/// Refinement frames of `bench frame`'s still image.
+pub const REFINEMENT_SPP: u32 = 32;
+
 /// The sizes `bench frame` times: a square, the viewer's window and full HD.
 pub const FRAME_SIZES: [(u32, u32); 3] = [(512, 512), (1280, 720), (1920, 1080)];
 const TIMED_FRAMES: u32 = 5;
@@ -439,10 +465,15 @@ pub fn frame(
 ) -> Result<FrameBench> {
     let progress = Progress::new(false);
     let mut sizes = Vec::new();
+    let mut direct_bake_ms = None;
+    let mut refinement = None;
     let (adapter, backend, fitted) = match gpu {
         Some(gpu) => {
             let mut renderer = FrameRenderer::new(gpu, scene)?;
             let lobes = renderer.bake(gpu, scene, &progress)?.lobes;
+            if cfg.direct == Direct::Baked {
+                direct_bake_ms = Some(renderer.bake_direct(gpu, scene)?);
+            }
             let present = PresentPipeline::new(gpu, WINDOW_FORMAT)?;
             for (w, h) in FRAME_SIZES {
                 let view = View::new(&scene.camera, w, h);
@@ -472,6 +503,21 @@ pub fn frame(
                 }));
                 t.present_ms = Some(median(present_ms[1..].to_vec()));
                 sizes.push(t);
+                if refinement.is_none() {
+                    let moving = renderer.read_hdr(gpu)?;
+                    let mut ms = Vec::new();
+                    let mut last = Instant::now();
+                    renderer.draw_refined(gpu, scene, &view, cfg, REFINEMENT_SPP, |_| {
+                        ms.push(ms_since(last));
+                        last = Instant::now();
+                    })?;
+                    let still = renderer.read_hdr(gpu)?;
+                    refinement = Some(RefinementTiming {
+                        spp: REFINEMENT_SPP,
+                        frame_ms: median(ms),
+                        moving_rel_mse: difference(&moving, &still)?.rel_mse,
+                    });
+                }
             }
             let name = gpu.info.name.clone();
             (name, gpu.backend_name().to_string(), lobes.stats.fitted)
@@ -486,7 +532,7 @@ pub fn frame(
                 let mut times = Vec::new();
                 for _ in 0..=TIMED_FRAMES {
                     let t = Instant::now();
-                    let hdr = cpu_frame(scene, &grid, &lobes, &cam, &params);
+                    let hdr = cpu_frame(scene, &grid, &lobes, &cam, &params)?;
                     let shade = ms_since(t);
                     let t = Instant::now();
                     cpu::tone_map(tone, &hdr)?;
@@ -507,8 +553,12 @@ pub fn frame(
         splats_fitted: fitted,
         lights: scene.lights.len(),
         area_samples: cfg.area_samples,
+        direct: cfg.direct.name(),
+        splatter: "raster",
+        direct_bake_ms,
         frame_ms: sizes[0].frame_ms,
         sizes,
+        refinement,
         window: None,
     })
 }
@@ -534,6 +584,8 @@ pub fn window_frames(
         tone,
         method: Method::Lobes,
         frames: Some(WINDOW_FRAMES),
+        // Every frame a moving frame: what a camera in motion gets.
+        spp: 0,
         screenshot: None,
         cache: None,
     };
@@ -567,6 +619,15 @@ impl std::fmt::Display for FrameBench {
             "splats       {} ({} with lobes), {} lights, {}² area samples",
             self.splats, self.splats_fitted, self.lights, self.area_samples
         )?;
+        write!(
+            f,
+            "direct       {}, {} splatter",
+            self.direct, self.splatter
+        )?;
+        if let Some(ms) = self.direct_bake_ms {
+            write!(f, "; direct bake {ms:.1} ms")?;
+        }
+        writeln!(f)?;
         for (i, s) in self.sizes.iter().enumerate() {
             if i > 0 {
                 writeln!(f)?;
@@ -582,6 +643,14 @@ impl std::fmt::Display for FrameBench {
             if let Some(p) = s.present_ms {
                 write!(f, "; present {p:.1} ms")?;
             }
+        }
+        if let Some(r) = &self.refinement {
+            write!(
+                f,
+                "\nrefinement   {:.1} ms/frame; the moving frame's relMSE against the {}-frame \
+                 still image: {:.5}",
+                r.frame_ms, r.spp, r.moving_rel_mse
+            )?;
         }
         if let Some(w) = &self.window {
             write!(

@@ -17,7 +17,7 @@ use std::path::PathBuf;
 use std::process::ExitCode;
 
 use crate::em::{EmConfig, LobeFamily};
-use crate::frame::{FrameConfig, Show};
+use crate::frame::{Direct, FrameConfig, Show};
 use crate::gpu::{BackendChoice, Gpu};
 use crate::photons::PhotonConfig;
 use crate::scene::file::StoreRange;
@@ -137,6 +137,10 @@ struct LookArgs {
     /// Which light to show: all of it, or one part.
     #[arg(long, value_enum, default_value_t = Show::Full)]
     show: Show,
+    /// Direct light of a moving frame: the bake's per-splat visibility, or shadow rays per
+    /// pixel. Still images (`render`, a resting viewer) refine with shadow rays.
+    #[arg(long, value_enum, default_value_t = Direct::Baked)]
+    direct: Direct,
 }
 
 impl LookArgs {
@@ -144,6 +148,7 @@ impl LookArgs {
         FrameConfig {
             area_samples: self.area_samples,
             show: self.show.mask(),
+            direct: self.direct,
             ..FrameConfig::default()
         }
     }
@@ -186,6 +191,11 @@ enum Command {
         /// else bake and save it there.
         #[arg(long, value_name = "FILE")]
         cache: Option<PathBuf>,
+        /// Samples per pixel of the still image: refinement frames, each jittered within the
+        /// pixel and with its share of the shadow rays, averaged (1: one exact frame at the
+        /// pixel centres, no anti-aliasing; 0: the frame a moving camera gets, with --direct).
+        #[arg(long, default_value_t = render::DEFAULT_SPP, value_parser = clap::value_parser!(u32).range(0..=65536))]
+        spp: u32,
         #[command(flatten)]
         bake: BakeArgs,
         #[command(flatten)]
@@ -223,6 +233,10 @@ enum Command {
         /// Scripted run: draw N frames once the bake is in, then exit.
         #[arg(long, value_name = "N")]
         frames: Option<u32>,
+        /// Refinement frames a resting camera adds to its still image, each jittered and with
+        /// its share of shadow rays (render --spp's frames; 0: never refine).
+        #[arg(long, default_value_t = render::DEFAULT_SPP, value_parser = clap::value_parser!(u32).range(0..=65536))]
+        spp: u32,
         /// With --frames: save the last frame here (PNG).
         #[arg(long, value_name = "OUT.png", requires = "frames")]
         screenshot: Option<PathBuf>,
@@ -336,6 +350,7 @@ fn run(cli: Cli) -> Result<()> {
             width,
             height,
             cache,
+            spp,
             bake,
             look,
             device,
@@ -353,6 +368,7 @@ fn run(cli: Cli) -> Result<()> {
                 frame: look.frame(),
                 tone: look.tone(),
                 cache,
+                spp,
             };
             let report = render::render(&scene, gpu.as_ref(), &opts, &output)?;
             if json {
@@ -371,6 +387,7 @@ fn run(cli: Cli) -> Result<()> {
             width,
             height,
             frames,
+            spp,
             screenshot,
             cache,
             method,
@@ -393,6 +410,7 @@ fn run(cli: Cli) -> Result<()> {
                 frames,
                 screenshot,
                 cache,
+                spp,
             };
             opts.frame.validate()?;
             opts.tone.validate()?;

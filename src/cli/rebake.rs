@@ -81,7 +81,7 @@ impl Place<'_> {
             Place::Cpu(grid) => {
                 let cam = camera_uniform(&view, scene.bounds(), &cfg);
                 let params = shade_params(scene, lobes, &cfg);
-                Ok(cpu_frame(scene, grid, lobes, &cam, &params))
+                cpu_frame(scene, grid, lobes, &cam, &params)
             }
         }
     }

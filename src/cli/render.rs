@@ -12,7 +12,9 @@ use crate::camera::View;
 use crate::cpu;
 use crate::cpu::photon_view::scene_scale;
 use crate::error::{Error, Result};
-use crate::frame::{FrameConfig, camera_uniform, cpu_frame, cpu_reference, shade_params};
+use crate::frame::{
+    FrameConfig, camera_uniform, cpu_frame, cpu_reference, cpu_refined, shade_params,
+};
 use crate::gpu::Gpu;
 use crate::gpu::photon_view::photon_image;
 use crate::gpu::photons::trace_photons;
@@ -50,7 +52,15 @@ pub struct Options {
     pub tone: ToneConfig,
     /// Load the bake from this file when it matches the scene, else bake and save it there.
     pub cache: Option<PathBuf>,
+    /// Refinement frames of the still image (`--spp`): each jittered within the pixel, with
+    /// its share of shadow rays; 1 is one exact frame at the pixel centres; 0 is the frame a
+    /// moving camera gets (direct light as `frame.direct` says).
+    pub spp: u32,
 }
+
+/// Refinement frames `render` averages unless told: enough for smooth edges, and with the
+/// default 4² area samples, one shadow ray per pixel and frame.
+pub const DEFAULT_SPP: u32 = 16;
 
 #[derive(Clone, Debug, Serialize)]
 pub struct Stages {
@@ -92,6 +102,10 @@ impl std::fmt::Display for RenderReport {
             ("tonemap", &s.tonemap),
         ];
         for (name, r) in rows {
+            if let (Some(ms), Some(frames)) = (r.ms, r.frames) {
+                writeln!(f, "{name:<8} {ms:>9.1} ms  ({frames} refinement frames)")?;
+                continue;
+            }
             match (r.ran, r.ms, &r.skipped_reason) {
                 (true, Some(ms), Some(part)) => writeln!(f, "{name:<8} {ms:>9.1} ms  ({part})")?,
                 (true, Some(ms), None) => writeln!(f, "{name:<8} {ms:>9.1} ms")?,
@@ -104,6 +118,14 @@ impl std::fmt::Display for RenderReport {
             "wrote    {} ({}×{})",
             self.output, self.width, self.height
         )
+    }
+}
+
+/// The shade stage's report for a still image of `spp` refinement frames.
+fn refined(ms: f64, spp: u32) -> StageReport {
+    StageReport {
+        frames: Some(spp),
+        ..StageReport::ran(ms)
     }
 }
 
@@ -334,8 +356,16 @@ fn render_lobes(
             let (baked, hit) = bake_or_load(scene, on_gpu, opts, &progress)?;
             let t = Instant::now();
             renderer.set_lobes(gpu, scene, &baked.lobes)?;
-            let targets = renderer.draw(gpu, scene, view, &opts.frame)?;
-            let shade = StageReport::ran(ms_since(t));
+            let targets = if opts.spp == 0 {
+                renderer.draw(gpu, scene, view, &opts.frame)?
+            } else {
+                let bar = progress.bar(opts.spp as u64);
+                let each = |k: u32| bar.set_position(k as u64 + 1);
+                let drawn = renderer.draw_refined(gpu, scene, view, &opts.frame, opts.spp, each);
+                bar.finish_and_clear();
+                drawn?
+            };
+            let shade = refined(ms_since(t), opts.spp);
             let drawn = drawn_on_gpu(gpu, &targets.hdr, pixels, format, &opts.tone, shade)?;
             (baked, hit, StageReport::ran(renderer.on_gpu.grid_ms), drawn)
         }
@@ -346,8 +376,11 @@ fn render_lobes(
             let (baked, hit) = bake_or_load(scene, BakeDevice::Cpu(&host_grid), opts, &progress)?;
             let params = shade_params(scene, &baked.lobes, &opts.frame);
             let t = Instant::now();
-            let hdr = cpu_frame(scene, &host_grid, &baked.lobes, &cam, &params);
-            let shade = StageReport::ran(ms_since(t));
+            let hdr = match opts.spp {
+                0 => cpu_frame(scene, &host_grid, &baked.lobes, &cam, &params)?,
+                spp => cpu_refined(scene, &host_grid, &baked.lobes, &cam, &params, spp),
+            };
+            let shade = refined(ms_since(t), opts.spp);
             let drawn = drawn_on_cpu(hdr, format, &opts.tone, shade)?;
             (baked, hit, grid, drawn)
         }

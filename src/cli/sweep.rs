@@ -321,7 +321,7 @@ impl Runner<'_> {
                 let mut hdr = Vec::new();
                 for _ in 0..frames.max(1) {
                     let t = Instant::now();
-                    hdr = cpu_frame(scene, &grid, &baked.lobes, &cam, &params);
+                    hdr = cpu_frame(scene, &grid, &baked.lobes, &cam, &params)?;
                     times.push(ms_since(t));
                 }
                 (hdr, baked)

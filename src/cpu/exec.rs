@@ -7,11 +7,11 @@ use std::rc::Rc;
 use bytemuck::Pod;
 
 use super::{bin_count, bin_place, bin_rank, bin_scatter, em_fit, em_select};
-use super::{grid_count, grid_distance, grid_rank, grid_scatter};
 use super::{
-    photon_resolve, photon_trace, photon_view, scan_apply, scan_reduce, tonemap_apply,
+    direct_bake, photon_resolve, photon_trace, photon_view, scan_apply, scan_reduce, tonemap_apply,
     tonemap_reduce,
 };
+use super::{grid_count, grid_distance, grid_rank, grid_scatter};
 use crate::error::{Error, Result};
 use crate::sequence::Executor;
 use crate::shared::trace::Geometry;
@@ -377,6 +377,14 @@ fn run_traced(stage: &str, b: &[&CpuBuffer], geo: &Geometry, groups: u32) -> Res
             let mut sums = get_mut(stage, b, 4)?;
             let (materials, photons) = (view(&materials), view(&photons));
             photon_view::photon_view(&p, &cam, materials, photons, &mut sums, geo);
+        }
+        "direct_bake" => {
+            let p = param(stage, b, 0)?;
+            let lights = get(stage, b, 1)?;
+            let mut direct = get_mut(stage, b, 2)?;
+            let mut visibility = get_mut(stage, b, 3)?;
+            let (direct, visibility) = (view_mut(&mut direct), view_mut(&mut visibility));
+            direct_bake::direct_bake(&p, view(&lights), direct, visibility, geo);
         }
         "photon_trace" => {
             let p = param(stage, b, 0)?;

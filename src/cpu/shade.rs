@@ -1,25 +1,25 @@
-//! Mirror of `wgsl/shade.wgsl`: normalise the blended sums, add direct light by shadow rays,
-//! show area lights seen directly; linear HDR out.
+//! Mirror of `wgsl/shade.wgsl`: normalise the blended sums, add direct light by shadow rays
+//! (unless it was baked), show area lights seen directly; linear HDR out, or a refinement
+//! frame added to the running mean.
 // `!(x < y)` is meant: NaN must fail these tests, as it does in the WGSL twin.
 #![allow(clippy::neg_cmp_op_on_partial_ord)]
 
 use glam::{Vec2, Vec3, Vec4};
 use rayon::prelude::*;
 
-use crate::shared::rng::{pcg_hash, unit_float};
-use crate::shared::sampling::{PI, smoothstep};
+use crate::shared::lights::{LightSample, MIN_ALPHA, area_point, sample_light};
+use crate::shared::rng::pcg_hash;
+use crate::shared::sampling::PI;
 use crate::shared::splat::{
     SHADOW_RAY_BUDGET, SHOW_DIRECT_DIFFUSE, SHOW_DIRECT_SPECULAR, pixel_ray,
 };
 use crate::shared::trace::{FAR, Geometry, trace_ray};
 use crate::shared::ward::ward_specular;
-use crate::types::{Camera, Light, NO_SPLAT, ShadeParams, light_kind};
+use crate::types::{Camera, DIRECT_RAYS, Light, NO_SPLAT, ShadeParams, light_kind};
 
 use super::splat_attributes::Attributes;
 
 pub const WG: u32 = 64;
-pub const MIN_ALPHA: f32 = 1e-3;
-
 struct Surface {
     p: Vec3,
     n: Vec3,
@@ -27,55 +27,6 @@ struct Surface {
     rho_d: Vec3,
     rho_s: Vec3,
     alpha: f32,
-}
-
-struct LightSample {
-    wi: Vec3,
-    dist: f32,
-    e: Vec3,
-}
-
-fn spot_falloff_mean(l: &Light) -> f32 {
-    if l.cos_inner <= l.cos_outer {
-        return 1.0;
-    }
-    ((l.cos_inner - l.cos_outer) * 0.5 + (1.0 - l.cos_inner)) / (1.0 - l.cos_outer)
-}
-
-fn sample_light(l: &Light, p: Vec3, u: f32, v: f32) -> LightSample {
-    let power = Vec3::from(l.power);
-    let axis = Vec3::from(l.direction);
-    if l.kind == light_kind::DIRECTIONAL {
-        return LightSample {
-            wi: -axis,
-            dist: FAR,
-            e: power / l.area,
-        };
-    }
-    let mut q = Vec3::from(l.position);
-    if l.kind == light_kind::AREA {
-        q += u * Vec3::from(l.edge_u) + v * Vec3::from(l.edge_v);
-    }
-    let to = q - p;
-    let d2 = to.dot(to);
-    let dist = d2.sqrt();
-    let wi = to / dist;
-    let cos_l = -wi.dot(axis);
-    let e = if l.kind == light_kind::AREA {
-        power * (cos_l.max(0.0) / (PI * d2))
-    } else if l.kind == light_kind::SPOT {
-        let ramp = if l.cos_inner > l.cos_outer {
-            smoothstep(l.cos_outer, l.cos_inner, cos_l)
-        } else {
-            1.0
-        };
-        let inside = if cos_l >= l.cos_outer { ramp } else { 0.0 };
-        let solid_angle = 2.0 * PI * (1.0 - l.cos_outer);
-        power * (inside / (spot_falloff_mean(l) * solid_angle * d2))
-    } else {
-        power / (4.0 * PI * d2)
-    };
-    LightSample { wi, dist, e }
 }
 
 fn brdf(sf: &Surface, wi: Vec3) -> Vec3 {
@@ -121,16 +72,16 @@ fn direct(
             sum += shade_sample(params, geo, sf, &sample_light(l, sf.p, 0.0, 0.0));
             continue;
         }
+        // This frame's strata of the n × n grid: all of them, or a refinement frame's share.
         let n = params.area_samples;
-        let inv_n = 1.0 / n as f32;
         let mut area_sum = Vec3::ZERO;
-        for j in 0..n * n {
+        for k in 0..params.area_count {
+            let j = (params.area_first + k) % (n * n);
             let r = key.wrapping_add((li as u32 * n * n + j).wrapping_mul(2));
-            let u = ((j % n) as f32 + unit_float(pcg_hash(r))) * inv_n;
-            let v = ((j / n) as f32 + unit_float(pcg_hash(r.wrapping_add(1)))) * inv_n;
-            area_sum += shade_sample(params, geo, sf, &sample_light(l, sf.p, u, v));
+            let uv = area_point(j, n, r, true);
+            area_sum += shade_sample(params, geo, sf, &sample_light(l, sf.p, uv.x, uv.y));
         }
-        sum += area_sum * (inv_n * inv_n);
+        sum += area_sum * (1.0 / params.area_count as f32);
     }
     sum
 }
@@ -165,57 +116,68 @@ fn emitted(
     out
 }
 
+/// Shades every pixel into `hdr` (`width × height` values): written for refinement sample 0,
+/// added to the running mean after it.
 pub fn shade(
     cam: &Camera,
     params: &ShadeParams,
     sums: &Attributes,
     lights: &[Light],
     geo: &Geometry,
-) -> Vec<[f32; 4]> {
+    hdr: &mut [[f32; 4]],
+) {
     let eye = Vec3::from(cam.eye);
-    let (width, height) = (cam.size[0] as u32, cam.size[1] as u32);
-    (0..width * height)
-        .into_par_iter()
-        .map(|i| {
-            let px = Vec2::new((i % width) as f32, (i / width) as f32);
-            let d = pixel_ray(cam, px + 0.5);
-            let acc = Vec4::from(sums.radiance[i as usize]);
-            let mut color = Vec3::ZERO;
-            let mut t_surface = FAR;
-            let shown = |bit: u32, v: Vec3| {
-                if params.show & bit != 0 {
-                    v
-                } else {
-                    Vec3::ZERO
-                }
-            };
-            if acc.w > 0.0 {
-                let inv_w = 1.0 / acc.w;
-                let g = Vec4::from(sums.geometry[i as usize]);
-                let dif = Vec4::from(sums.diffuse[i as usize]);
-                let spec = Vec4::from(sums.specular[i as usize]);
-                t_surface = g.w * inv_w;
-                let gn = g.truncate();
-                // Terms the frame does not show weigh nothing; with neither, no shadow ray.
-                let sf = Surface {
-                    p: eye + t_surface * d,
-                    n: if gn.dot(gn) > 0.0 { gn.normalize() } else { -d },
-                    wo: -d,
-                    rho_d: shown(SHOW_DIRECT_DIFFUSE, dif.truncate() * inv_w),
-                    rho_s: shown(SHOW_DIRECT_SPECULAR, spec.truncate() * inv_w),
-                    alpha: if spec.w > 0.0 { dif.w / spec.w } else { 0.0 },
-                };
-                color = acc.truncate() * inv_w;
-                if params.show & (SHOW_DIRECT_DIFFUSE | SHOW_DIRECT_SPECULAR) != 0 {
-                    color += direct(params, geo, lights, &sf, i);
-                }
+    let width = cam.size[0] as u32;
+    hdr.par_iter_mut().enumerate().for_each(|(i, out)| {
+        let i = i as u32;
+        let px = Vec2::new((i % width) as f32, (i / width) as f32);
+        let d = pixel_ray(cam, px + 0.5);
+        let acc = Vec4::from(sums.radiance[i as usize]);
+        let mut color = Vec3::ZERO;
+        let mut t_surface = FAR;
+        let shown = |bit: u32, v: Vec3| {
+            if params.show & bit != 0 {
+                v
+            } else {
+                Vec3::ZERO
             }
-            // A light seen directly hides what lies behind it; its radiance counts with the
-            // direct diffuse term, so that the parts a frame can show add up to the whole.
-            let c = emitted(cam, params, lights, d, t_surface)
-                .map(|light| shown(SHOW_DIRECT_DIFFUSE, light))
-                .unwrap_or(color);
-            [c.x, c.y, c.z, 1.0]
-        })
-        .collect()
+        };
+        if acc.w > 0.0 {
+            let inv_w = 1.0 / acc.w;
+            let g = Vec4::from(sums.geometry[i as usize]);
+            let dif = Vec4::from(sums.diffuse[i as usize]);
+            let spec = Vec4::from(sums.specular[i as usize]);
+            t_surface = g.w * inv_w;
+            let gn = g.truncate();
+            // Terms the frame does not show weigh nothing; with neither, no shadow ray.
+            let sf = Surface {
+                p: eye + t_surface * d,
+                n: if gn.dot(gn) > 0.0 { gn.normalize() } else { -d },
+                wo: -d,
+                rho_d: shown(SHOW_DIRECT_DIFFUSE, dif.truncate() * inv_w),
+                rho_s: shown(SHOW_DIRECT_SPECULAR, spec.truncate() * inv_w),
+                alpha: if spec.w > 0.0 { dif.w / spec.w } else { 0.0 },
+            };
+            color = acc.truncate() * inv_w;
+            // Baked direct light came with the attribute pass's sums.
+            let rays = params.direct == DIRECT_RAYS;
+            if rays && params.show & (SHOW_DIRECT_DIFFUSE | SHOW_DIRECT_SPECULAR) != 0 {
+                color += direct(params, geo, lights, &sf, i);
+            }
+        }
+        // A light seen directly hides what lies behind it; its radiance counts with the
+        // direct diffuse term, so that the parts a frame can show add up to the whole.
+        let c = emitted(cam, params, lights, d, t_surface)
+            .map(|light| shown(SHOW_DIRECT_DIFFUSE, light))
+            .unwrap_or(color);
+        let c = c.extend(1.0);
+        // Refinement: the running mean of this frame and the `sample` frames before it.
+        *out = if params.sample == 0 {
+            c
+        } else {
+            let mean = Vec4::from(*out);
+            mean + (c - mean) * (1.0 / (params.sample + 1) as f32)
+        }
+        .to_array();
+    });
 }

@@ -8,8 +8,9 @@ use super::{Gpu, buffer_entries};
 use crate::em::LobeMap;
 use crate::error::{Error, Result};
 use crate::scene::Scene;
+use crate::sequence::Direct;
 use crate::shared::splat::SPLAT_CORNERS;
-use crate::types::{Camera, ShadeParams};
+use crate::types::{Camera, DIRECT_BAKED, ShadeParams};
 
 /// The format of the blended targets: f32 where the device can blend it, else f16.
 pub fn accumulation_format(gpu: &Gpu) -> wgpu::TextureFormat {
@@ -37,6 +38,9 @@ pub struct SceneBuffers<'a> {
     /// `lobe_norms::lobe_norms()`, the table the shading divides each lobe by.
     pub lobe_norms: &'a wgpu::Buffer,
     pub lights: &'a wgpu::Buffer,
+    /// The direct bake (`sequence::Direct`): per-splat irradiance and light visibility.
+    pub direct: &'a wgpu::Buffer,
+    pub visibility: &'a wgpu::Buffer,
     /// Bind group 1 of tracing stages (`GpuScene::geometry`).
     pub geometry: [&'a wgpu::Buffer; 5],
 }
@@ -71,15 +75,23 @@ pub struct FrameScene {
     pub lobes: wgpu::Buffer,
     pub lobe_norms: wgpu::Buffer,
     pub lights: wgpu::Buffer,
+    /// The direct bake of `lights` (zeroed until `FrameRenderer::bake_direct`).
+    pub direct: Direct<wgpu::Buffer>,
 }
 
 impl FrameScene {
     pub fn upload(gpu: &Gpu, scene: &Scene, lobes: &LobeMap) -> Result<FrameScene> {
+        let splats = scene.splats.len().max(1) as u64;
+        let visibility = splats * scene.lights.len().max(1) as u64 * 4;
         Ok(FrameScene {
             splat_light: gpu.storage("splat light", &lobes.light)?,
             lobes: gpu.storage("lobes", &lobes.lobes)?,
             lobe_norms: gpu.storage("lobe norms", crate::convolution::lobe_norms())?,
             lights: gpu.storage("lights", &scene.lights)?,
+            direct: Direct {
+                direct: gpu.storage_zeroed("direct light", splats * 16)?,
+                visibility: gpu.storage_zeroed("light visibility", visibility)?,
+            },
         })
     }
 
@@ -93,9 +105,19 @@ impl FrameScene {
             lobes: &self.lobes,
             lobe_norms: &self.lobe_norms,
             lights: &self.lights,
+            direct: &self.direct.direct,
+            visibility: &self.direct.visibility,
             geometry: on_gpu.geometry(),
         }
     }
+}
+
+/// A frame's uniforms on the device, and which attribute pass they ask for.
+struct Uniforms {
+    cam: wgpu::Buffer,
+    params: wgpu::Buffer,
+    /// `ShadeParams::direct`.
+    direct: u32,
 }
 
 /// The compiled splat passes of one device.
@@ -103,6 +125,8 @@ pub struct SplatPipelines {
     format: wgpu::TextureFormat,
     visibility: wgpu::RenderPipeline,
     attributes: wgpu::RenderPipeline,
+    /// `fs_baked`: the attribute pass with baked direct light, two targets.
+    attributes_baked: wgpu::RenderPipeline,
     shade: wgpu::ComputePipeline,
     shade_layouts: [wgpu::BindGroupLayout; 2],
 }
@@ -153,6 +177,17 @@ pub(super) fn raster_pipeline(
     depth: Option<wgpu::DepthStencilState>,
     targets: &[Option<wgpu::ColorTargetState>],
 ) -> Result<wgpu::RenderPipeline> {
+    raster_pipeline_at(gpu, name, "fs_main", depth, targets)
+}
+
+/// `raster_pipeline` with the fragment entry point `fragment`.
+pub(super) fn raster_pipeline_at(
+    gpu: &Gpu,
+    name: &'static str,
+    fragment: &'static str,
+    depth: Option<wgpu::DepthStencilState>,
+    targets: &[Option<wgpu::ColorTargetState>],
+) -> Result<wgpu::RenderPipeline> {
     let module = module(gpu, name)?;
     Ok(gpu
         .device
@@ -173,7 +208,7 @@ pub(super) fn raster_pipeline(
             multisample: Default::default(),
             fragment: Some(wgpu::FragmentState {
                 module: &module,
-                entry_point: Some("fs_main"),
+                entry_point: Some(fragment),
                 compilation_options: Default::default(),
                 targets,
             }),
@@ -275,7 +310,19 @@ impl SplatPipelines {
             gpu,
             "splat_attributes",
             Some(depth(wgpu::CompareFunction::GreaterEqual, false)),
-            &[target.clone(), target.clone(), target.clone(), target],
+            &[
+                target.clone(),
+                target.clone(),
+                target.clone(),
+                target.clone(),
+            ],
+        )?;
+        let attributes_baked = raster_pipeline_at(
+            gpu,
+            "splat_attributes",
+            "fs_baked",
+            Some(depth(wgpu::CompareFunction::GreaterEqual, false)),
+            &[target.clone(), target],
         )?;
         let shade_layouts = shade_layouts(gpu);
         let layout = gpu
@@ -304,6 +351,7 @@ impl SplatPipelines {
             format,
             visibility,
             attributes,
+            attributes_baked,
             shade,
             shade_layouts,
         })
@@ -393,11 +441,12 @@ impl SplatPipelines {
         Ok(ms)
     }
 
-    fn uniforms(&self, gpu: &Gpu, cam: &Camera, params: &ShadeParams) -> [wgpu::Buffer; 2] {
-        [
-            gpu.uniform("camera", cam),
-            gpu.uniform("shade params", params),
-        ]
+    fn uniforms(&self, gpu: &Gpu, cam: &Camera, params: &ShadeParams) -> Uniforms {
+        Uniforms {
+            cam: gpu.uniform("camera", cam),
+            params: gpu.uniform("shade params", params),
+            direct: params.direct,
+        }
     }
 
     fn record(
@@ -405,10 +454,11 @@ impl SplatPipelines {
         gpu: &Gpu,
         encoder: &mut wgpu::CommandEncoder,
         scene: &SceneBuffers,
-        [cam_buf, params_buf]: &[wgpu::Buffer; 2],
+        uniforms: &Uniforms,
         out: &FrameTargets,
         pass: SplatPass,
     ) -> Result<()> {
+        let (cam_buf, params_buf) = (&uniforms.cam, &uniforms.params);
         let buffers = |pipeline: &wgpu::RenderPipeline, list: &[&wgpu::Buffer]| {
             gpu.device.create_bind_group(&wgpu::BindGroupDescriptor {
                 label: None,
@@ -442,19 +492,33 @@ impl SplatPipelines {
             return Ok(());
         }
         if pass == SplatPass::Attributes {
-            let attr_group = buffers(
-                &self.attributes,
-                &[
-                    cam_buf,
-                    scene.splats,
-                    params_buf,
-                    scene.materials,
-                    scene.splat_light,
-                    scene.lobes,
-                    scene.lobe_norms,
-                ],
-            );
-            let color = out.cleared_sums();
+            let pipeline = match uniforms.direct {
+                DIRECT_BAKED => &self.attributes_baked,
+                _ => &self.attributes,
+            };
+            let all = [
+                cam_buf,
+                scene.splats,
+                params_buf,
+                scene.materials,
+                scene.splat_light,
+                scene.lobes,
+                scene.lobe_norms,
+                scene.lights,
+                scene.direct,
+                scene.visibility,
+            ];
+            // `fs_main` reads none of the direct bake's bindings, so its layout has none.
+            let used = if uniforms.direct == DIRECT_BAKED {
+                10
+            } else {
+                7
+            };
+            let attr_group = buffers(pipeline, &all[..used]);
+            let mut color = out.cleared_sums();
+            if uniforms.direct == DIRECT_BAKED {
+                color.truncate(2);
+            }
             let mut pass = encoder.begin_render_pass(&wgpu::RenderPassDescriptor {
                 label: Some("splat_attributes"),
                 color_attachments: &color,
@@ -463,7 +527,7 @@ impl SplatPipelines {
                 occlusion_query_set: None,
                 multiview_mask: None,
             });
-            pass.set_pipeline(&self.attributes);
+            pass.set_pipeline(pipeline);
             pass.set_bind_group(0, &attr_group, &[]);
             pass.draw(0..SPLAT_CORNERS, 0..scene.splat_count);
             return Ok(());

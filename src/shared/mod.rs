@@ -3,6 +3,7 @@
 
 pub mod bins;
 pub mod dispatch;
+pub mod lights;
 pub mod lobe_brdf;
 pub mod lobes;
 pub mod octahedral;

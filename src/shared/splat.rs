@@ -40,9 +40,12 @@ pub fn faces_camera(s: &Splat, eye: Vec3) -> bool {
 pub fn clip_position(cam: &Camera, p: Vec3) -> Vec4 {
     let v = p - Vec3::from(cam.eye);
     let z = v.dot(Vec3::from(cam.forward));
+    // The jitter moves the image under the pixel grid, so that the pixel centre the
+    // rasterizer samples lies on the jittered ray `pixel_ray` casts.
+    let shift = Vec2::from(cam.jitter) * 2.0 / Vec2::from(cam.size);
     Vec4::new(
-        v.dot(Vec3::from(cam.right)) / cam.tan_x,
-        v.dot(Vec3::from(cam.up)) / cam.tan_y,
+        v.dot(Vec3::from(cam.right)) / cam.tan_x - shift.x * z,
+        v.dot(Vec3::from(cam.up)) / cam.tan_y + shift.y * z,
         cam.near,
         z,
     )
@@ -54,6 +57,7 @@ pub fn view_depth(cam: &Camera, z: f32) -> f32 {
 
 pub fn pixel_ray(cam: &Camera, pixel: Vec2) -> Vec3 {
     let size = Vec2::from(cam.size);
+    let pixel = pixel + Vec2::from(cam.jitter);
     let ndc = Vec2::new(pixel.x / size.x * 2.0 - 1.0, 1.0 - pixel.y / size.y * 2.0);
     (Vec3::from(cam.forward)
         + (ndc.x * cam.tan_x) * Vec3::from(cam.right)

@@ -69,7 +69,11 @@ fn faces_camera(s: Splat, eye: vec3<f32>) -> bool {
 fn clip_position(cam: Camera, p: vec3<f32>) -> vec4<f32> {
     let v = p - cam.eye;
     let z = dot(v, cam.forward);
-    return vec4<f32>(dot(v, cam.right) / cam.tan_x, dot(v, cam.up) / cam.tan_y, cam.near, z);
+    // The jitter moves the image under the pixel grid, so that the pixel centre the
+    // rasterizer samples lies on the jittered ray `pixel_ray` casts.
+    let shift = cam.jitter * 2.0 / cam.size;
+    return vec4<f32>(dot(v, cam.right) / cam.tan_x - shift.x * z,
+                     dot(v, cam.up) / cam.tan_y + shift.y * z, cam.near, z);
 }
 
 // The vertex of both raster passes: corner `corner` of splat `i`'s triangle; a back-facing
@@ -87,9 +91,11 @@ fn view_depth(cam: Camera, z: f32) -> f32 {
     return cam.near / z;
 }
 
-// The unit view ray through a point of the image (pixel centres at +0.5, rows from the top).
+// The unit view ray through a point of the image (pixel centres at +0.5, rows from the top),
+// moved by the frame's sub-pixel jitter.
 fn pixel_ray(cam: Camera, pixel: vec2<f32>) -> vec3<f32> {
-    let ndc = vec2<f32>(pixel.x / cam.size.x * 2.0 - 1.0, 1.0 - pixel.y / cam.size.y * 2.0);
+    let at = pixel + cam.jitter;
+    let ndc = vec2<f32>(at.x / cam.size.x * 2.0 - 1.0, 1.0 - at.y / cam.size.y * 2.0);
     return normalize(cam.forward + (ndc.x * cam.tan_x) * cam.right + (ndc.y * cam.tan_y) * cam.up);
 }
 

@@ -30,7 +30,6 @@
 @group(1) @binding(4) var<storage, read> cell_dist: array<u32>;
 
 const PARALLEL_COS: f32 = 1e-6;
-const FAR: f32 = 3.0e38;
 
 // Ray parameter of the hit with a disk's front face, or -1.
 fn intersect_disk(s: Splat, o: vec3<f32>, d: vec3<f32>) -> f32 {

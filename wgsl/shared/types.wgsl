@@ -20,6 +20,9 @@ const LIGHT_SPOT: u32 = 1u;
 const LIGHT_AREA: u32 = 2u;
 const LIGHT_DIRECTIONAL: u32 = 3u;
 
+// A distance beyond everything: a ray without end, a directional light's.
+const FAR: f32 = 3.0e38;
+
 struct Light {
     position: vec3<f32>,
     kind: u32,
@@ -166,8 +169,7 @@ struct Camera {
     up: vec3<f32>,
     tan_y: f32,
     size: vec2<f32>,
-    _pad0: u32,
-    _pad1: u32,
+    jitter: vec2<f32>,
 }
 
 struct ShadeParams {
@@ -178,7 +180,25 @@ struct ShadeParams {
     shadow_bias: f32,
     seed: u32,
     show: u32,
+    direct: u32,
+    area_first: u32,
+    area_count: u32,
+    sample: u32,
+    _pad0: u32,
+}
+
+const DIRECT_RAYS: u32 = 0u;
+const DIRECT_BAKED: u32 = 1u;
+
+struct DirectParams {
+    splat_count: u32,
+    light_count: u32,
+    samples: u32,
+    seed: u32,
+    shadow_bias: f32,
+    _pad0: u32,
     _pad1: u32,
+    _pad2: u32,
 }
 
 struct GridParams {

@@ -26,7 +26,7 @@ use crate::camera::View;
 use crate::cli::render::Method;
 use crate::cpu::photon_view::scene_scale;
 use crate::error::{Error, Result};
-use crate::frame::{FrameConfig, Show, camera_uniform};
+use crate::frame::{Direct, FrameConfig, Show, camera_uniform};
 use crate::gpu::photon_view::photon_image;
 use crate::gpu::present::PresentPipeline;
 use crate::gpu::tone::tone_map;
@@ -34,6 +34,7 @@ use crate::gpu::{BackendChoice, Gpu};
 use crate::renderer::FrameRenderer;
 use crate::scene::Scene;
 use crate::tone::ToneConfig;
+use crate::types::Camera;
 use baking::{BakeResult, Baking};
 pub use baking::{PREVIEW_FRACTION, passes};
 pub use orbit::Orbit;
@@ -56,6 +57,9 @@ pub struct ViewOptions {
     pub frames: Option<u32>,
     /// Where a scripted run saves its last frame.
     pub screenshot: Option<PathBuf>,
+    /// Refinement frames a resting camera accumulates into the still image (`render --spp`'s
+    /// frames, so both give the same image); 0: every frame is a moving frame.
+    pub spp: u32,
     /// The bake cache: loaded at start when it matches the scene, else written once the first
     /// bake is in (`render --cache`'s file format).
     pub cache: Option<PathBuf>,
@@ -126,6 +130,14 @@ struct State {
     frame_ms: f64,
     /// Frame times (ms) since the bake came in: a scripted run prints their median.
     lit_ms: Vec<f64>,
+    /// What the last frame showed (camera, terms, method and light version): while it stays,
+    /// the camera rests and frames refine the still image.
+    still: Option<(Camera, u32, Method, u64)>,
+    /// Refinement frames the HDR image holds (0: a moving frame), and the most it takes.
+    samples: u32,
+    spp: u32,
+    /// Bumped whenever new lobes or lights come in.
+    version: u64,
     /// Which light the frame shows (keys 1–5).
     show: Show,
 }
@@ -223,6 +235,10 @@ impl App {
             cursor: (0.0, 0.0),
             frame_ms: 0.0,
             lit_ms: Vec::new(),
+            still: None,
+            samples: 0,
+            spp: self.opts.spp,
+            version: 0,
             show: Show::ALL
                 .into_iter()
                 .find(|s| s.mask() == self.opts.frame.show)
@@ -255,6 +271,7 @@ impl State {
         }
         self.renderer.set_lobes(&self.gpu, scene, &result.lobes)?;
         self.baked = Some(result);
+        self.version += 1;
         Ok(())
     }
 
@@ -315,10 +332,26 @@ impl State {
                     .record_reference(gpu, encoder, scene, bins, em, &cam, frame)?;
                 Ok(std::borrow::Cow::Borrowed(hdr))
             }
-            // The lobes, and what shows while the photons a view needs are on their way.
+            // The lobes, and what shows while the photons a view needs are on their way: a
+            // moving frame, then refinement frames while the camera rests, then the still
+            // image as it stands.
             _ => {
-                let hdr = self.renderer.record(gpu, encoder, scene, &cam, frame)?;
-                Ok(std::borrow::Cow::Borrowed(hdr))
+                let key = Some((cam, frame.show, self.method, self.version));
+                if self.still != key {
+                    self.still = key;
+                    self.samples = 0;
+                    if frame.direct == Direct::Baked && !self.renderer.direct_is_baked() {
+                        let ms = self.renderer.bake_direct(gpu, scene)?;
+                        eprintln!("direct bake: {ms:.0} ms");
+                    }
+                    self.renderer.record(gpu, encoder, scene, &cam, frame)?;
+                } else if self.samples < self.spp {
+                    let (k, spp) = (self.samples, self.spp);
+                    self.renderer
+                        .record_sample(gpu, encoder, scene, &cam, frame, k, spp)?;
+                    self.samples += 1;
+                }
+                Ok(std::borrow::Cow::Borrowed(&self.renderer.targets()?.hdr))
             }
         }
     }
@@ -394,8 +427,13 @@ impl State {
             (None, None) => "direct light".into(),
         };
         let waiting = self.method != Method::Lobes && self.baked.is_none();
+        let still = match (self.method, self.samples) {
+            (Method::Lobes, 0) => " — moving".to_string(),
+            (Method::Lobes, k) => format!(" — still: {k}/{} samples", self.spp),
+            _ => String::new(),
+        };
         format!(
-            "lobelight — {:.1} fps, {:.0} ms — {} splats, {} photons — {light} — {:?}{}, \
+            "lobelight — {:.1} fps, {:.0} ms{still} — {} splats, {} photons — {light} — {:?}{}, \
              showing {:?} — H: keys",
             1e3 / self.frame_ms.max(1e-3),
             self.frame_ms,
@@ -626,6 +664,7 @@ impl App {
                         // Direct light follows at once; the indirect light with the preview
                         // bake, then the full one (a bake for the old position stops).
                         state.renderer.set_lights(&state.gpu, &self.scene)?;
+                        state.version += 1;
                         state.rebake(&self.scene, true);
                     }
                     None => {}

@@ -1,0 +1,76 @@
+//! Mirror of `wgsl/direct_bake.wgsl`: every splat's shadowed irradiance from the lights, and
+//! each light's visibility, by shadow rays from the splat's centre.
+// `!(x < y)` is meant: NaN must fail these tests, as it does in the WGSL twin.
+#![allow(clippy::neg_cmp_op_on_partial_ord)]
+
+use glam::{Vec3, Vec4};
+use rayon::prelude::*;
+
+use crate::shared::lights::{area_point, sample_light};
+use crate::shared::rng::pcg_hash;
+use crate::shared::splat::SHADOW_RAY_BUDGET;
+use crate::shared::trace::{Geometry, trace_ray};
+use crate::types::{DirectParams, Light, NO_SPLAT, light_kind};
+
+pub const WG: u32 = 64;
+
+/// Fills `direct` (one `[E, 0]` per splat) and `visibility` (splat × light).
+pub fn direct_bake(
+    params: &DirectParams,
+    lights: &[Light],
+    direct: &mut [[f32; 4]],
+    visibility: &mut [f32],
+    geo: &Geometry,
+) {
+    let lc = params.light_count as usize;
+    let count = params.splat_count as usize;
+    let rows: Vec<(Vec4, Vec<f32>)> = (0..count as u32)
+        .into_par_iter()
+        .map(|i| {
+            let s = &geo.splats[i as usize];
+            let (centre, normal) = (Vec3::from(s.center), Vec3::from(s.normal));
+            let o = centre + params.shadow_bias * normal;
+            let key = pcg_hash(pcg_hash(params.seed).wrapping_add(i));
+            let mut total = Vec3::ZERO;
+            let mut seen_by = Vec::with_capacity(lc);
+            for (li, l) in lights.iter().enumerate().take(lc) {
+                let li = li as u32;
+                let n = if l.kind == light_kind::AREA {
+                    params.samples
+                } else {
+                    1
+                };
+                let (mut open, mut unshadowed) = (Vec3::ZERO, Vec3::ZERO);
+                for j in 0..n * n {
+                    let r = key.wrapping_add((li * n * n + j).wrapping_mul(2));
+                    let uv = area_point(j, n, r, true);
+                    let ls = sample_light(l, centre, uv.x, uv.y);
+                    let cos_i = normal.dot(ls.wi);
+                    if !(cos_i > 0.0) || ls.e.cmple(Vec3::ZERO).all() {
+                        continue;
+                    }
+                    let e = ls.e * cos_i;
+                    unshadowed += e;
+                    let mut budget = SHADOW_RAY_BUDGET;
+                    let t_max = ls.dist - params.shadow_bias;
+                    let hit = trace_ray(geo, o, ls.wi, i, t_max, &mut budget);
+                    if hit.splat == NO_SPLAT {
+                        open += e;
+                    }
+                }
+                total += open * (1.0 / (n * n) as f32);
+                let seen = unshadowed.x + unshadowed.y + unshadowed.z;
+                seen_by.push(if seen > 0.0 {
+                    (open.x + open.y + open.z) / seen
+                } else {
+                    1.0
+                });
+            }
+            (total.extend(0.0), seen_by)
+        })
+        .collect();
+    for (i, (e, seen_by)) in rows.into_iter().enumerate() {
+        direct[i] = e.to_array();
+        visibility[i * lc..(i + 1) * lc].copy_from_slice(&seen_by);
+    }
+}

@@ -1,0 +1,70 @@
+// Light sampling (docs/design.md section 8): the irradiance one point of a light brings to a
+// surface point, and the stratified points of an area light. Shared by the shade pass (shadow
+// rays per pixel), the direct bake (shadow rays per splat) and the attribute pass (baked
+// visibility times the BRDF towards each light). Twin: src/shared/lights.rs.
+
+// #import types
+// #import sampling
+// #import rng
+
+// Roughness below this gives no direct highlight (a mirror needs the lobes, not a sample).
+const MIN_ALPHA: f32 = 1e-3;
+
+// Light arriving at p from one light sample: its direction, distance (for the shadow ray)
+// and irradiance on a surface facing it.
+struct LightSample {
+    wi: vec3<f32>,
+    dist: f32,
+    e: vec3<f32>,
+}
+
+// The mean of a spot's smooth falloff over its cone, uniform in cos (see photons.rs).
+fn spot_falloff_mean(l: Light) -> f32 {
+    if l.cos_inner <= l.cos_outer {
+        return 1.0;
+    }
+    return ((l.cos_inner - l.cos_outer) * 0.5 + (1.0 - l.cos_inner)) / (1.0 - l.cos_outer);
+}
+
+// A point on a light towards p: (u, v) picks the point of an area light.
+fn sample_light(l: Light, p: vec3<f32>, u: f32, v: f32) -> LightSample {
+    var s: LightSample;
+    if l.kind == LIGHT_DIRECTIONAL {
+        s.wi = -l.direction;
+        s.dist = FAR;
+        s.e = l.power / l.area;
+        return s;
+    }
+    var q = l.position;
+    if l.kind == LIGHT_AREA {
+        q += u * l.edge_u + v * l.edge_v;
+    }
+    let to = q - p;
+    let d2 = dot(to, to);
+    s.dist = sqrt(d2);
+    s.wi = to / s.dist;
+    let cos_l = -dot(s.wi, l.direction);
+    if l.kind == LIGHT_AREA {
+        // Radiance power / (pi A) over the whole rectangle: pdf 1 / A per point.
+        s.e = l.power * (max(cos_l, 0.0) / (PI * d2));
+    } else if l.kind == LIGHT_SPOT {
+        let ramp = select(1.0, smoothstep(l.cos_outer, l.cos_inner, cos_l), l.cos_inner > l.cos_outer);
+        let inside = select(0.0, ramp, cos_l >= l.cos_outer);
+        let solid_angle = 2.0 * PI * (1.0 - l.cos_outer);
+        s.e = l.power * (inside / (spot_falloff_mean(l) * solid_angle * d2));
+    } else {
+        s.e = l.power / (4.0 * PI * d2);
+    }
+    return s;
+}
+
+// Stratum j of an area light's n x n grid, jittered by the two hashes at r and r + 1
+// (jitter false: the stratum's centre).
+fn area_point(j: u32, n: u32, r: u32, jitter: bool) -> vec2<f32> {
+    let inv_n = 1.0 / f32(n);
+    var o = vec2<f32>(0.5);
+    if jitter {
+        o = vec2<f32>(unit_float(pcg_hash(r)), unit_float(pcg_hash(r + 1u)));
+    }
+    return (vec2<f32>(f32(j % n), f32(j / n)) + o) * inv_n;
+}
