@@ -84,6 +84,31 @@ impl Direct {
     }
 }
 
+/// How splats become pixels.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, serde::Serialize)]
+#[cfg_attr(feature = "cli", derive(clap::ValueEnum))]
+#[serde(rename_all = "lowercase")]
+pub enum Splatter {
+    /// Two render passes over one triangle per splat (depth, then blended attributes).
+    Raster,
+    /// One compute pass over screen tiles of binned splats: no triangles.
+    Compute,
+    /// Whichever the device class draws faster (docs/measurements.md): raster on llvmpipe,
+    /// where the compute splatter measured 3–4× slower, and until measured elsewhere.
+    #[default]
+    Auto,
+}
+
+impl Splatter {
+    pub fn name(self) -> &'static str {
+        match self {
+            Splatter::Raster => "raster",
+            Splatter::Compute => "compute",
+            Splatter::Auto => "auto",
+        }
+    }
+}
+
 /// Settings of the splat passes.
 #[derive(Clone, Debug, PartialEq)]
 pub struct FrameConfig {
@@ -92,6 +117,8 @@ pub struct FrameConfig {
     pub area_samples: u32,
     /// Direct light from the bake or from shadow rays (a refinement frame always casts rays).
     pub direct: Direct,
+    /// Raster passes or the compute splatter (the device resolves `Auto`).
+    pub splatter: Splatter,
     /// Splats within this many of their radii behind the visible surface blend into a pixel.
     pub depth_tolerance: f32,
     /// Seed of the area-light jitter.
@@ -105,6 +132,7 @@ impl Default for FrameConfig {
         FrameConfig {
             area_samples: 4,
             direct: Direct::Baked,
+            splatter: Splatter::Auto,
             depth_tolerance: 1.0,
             seed: 1,
             show: crate::shared::splat::SHOW_ALL,

@@ -14,7 +14,7 @@ use crate::camera::View;
 use crate::em::LobeMap;
 use crate::error::{Error, Result};
 use crate::frame::{
-    Direct, DirectMap, FrameConfig, camera_uniform, direct_params, jitter, refinement,
+    Direct, DirectMap, FrameConfig, Splatter, camera_uniform, direct_params, jitter, refinement,
     shade_params_for,
 };
 use crate::gpu::Gpu;
@@ -173,7 +173,7 @@ impl FrameRenderer {
         cfg: &FrameConfig,
     ) -> Result<&wgpu::Buffer> {
         let params = shade_params_for(scene, self.lobes_per_splat, cfg);
-        self.record_params(gpu, encoder, cam, &params)
+        self.record_params(gpu, encoder, cam, &params, cfg.splatter)
     }
 
     /// Records refinement frame `k` of `spp` of `cam` (`frame::refinement`): jittered, with
@@ -195,7 +195,8 @@ impl FrameRenderer {
             jitter: jitter(k),
             ..*cam
         };
-        self.record_params(gpu, encoder, &cam, &refinement(&base, k, spp))
+        let params = refinement(&base, k, spp);
+        self.record_params(gpu, encoder, &cam, &params, cfg.splatter)
     }
 
     fn record_params(
@@ -204,6 +205,7 @@ impl FrameRenderer {
         encoder: &mut wgpu::CommandEncoder,
         cam: &Camera,
         params: &ShadeParams,
+        splatter: Splatter,
     ) -> Result<&wgpu::Buffer> {
         if params.direct == DIRECT_BAKED && self.direct_ms.is_none() {
             return Err(Error::Invalid(
@@ -212,8 +214,9 @@ impl FrameRenderer {
         }
         let targets = self.targets()?;
         let buffers = self.frame_scene.buffers(&self.on_gpu);
+        let compute = self.pipelines.uses_compute(splatter)?;
         self.pipelines
-            .draw(gpu, encoder, &buffers, cam, params, targets)?;
+            .draw(gpu, encoder, &buffers, cam, params, compute, targets)?;
         Ok(&targets.hdr)
     }
 
@@ -336,8 +339,9 @@ impl FrameRenderer {
         let cam = camera_uniform(view, scene.bounds(), cfg);
         let params = shade_params_for(scene, self.lobes_per_splat, cfg);
         let buffers = self.frame_scene.buffers(&self.on_gpu);
+        let compute = self.pipelines.uses_compute(cfg.splatter)?;
         self.pipelines
-            .draw_timed(gpu, &buffers, &cam, &params, self.targets()?)
+            .draw_timed(gpu, &buffers, &cam, &params, compute, self.targets()?)
     }
 
     /// Records the tone mapping of the current targets' HDR image.

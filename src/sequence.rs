@@ -22,7 +22,7 @@ use crate::shared::dispatch::groups_for;
 use crate::tone::{ToneConfig, reduce_levels};
 use crate::types::{
     BinParams, Camera, DirectParams, DistanceParams, EmParams, Emitter, GridParams, Photon,
-    PhotonViewParams, ScanParams, TraceCounters,
+    PhotonViewParams, ScanParams, TileParams, TraceCounters,
 };
 
 /// Where a sequence runs: buffers, uniforms, dispatches by stage name, copies and readbacks.
@@ -703,4 +703,88 @@ pub fn bake_direct<E: Executor>(
     let groups = groups("direct_bake", params.splat_count)?;
     ex.dispatch_traced("direct_bake", &bindings, groups)?;
     Ok(Direct { direct, visibility })
+}
+
+pub use crate::shared::splat::TILE;
+
+/// Each screen tile's splats, in splat-index order, where they were binned.
+pub struct TileLists<B> {
+    /// The tiling, with the entry count the binning found.
+    pub params: TileParams,
+    /// `tiles + 1` list starts (the scanned counts).
+    pub start: B,
+    /// The lists, one after another.
+    pub splats: B,
+    /// The longest list.
+    pub longest: u32,
+}
+
+/// Bins the splats into the screen tiles of `cam` (bound as `cam_buf`): `splat_tile_count`,
+/// the exclusive scan, then a split point for the entry total (it sizes the lists),
+/// `splat_tile_scatter`, and `grid_rank` to put each list in splat-index order.
+pub fn bin_splat_tiles<E: Executor>(
+    ex: &mut E,
+    cam: &Camera,
+    cam_buf: &E::Buffer,
+    splats: &E::Buffer,
+    splat_count: u32,
+) -> Result<TileLists<E::Buffer>> {
+    let (width, height) = (cam.size[0] as u32, cam.size[1] as u32);
+    let mut params = TileParams {
+        tiles_x: width.div_ceil(TILE),
+        tiles_y: height.div_ceil(TILE),
+        splat_count,
+        entry_count: 0,
+    };
+    let tiles = params.tiles_x * params.tiles_y;
+    let uniform = ex.uniform("tile params", &params)?;
+    let start = ex.zeroed("tile starts", (tiles as u64 + 1) * 4)?;
+    let per_splat = groups("splat_tile_count", splat_count)?;
+    ex.dispatch(
+        "splat_tile_count",
+        &[cam_buf, &uniform, splats, &start],
+        per_splat,
+    )?;
+    exclusive_scan(ex, &start, tiles + 1)?;
+    let starts = ex.read::<u32>(&start, tiles as usize + 1)?;
+    params.entry_count = starts[tiles as usize];
+    let longest = starts.windows(2).map(|w| w[1] - w[0]).max().unwrap_or(0);
+    // grid_rank's loop, and the splatter's, walk a whole list per invocation.
+    if longest > crate::grid::MAX_CELL_LEN {
+        return Err(Error::Invalid(format!(
+            "{longest} splats cover one {TILE}×{TILE}-pixel tile (at most {}): the compute \
+             splatter cannot draw this view; use --splatter raster",
+            crate::grid::MAX_CELL_LEN
+        )));
+    }
+    let entries = params.entry_count.max(1) as u64 * 4;
+    let uniform = ex.uniform("tile params", &params)?;
+    let cursor = ex.zeroed("tile cursors", tiles.max(1) as u64 * 4)?;
+    let scratch_splats = ex.zeroed("tile scratch splats", entries)?;
+    let scratch_tiles = ex.zeroed("tile scratch tiles", entries)?;
+    let bindings = [
+        cam_buf,
+        &uniform,
+        splats,
+        &start,
+        &cursor,
+        &scratch_splats,
+        &scratch_tiles,
+    ];
+    ex.dispatch("splat_tile_scatter", &bindings, per_splat)?;
+    let rank = GridParams {
+        entry_count: params.entry_count,
+        ..Default::default()
+    };
+    let rank = ex.uniform("tile rank params", &rank)?;
+    let lists = ex.zeroed("tile lists", entries)?;
+    let bindings = [&rank, &start, &scratch_splats, &scratch_tiles, &lists];
+    let groups = groups("grid_rank", params.entry_count)?;
+    ex.dispatch("grid_rank", &bindings, groups)?;
+    Ok(TileLists {
+        params,
+        start,
+        splats: lists,
+        longest,
+    })
 }

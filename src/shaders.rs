@@ -58,6 +58,9 @@ pub const STAGES: &[WgslFile] = &[
     stage!("tonemap_apply"),
     stage!("splat_visibility"),
     stage!("splat_attributes"),
+    stage!("splat_tile_count"),
+    stage!("splat_tile_scatter"),
+    stage!("splat_compute"),
     stage!("direct_bake"),
     stage!("shade"),
     stage!("reference_gather"),
@@ -81,6 +84,7 @@ pub const SHARED: &[WgslFile] = &[
     shared!("tone"),
     shared!("splat"),
     shared!("lights"),
+    shared!("splat_shading"),
     shared!("lobe_brdf"),
     shared!("fullscreen"),
 ];

@@ -337,6 +337,18 @@ pub const DIRECT_RAYS: u32 = 0;
 /// `ShadeParams::direct`: the bake's per-splat visibility (`direct_bake`).
 pub const DIRECT_BAKED: u32 = 1;
 
+/// Uniform of the compute splatter's stages (`splat_tile_count`, `splat_tile_scatter`,
+/// `splat_compute`): the image in `TILE`² pixel tiles, tiles numbered x-fastest.
+#[repr(C)]
+#[derive(Clone, Copy, Debug, Default, PartialEq, Pod, Zeroable)]
+pub struct TileParams {
+    pub tiles_x: u32,
+    pub tiles_y: u32,
+    pub splat_count: u32,
+    /// (tile, splat) entries, known once the counts are scanned.
+    pub entry_count: u32,
+}
+
 /// Uniform of `direct_bake`: every splat's direct light from every light, shadowed.
 #[repr(C)]
 #[derive(Clone, Copy, Debug, Default, PartialEq, Pod, Zeroable)]

@@ -181,6 +181,12 @@ fn rust_layouts() -> Vec<RustLayout> {
             sample,
             _pad0
         }),
+        layout!(TileParams {
+            tiles_x,
+            tiles_y,
+            splat_count,
+            entry_count
+        }),
         layout!(DirectParams {
             splat_count,
             light_count,

@@ -9,7 +9,9 @@ use lobelight::bake::{BakeDevice, Progress, bake};
 use lobelight::camera::View;
 use lobelight::cli::compare::difference;
 use lobelight::em::LobeMap;
-use lobelight::frame::{Direct, FrameConfig, Show, camera_uniform, cpu_frame, shade_params};
+use lobelight::frame::{
+    Direct, FrameConfig, Show, Splatter, camera_uniform, cpu_frame, shade_params,
+};
 use lobelight::gpu::Gpu;
 use lobelight::gpu::scene::GpuScene;
 use lobelight::grid::SplatGrid;
@@ -59,7 +61,9 @@ fn cpu_hdr(
     cpu_frame(scene, grid, lobes, &cam, &shade_params(scene, lobes, cfg)).unwrap()
 }
 
-/// The glossy Cornell box, baked once on the CPU and drawn from two views by both paths.
+/// The glossy Cornell box, baked once on the CPU and drawn from two views by both paths, with
+/// baked and ray-traced direct light, by the raster passes and by the compute splatter (whose
+/// mirror is the raster passes' own: the same fragments summed per pixel in the same order).
 #[test]
 fn splat_passes_match_the_cpu_mirror() {
     let gpu = common::gpu();
@@ -68,16 +72,22 @@ fn splat_passes_match_the_cpu_mirror() {
     let grid = common::host_grid(&scene);
     let lobes = cpu_bake(&scene, &grid);
     assert!(lobes.stats.fitted > 500, "the glossy block has lobes");
-    for direct in [Direct::Baked, Direct::Rays] {
+    let modes =
+        [Direct::Baked, Direct::Rays].map(|d| [(d, Splatter::Raster), (d, Splatter::Compute)]);
+    for (direct, splatter) in modes.into_iter().flatten() {
         let cfg = FrameConfig {
             direct,
+            splatter,
             ..FrameConfig::default()
         };
         for view in views(&scene, 96) {
             let a = gpu_frame(&gpu, &scene, &lobes, &view, &cfg);
             let b = cpu_hdr(&scene, &grid, &lobes, &view, &cfg);
             let d = difference(&a, &b).unwrap();
-            eprintln!("{direct:?} {}x{}: {d:?}", view.width, view.height);
+            eprintln!(
+                "{direct:?} {splatter:?} {}x{}: {d:?}",
+                view.width, view.height
+            );
             assert!(d.mean_relative <= MEAN_RELATIVE, "{d:?}");
             assert!(d.within_5_percent >= WITHIN_5_PERCENT, "{d:?}");
             let lit = b.iter().filter(|p| p[0] + p[1] + p[2] > 0.0).count();
@@ -373,5 +383,77 @@ fn shown_light_terms_add_up_to_the_full_frame() {
         // A part alone is not the whole: the split is real.
         let direct = difference(&frame(Show::Direct.mask()), &full).unwrap();
         assert!(direct.energy < -0.05, "{direct:?}");
+    }
+}
+
+/// The compute splatter's tile lists: the device's (atomics, then `grid_rank`) equal the
+/// mirror's, list for list; and they are conservative: every splat whose disk covers a pixel
+/// centre is in that pixel's tile's list (checked by brute force over every pixel and splat,
+/// from a jittered camera).
+#[test]
+fn splat_tile_lists_match_the_mirror_and_miss_no_fragment() {
+    use glam::{Vec2, Vec3};
+    use lobelight::cpu::CpuExecutor;
+    use lobelight::gpu::exec::GpuExecutor;
+    use lobelight::sequence::{Executor, TILE, bin_splat_tiles};
+    use lobelight::shared::splat::{covers, faces_camera, pixel_ray, splat_hit};
+
+    let gpu = common::gpu();
+    let scene = scene::load(Path::new("scenes/cornell.toml")).unwrap();
+    let views = views(&scene, 72);
+    for (n, view) in views.iter().enumerate() {
+        let mut cam = camera_uniform(view, scene.bounds(), &FrameConfig::default());
+        cam.jitter = [0.3, -0.2];
+        let count = scene.splats.len() as u32;
+        let on_gpu = {
+            let mut encoder = gpu.encoder("tiles");
+            let mut ex = GpuExecutor::new(&gpu, &mut encoder);
+            let cam_buf = ex.uniform("camera", &cam).unwrap();
+            let splats = ex.upload("splats", &scene.splats).unwrap();
+            let t = bin_splat_tiles(&mut ex, &cam, &cam_buf, &splats, count).unwrap();
+            let tiles = (t.params.tiles_x * t.params.tiles_y) as usize;
+            let start = ex.read::<u32>(&t.start, tiles + 1).unwrap();
+            let entries = ex
+                .read::<u32>(&t.splats, t.params.entry_count as usize)
+                .unwrap();
+            (start, entries)
+        };
+        let mut ex = CpuExecutor::default();
+        let cam_buf = ex.uniform("camera", &cam).unwrap();
+        let splats = ex.upload("splats", &scene.splats).unwrap();
+        let t = bin_splat_tiles(&mut ex, &cam, &cam_buf, &splats, count).unwrap();
+        let tiles_x = t.params.tiles_x;
+        let tiles = (tiles_x * t.params.tiles_y) as usize;
+        let start = ex.read::<u32>(&t.start, tiles + 1).unwrap();
+        let entries = ex
+            .read::<u32>(&t.splats, t.params.entry_count as usize)
+            .unwrap();
+        assert_eq!(on_gpu, (start.clone(), entries.clone()), "view {n}");
+        assert!(
+            entries.len() > scene.splats.len() / 4,
+            "view {n}: most splats binned"
+        );
+        let eye = Vec3::from(cam.eye);
+        let mut fragments = 0;
+        for y in 0..view.height {
+            for x in 0..view.width {
+                let d = pixel_ray(&cam, Vec2::new(x as f32, y as f32) + 0.5);
+                let tile = ((y / TILE) * tiles_x + x / TILE) as usize;
+                let list = &entries[start[tile] as usize..start[tile + 1] as usize];
+                for (i, s) in scene.splats.iter().enumerate() {
+                    if faces_camera(s, eye) && covers(&cam, splat_hit(s, eye, d), d) {
+                        fragments += 1;
+                        assert!(
+                            list.binary_search(&(i as u32)).is_ok(),
+                            "view {n}: splat {i} at ({x}, {y})"
+                        );
+                    }
+                }
+            }
+        }
+        assert!(
+            fragments > (view.width * view.height) as usize,
+            "view {n}: {fragments}"
+        );
     }
 }

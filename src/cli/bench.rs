@@ -399,7 +399,9 @@ pub struct FrameBench {
     pub area_samples: u32,
     /// Where the timed frames' direct light came from: "baked" or "rays" (`--direct`).
     pub direct: &'static str,
-    /// How splats became pixels: "raster" (the visibility and attribute render passes).
+    /// How splats became pixels: "raster" (the visibility and attribute render passes) or
+    /// "compute" (the compute splatter; `passes_ms` are then its tile binning, its tile pass
+    /// and shade).
     pub splatter: &'static str,
     /// GPU, baked direct light: the direct bake of the lights, once before the frames (what
     /// a moved light costs before its indirect bake).
@@ -466,6 +468,7 @@ pub fn frame(
     let progress = Progress::new(false);
     let mut sizes = Vec::new();
     let mut direct_bake_ms = None;
+    let mut splatter = "raster";
     let mut refinement = None;
     let (adapter, backend, fitted) = match gpu {
         Some(gpu) => {
@@ -473,6 +476,9 @@ pub fn frame(
             let lobes = renderer.bake(gpu, scene, &progress)?.lobes;
             if cfg.direct == Direct::Baked {
                 direct_bake_ms = Some(renderer.bake_direct(gpu, scene)?);
+            }
+            if renderer.pipelines.uses_compute(cfg.splatter)? {
+                splatter = "compute";
             }
             let present = PresentPipeline::new(gpu, WINDOW_FORMAT)?;
             for (w, h) in FRAME_SIZES {
@@ -554,7 +560,7 @@ pub fn frame(
         lights: scene.lights.len(),
         area_samples: cfg.area_samples,
         direct: cfg.direct.name(),
-        splatter: "raster",
+        splatter,
         direct_bake_ms,
         frame_ms: sizes[0].frame_ms,
         sizes,

@@ -17,7 +17,7 @@ use std::path::PathBuf;
 use std::process::ExitCode;
 
 use crate::em::{EmConfig, LobeFamily};
-use crate::frame::{Direct, FrameConfig, Show};
+use crate::frame::{Direct, FrameConfig, Show, Splatter};
 use crate::gpu::{BackendChoice, Gpu};
 use crate::photons::PhotonConfig;
 use crate::scene::file::StoreRange;
@@ -141,6 +141,10 @@ struct LookArgs {
     /// pixel. Still images (`render`, a resting viewer) refine with shadow rays.
     #[arg(long, value_enum, default_value_t = Direct::Baked)]
     direct: Direct,
+    /// How splats become pixels: two raster passes, the compute splatter over screen tiles,
+    /// or whichever is faster on this kind of device.
+    #[arg(long, value_enum, default_value_t = Splatter::Auto)]
+    splatter: Splatter,
 }
 
 impl LookArgs {
@@ -149,6 +153,7 @@ impl LookArgs {
             area_samples: self.area_samples,
             show: self.show.mask(),
             direct: self.direct,
+            splatter: self.splatter,
             ..FrameConfig::default()
         }
     }

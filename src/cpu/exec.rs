@@ -11,7 +11,7 @@ use super::{
     direct_bake, photon_resolve, photon_trace, photon_view, scan_apply, scan_reduce, tonemap_apply,
     tonemap_reduce,
 };
-use super::{grid_count, grid_distance, grid_rank, grid_scatter};
+use super::{grid_count, grid_distance, grid_rank, grid_scatter, splat_tiles};
 use crate::error::{Error, Result};
 use crate::sequence::Executor;
 use crate::shared::trace::Geometry;
@@ -204,6 +204,31 @@ fn run(stage: &str, b: &[&CpuBuffer], groups: u32) -> Result<()> {
             let mut counts = get_mut(stage, b, 2)?;
             let mut max_len = get_mut(stage, b, 3)?;
             grid_count::grid_count(&p, view(&splats), &mut counts, &mut max_len[0], groups);
+        }
+        "splat_tile_count" => {
+            let cam = param(stage, b, 0)?;
+            let p = param(stage, b, 1)?;
+            let splats = get(stage, b, 2)?;
+            let mut counts = get_mut(stage, b, 3)?;
+            splat_tiles::splat_tile_count(&cam, &p, view(&splats), &mut counts);
+        }
+        "splat_tile_scatter" => {
+            let cam = param(stage, b, 0)?;
+            let p = param(stage, b, 1)?;
+            let splats = get(stage, b, 2)?;
+            let tile_start = get(stage, b, 3)?;
+            let mut cursor = get_mut(stage, b, 4)?;
+            let mut scratch_splats = get_mut(stage, b, 5)?;
+            let mut scratch_tiles = get_mut(stage, b, 6)?;
+            splat_tiles::splat_tile_scatter(
+                &cam,
+                &p,
+                view(&splats),
+                &tile_start,
+                &mut cursor,
+                &mut scratch_splats,
+                &mut scratch_tiles,
+            );
         }
         "grid_scatter" => {
             let p = param(stage, b, 0)?;

@@ -24,6 +24,7 @@ pub mod scan_apply;
 pub mod scan_reduce;
 pub mod shade;
 pub mod splat_attributes;
+pub mod splat_tiles;
 pub mod splat_visibility;
 pub mod tonemap_apply;
 pub mod tonemap_reduce;

@@ -3,12 +3,14 @@
 //! targets. The pipelines are built once per device; the targets once per image size, so a
 //! viewer or a benchmark draws frame after frame with nothing but a new camera uniform.
 
+use super::exec::GpuExecutor;
 use super::scene::GpuScene;
 use super::{Gpu, buffer_entries};
 use crate::em::LobeMap;
 use crate::error::{Error, Result};
+use crate::frame::Splatter;
 use crate::scene::Scene;
-use crate::sequence::Direct;
+use crate::sequence::{Direct, TileLists, bin_splat_tiles};
 use crate::shared::splat::SPLAT_CORNERS;
 use crate::types::{Camera, DIRECT_BAKED, ShadeParams};
 
@@ -112,12 +114,16 @@ impl FrameScene {
     }
 }
 
-/// A frame's uniforms on the device, and which attribute pass they ask for.
+/// A frame's uniforms on the device, and which passes they ask for.
 struct Uniforms {
+    camera: Camera,
     cam: wgpu::Buffer,
     params: wgpu::Buffer,
     /// `ShadeParams::direct`.
     direct: u32,
+    /// The compute splatter in place of the raster passes, and its tile lists once binned.
+    compute: bool,
+    tiles: std::cell::RefCell<Option<TileLists<wgpu::Buffer>>>,
 }
 
 /// The compiled splat passes of one device.
@@ -127,6 +133,8 @@ pub struct SplatPipelines {
     attributes: wgpu::RenderPipeline,
     /// `fs_baked`: the attribute pass with baked direct light, two targets.
     attributes_baked: wgpu::RenderPipeline,
+    /// The compute splatter's tile pass, where the device can run it (`compute_splatter`).
+    splat_compute: Option<wgpu::ComputePipeline>,
     shade: wgpu::ComputePipeline,
     shade_layouts: [wgpu::BindGroupLayout; 2],
 }
@@ -268,6 +276,18 @@ fn shade_layouts(gpu: &Gpu) -> [wgpu::BindGroupLayout; 2] {
     })
 }
 
+/// Storage buffers `splat_compute` binds: the splats, the eight of `splat_shading`, and the
+/// tile lists' starts and entries.
+const SPLAT_COMPUTE_BUFFERS: u32 = 11;
+
+/// Whether the device can run the compute splatter: it stores f32 targets from a compute pass
+/// and binds its buffers in one stage.
+fn compute_splatter_fits(gpu: &Gpu, format: wgpu::TextureFormat) -> bool {
+    format == wgpu::TextureFormat::Rgba32Float
+        && gpu.limits.max_storage_buffers_per_shader_stage >= SPLAT_COMPUTE_BUFFERS
+        && gpu.limits.max_storage_textures_per_shader_stage >= TARGETS as u32
+}
+
 impl SplatPipelines {
     pub fn new(gpu: &Gpu) -> Result<SplatPipelines> {
         let format = accumulation_format(gpu);
@@ -324,6 +344,22 @@ impl SplatPipelines {
             Some(depth(wgpu::CompareFunction::GreaterEqual, false)),
             &[target.clone(), target],
         )?;
+        let splat_compute = if compute_splatter_fits(gpu, format) {
+            let module = module(gpu, "splat_compute")?;
+            Some(
+                gpu.device
+                    .create_compute_pipeline(&wgpu::ComputePipelineDescriptor {
+                        label: Some("splat_compute"),
+                        layout: None,
+                        module: &module,
+                        entry_point: Some("main"),
+                        compilation_options: Default::default(),
+                        cache: None,
+                    }),
+            )
+        } else {
+            None
+        };
         let shade_layouts = shade_layouts(gpu);
         let layout = gpu
             .device
@@ -352,6 +388,7 @@ impl SplatPipelines {
             visibility,
             attributes,
             attributes_baked,
+            splat_compute,
             shade,
             shade_layouts,
         })
@@ -363,13 +400,17 @@ impl SplatPipelines {
                 .create_view(&Default::default())
         };
         let attachment = wgpu::TextureUsages::RENDER_ATTACHMENT;
+        let storage = match self.splat_compute {
+            Some(_) => wgpu::TextureUsages::STORAGE_BINDING,
+            None => wgpu::TextureUsages::empty(),
+        };
         let depth = texture("splat depth", DEPTH, attachment);
         let sums = (0..TARGETS)
             .map(|_| {
                 texture(
                     "splat sums",
                     self.format,
-                    attachment | wgpu::TextureUsages::TEXTURE_BINDING,
+                    attachment | wgpu::TextureUsages::TEXTURE_BINDING | storage,
                 )
             })
             .collect();
@@ -403,6 +444,7 @@ impl SplatPipelines {
     }
 
     /// Records one frame into `out.hdr`: visibility, attributes, shade.
+    #[allow(clippy::too_many_arguments)]
     pub fn draw(
         &self,
         gpu: &Gpu,
@@ -410,9 +452,13 @@ impl SplatPipelines {
         scene: &SceneBuffers,
         cam: &Camera,
         params: &ShadeParams,
+        compute: bool,
         out: &FrameTargets,
     ) -> Result<()> {
-        let uniforms = self.uniforms(gpu, cam, params);
+        let uniforms = Uniforms {
+            compute,
+            ..self.uniforms(gpu, cam, params)
+        };
         for pass in SplatPass::ALL {
             self.record(gpu, encoder, scene, &uniforms, out, pass)?;
         }
@@ -427,9 +473,13 @@ impl SplatPipelines {
         scene: &SceneBuffers,
         cam: &Camera,
         params: &ShadeParams,
+        compute: bool,
         out: &FrameTargets,
     ) -> Result<[f64; 3]> {
-        let uniforms = self.uniforms(gpu, cam, params);
+        let uniforms = Uniforms {
+            compute,
+            ..self.uniforms(gpu, cam, params)
+        };
         let mut ms = [0.0; 3];
         for (pass, slot) in SplatPass::ALL.into_iter().zip(&mut ms) {
             let t = std::time::Instant::now();
@@ -443,10 +493,96 @@ impl SplatPipelines {
 
     fn uniforms(&self, gpu: &Gpu, cam: &Camera, params: &ShadeParams) -> Uniforms {
         Uniforms {
+            camera: *cam,
             cam: gpu.uniform("camera", cam),
             params: gpu.uniform("shade params", params),
             direct: params.direct,
+            compute: false,
+            tiles: Default::default(),
         }
+    }
+
+    /// Whether `splatter` draws with the compute splatter on this device. `Auto` takes the
+    /// raster passes: on llvmpipe the compute splatter measured 3–4× slower (its per-pixel loop
+    /// over each tile's list costs more than the rasterizer's triangle setup saves;
+    /// docs/measurements.md), and no other device class has been measured yet.
+    pub fn uses_compute(&self, splatter: Splatter) -> Result<bool> {
+        let can = self.splat_compute.is_some();
+        match splatter {
+            Splatter::Raster => Ok(false),
+            Splatter::Compute if can => Ok(true),
+            Splatter::Compute => Err(Error::Gpu(format!(
+                "this device cannot run the compute splatter (it needs f32 storage targets and \
+                 {SPLAT_COMPUTE_BUFFERS} storage buffers in one stage); use --splatter raster"
+            ))),
+            Splatter::Auto => Ok(false),
+        }
+    }
+
+    /// The compute splatter in place of the raster passes: the tile binning for
+    /// `SplatPass::Visibility`, the tile pass for `SplatPass::Attributes`.
+    fn record_compute(
+        &self,
+        gpu: &Gpu,
+        encoder: &mut wgpu::CommandEncoder,
+        scene: &SceneBuffers,
+        uniforms: &Uniforms,
+        out: &FrameTargets,
+        pass: SplatPass,
+    ) -> Result<()> {
+        if pass == SplatPass::Visibility {
+            let mut ex = GpuExecutor::new(gpu, encoder);
+            let (cam, count) = (&uniforms.camera, scene.splat_count);
+            let lists = bin_splat_tiles(&mut ex, cam, &uniforms.cam, scene.splats, count)?;
+            *uniforms.tiles.borrow_mut() = Some(lists);
+            return Ok(());
+        }
+        let (Some(pipeline), Some(lists)) = (&self.splat_compute, &*uniforms.tiles.borrow()) else {
+            return Err(Error::Invalid(
+                "the compute splatter's tile pass ran before its binning".into(),
+            ));
+        };
+        let tile_params = gpu.uniform("tile params", &lists.params);
+        let buffers = [
+            &uniforms.cam,
+            scene.splats,
+            &uniforms.params,
+            scene.materials,
+            scene.splat_light,
+            scene.lobes,
+            scene.lobe_norms,
+            scene.lights,
+            scene.direct,
+            scene.visibility,
+            &tile_params,
+            &lists.start,
+            &lists.splats,
+        ];
+        let mut entries = buffer_entries(&buffers);
+        entries.extend(
+            out.sums
+                .iter()
+                .enumerate()
+                .map(|(k, view)| wgpu::BindGroupEntry {
+                    binding: buffers.len() as u32 + k as u32,
+                    resource: wgpu::BindingResource::TextureView(view),
+                }),
+        );
+        let group = gpu.device.create_bind_group(&wgpu::BindGroupDescriptor {
+            label: Some("splat_compute"),
+            layout: &pipeline.get_bind_group_layout(0),
+            entries: &entries,
+        });
+        let tiles = lists.params.tiles_x * lists.params.tiles_y;
+        let (x, y) = gpu.dispatch_dims(tiles)?;
+        let mut pass = encoder.begin_compute_pass(&wgpu::ComputePassDescriptor {
+            label: Some("splat_compute"),
+            timestamp_writes: None,
+        });
+        pass.set_pipeline(pipeline);
+        pass.set_bind_group(0, &group, &[]);
+        pass.dispatch_workgroups(x, y, 1);
+        Ok(())
     }
 
     fn record(
@@ -459,6 +595,9 @@ impl SplatPipelines {
         pass: SplatPass,
     ) -> Result<()> {
         let (cam_buf, params_buf) = (&uniforms.cam, &uniforms.params);
+        if uniforms.compute && pass != SplatPass::Shade {
+            return self.record_compute(gpu, encoder, scene, uniforms, out, pass);
+        }
         let buffers = |pipeline: &wgpu::RenderPipeline, list: &[&wgpu::Buffer]| {
             gpu.device.create_bind_group(&wgpu::BindGroupDescriptor {
                 label: None,

@@ -527,7 +527,10 @@ fn required_limits(adapter: &wgpu::Limits) -> wgpu::Limits {
     wgpu::Limits {
         max_buffer_size: adapter.max_buffer_size,
         max_storage_buffer_binding_size: adapter.max_storage_buffer_binding_size,
-        max_storage_buffers_per_shader_stage: adapter.max_storage_buffers_per_shader_stage.min(8),
+        // The compute splatter binds 11 (`gpu::frame::SPLAT_COMPUTE_BUFFERS`); where the adapter
+        // offers fewer, it is not used.
+        max_storage_buffers_per_shader_stage: adapter.max_storage_buffers_per_shader_stage.min(16),
+        max_storage_textures_per_shader_stage: adapter.max_storage_textures_per_shader_stage.min(4),
         max_compute_workgroups_per_dimension: adapter.max_compute_workgroups_per_dimension,
         // The attribute pass writes four RGBA float targets.
         max_color_attachment_bytes_per_sample: adapter.max_color_attachment_bytes_per_sample,

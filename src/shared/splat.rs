@@ -93,3 +93,51 @@ pub fn splat_weight(q: f32) -> f32 {
 pub fn lobe_beta2(family: u32, sharpness: f32) -> f32 {
     (if family == FAMILY_WARD { 1.0 } else { 0.5 }) / sharpness
 }
+
+/// The compute splatter's screen tiles: `TILE` × `TILE` pixels, one workgroup each.
+pub const TILE: u32 = 8;
+
+/// The tiles whose pixel centres splat `s`'s triangle may cover, `(x0, y0, x1, y1)` inclusive;
+/// none when `x0 > x1`.
+pub fn tile_rect(cam: &Camera, s: &Splat, tiles_x: u32, tiles_y: u32) -> [u32; 4] {
+    let none = [1, 0, 0, 0];
+    if !faces_camera(s, Vec3::from(cam.eye)) {
+        return none;
+    }
+    let mut lo = Vec2::splat(3.0e38);
+    let mut hi = Vec2::splat(-3.0e38);
+    let mut behind = 0;
+    for k in 0..SPLAT_CORNERS {
+        let c = clip_position(cam, splat_corner(s, k));
+        if !(c.w >= cam.near) {
+            behind += 1;
+            continue;
+        }
+        let ndc = Vec2::new(c.x, c.y) / c.w;
+        let p = Vec2::new(
+            (ndc.x * 0.5 + 0.5) * cam.size[0],
+            (0.5 - ndc.y * 0.5) * cam.size[1],
+        );
+        lo = lo.min(p);
+        hi = hi.max(p);
+    }
+    if behind == SPLAT_CORNERS {
+        return none;
+    }
+    let last = Vec2::new((tiles_x * TILE) as f32 - 1.0, (tiles_y * TILE) as f32 - 1.0);
+    if behind > 0 {
+        lo = Vec2::ZERO;
+        hi = last + 0.5;
+    }
+    let first = (lo - 0.5 - 1e-3).ceil().max(Vec2::ZERO);
+    let end = (hi - 0.5 + 1e-3).floor().min(last);
+    if first.x > end.x || first.y > end.y {
+        return none;
+    }
+    [
+        first.x as u32 / TILE,
+        first.y as u32 / TILE,
+        end.x as u32 / TILE,
+        end.y as u32 / TILE,
+    ]
+}

@@ -129,3 +129,45 @@ fn splat_weight(q: f32) -> f32 {
 fn lobe_beta2(family: u32, sharpness: f32) -> f32 {
     return select(0.5, 1.0, family == FAMILY_WARD) / sharpness;
 }
+
+// The compute splatter's tiles: TILE x TILE pixels, one workgroup each.
+const TILE: u32 = 8u;
+
+// The tiles whose pixel centres splat s's triangle may cover, as (x0, y0, x1, y1) inclusive;
+// x0 > x1 when none (a back-facing splat, or one wholly behind the near plane or outside the
+// image). A triangle with a corner behind the near plane projects without bound: all tiles.
+fn tile_rect(cam: Camera, s: Splat, tiles_x: u32, tiles_y: u32) -> vec4<u32> {
+    let none = vec4<u32>(1u, 0u, 0u, 0u);
+    if !faces_camera(s, cam.eye) {
+        return none;
+    }
+    var lo = vec2<f32>(3.0e38);
+    var hi = vec2<f32>(-3.0e38);
+    var behind = 0u;
+    for (var k = 0u; k < SPLAT_CORNERS; k++) {
+        let c = clip_position(cam, splat_corner(s, k));
+        if !(c.w >= cam.near) {
+            behind += 1u;
+            continue;
+        }
+        let ndc = c.xy / c.w;
+        let p = vec2<f32>((ndc.x * 0.5 + 0.5) * cam.size.x, (0.5 - ndc.y * 0.5) * cam.size.y);
+        lo = min(lo, p);
+        hi = max(hi, p);
+    }
+    if behind == SPLAT_CORNERS {
+        return none;
+    }
+    let last = vec2<f32>(f32(tiles_x * TILE) - 1.0, f32(tiles_y * TILE) - 1.0);
+    if behind > 0u {
+        lo = vec2<f32>(0.0);
+        hi = last + 0.5;
+    }
+    // Pixels whose centre p + 0.5 lies in [lo, hi], with a margin for rounding.
+    let first = max(ceil(lo - 0.5 - 1e-3), vec2<f32>(0.0));
+    let end = min(floor(hi - 0.5 + 1e-3), last);
+    if first.x > end.x || first.y > end.y {
+        return none;
+    }
+    return vec4<u32>(vec2<u32>(first) / TILE, vec2<u32>(end) / TILE);
+}

@@ -190,6 +190,13 @@ struct ShadeParams {
 const DIRECT_RAYS: u32 = 0u;
 const DIRECT_BAKED: u32 = 1u;
 
+struct TileParams {
+    tiles_x: u32,
+    tiles_y: u32,
+    splat_count: u32,
+    entry_count: u32,
+}
+
 struct DirectParams {
     splat_count: u32,
     light_count: u32,

@@ -1,0 +1,90 @@
+// What a splat's fragment is shaded with (docs/design.md sections 7-8), for the attribute
+// pass and the compute splatter alike: the indirect light from the splat's lobes and
+// irradiance, and the baked direct light. The bindings 2-9 of group 0 are declared here, so
+// that both stages bind them at the same numbers; bindings 0 (the camera) and 1 (the splats)
+// are the stage's. Twin: src/cpu/splat_attributes.rs.
+
+// #import splat
+// #import lobe_brdf
+// #import lights
+
+@group(0) @binding(2) var<uniform> params: ShadeParams;
+@group(0) @binding(3) var<storage, read> materials: array<Material>;
+@group(0) @binding(4) var<storage, read> splat_light: array<SplatLight>;
+@group(0) @binding(5) var<storage, read> lobes: array<Lobe>;
+@group(0) @binding(6) var<storage, read> lobe_norms: array<f32>;
+@group(0) @binding(7) var<storage, read> lights: array<Light>;
+// The direct bake's (direct_bake.wgsl): per splat (shadowed irradiance, 0), and per splat and
+// light the light's visibility. Read only when params.direct is DIRECT_BAKED.
+@group(0) @binding(8) var<storage, read> direct: array<vec4<f32>>;
+@group(0) @binding(9) var<storage, read> visibility: array<f32>;
+
+// The hemispherical integral of a lobe of width beta2 about axis (lobe_norms).
+fn lobe_norm(n: vec3<f32>, axis: vec3<f32>, beta2: f32) -> f32 {
+    let l = norm_lookup(dot(n, axis), beta2);
+    let i = l.index;
+    let row = NORM_COS_NODES;
+    let lo = lobe_norms[i] + l.fx * (lobe_norms[i + 1u] - lobe_norms[i]);
+    let hi = lobe_norms[i + row] + l.fx * (lobe_norms[i + row + 1u] - lobe_norms[i + row]);
+    return lo + l.fy * (hi - lo);
+}
+
+// Radiance leaving splat `i` towards wo by the light its photons brought (thesis 3.6.1).
+fn indirect(i: u32, s: Splat, m: Material, wo: vec3<f32>) -> vec3<f32> {
+    let light = splat_light[i];
+    var spec = vec3<f32>(0.0);
+    let first = light.first_lobe;
+    let shown = select(0u, light.lobes, (params.show & SHOW_INDIRECT_SPECULAR) != 0u);
+    for (var k = 0u; k < shown; k++) {
+        let lobe = lobes[first + k];
+        let beta2 = lobe_beta2(params.family, lobe.sharpness);
+        let norm = lobe_norm(s.normal, lobe.axis, beta2);
+        spec += lobe.irradiance * lobe_specular(s.normal, wo, lobe.axis, m.roughness, beta2, norm);
+    }
+    let diffuse = select(vec3<f32>(0.0), s.diffuse * (light.irradiance / PI),
+                         (params.show & SHOW_INDIRECT_DIFFUSE) != 0u);
+    return diffuse + m.specular * spec;
+}
+
+// The specular light one light sample reflects towards wo, unshadowed.
+fn specular_sample(n: vec3<f32>, wo: vec3<f32>, alpha: f32, ls: LightSample) -> vec3<f32> {
+    let cos_i = dot(n, ls.wi);
+    if !(cos_i > 0.0) {
+        return vec3<f32>(0.0);
+    }
+    return ward_specular(n, ls.wi, wo, alpha) * ls.e * cos_i;
+}
+
+// Radiance leaving splat i at p towards wo by the baked direct light: the diffuse part from
+// the shadowed irradiance, the glossy part from the BRDF towards each light (an area light's
+// n x n strata centres) times the light's visibility.
+fn baked_direct(i: u32, s: Splat, m: Material, p: vec3<f32>, wo: vec3<f32>) -> vec3<f32> {
+    var out = vec3<f32>(0.0);
+    if (params.show & SHOW_DIRECT_DIFFUSE) != 0u {
+        out = s.diffuse * (direct[i].xyz / PI);
+    }
+    let glossy = m.roughness >= MIN_ALPHA && any(m.specular > vec3<f32>(0.0));
+    if (params.show & SHOW_DIRECT_SPECULAR) == 0u || !glossy {
+        return out;
+    }
+    var spec = vec3<f32>(0.0);
+    for (var li = 0u; li < params.light_count; li++) {
+        let vis = visibility[i * params.light_count + li];
+        let l = lights[li];
+        if !(vis > 0.0) {
+            continue;
+        }
+        if l.kind != LIGHT_AREA {
+            spec += vis * specular_sample(s.normal, wo, m.roughness, sample_light(l, p, 0.0, 0.0));
+            continue;
+        }
+        let n = params.area_samples;
+        var area_sum = vec3<f32>(0.0);
+        for (var j = 0u; j < n * n; j++) {
+            let uv = area_point(j, n, 0u, false);
+            area_sum += specular_sample(s.normal, wo, m.roughness, sample_light(l, p, uv.x, uv.y));
+        }
+        spec += vis * area_sum * (1.0 / f32(n * n));
+    }
+    return out + m.specular * spec;
+}
