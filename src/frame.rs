@@ -183,8 +183,11 @@ pub fn shadow_bias(splats: &[Splat]) -> f32 {
     (0.5 * sum / splats.len().max(1) as f64) as f32
 }
 
-/// Area lights are sampled on a `DIRECT_SAMPLES`² jittered grid per splat by the direct bake.
-pub const DIRECT_SAMPLES: u32 = 8;
+/// Area lights are sampled on a `DIRECT_SAMPLES`² jittered grid per splat by the direct bake:
+/// as many rays as a pixel's default shadow rays. 8² cost 3.4 times the time (1.37 s against
+/// 0.40 s for the bunny's 67 k splats on lavapipe) for a moving frame no closer to the still
+/// image (relMSE 0.00524 against 0.00534).
+pub const DIRECT_SAMPLES: u32 = 4;
 
 pub use crate::sequence::DirectMap;
 

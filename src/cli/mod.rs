@@ -239,7 +239,8 @@ enum Command {
         #[arg(long, value_name = "N")]
         frames: Option<u32>,
         /// Refinement frames a resting camera adds to its still image, each jittered and with
-        /// its share of shadow rays (render --spp's frames; 0: never refine).
+        /// its share of shadow rays (render --spp's frames; 0: never refine, every frame a
+        /// moving frame).
         #[arg(long, default_value_t = render::DEFAULT_SPP, value_parser = clap::value_parser!(u32).range(0..=65536))]
         spp: u32,
         /// With --frames: save the last frame here (PNG).

@@ -15,7 +15,7 @@ use crate::cli::view::{move_first_light, passes};
 use crate::cpu;
 use crate::em::LobeMap;
 use crate::error::{Error, Result};
-use crate::frame::{FrameConfig, camera_uniform, cpu_frame, shade_params};
+use crate::frame::{FrameConfig, camera_uniform, cpu_direct, cpu_frame, shade_params};
 use crate::gpu::Gpu;
 use crate::grid::SplatGrid;
 use crate::photons::ms_since;
@@ -40,7 +40,9 @@ pub struct RebakeBench {
     pub grid_ms: f64,
     /// The first bake (pipelines compiled on the way).
     pub bake_ms: f64,
-    /// Medians over the moves: the full re-bake and the preview bake.
+    /// Medians over the moves: the moved light's direct bake (made first, so its direct light
+    /// and shadows follow at once), the full re-bake of the indirect light and the preview bake.
+    pub direct_ms: f64,
     pub rebake_ms: f64,
     pub preview_ms: f64,
     /// Photons traced per second by the full re-bake.
@@ -66,6 +68,21 @@ impl Place<'_> {
         };
         let lobes = bake(scene, device, &quiet)?.lobes;
         Ok((lobes, ms_since(t)))
+    }
+
+    /// The direct bake of the scene's lights, in milliseconds.
+    fn bake_direct(&mut self, scene: &Scene) -> Result<f64> {
+        let t = Instant::now();
+        match self {
+            Place::Gpu(gpu, renderer) => {
+                renderer.set_lights(gpu, scene)?;
+                renderer.bake_direct(gpu, scene)?;
+            }
+            Place::Cpu(grid) => {
+                cpu_direct(scene, grid)?;
+            }
+        }
+        Ok(ms_since(t))
     }
 
     /// The frame of the scene's camera with `lobes`, linear HDR.
@@ -112,9 +129,11 @@ pub fn rebake(scene: &Scene, gpu: Option<&Gpu>) -> Result<RebakeBench> {
     let grid_ms = ms_since(t);
     let (_, bake_ms) = place.bake(scene)?;
     let (mut full_ms, mut preview_ms, mut errors) = (Vec::new(), Vec::new(), Vec::new());
+    let mut direct_ms = Vec::new();
     for k in 1..=MOVES {
         let moved = move_first_light(scene, k as f32, 0.0)
             .ok_or_else(|| Error::Invalid("bench rebake needs a scene with a light".into()))?;
+        direct_ms.push(place.bake_direct(&moved)?);
         let mut preview = moved.clone();
         preview.bake = quick.clone();
         let (quick, ms) = place.bake(&preview)?;
@@ -137,6 +156,7 @@ pub fn rebake(scene: &Scene, gpu: Option<&Gpu>) -> Result<RebakeBench> {
         preview_iterations: quick.iterations,
         grid_ms,
         bake_ms,
+        direct_ms: median(direct_ms),
         rebake_ms,
         preview_ms: median(preview_ms),
         photons_per_s: photons as f64 / (rebake_ms / 1e3).max(1e-9),
@@ -153,6 +173,11 @@ impl std::fmt::Display for RebakeBench {
             f,
             "scene        {} splats, grid built once in {:.1} ms; first bake {:.1} ms",
             self.splats, self.grid_ms, self.bake_ms
+        )?;
+        writeln!(
+            f,
+            "direct       {:.1} ms: the moved light's direct bake, before the indirect light's",
+            self.direct_ms
         )?;
         writeln!(
             f,

@@ -24,7 +24,7 @@ use crate::cli::plot::{Chart, Series};
 use crate::cpu;
 use crate::em::LobeFamily;
 use crate::error::{Error, Result};
-use crate::frame::{FrameConfig, camera_uniform, cpu_frame, cpu_reference, shade_params};
+use crate::frame::{Direct, FrameConfig, camera_uniform, cpu_frame, cpu_reference, shade_params};
 use crate::gpu::Gpu;
 use crate::photons::ms_since;
 use crate::renderer::FrameRenderer;
@@ -298,7 +298,11 @@ fn renderer_on<'r>(
 impl Runner<'_> {
     fn lobes(&mut self, scene: &Scene, view: &View, frames: u32) -> Result<LobeRun> {
         let quiet = Progress::new(false);
-        let cfg = FrameConfig::default();
+        // Direct light by shadow rays, as the reference's: the sweep measures the bake's knobs.
+        let cfg = FrameConfig {
+            direct: Direct::Rays,
+            ..FrameConfig::default()
+        };
         let mut times = Vec::new();
         let (hdr, baked) = match self {
             Runner::Gpu(gpu, slot) => {

@@ -337,7 +337,8 @@ impl State {
             // image as it stands.
             _ => {
                 let key = Some((cam, frame.show, self.method, self.version));
-                if self.still != key {
+                // Without refinement every frame is drawn anew, as for a moving camera.
+                if self.still != key || self.spp == 0 {
                     self.still = key;
                     self.samples = 0;
                     if frame.direct == Direct::Baked && !self.renderer.direct_is_baked() {
