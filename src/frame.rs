@@ -12,7 +12,9 @@ use crate::grid::SplatGrid;
 use crate::scene::Scene;
 use crate::sequence::Executor;
 use crate::shared::trace::Geometry;
-use crate::types::{Camera, DIRECT_BAKED, DIRECT_RAYS, DirectParams, EmParams, ShadeParams, Splat};
+use crate::types::{
+    Camera, DIRECT_BAKED, DIRECT_RAYS, DirectParams, EmParams, PathParams, ShadeParams, Splat,
+};
 
 /// Which light a frame shows: everything, or one part of it (the viewer's keys 1–5).
 #[derive(Clone, Copy, Debug, Default, PartialEq, Eq, serde::Serialize)]
@@ -214,6 +216,39 @@ pub fn cpu_direct(scene: &Scene, grid: &SplatGrid) -> Result<DirectMap> {
     let lights = ex.upload("lights", &scene.lights)?;
     let baked = crate::sequence::bake_direct(&mut ex, &lights, &params)?;
     baked.read_back(&mut ex, &params)
+}
+
+/// The path tracer's uniform for sample `sample` of an image `cam.size`, with the bake's path
+/// length and seed.
+pub fn path_params(scene: &Scene, cam: &Camera, sample: u32) -> PathParams {
+    PathParams {
+        width: cam.size[0] as u32,
+        height: cam.size[1] as u32,
+        sample,
+        seed: scene.bake.seed,
+        max_depth: scene.bake.max_depth,
+        light_count: scene.lights.len() as u32,
+        ..Default::default()
+    }
+}
+
+/// The path-traced image of `cam` on the CPU mirror: `spp` samples per pixel, averaged.
+pub fn cpu_path(scene: &Scene, grid: &SplatGrid, cam: &Camera, spp: u32) -> Result<Vec<[f32; 4]>> {
+    let geo = Geometry {
+        grid,
+        splats: &scene.splats,
+    };
+    let pixels = (cam.size[0] * cam.size[1]) as usize;
+    let mut ex = cpu::CpuExecutor::tracing(geo);
+    let cam_buf = ex.uniform("camera", cam)?;
+    let materials = ex.upload("materials", &scene.materials)?;
+    let lights = ex.upload("lights", &scene.lights)?;
+    let hdr = ex.zeroed("path image", pixels.max(1) as u64 * 16)?;
+    for k in 0..spp.max(1) {
+        let params = path_params(scene, cam, k);
+        crate::sequence::path_sample(&mut ex, &params, &cam_buf, &materials, &lights, &hdr)?;
+    }
+    ex.read(&hdr, pixels)
 }
 
 /// Point `k` of the Halton sequence in `base` (k ≥ 1), in [0, 1).

@@ -14,8 +14,8 @@ use crate::camera::View;
 use crate::em::LobeMap;
 use crate::error::{Error, Result};
 use crate::frame::{
-    Direct, DirectMap, FrameConfig, Splatter, camera_uniform, direct_params, jitter, refinement,
-    shade_params_for,
+    Direct, DirectMap, FrameConfig, Splatter, camera_uniform, direct_params, jitter, path_params,
+    refinement, shade_params_for,
 };
 use crate::gpu::Gpu;
 use crate::gpu::bins::GpuBins;
@@ -25,6 +25,7 @@ use crate::gpu::reference::ReferencePipeline;
 use crate::gpu::scene::GpuScene;
 use crate::gpu::tone::{GpuToned, tone_map};
 use crate::scene::Scene;
+use crate::sequence::path_sample;
 use crate::tone::ToneConfig;
 use crate::types::{Camera, DIRECT_BAKED, EmParams, Light, ShadeParams};
 
@@ -320,6 +321,36 @@ impl FrameRenderer {
         let (bins, em) = (&binned.bins, &binned.em);
         self.record_reference(gpu, &mut encoder, scene, bins, em, &cam, cfg)?;
         gpu.submit_and_wait(encoder)?;
+        self.targets()
+    }
+
+    /// The path-traced image of `view` (`sequence::path_sample`): `spp` samples per pixel, one
+    /// submission each, with `each(k)` called after sample `k`. Needs no bake; the HDR image
+    /// holds their mean.
+    pub fn draw_path(
+        &mut self,
+        gpu: &Gpu,
+        scene: &Scene,
+        view: &View,
+        spp: u32,
+        mut each: impl FnMut(u32),
+    ) -> Result<&FrameTargets> {
+        self.resize(gpu, view.width, view.height)?;
+        let cam = camera_uniform(view, scene.bounds(), &FrameConfig::default());
+        let cam_buf = gpu.uniform("camera", &cam);
+        let targets = self
+            .targets
+            .as_ref()
+            .ok_or_else(|| Error::Invalid("the frame renderer has no targets yet".into()))?;
+        for k in 0..spp.max(1) {
+            let mut encoder = gpu.encoder("path sample");
+            let mut ex = GpuExecutor::new(gpu, &mut encoder).tracing(&self.on_gpu);
+            let params = path_params(scene, &cam, k);
+            let (materials, lights) = (&self.on_gpu.materials, &self.frame_scene.lights);
+            path_sample(&mut ex, &params, &cam_buf, materials, lights, &targets.hdr)?;
+            gpu.submit_and_wait(encoder)?;
+            each(k);
+        }
         self.targets()
     }
 

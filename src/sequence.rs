@@ -21,8 +21,8 @@ use crate::shaders::stage_shape;
 use crate::shared::dispatch::groups_for;
 use crate::tone::{ToneConfig, reduce_levels};
 use crate::types::{
-    BinParams, Camera, DirectParams, DistanceParams, EmParams, Emitter, GridParams, Photon,
-    PhotonViewParams, ScanParams, TileParams, TraceCounters,
+    BinParams, Camera, DirectParams, DistanceParams, EmParams, Emitter, GridParams, PathParams,
+    Photon, PhotonViewParams, ScanParams, TileParams, TraceCounters,
 };
 
 /// Where a sequence runs: buffers, uniforms, dispatches by stage name, copies and readbacks.
@@ -787,4 +787,20 @@ pub fn bin_splat_tiles<E: Executor>(
         splats: lists,
         longest,
     })
+}
+
+/// Adds one path-traced sample per pixel (`params.sample`) to the running mean in `hdr`
+/// (`path_trace`, one invocation per pixel).
+pub fn path_sample<E: Executor>(
+    ex: &mut E,
+    params: &PathParams,
+    cam: &E::Buffer,
+    materials: &E::Buffer,
+    lights: &E::Buffer,
+    hdr: &E::Buffer,
+) -> Result<()> {
+    let uniform = ex.uniform("path params", params)?;
+    let bindings = [&uniform, cam, materials, lights, hdr];
+    let pixels = params.width * params.height;
+    ex.dispatch_traced("path_trace", &bindings, groups("path_trace", pixels)?)
 }

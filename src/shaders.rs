@@ -64,6 +64,7 @@ pub const STAGES: &[WgslFile] = &[
     stage!("direct_bake"),
     stage!("shade"),
     stage!("reference_gather"),
+    stage!("path_trace"),
     stage!("present"),
     stage!("photon_view"),
     stage!("photon_resolve"),

@@ -349,6 +349,22 @@ pub struct TileParams {
     pub entry_count: u32,
 }
 
+/// Uniform of `path_trace`: one sample per pixel of a progressive path-traced image.
+#[repr(C)]
+#[derive(Clone, Copy, Debug, Default, PartialEq, Pod, Zeroable)]
+pub struct PathParams {
+    pub width: u32,
+    pub height: u32,
+    /// This sample's place in the running mean (0 writes the image).
+    pub sample: u32,
+    pub seed: u32,
+    /// Surface vertices a path may have (the bake's `max_depth`).
+    pub max_depth: u32,
+    pub light_count: u32,
+    pub _pad0: u32,
+    pub _pad1: u32,
+}
+
 /// Uniform of `direct_bake`: every splat's direct light from every light, shadowed.
 #[repr(C)]
 #[derive(Clone, Copy, Debug, Default, PartialEq, Pod, Zeroable)]

@@ -187,6 +187,16 @@ fn rust_layouts() -> Vec<RustLayout> {
             splat_count,
             entry_count
         }),
+        layout!(PathParams {
+            width,
+            height,
+            sample,
+            seed,
+            max_depth,
+            light_count,
+            _pad0,
+            _pad1
+        }),
         layout!(DirectParams {
             splat_count,
             light_count,

@@ -155,6 +155,7 @@ fn mirror_workgroup_shapes_match_the_wgsl() {
         ("trace_rays", trace_rays::WG, 1),
         ("photon_trace", photon_trace::WG, 1),
         ("direct_bake", direct_bake::WG, 1),
+        ("path_trace", path_trace::WG, 1),
         ("splat_tile_count", splat_tiles::WG, 1),
         ("splat_tile_scatter", splat_tiles::WG, 1),
         ("splat_compute", splat_tiles::WG, 1),
@@ -207,6 +208,7 @@ fn stage_bindings_are_read_from_the_wgsl() {
         "photon_trace",
         "photon_view",
         "direct_bake",
+        "path_trace",
         "shade",
         "reference_gather",
     ];

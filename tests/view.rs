@@ -381,18 +381,30 @@ until_title() {{
   done
   echo "timed out waiting for: $1 (title: $(title))" >&2; kill $viewer; exit 1
 }}
+# Press a key until the title shows what it does: under load an X event can be lost, and a
+# key that toggles must not be pressed twice, so each press gets 10 s to show.
+press() {{
+  for k in $(seq 1 12); do
+    xdotool windowfocus --sync "$win"
+    xdotool key "$1"
+    for i in $(seq 1 100); do
+      case "$(title)" in *"$2"*) return 0 ;; esac
+      sleep 0.1
+    done
+  done
+  echo "timed out waiting for: $2 after key $1 (title: $(title))" >&2; kill $viewer; exit 1
+}}
 for i in $(seq 1 600); do
   win=$(xdotool search --name lobelight 2>/dev/null | head -1) && [ -n "$win" ] && break
   sleep 0.1
 done
 until_title "global illumination"
-xdotool windowfocus --sync "$win"
-xdotool key r; until_title "Reference"
+press r "Reference"
 xdotool key p
-xdotool key m; until_title "Photons"
+press m "Photons"
 xdotool key p
-xdotool key m; until_title "Lobes"
-xdotool key Right; until_title "baking"
+press m "Lobes"
+press Right "baking"
 until_title "global illumination"
 xdotool key Escape
 wait $viewer

@@ -84,15 +84,8 @@ fn emitted(d: vec3<f32>, t_surface: f32) -> vec3<f32> {
     var t_near = t_surface;
     for (var li = 0u; li < params.light_count; li++) {
         let l = lights[li];
-        let denom = dot(d, l.direction);
-        if l.kind != LIGHT_AREA || !(denom < 0.0) {
-            continue;
-        }
-        let t = dot(l.position - cam.eye, l.direction) / denom;
-        let q = cam.eye + t * d - l.position;
-        let u = dot(q, l.edge_u) / dot(l.edge_u, l.edge_u);
-        let v = dot(q, l.edge_v) / dot(l.edge_v, l.edge_v);
-        if t > 0.0 && t < t_near && u >= 0.0 && u <= 1.0 && v >= 0.0 && v <= 1.0 {
+        let t = area_light_hit(l, cam.eye, d);
+        if t > 0.0 && t < t_near {
             t_near = t;
             out = l.power / (PI * l.area);
         }

@@ -419,6 +419,13 @@ fn run(cli: Cli) -> Result<()> {
                 spp,
             };
             opts.frame.validate()?;
+            if method == render::Method::Path {
+                return Err(Error::Invalid(
+                    "the viewer draws the lobes, the reference or the photons; the path tracer \
+                     renders still images: lobelight render --method path"
+                        .into(),
+                ));
+            }
             opts.tone.validate()?;
             crate::cli::view::view(scene, opts)?;
         }

@@ -13,7 +13,7 @@ use crate::cpu;
 use crate::cpu::photon_view::scene_scale;
 use crate::error::{Error, Result};
 use crate::frame::{
-    FrameConfig, camera_uniform, cpu_frame, cpu_reference, cpu_refined, shade_params,
+    FrameConfig, camera_uniform, cpu_frame, cpu_path, cpu_reference, cpu_refined, shade_params,
 };
 use crate::gpu::Gpu;
 use crate::gpu::photon_view::photon_image;
@@ -39,6 +39,20 @@ pub enum Method {
     /// casting and the photons within R gathered there with the exact BRDF, plus the same
     /// direct light. No lobe fit, no cache.
     Reference,
+    /// Ground truth of the same splat scene: an unbiased path tracer through the splat grid
+    /// with the same Ward BRDF and path length, `--spp` samples per pixel. No bake, no cache.
+    Path,
+}
+
+impl Method {
+    pub fn name(self) -> &'static str {
+        match self {
+            Method::Lobes => "lobes",
+            Method::Photons => "photons",
+            Method::Reference => "reference",
+            Method::Path => "path",
+        }
+    }
 }
 
 #[derive(Clone, Debug, Default)]
@@ -178,12 +192,11 @@ pub fn render(
     opts.frame.validate()?;
     opts.tone.validate()?;
     let view = View::new(&scene.camera, width, height);
-    if opts.method == Method::Reference && opts.cache.is_some() {
-        return Err(Error::Invalid(
-            "--cache holds fitted lobes; --method reference gathers photons and has none to \
-             load or save"
-                .into(),
-        ));
+    if matches!(opts.method, Method::Reference | Method::Path) && opts.cache.is_some() {
+        return Err(Error::Invalid(format!(
+            "--cache holds fitted lobes; --method {} fits none and has none to load or save",
+            opts.method.name()
+        )));
     }
     let (adapter, backend) = adapter_names(gpu);
     let (stages, cache_hit, log_average) = match opts.method {
@@ -195,6 +208,10 @@ pub fn render(
         ),
         Method::Reference => {
             let (stages, log_average) = render_reference(scene, gpu, opts, &view, format, output)?;
+            (stages, false, log_average)
+        }
+        Method::Path => {
+            let (stages, log_average) = render_path(scene, gpu, opts, &view, format, output)?;
             (stages, false, log_average)
         }
     };
@@ -454,6 +471,55 @@ fn render_reference(
         photons,
         binning,
         em: StageReport::skipped("the reference gathers photons; it fits no lobes"),
+        shade: drawn.shade,
+        tonemap: drawn.tonemap,
+    };
+    Ok((stages, drawn.log_sum.map_or(0.0, crate::tone::log_average)))
+}
+
+/// `--method path`: `--spp` path-traced samples per pixel, on the device or the CPU mirror.
+fn render_path(
+    scene: &Scene,
+    gpu: Option<&Gpu>,
+    opts: &Options,
+    view: &View,
+    format: ImageFormat,
+    output: &Path,
+) -> Result<(Stages, f32)> {
+    let progress = Progress::new(opts.progress);
+    let pixels = view.width * view.height;
+    let spp = opts.spp.max(1);
+    let bar = progress.bar(spp as u64);
+    let each = |k: u32| bar.set_position(k as u64 + 1);
+    let (grid, drawn) = match gpu {
+        Some(gpu) => {
+            let mut renderer = FrameRenderer::new(gpu, scene)?;
+            let t = Instant::now();
+            let targets = renderer.draw_path(gpu, scene, view, spp, each);
+            bar.finish_and_clear();
+            let shade = refined(ms_since(t), spp);
+            let drawn = drawn_on_gpu(gpu, &targets?.hdr, pixels, format, &opts.tone, shade)?;
+            (StageReport::ran(renderer.on_gpu.grid_ms), drawn)
+        }
+        None => {
+            let t = Instant::now();
+            let host_grid = cpu::scene_grid(scene)?;
+            let grid = StageReport::ran(ms_since(t));
+            let cam = camera_uniform(view, scene.bounds(), &opts.frame);
+            let t = Instant::now();
+            let hdr = cpu_path(scene, &host_grid, &cam, spp);
+            bar.finish_and_clear();
+            let drawn = drawn_on_cpu(hdr?, format, &opts.tone, refined(ms_since(t), spp))?;
+            (grid, drawn)
+        }
+    };
+    write_drawn(&drawn, &progress, view, output)?;
+    let why = "the path tracer needs no bake";
+    let stages = Stages {
+        grid,
+        photons: StageReport::skipped(why),
+        binning: StageReport::skipped(why),
+        em: StageReport::skipped(why),
         shade: drawn.shade,
         tonemap: drawn.tonemap,
     };

@@ -8,8 +8,8 @@ use bytemuck::Pod;
 
 use super::{bin_count, bin_place, bin_rank, bin_scatter, em_fit, em_select};
 use super::{
-    direct_bake, photon_resolve, photon_trace, photon_view, scan_apply, scan_reduce, tonemap_apply,
-    tonemap_reduce,
+    direct_bake, path_trace, photon_resolve, photon_trace, photon_view, scan_apply, scan_reduce,
+    tonemap_apply, tonemap_reduce,
 };
 use super::{grid_count, grid_distance, grid_rank, grid_scatter, splat_tiles};
 use crate::error::{Error, Result};
@@ -402,6 +402,15 @@ fn run_traced(stage: &str, b: &[&CpuBuffer], geo: &Geometry, groups: u32) -> Res
             let mut sums = get_mut(stage, b, 4)?;
             let (materials, photons) = (view(&materials), view(&photons));
             photon_view::photon_view(&p, &cam, materials, photons, &mut sums, geo);
+        }
+        "path_trace" => {
+            let p = param(stage, b, 0)?;
+            let cam = param(stage, b, 1)?;
+            let materials = get(stage, b, 2)?;
+            let lights = get(stage, b, 3)?;
+            let mut hdr = get_mut(stage, b, 4)?;
+            let (materials, lights) = (view(&materials), view(&lights));
+            path_trace::path_trace(&p, &cam, materials, lights, view_mut(&mut hdr), geo);
         }
         "direct_bake" => {
             let p = param(stage, b, 0)?;

@@ -15,6 +15,7 @@ pub mod grid_count;
 pub mod grid_distance;
 pub mod grid_rank;
 pub mod grid_scatter;
+pub mod path_trace;
 pub mod photon_resolve;
 pub mod photon_trace;
 pub mod photon_view;

@@ -7,7 +7,7 @@
 use glam::{Vec2, Vec3, Vec4};
 use rayon::prelude::*;
 
-use crate::shared::lights::{LightSample, MIN_ALPHA, area_point, sample_light};
+use crate::shared::lights::{LightSample, MIN_ALPHA, area_light_hit, area_point, sample_light};
 use crate::shared::rng::pcg_hash;
 use crate::shared::sampling::PI;
 use crate::shared::splat::{
@@ -97,18 +97,8 @@ fn emitted(
     let mut out = None;
     let mut t_near = t_surface;
     for l in lights.iter().take(params.light_count as usize) {
-        let axis = Vec3::from(l.direction);
-        let denom = d.dot(axis);
-        if l.kind != light_kind::AREA || !(denom < 0.0) {
-            continue;
-        }
-        let corner = Vec3::from(l.position);
-        let (eu, ev) = (Vec3::from(l.edge_u), Vec3::from(l.edge_v));
-        let t = (corner - eye).dot(axis) / denom;
-        let q = eye + t * d - corner;
-        let u = q.dot(eu) / eu.dot(eu);
-        let v = q.dot(ev) / ev.dot(ev);
-        if t > 0.0 && t < t_near && (0.0..=1.0).contains(&u) && (0.0..=1.0).contains(&v) {
+        let t = area_light_hit(l, eye, d);
+        if t > 0.0 && t < t_near {
             t_near = t;
             out = Some(Vec3::from(l.power) / (PI * l.area));
         }

@@ -1,5 +1,8 @@
 //! Twin of `wgsl/shared/lights.wgsl`: the irradiance one point of a light brings to a surface
-//! point, and the stratified points of an area light.
+//! point, the stratified points of an area light, and where a ray meets one.
+
+// `!(x < y)` is meant: NaN must fail these tests, as it does in the WGSL twin.
+#![allow(clippy::neg_cmp_op_on_partial_ord)]
 
 use glam::{Vec2, Vec3};
 
@@ -71,4 +74,24 @@ pub fn area_point(j: u32, n: u32, r: u32, jitter: bool) -> Vec2 {
         Vec2::splat(0.5)
     };
     (Vec2::new((j % n) as f32, (j / n) as f32) + o) * inv_n
+}
+
+/// Where ray `(o, d)` meets area light `l`'s emitting face: `t > 0`, or -1 when it misses it.
+pub fn area_light_hit(l: &Light, o: Vec3, d: Vec3) -> f32 {
+    let axis = Vec3::from(l.direction);
+    let denom = d.dot(axis);
+    if l.kind != light_kind::AREA || !(denom < 0.0) {
+        return -1.0;
+    }
+    let corner = Vec3::from(l.position);
+    let (eu, ev) = (Vec3::from(l.edge_u), Vec3::from(l.edge_v));
+    let t = (corner - o).dot(axis) / denom;
+    let q = o + t * d - corner;
+    let u = q.dot(eu) / eu.dot(eu);
+    let v = q.dot(ev) / ev.dot(ev);
+    if t > 0.0 && (0.0..=1.0).contains(&u) && (0.0..=1.0).contains(&v) {
+        t
+    } else {
+        -1.0
+    }
 }

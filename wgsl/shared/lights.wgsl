@@ -68,3 +68,17 @@ fn area_point(j: u32, n: u32, r: u32, jitter: bool) -> vec2<f32> {
     }
     return (vec2<f32>(f32(j % n), f32(j / n)) + o) * inv_n;
 }
+
+// Where ray (o, d) meets area light l's emitting face: t > 0, or -1 when it misses it (or
+// meets its back, which emits nothing).
+fn area_light_hit(l: Light, o: vec3<f32>, d: vec3<f32>) -> f32 {
+    let denom = dot(d, l.direction);
+    if l.kind != LIGHT_AREA || !(denom < 0.0) {
+        return -1.0;
+    }
+    let t = dot(l.position - o, l.direction) / denom;
+    let q = o + t * d - l.position;
+    let u = dot(q, l.edge_u) / dot(l.edge_u, l.edge_u);
+    let v = dot(q, l.edge_v) / dot(l.edge_v, l.edge_v);
+    return select(-1.0, t, t > 0.0 && u >= 0.0 && u <= 1.0 && v >= 0.0 && v <= 1.0);
+}

@@ -197,6 +197,17 @@ struct TileParams {
     entry_count: u32,
 }
 
+struct PathParams {
+    width: u32,
+    height: u32,
+    sample: u32,
+    seed: u32,
+    max_depth: u32,
+    light_count: u32,
+    _pad0: u32,
+    _pad1: u32,
+}
+
 struct DirectParams {
     splat_count: u32,
     light_count: u32,

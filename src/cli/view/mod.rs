@@ -401,6 +401,15 @@ impl State {
         Ok(Some(toned.rgba))
     }
 
+    /// The image on screen is final until something changes: the lobes' still image is
+    /// complete and no bake is running.
+    fn at_rest(&self) -> bool {
+        self.method == Method::Lobes
+            && self.spp > 0
+            && self.samples >= self.spp
+            && self.baking.is_none()
+    }
+
     fn title(&self, scene: &Scene) -> String {
         let light = match (&self.baking, self.bake_s) {
             (None, Some(s)) => format!("global illumination (baked in {s:.1} s)"),
@@ -565,7 +574,11 @@ impl App {
             event_loop.exit();
             return Ok(());
         }
-        state.window.request_redraw();
+        // A finished still image with nothing baking waits for input instead of drawing the
+        // same frame again (the event loop sleeps; `input` asks for the next frame).
+        if scripted || !state.at_rest() {
+            state.window.request_redraw();
+        }
         Ok(())
     }
 }
@@ -604,6 +617,9 @@ impl App {
         let Some(state) = self.state.as_mut() else {
             return Ok(());
         };
+        // Whatever the event changed shows in the next frame (a resting viewer draws none
+        // unasked).
+        state.window.request_redraw();
         match event {
             WindowEvent::Resized(size) => state.resize(size)?,
             WindowEvent::MouseInput {

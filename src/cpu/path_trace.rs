@@ -1,0 +1,192 @@
+//! Mirror of `wgsl/path_trace.wgsl`: one path-traced sample per pixel added to the running
+//! mean, with next-event estimation weighted against BRDF sampling by the power heuristic.
+// `!(x < y)` is meant: NaN must fail these tests, as it does in the WGSL twin.
+#![allow(clippy::neg_cmp_op_on_partial_ord)]
+
+use glam::{Vec2, Vec3, Vec4};
+use rayon::prelude::*;
+
+use crate::shared::lights::{MIN_ALPHA, area_light_hit, sample_light};
+use crate::shared::rng::{
+    RNG_BOUNCE_U, RNG_BOUNCE_V, RNG_EMIT_POS_U, RNG_EMIT_POS_V, RNG_ROULETTE, path_key, pcg_hash,
+    rand,
+};
+use crate::shared::sampling::{PI, frame_of, sample_cosine, to_world};
+use crate::shared::splat::{SHADOW_RAY_BUDGET, pixel_ray};
+use crate::shared::trace::{FAR, Geometry, trace_ray};
+use crate::shared::ward::{ward_pdf, ward_sample, ward_specular};
+use crate::types::{Camera, Light, Material, NO_SPLAT, PathParams, light_kind};
+
+pub const WG: u32 = 64;
+pub const RNG_LIGHT_U: u32 = 7;
+pub const RNG_LIGHT_V: u32 = 8;
+
+fn mean3(v: Vec3) -> f32 {
+    (v.x + v.y + v.z) * (1.0 / 3.0)
+}
+
+fn power_heuristic(a: f32, b: f32) -> f32 {
+    let a2 = a * a;
+    if a2 > 0.0 { a2 / (a2 + b * b) } else { 0.0 }
+}
+
+fn brdf_pdf(n: Vec3, wo: Vec3, wi: Vec3, pd: f32, ps: f32, alpha: f32) -> f32 {
+    let ci = n.dot(wi);
+    if !(ci > 0.0) {
+        return 0.0;
+    }
+    let mut pdf = pd * ci / PI;
+    if ps > 0.0 && alpha >= MIN_ALPHA {
+        pdf += ps * ward_pdf(n, wo, wi, alpha);
+    }
+    pdf
+}
+
+fn brdf(n: Vec3, wo: Vec3, wi: Vec3, rho_d: Vec3, m: &Material) -> Vec3 {
+    let mut f = rho_d / PI;
+    if m.roughness >= MIN_ALPHA {
+        f += Vec3::from(m.specular) * ward_specular(n, wi, wo, m.roughness);
+    }
+    f
+}
+
+/// One sample of pixel `i`.
+fn sample(
+    params: &PathParams,
+    cam: &Camera,
+    materials: &[Material],
+    lights: &[Light],
+    geo: &Geometry,
+    i: u32,
+) -> Vec3 {
+    let key = path_key(pcg_hash(params.seed.wrapping_add(params.sample)), i);
+    let px = Vec2::new((i % params.width) as f32, (i / params.width) as f32);
+    let jitter = Vec2::new(rand(key, 0, RNG_EMIT_POS_U), rand(key, 0, RNG_EMIT_POS_V));
+    let mut o = Vec3::from(cam.eye);
+    let mut d = pixel_ray(cam, px + jitter);
+    let mut throughput = Vec3::ONE;
+    let mut radiance = Vec3::ZERO;
+    let mut skip = NO_SPLAT;
+    let mut pdf_brdf = 0.0;
+    let lights = &lights[..params.light_count as usize];
+    for depth in 0..=params.max_depth {
+        let mut budget = SHADOW_RAY_BUDGET;
+        let hit = trace_ray(geo, o, d, skip, FAR, &mut budget);
+        let t_surface = if hit.splat == NO_SPLAT { FAR } else { hit.t };
+        let mut light_t = t_surface;
+        let mut seen = None;
+        for (li, l) in lights.iter().enumerate() {
+            let t = area_light_hit(l, o, d);
+            if t > 0.0 && t < light_t {
+                light_t = t;
+                seen = Some(li);
+            }
+        }
+        if let Some(li) = seen {
+            let l = &lights[li];
+            let mut w = 1.0;
+            if pdf_brdf > 0.0 {
+                let pdf_light = light_t * light_t / (l.area * -d.dot(Vec3::from(l.direction)));
+                w = power_heuristic(pdf_brdf, pdf_light);
+            }
+            radiance += throughput * (Vec3::from(l.power) / (PI * l.area)) * w;
+            break;
+        }
+        if hit.splat == NO_SPLAT || hit.aborted != 0 || depth == params.max_depth {
+            break;
+        }
+        let s = &geo.splats[hit.splat as usize];
+        let m = &materials[s.material as usize];
+        let p = o + hit.t * d;
+        let n = Vec3::from(s.normal);
+        let wo = -d;
+        let (rho_d, rho_s) = (Vec3::from(s.diffuse), Vec3::from(m.specular));
+        let (pd, ps) = (mean3(rho_d), mean3(rho_s));
+        for (li, l) in lights.iter().enumerate() {
+            let lkey = pcg_hash(key.wrapping_add(li as u32));
+            let (u, v) = (
+                rand(lkey, depth, RNG_LIGHT_U),
+                rand(lkey, depth, RNG_LIGHT_V),
+            );
+            let ls = sample_light(l, p, u, v);
+            let cos_i = n.dot(ls.wi);
+            if !(cos_i > 0.0) || ls.e.cmple(Vec3::ZERO).all() {
+                continue;
+            }
+            let mut shadow_budget = SHADOW_RAY_BUDGET;
+            let blocked = trace_ray(
+                geo,
+                p,
+                ls.wi,
+                hit.splat,
+                ls.dist * 0.999,
+                &mut shadow_budget,
+            );
+            if blocked.splat != NO_SPLAT {
+                continue;
+            }
+            let mut w = 1.0;
+            if l.kind == light_kind::AREA {
+                let pdf_light = ls.dist * ls.dist / (l.area * -ls.wi.dot(Vec3::from(l.direction)));
+                w = power_heuristic(pdf_light, brdf_pdf(n, wo, ls.wi, pd, ps, m.roughness));
+            }
+            radiance += throughput * brdf(n, wo, ls.wi, rho_d, m) * ls.e * (cos_i * w);
+        }
+        if depth + 1 == params.max_depth {
+            break;
+        }
+        let u = rand(key, depth + 1, RNG_ROULETTE);
+        let u1 = rand(key, depth + 1, RNG_BOUNCE_U);
+        let u2 = rand(key, depth + 1, RNG_BOUNCE_V);
+        let f = frame_of(n);
+        let wi;
+        if u < pd {
+            wi = to_world(&f, sample_cosine(u1, u2)).normalize();
+            throughput *= rho_d / pd;
+        } else if u < pd + ps {
+            let ws = ward_sample(&f, wo, u1, u2, m.roughness);
+            if !(ws.weight > 0.0) {
+                break;
+            }
+            wi = ws.wo.normalize();
+            throughput *= rho_s * (ws.weight / ps);
+        } else {
+            break;
+        }
+        let mirror = u >= pd && m.roughness < MIN_ALPHA;
+        pdf_brdf = if mirror {
+            0.0
+        } else {
+            brdf_pdf(n, wo, wi, pd, ps, m.roughness)
+        };
+        o = p;
+        d = wi;
+        skip = hit.splat;
+    }
+    radiance
+}
+
+/// Adds sample `params.sample` of every pixel to the running mean in `hdr`.
+pub fn path_trace(
+    params: &PathParams,
+    cam: &Camera,
+    materials: &[Material],
+    lights: &[Light],
+    hdr: &mut [[f32; 4]],
+    geo: &Geometry,
+) {
+    let pixels = (params.width * params.height) as usize;
+    hdr[..pixels]
+        .par_iter_mut()
+        .enumerate()
+        .for_each(|(i, px)| {
+            let c = sample(params, cam, materials, lights, geo, i as u32).extend(1.0);
+            *px = if params.sample == 0 {
+                c
+            } else {
+                let mean = Vec4::from(*px);
+                mean + (c - mean) * (1.0 / (params.sample + 1) as f32)
+            }
+            .to_array();
+        });
+}

@@ -1,0 +1,168 @@
+// The path tracer (docs/design.md section 10): ground truth of the same splat scene, with the
+// same Ward BRDF, lights and path length as the bake. One invocation per pixel adds one sample
+// to the running mean of the image: a uniformly jittered view ray through the splat grid, at
+// each surface vertex next-event estimation of every light (area lights sampled uniformly,
+// weighted against BRDF sampling by the power heuristic), then a BRDF sample chosen as the
+// photons choose theirs (diffuse with probability mean(rho_d), Ward with mean(rho_s), else
+// the path ends: Russian roulette by albedo). A BRDF-sampled ray that meets an area light
+// adds its radiance with the other MIS weight. CPU mirror: src/cpu/path_trace.rs.
+
+// #import types
+// #import dispatch
+// #import rng
+// #import splat
+// #import trace
+// #import lights
+
+@group(0) @binding(0) var<uniform> params: PathParams;
+@group(0) @binding(1) var<uniform> cam: Camera;
+@group(0) @binding(2) var<storage, read> materials: array<Material>;
+@group(0) @binding(3) var<storage, read> lights: array<Light>;
+@group(0) @binding(4) var<storage, read_write> hdr: array<vec4<f32>>;
+
+const WG: u32 = 64u;
+
+// Random numbers of a light's sample at a vertex: purposes after the photon tracer's.
+const RNG_LIGHT_U: u32 = 7u;
+const RNG_LIGHT_V: u32 = 8u;
+
+fn mean3(v: vec3<f32>) -> f32 {
+    return (v.x + v.y + v.z) * (1.0 / 3.0);
+}
+
+// The power heuristic's weight of a strategy of pdf a against one of pdf b.
+fn power_heuristic(a: f32, b: f32) -> f32 {
+    let a2 = a * a;
+    return select(0.0, a2 / (a2 + b * b), a2 > 0.0);
+}
+
+// The pdf (solid angle) of choosing wi by the BRDF sampling below, from wo.
+fn brdf_pdf(n: vec3<f32>, wo: vec3<f32>, wi: vec3<f32>, pd: f32, ps: f32, alpha: f32) -> f32 {
+    let ci = dot(n, wi);
+    if !(ci > 0.0) {
+        return 0.0;
+    }
+    var pdf = pd * ci / PI;
+    if ps > 0.0 && alpha >= MIN_ALPHA {
+        pdf += ps * ward_pdf(n, wo, wi, alpha);
+    }
+    return pdf;
+}
+
+fn brdf(n: vec3<f32>, wo: vec3<f32>, wi: vec3<f32>, rho_d: vec3<f32>, m: Material) -> vec3<f32> {
+    var f = rho_d / PI;
+    if m.roughness >= MIN_ALPHA {
+        f += m.specular * ward_specular(n, wi, wo, m.roughness);
+    }
+    return f;
+}
+
+@compute @workgroup_size(64)
+fn main(@builtin(workgroup_id) wg: vec3<u32>, @builtin(num_workgroups) num_wg: vec3<u32>,
+        @builtin(local_invocation_index) lid: u32) {
+    let i = linear_workgroup(wg, num_wg) * WG + lid;
+    if i >= params.width * params.height {
+        return;
+    }
+    let key = path_key(pcg_hash(params.seed + params.sample), i);
+    let px = vec2<f32>(f32(i % params.width), f32(i / params.width));
+    let jitter = vec2<f32>(rand(key, 0u, RNG_EMIT_POS_U), rand(key, 0u, RNG_EMIT_POS_V));
+    var o = cam.eye;
+    var d = pixel_ray(cam, px + jitter);
+    var throughput = vec3<f32>(1.0);
+    var radiance = vec3<f32>(0.0);
+    var skip = NO_SPLAT;
+    // The pdf of the BRDF sample that chose d (0: the camera's ray, which sees lights whole).
+    var pdf_brdf = 0.0;
+    for (var depth = 0u; depth <= params.max_depth; depth++) {
+        var budget = SHADOW_RAY_BUDGET;
+        let hit = trace_ray(o, d, skip, FAR, &budget);
+        let t_surface = select(hit.t, FAR, hit.splat == NO_SPLAT);
+        // An area light in front of the surface ends the path with its radiance.
+        var light_t = t_surface;
+        var seen = NO_SPLAT;
+        for (var li = 0u; li < params.light_count; li++) {
+            let t = area_light_hit(lights[li], o, d);
+            if t > 0.0 && t < light_t {
+                light_t = t;
+                seen = li;
+            }
+        }
+        if seen != NO_SPLAT {
+            let l = lights[seen];
+            var w = 1.0;
+            if pdf_brdf > 0.0 {
+                let pdf_light = light_t * light_t / (l.area * -dot(d, l.direction));
+                w = power_heuristic(pdf_brdf, pdf_light);
+            }
+            radiance += throughput * (l.power / (PI * l.area)) * w;
+            break;
+        }
+        if hit.splat == NO_SPLAT || hit.aborted != 0u || depth == params.max_depth {
+            break;
+        }
+        let s = splats[hit.splat];
+        let m = materials[s.material];
+        let p = o + hit.t * d;
+        let n = s.normal;
+        let wo = -d;
+        let pd = mean3(s.diffuse);
+        let ps = mean3(m.specular);
+        // Next-event estimation of every light.
+        for (var li = 0u; li < params.light_count; li++) {
+            let l = lights[li];
+            let lkey = pcg_hash(key + li);
+            let ls = sample_light(l, p, rand(lkey, depth, RNG_LIGHT_U), rand(lkey, depth, RNG_LIGHT_V));
+            let cos_i = dot(n, ls.wi);
+            if !(cos_i > 0.0) || all(ls.e <= vec3<f32>(0.0)) {
+                continue;
+            }
+            var shadow_budget = SHADOW_RAY_BUDGET;
+            let blocked = trace_ray(p, ls.wi, hit.splat, ls.dist * 0.999, &shadow_budget);
+            if blocked.splat != NO_SPLAT {
+                continue;
+            }
+            var w = 1.0;
+            if l.kind == LIGHT_AREA {
+                let pdf_light = ls.dist * ls.dist / (l.area * -dot(ls.wi, l.direction));
+                w = power_heuristic(pdf_light, brdf_pdf(n, wo, ls.wi, pd, ps, m.roughness));
+            }
+            radiance += throughput * brdf(n, wo, ls.wi, s.diffuse, m) * ls.e * (cos_i * w);
+        }
+        if depth + 1u == params.max_depth {
+            break;
+        }
+        // The next direction, as a photon would bounce.
+        let u = rand(key, depth + 1u, RNG_ROULETTE);
+        let u1 = rand(key, depth + 1u, RNG_BOUNCE_U);
+        let u2 = rand(key, depth + 1u, RNG_BOUNCE_V);
+        let f = frame_of(n);
+        var wi: vec3<f32>;
+        if u < pd {
+            wi = normalize(to_world(f, sample_cosine(u1, u2)));
+            throughput *= s.diffuse / pd;
+        } else if u < pd + ps {
+            let ws = ward_sample(f, wo, u1, u2, m.roughness);
+            if !(ws.weight > 0.0) {
+                break;
+            }
+            wi = normalize(ws.wo);
+            throughput *= m.specular * (ws.weight / ps);
+        } else {
+            break;
+        }
+        // A mirror-like Ward sample (alpha below MIN_ALPHA) has no pdf to weigh against: next
+        // events skip it, so a light it meets counts in full.
+        let mirror = u >= pd && m.roughness < MIN_ALPHA;
+        pdf_brdf = select(brdf_pdf(n, wo, wi, pd, ps, m.roughness), 0.0, mirror);
+        o = p;
+        d = wi;
+        skip = hit.splat;
+    }
+    let out = vec4<f32>(radiance, 1.0);
+    if params.sample == 0u {
+        hdr[i] = out;
+    } else {
+        hdr[i] += (out - hdr[i]) * (1.0 / f32(params.sample + 1u));
+    }
+}
