@@ -26,10 +26,6 @@ const WG: u32 = 64u;
 const RNG_LIGHT_U: u32 = 7u;
 const RNG_LIGHT_V: u32 = 8u;
 
-fn mean3(v: vec3<f32>) -> f32 {
-    return (v.x + v.y + v.z) * (1.0 / 3.0);
-}
-
 // The power heuristic's weight of a strategy of pdf a against one of pdf b.
 fn power_heuristic(a: f32, b: f32) -> f32 {
     let a2 = a * a;
@@ -112,7 +108,8 @@ fn main(@builtin(workgroup_id) wg: vec3<u32>, @builtin(num_workgroups) num_wg: v
         for (var li = 0u; li < params.light_count; li++) {
             let l = lights[li];
             let lkey = pcg_hash(key + li);
-            let ls = sample_light(l, p, rand(lkey, depth, RNG_LIGHT_U), rand(lkey, depth, RNG_LIGHT_V));
+            let uv = vec2<f32>(rand(lkey, depth, RNG_LIGHT_U), rand(lkey, depth, RNG_LIGHT_V));
+            let ls = sample_light(l, p, uv.x, uv.y);
             let cos_i = dot(n, ls.wi);
             if !(cos_i > 0.0) || all(ls.e <= vec3<f32>(0.0)) {
                 continue;
@@ -137,23 +134,15 @@ fn main(@builtin(workgroup_id) wg: vec3<u32>, @builtin(num_workgroups) num_wg: v
         let u1 = rand(key, depth + 1u, RNG_BOUNCE_U);
         let u2 = rand(key, depth + 1u, RNG_BOUNCE_V);
         let f = frame_of(n);
-        var wi: vec3<f32>;
-        if u < pd {
-            wi = normalize(to_world(f, sample_cosine(u1, u2)));
-            throughput *= s.diffuse / pd;
-        } else if u < pd + ps {
-            let ws = ward_sample(f, wo, u1, u2, m.roughness);
-            if !(ws.weight > 0.0) {
-                break;
-            }
-            wi = normalize(ws.wo);
-            throughput *= m.specular * (ws.weight / ps);
-        } else {
+        let next = sample_bounce(f, wo, s.diffuse, m.specular, m.roughness, u, u1, u2);
+        if !next.alive {
             break;
         }
+        let wi = next.dir;
+        throughput *= next.weight;
         // A mirror-like Ward sample (alpha below MIN_ALPHA) has no pdf to weigh against: next
         // events skip it, so a light it meets counts in full.
-        let mirror = u >= pd && m.roughness < MIN_ALPHA;
+        let mirror = next.specular && m.roughness < MIN_ALPHA;
         pdf_brdf = select(brdf_pdf(n, wo, wi, pd, ps, m.roughness), 0.0, mirror);
         o = p;
         d = wi;

@@ -90,10 +90,6 @@ fn store(p: Photon) {
     }
 }
 
-fn mean3(v: vec3<f32>) -> f32 {
-    return (v.x + v.y + v.z) * (1.0 / 3.0);
-}
-
 @compute @workgroup_size(64)
 fn main(@builtin(workgroup_id) wg: vec3<u32>, @builtin(num_workgroups) num_wg: vec3<u32>,
         @builtin(local_invocation_index) lid: u32) {
@@ -129,27 +125,17 @@ fn main(@builtin(workgroup_id) wg: vec3<u32>, @builtin(num_workgroups) num_wg: v
             break;
         }
         let m = materials[s.material];
-        let pd = mean3(s.diffuse);
-        let ps = mean3(m.specular);
         let u = rand(key, bounce, RNG_ROULETTE);
         let u1 = rand(key, bounce, RNG_BOUNCE_U);
         let u2 = rand(key, bounce, RNG_BOUNCE_V);
         let f = frame_of(s.normal);
-        if u < pd {
-            d = normalize(to_world(f, sample_cosine(u1, u2)));
-            power = power * (s.diffuse / pd);
-        } else if u < pd + ps {
-            let ws = ward_sample(f, wi, u1, u2, m.roughness);
-            if !(ws.weight > 0.0) {
-                atomicAdd(&counters.absorbed, 1u);
-                return;
-            }
-            d = normalize(ws.wo);
-            power = power * (m.specular * (ws.weight / ps));
-        } else {
+        let next = sample_bounce(f, wi, s.diffuse, m.specular, m.roughness, u, u1, u2);
+        if !next.alive {
             atomicAdd(&counters.absorbed, 1u);
             return;
         }
+        d = next.dir;
+        power = power * next.weight;
         o = p;
         skip = hit.splat;
     }

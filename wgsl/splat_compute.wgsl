@@ -30,7 +30,8 @@ fn main(@builtin(workgroup_id) wg: vec3<u32>, @builtin(num_workgroups) num_wg: v
     if t >= tiles.tiles_x * tiles.tiles_y {
         return;
     }
-    let px = vec2<u32>((t % tiles.tiles_x) * TILE + lid % TILE, (t / tiles.tiles_x) * TILE + lid / TILE);
+    let corner = vec2<u32>(t % tiles.tiles_x, t / tiles.tiles_x) * TILE;
+    let px = corner + vec2<u32>(lid % TILE, lid / TILE);
     let size = vec2<u32>(cam.size);
     if px.x >= size.x || px.y >= size.y {
         return;

@@ -11,19 +11,15 @@ use crate::shared::rng::{
     RNG_BOUNCE_U, RNG_BOUNCE_V, RNG_EMIT_POS_U, RNG_EMIT_POS_V, RNG_ROULETTE, path_key, pcg_hash,
     rand,
 };
-use crate::shared::sampling::{PI, frame_of, sample_cosine, to_world};
+use crate::shared::sampling::{PI, frame_of};
 use crate::shared::splat::{SHADOW_RAY_BUDGET, pixel_ray};
 use crate::shared::trace::{FAR, Geometry, trace_ray};
-use crate::shared::ward::{ward_pdf, ward_sample, ward_specular};
+use crate::shared::ward::{mean3, sample_bounce, ward_pdf, ward_specular};
 use crate::types::{Camera, Light, Material, NO_SPLAT, PathParams, light_kind};
 
 pub const WG: u32 = 64;
 pub const RNG_LIGHT_U: u32 = 7;
 pub const RNG_LIGHT_V: u32 = 8;
-
-fn mean3(v: Vec3) -> f32 {
-    (v.x + v.y + v.z) * (1.0 / 3.0)
-}
 
 fn power_heuristic(a: f32, b: f32) -> f32 {
     let a2 = a * a;
@@ -138,22 +134,13 @@ fn sample(
         let u = rand(key, depth + 1, RNG_ROULETTE);
         let u1 = rand(key, depth + 1, RNG_BOUNCE_U);
         let u2 = rand(key, depth + 1, RNG_BOUNCE_V);
-        let f = frame_of(n);
-        let wi;
-        if u < pd {
-            wi = to_world(&f, sample_cosine(u1, u2)).normalize();
-            throughput *= rho_d / pd;
-        } else if u < pd + ps {
-            let ws = ward_sample(&f, wo, u1, u2, m.roughness);
-            if !(ws.weight > 0.0) {
-                break;
-            }
-            wi = ws.wo.normalize();
-            throughput *= rho_s * (ws.weight / ps);
-        } else {
+        let next = sample_bounce(&frame_of(n), wo, rho_d, rho_s, m.roughness, u, u1, u2);
+        if !next.alive {
             break;
         }
-        let mirror = u >= pd && m.roughness < MIN_ALPHA;
+        let wi = next.dir;
+        throughput *= next.weight;
+        let mirror = next.specular && m.roughness < MIN_ALPHA;
         pdf_brdf = if mirror {
             0.0
         } else {

@@ -10,7 +10,7 @@ use rayon::prelude::*;
 use crate::shared::rng::*;
 use crate::shared::sampling::*;
 use crate::shared::trace::{FAR, Geometry, trace_ray};
-use crate::shared::ward::ward_sample;
+use crate::shared::ward;
 use crate::types::{Emitter, Material, NO_SPLAT, Photon, TraceCounters, TraceParams, light_kind};
 
 pub const WG: u32 = 64;
@@ -74,10 +74,6 @@ fn emit(params: &TraceParams, emitters: &[Emitter], path: u32, key: u32) -> Emis
     }
 }
 
-fn mean3(v: Vec3) -> f32 {
-    (v.x + v.y + v.z) * (1.0 / 3.0)
-}
-
 /// How a path ended, one counter each.
 enum End {
     Escaped,
@@ -128,25 +124,16 @@ fn trace_path(
         let m = &materials[s.material as usize];
         let diffuse = Vec3::from(s.diffuse);
         let specular = Vec3::from(m.specular);
-        let pd = mean3(diffuse);
-        let ps = mean3(specular);
         let u = rand(key, bounce, RNG_ROULETTE);
         let u1 = rand(key, bounce, RNG_BOUNCE_U);
         let u2 = rand(key, bounce, RNG_BOUNCE_V);
         let f = frame_of(Vec3::from(s.normal));
-        if u < pd {
-            d = to_world(&f, sample_cosine(u1, u2)).normalize();
-            power *= diffuse / pd;
-        } else if u < pd + ps {
-            let ws = ward_sample(&f, wi, u1, u2, m.roughness);
-            if !(ws.weight > 0.0) {
-                return End::Absorbed;
-            }
-            d = ws.wo.normalize();
-            power *= specular * (ws.weight / ps);
-        } else {
+        let next = ward::sample_bounce(&f, wi, diffuse, specular, m.roughness, u, u1, u2);
+        if !next.alive {
             return End::Absorbed;
         }
+        d = next.dir;
+        power *= next.weight;
         o = p;
         skip = hit.splat;
     }

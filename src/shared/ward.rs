@@ -5,7 +5,7 @@
 
 use glam::Vec3;
 
-use super::sampling::{Frame, PI, to_world};
+use super::sampling::{Frame, PI, sample_cosine, to_world};
 
 /// tan² of the angle between unit `n` and `h` (`ch = n·h`): |n × h|² / ch², not
 /// (1 − ch²) / ch², which cancels in f32 for the narrow lobes of sharp gloss.
@@ -84,4 +84,52 @@ pub fn ward_sample(f: &Frame, wi: Vec3, u1: f32, u2: f32, alpha: f32) -> WardSam
         wo,
         weight: if ok { co / (hi * ch) } else { 0.0 },
     }
+}
+
+pub fn mean3(v: Vec3) -> f32 {
+    (v.x + v.y + v.z) * (1.0 / 3.0)
+}
+
+/// The next direction from a surface hit from `wi`, as photons bounce and camera paths
+/// follow: diffuse with probability mean(ρd), the Ward lobe with mean(ρs), else none.
+pub struct Bounce {
+    pub dir: Vec3,
+    pub weight: Vec3,
+    pub alive: bool,
+    pub specular: bool,
+}
+
+#[allow(clippy::too_many_arguments)]
+pub fn sample_bounce(
+    f: &Frame,
+    wi: Vec3,
+    rho_d: Vec3,
+    rho_s: Vec3,
+    alpha: f32,
+    u: f32,
+    u1: f32,
+    u2: f32,
+) -> Bounce {
+    let pd = mean3(rho_d);
+    let ps = mean3(rho_s);
+    let mut b = Bounce {
+        dir: Vec3::ZERO,
+        weight: Vec3::ZERO,
+        alive: false,
+        specular: false,
+    };
+    if u < pd {
+        b.dir = to_world(f, sample_cosine(u1, u2)).normalize();
+        b.weight = rho_d / pd;
+        b.alive = true;
+    } else if u < pd + ps {
+        b.specular = true;
+        let ws = ward_sample(f, wi, u1, u2, alpha);
+        if ws.weight > 0.0 {
+            b.dir = ws.wo.normalize();
+            b.weight = rho_s * (ws.weight / ps);
+            b.alive = true;
+        }
+    }
+    b
 }

@@ -71,3 +71,43 @@ fn ward_sample(f: Frame, wi: vec3<f32>, u1: f32, u2: f32, alpha: f32) -> WardSam
     s.weight = select(0.0, co / (hi * ch), co > 0.0 && hi > 0.0 && ci > 0.0);
     return s;
 }
+
+fn mean3(v: vec3<f32>) -> f32 {
+    return (v.x + v.y + v.z) * (1.0 / 3.0);
+}
+
+// The next direction from a surface hit from wi, as photons bounce and camera paths follow:
+// diffuse (cosine-weighted) with probability mean(rho_d), the Ward lobe with mean(rho_s),
+// else none (Russian roulette by albedo). `weight` is what the carried power or throughput is
+// multiplied by.
+struct Bounce {
+    dir: vec3<f32>,
+    weight: vec3<f32>,
+    // False when the path ends here: roulette, or a Ward sample below the surface.
+    alive: bool,
+    // The Ward lobe was chosen.
+    specular: bool,
+}
+
+fn sample_bounce(f: Frame, wi: vec3<f32>, rho_d: vec3<f32>, rho_s: vec3<f32>, alpha: f32,
+                 u: f32, u1: f32, u2: f32) -> Bounce {
+    let pd = mean3(rho_d);
+    let ps = mean3(rho_s);
+    var b: Bounce;
+    b.alive = false;
+    b.specular = false;
+    if u < pd {
+        b.dir = normalize(to_world(f, sample_cosine(u1, u2)));
+        b.weight = rho_d / pd;
+        b.alive = true;
+    } else if u < pd + ps {
+        b.specular = true;
+        let ws = ward_sample(f, wi, u1, u2, alpha);
+        if ws.weight > 0.0 {
+            b.dir = normalize(ws.wo);
+            b.weight = rho_s * (ws.weight / ps);
+            b.alive = true;
+        }
+    }
+    return b;
+}
