@@ -115,6 +115,7 @@ impl FrameRenderer {
     /// and waits; returns its milliseconds.
     pub fn bake_direct(&mut self, gpu: &Gpu, scene: &Scene) -> Result<f64> {
         let start = std::time::Instant::now();
+        self.set_lights(gpu, scene)?;
         let params = direct_params(scene);
         let mut encoder = gpu.encoder("direct bake");
         let mut ex = GpuExecutor::new(gpu, &mut encoder).tracing(&self.on_gpu);
@@ -336,6 +337,7 @@ impl FrameRenderer {
         mut each: impl FnMut(u32),
     ) -> Result<&FrameTargets> {
         self.resize(gpu, view.width, view.height)?;
+        self.set_lights(gpu, scene)?;
         let cam = camera_uniform(view, scene.bounds(), &FrameConfig::default());
         let cam_buf = gpu.uniform("camera", &cam);
         let targets = self
