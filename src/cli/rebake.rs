@@ -15,7 +15,9 @@ use crate::cli::view::{move_first_light, passes};
 use crate::cpu;
 use crate::em::LobeMap;
 use crate::error::{Error, Result};
-use crate::frame::{FrameConfig, camera_uniform, cpu_direct, cpu_frame, shade_params};
+use crate::frame::{
+    DirectMap, FrameConfig, camera_uniform, cpu_direct, cpu_frame_into, shade_params,
+};
 use crate::gpu::Gpu;
 use crate::grid::SplatGrid;
 use crate::photons::ms_since;
@@ -55,7 +57,8 @@ pub struct RebakeBench {
 /// Where it runs: the device with the scene on it, or the CPU mirror with its grid.
 enum Place<'a> {
     Gpu(&'a Gpu, Box<FrameRenderer>),
-    Cpu(SplatGrid),
+    /// The grid, and the direct bake of the lights as they last moved.
+    Cpu(SplatGrid, DirectMap),
 }
 
 impl Place<'_> {
@@ -64,7 +67,7 @@ impl Place<'_> {
         let t = Instant::now();
         let device = match self {
             Place::Gpu(gpu, renderer) => BakeDevice::Gpu(gpu, &renderer.on_gpu),
-            Place::Cpu(grid) => BakeDevice::Cpu(grid),
+            Place::Cpu(grid, _) => BakeDevice::Cpu(grid),
         };
         let lobes = bake(scene, device, &quiet)?.lobes;
         Ok((lobes, ms_since(t)))
@@ -75,12 +78,9 @@ impl Place<'_> {
         let t = Instant::now();
         match self {
             Place::Gpu(gpu, renderer) => {
-                renderer.set_lights(gpu, scene)?;
                 renderer.bake_direct(gpu, scene)?;
             }
-            Place::Cpu(grid) => {
-                cpu_direct(scene, grid)?;
-            }
+            Place::Cpu(grid, direct) => *direct = cpu_direct(scene, grid)?,
         }
         Ok(ms_since(t))
     }
@@ -95,10 +95,12 @@ impl Place<'_> {
                 renderer.draw(gpu, scene, &view, &cfg)?;
                 renderer.read_hdr(gpu)
             }
-            Place::Cpu(grid) => {
+            Place::Cpu(grid, direct) => {
                 let cam = camera_uniform(&view, scene.bounds(), &cfg);
                 let params = shade_params(scene, lobes, &cfg);
-                cpu_frame(scene, grid, lobes, &cam, &params)
+                let mut hdr = vec![[0.0; 4]; (IMAGE.0 * IMAGE.1) as usize];
+                cpu_frame_into(scene, grid, lobes, direct, &cam, &params, &mut hdr);
+                Ok(hdr)
             }
         }
     }
@@ -123,7 +125,8 @@ pub fn rebake(scene: &Scene, gpu: Option<&Gpu>) -> Result<RebakeBench> {
             let grid = cpu::scene_grid(scene)?;
             let threads = rayon::current_num_threads();
             let adapter = format!("CPU mirror ({threads} threads)");
-            (Place::Cpu(grid), adapter, "cpu".to_string())
+            let direct = cpu_direct(scene, &grid)?;
+            (Place::Cpu(grid, direct), adapter, "cpu".to_string())
         }
     };
     let grid_ms = ms_since(t);

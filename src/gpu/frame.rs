@@ -47,6 +47,25 @@ pub struct SceneBuffers<'a> {
     pub geometry: [&'a wgpu::Buffer; 5],
 }
 
+impl<'a> SceneBuffers<'a> {
+    /// Bindings 0–9 of the passes that shade fragments (`splat_attributes`, `splat_compute`):
+    /// the camera and the splats, then the eight `wgsl/shared/splat_shading.wgsl` declares.
+    fn shading(&self, cam: &'a wgpu::Buffer, params: &'a wgpu::Buffer) -> [&'a wgpu::Buffer; 10] {
+        [
+            cam,
+            self.splats,
+            params,
+            self.materials,
+            self.splat_light,
+            self.lobes,
+            self.lobe_norms,
+            self.lights,
+            self.direct,
+            self.visibility,
+        ]
+    }
+}
+
 /// The passes of a frame, in order.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub enum SplatPass {
@@ -543,21 +562,8 @@ impl SplatPipelines {
             ));
         };
         let tile_params = gpu.uniform("tile params", &lists.params);
-        let buffers = [
-            &uniforms.cam,
-            scene.splats,
-            &uniforms.params,
-            scene.materials,
-            scene.splat_light,
-            scene.lobes,
-            scene.lobe_norms,
-            scene.lights,
-            scene.direct,
-            scene.visibility,
-            &tile_params,
-            &lists.start,
-            &lists.splats,
-        ];
+        let mut buffers = scene.shading(&uniforms.cam, &uniforms.params).to_vec();
+        buffers.extend([&tile_params, &lists.start, &lists.splats]);
         let mut entries = buffer_entries(&buffers);
         entries.extend(
             out.sums
@@ -635,23 +641,13 @@ impl SplatPipelines {
                 DIRECT_BAKED => &self.attributes_baked,
                 _ => &self.attributes,
             };
-            let all = [
-                cam_buf,
-                scene.splats,
-                params_buf,
-                scene.materials,
-                scene.splat_light,
-                scene.lobes,
-                scene.lobe_norms,
-                scene.lights,
-                scene.direct,
-                scene.visibility,
-            ];
-            // `fs_main` reads none of the direct bake's bindings, so its layout has none.
+            let all = scene.shading(cam_buf, params_buf);
+            // `fs_main` reads none of the direct bake's bindings (the lights, the bake's two
+            // buffers), so its derived layout has none.
             let used = if uniforms.direct == DIRECT_BAKED {
-                10
+                all.len()
             } else {
-                7
+                all.len() - 3
             };
             let attr_group = buffers(pipeline, &all[..used]);
             let mut color = out.cleared_sums();
