@@ -219,8 +219,8 @@ pub fn cpu_direct(scene: &Scene, grid: &SplatGrid) -> Result<DirectMap> {
 }
 
 /// The path tracer's uniform for sample `sample` of an image `cam.size`, with the bake's path
-/// length and seed.
-pub fn path_params(scene: &Scene, cam: &Camera, sample: u32) -> PathParams {
+/// length and seed, showing the light terms `show` (`FrameConfig::show`).
+pub fn path_params(scene: &Scene, cam: &Camera, sample: u32, show: u32) -> PathParams {
     PathParams {
         width: cam.size[0] as u32,
         height: cam.size[1] as u32,
@@ -228,12 +228,20 @@ pub fn path_params(scene: &Scene, cam: &Camera, sample: u32) -> PathParams {
         seed: scene.bake.seed,
         max_depth: scene.bake.max_depth,
         light_count: scene.lights.len() as u32,
+        show,
         ..Default::default()
     }
 }
 
-/// The path-traced image of `cam` on the CPU mirror: `spp` samples per pixel, averaged.
-pub fn cpu_path(scene: &Scene, grid: &SplatGrid, cam: &Camera, spp: u32) -> Result<Vec<[f32; 4]>> {
+/// The path-traced image of `cam` on the CPU mirror: `spp` samples per pixel, averaged, of
+/// the light terms `show`.
+pub fn cpu_path(
+    scene: &Scene,
+    grid: &SplatGrid,
+    cam: &Camera,
+    show: u32,
+    spp: u32,
+) -> Result<Vec<[f32; 4]>> {
     let geo = Geometry {
         grid,
         splats: &scene.splats,
@@ -245,7 +253,7 @@ pub fn cpu_path(scene: &Scene, grid: &SplatGrid, cam: &Camera, spp: u32) -> Resu
     let lights = ex.upload("lights", &scene.lights)?;
     let hdr = ex.zeroed("path image", pixels.max(1) as u64 * 16)?;
     for k in 0..spp.max(1) {
-        let params = path_params(scene, cam, k);
+        let params = path_params(scene, cam, k, show);
         crate::sequence::path_sample(&mut ex, &params, &cam_buf, &materials, &lights, &hdr)?;
     }
     ex.read(&hdr, pixels)

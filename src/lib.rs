@@ -11,7 +11,8 @@
 //!   host-side data);
 //! - `scene` (the scene file, procedural shapes and model files) and `camera`;
 //! - `sequence` (each multi-dispatch stage's dispatches, written once), run by `cpu` (the
-//!   mirrors) and `gpu` (the device host); `frame` (what a frame draws);
+//!   mirrors) and `gpu` (the device host); `frame` (what a frame draws); `objects` (which
+//!   surface each pixel shows);
 //! - `bake` (photons → bins → lobes on either), `cache` (a bake on disk) and `renderer` (the
 //!   device's frame: bake, draw from a view, tone map, read back);
 //! - `cli` (feature `app`): the `lobelight` commands.
@@ -40,6 +41,7 @@ pub mod error;
 pub mod frame;
 pub mod gpu;
 pub mod grid;
+pub mod objects;
 pub mod photons;
 pub mod renderer;
 pub mod scene;

@@ -326,13 +326,14 @@ impl FrameRenderer {
     }
 
     /// The path-traced image of `view` (`sequence::path_sample`): `spp` samples per pixel, one
-    /// submission each, with `each(k)` called after sample `k`. Needs no bake; the HDR image
-    /// holds their mean.
+    /// submission each, with `each(k)` called after sample `k`, of the light terms `show`
+    /// (`FrameConfig::show`). Needs no bake; the HDR image holds their mean.
     pub fn draw_path(
         &mut self,
         gpu: &Gpu,
         scene: &Scene,
         view: &View,
+        show: u32,
         spp: u32,
         mut each: impl FnMut(u32),
     ) -> Result<&FrameTargets> {
@@ -347,7 +348,7 @@ impl FrameRenderer {
         for k in 0..spp.max(1) {
             let mut encoder = gpu.encoder("path sample");
             let mut ex = GpuExecutor::new(gpu, &mut encoder).tracing(&self.on_gpu);
-            let params = path_params(scene, &cam, k);
+            let params = path_params(scene, &cam, k, show);
             let (materials, lights) = (&self.on_gpu.materials, &self.frame_scene.lights);
             path_sample(&mut ex, &params, &cam_buf, materials, lights, &targets.hdr)?;
             gpu.submit_and_wait(encoder)?;

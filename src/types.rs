@@ -14,7 +14,9 @@ pub struct Splat {
     pub normal: [f32; 3],
     pub material: u32,
     pub diffuse: [f32; 3],
-    pub _pad: u32,
+    /// The scene surface it belongs to, an index into `Scene::surfaces`: what an object-ID
+    /// image names, so that errors can be measured per object.
+    pub object: u32,
 }
 
 /// Isotropic Ward material (docs/design.md §3): the specular part; the diffuse albedo lives per splat.
@@ -361,7 +363,8 @@ pub struct PathParams {
     /// Surface vertices a path may have (the bake's `max_depth`).
     pub max_depth: u32,
     pub light_count: u32,
-    pub _pad0: u32,
+    /// Which light terms to show (`shared::splat::SHOW_*` bits, split as path_trace.wgsl says).
+    pub show: u32,
     pub _pad1: u32,
 }
 

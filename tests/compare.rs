@@ -104,3 +104,44 @@ fn images_of_different_sizes_are_an_error() {
     let e = difference(&constant(1.0), &constant(1.0)[..10]).unwrap_err();
     assert!(e.to_string().contains("differ in size"), "{e}");
 }
+
+/// Per-object figures: an image brighter by 10 % on one object's pixels only shows that
+/// object's bias as +10 % and the others' as none; edge and empty pixels count for no object.
+#[test]
+fn per_object_figures_see_one_object_alone() {
+    use lobelight::cli::compare::per_object;
+    use lobelight::objects::{MIXED, NONE, id_of};
+    let b = ramp();
+    // Left half surface 0, right half surface 1, the first column empty, the last mixed.
+    let ids: Vec<u16> = (0..W * H)
+        .map(|i| match i % W {
+            0 => NONE,
+            x if x == W - 1 => MIXED,
+            x if x < W / 2 => id_of(0),
+            _ => id_of(1),
+        })
+        .collect();
+    let a: Vec<[f32; 4]> = b
+        .iter()
+        .zip(&ids)
+        .map(|(p, &id)| {
+            let k = if id == id_of(1) || id == MIXED {
+                1.1
+            } else {
+                1.0
+            };
+            [p[0] * k, p[1] * k, p[2] * k, 1.0]
+        })
+        .collect();
+    let names = vec!["left".to_string(), "right".to_string()];
+    let objects = per_object(&a, &b, &ids, &names).unwrap();
+    assert_eq!(objects.len(), 2);
+    assert_eq!(objects[0].name, "left");
+    assert_eq!(objects[0].pixels as u32, (W / 2 - 1) * H);
+    assert_eq!(objects[1].pixels as u32, (W / 2 - 1) * H);
+    assert_eq!(objects[0].bias, 0.0);
+    assert_eq!(objects[0].rel_mse, 0.0);
+    assert!((objects[1].bias - 0.1).abs() < 1e-6, "{}", objects[1].bias);
+    assert!(objects[1].rel_mse > 0.0);
+    assert!(per_object(&a, &b, &ids[1..], &names).is_err());
+}

@@ -61,7 +61,7 @@ impl Fixture {
                     normal: [0.0, 0.0, 1.0],
                     material: 0,
                     diffuse: [0.3; 3],
-                    _pad: 0,
+                    object: 0,
                 }
             })
             .collect();

@@ -30,7 +30,7 @@ fn rust_layouts() -> Vec<RustLayout> {
             normal,
             material,
             diffuse,
-            _pad
+            object
         }),
         layout!(Material {
             specular,
@@ -194,7 +194,7 @@ fn rust_layouts() -> Vec<RustLayout> {
             seed,
             max_depth,
             light_count,
-            _pad0,
+            show,
             _pad1
         }),
         layout!(DirectParams {

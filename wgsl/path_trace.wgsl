@@ -6,6 +6,12 @@
 // photons choose theirs (diffuse with probability mean(rho_d), Ward with mean(rho_s), else
 // the path ends: Russian roulette by albedo). A BRDF-sampled ray that meets an area light
 // adds its radiance with the other MIS weight. CPU mirror: src/cpu/path_trace.rs.
+//
+// params.show picks terms as the splat frame's --show does, by the first surface the camera
+// sees: direct light is what reaches it from a light (its next events, and a light its BRDF
+// sample meets), indirect all the rest; diffuse or specular is the part of its BRDF (next
+// events split the BRDF; a bounce counts for the part it sampled, which keeps each part
+// unbiased). A light the camera sees directly counts as direct diffuse, as in shade.wgsl.
 
 // #import types
 // #import dispatch
@@ -45,12 +51,19 @@ fn brdf_pdf(n: vec3<f32>, wo: vec3<f32>, wi: vec3<f32>, pd: f32, ps: f32, alpha:
     return pdf;
 }
 
-fn brdf(n: vec3<f32>, wo: vec3<f32>, wi: vec3<f32>, rho_d: vec3<f32>, m: Material) -> vec3<f32> {
-    var f = rho_d / PI;
+// The BRDF with its diffuse and specular parts weighed by wd and ws (1 or 0: shown or not).
+fn brdf(n: vec3<f32>, wo: vec3<f32>, wi: vec3<f32>, rho_d: vec3<f32>, m: Material, wd: f32,
+        ws: f32) -> vec3<f32> {
+    var f = rho_d / PI * wd;
     if m.roughness >= MIN_ALPHA {
-        f += m.specular * ward_specular(n, wi, wo, m.roughness);
+        f += m.specular * ward_specular(n, wi, wo, m.roughness) * ws;
     }
     return f;
+}
+
+// 1 where params.show has any of `bits`, else 0.
+fn shown(bits: u32) -> f32 {
+    return select(0.0, 1.0, (params.show & bits) != 0u);
 }
 
 @compute @workgroup_size(64)
@@ -70,6 +83,10 @@ fn main(@builtin(workgroup_id) wg: vec3<u32>, @builtin(num_workgroups) num_wg: v
     var skip = NO_SPLAT;
     // The pdf of the BRDF sample that chose d (0: the camera's ray, which sees lights whole).
     var pdf_brdf = 0.0;
+    // Weights of the terms by params.show: a light the ray meets, and next events at vertices
+    // past the first; both fixed by the first bounce's part.
+    var hit_shown = shown(SHOW_DIRECT_DIFFUSE);
+    var later_shown = 1.0;
     for (var depth = 0u; depth <= params.max_depth; depth++) {
         var budget = SHADOW_RAY_BUDGET;
         let hit = trace_ray(o, d, skip, FAR, &budget);
@@ -91,7 +108,7 @@ fn main(@builtin(workgroup_id) wg: vec3<u32>, @builtin(num_workgroups) num_wg: v
                 let pdf_light = light_t * light_t / (l.area * -dot(d, l.direction));
                 w = power_heuristic(pdf_brdf, pdf_light);
             }
-            radiance += throughput * (l.power / (PI * l.area)) * w;
+            radiance += throughput * (l.power / (PI * l.area)) * (w * hit_shown);
             break;
         }
         if hit.splat == NO_SPLAT || hit.aborted != 0u || depth == params.max_depth {
@@ -124,7 +141,13 @@ fn main(@builtin(workgroup_id) wg: vec3<u32>, @builtin(num_workgroups) num_wg: v
                 let pdf_light = ls.dist * ls.dist / (l.area * -dot(ls.wi, l.direction));
                 w = power_heuristic(pdf_light, brdf_pdf(n, wo, ls.wi, pd, ps, m.roughness));
             }
-            radiance += throughput * brdf(n, wo, ls.wi, s.diffuse, m) * ls.e * (cos_i * w);
+            var wd = later_shown;
+            var ws = later_shown;
+            if depth == 0u {
+                wd = shown(SHOW_DIRECT_DIFFUSE);
+                ws = shown(SHOW_DIRECT_SPECULAR);
+            }
+            radiance += throughput * brdf(n, wo, ls.wi, s.diffuse, m, wd, ws) * ls.e * (cos_i * w);
         }
         if depth + 1u == params.max_depth {
             break;
@@ -140,6 +163,12 @@ fn main(@builtin(workgroup_id) wg: vec3<u32>, @builtin(num_workgroups) num_wg: v
         }
         let wi = next.dir;
         throughput *= next.weight;
+        if depth == 0u {
+            hit_shown = shown(select(SHOW_DIRECT_DIFFUSE, SHOW_DIRECT_SPECULAR, next.specular));
+            later_shown = shown(select(SHOW_INDIRECT_DIFFUSE, SHOW_INDIRECT_SPECULAR, next.specular));
+        } else {
+            hit_shown = later_shown;
+        }
         // A mirror-like Ward sample (alpha below MIN_ALPHA) has no pdf to weigh against: next
         // events skip it, so a light it meets counts in full.
         let mirror = next.specular && m.roughness < MIN_ALPHA;

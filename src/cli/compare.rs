@@ -44,6 +44,27 @@ pub struct Difference {
     pub flip: Option<f64>,
     /// Pixels left out because either image is not finite there.
     pub non_finite: usize,
+    /// The figures over each object's pixels (`--objects`); empty without an ID image.
+    #[serde(skip_serializing_if = "Vec::is_empty")]
+    pub objects: Vec<ObjectDifference>,
+}
+
+/// The difference over the pixels an object-ID image gives one surface (`crate::objects`).
+#[derive(Clone, Debug, Serialize)]
+pub struct ObjectDifference {
+    /// Its ID in the image (surface index + 1).
+    pub id: u16,
+    /// Its name (`Scene::surfaces`), from the ID image's JSON sidecar; else "id N".
+    pub name: String,
+    pub pixels: usize,
+    /// Mean of (R + G + B) / 3 over its pixels, in A and in the reference B.
+    pub mean: f64,
+    pub reference_mean: f64,
+    /// mean / reference_mean − 1: how much brighter A shows the object.
+    pub bias: f64,
+    /// relMSE and SMAPE over its pixels alone (their ε from its own mean).
+    pub rel_mse: f64,
+    pub smape: f64,
 }
 
 fn l1(p: &[f32; 4]) -> f64 {
@@ -208,7 +229,133 @@ pub fn difference(a: &[[f32; 4]], b: &[[f32; 4]]) -> Result<Difference> {
         smape: hdr.smape,
         flip: None,
         non_finite: hdr.non_finite,
+        objects: Vec::new(),
     })
+}
+
+/// The figures of `a` against the reference `b` over each surface of the object-ID image
+/// `ids` (one ID a pixel; edge and empty pixels left out), named by `names[surface]`, in ID
+/// order. Pixels that are not finite in either image are left out too.
+pub fn per_object(
+    a: &[[f32; 4]],
+    b: &[[f32; 4]],
+    ids: &[u16],
+    names: &[String],
+) -> Result<Vec<ObjectDifference>> {
+    if ids.len() != a.len() || a.len() != b.len() {
+        return Err(Error::Invalid(format!(
+            "the object-ID image has {} pixels, the images {} and {}",
+            ids.len(),
+            a.len(),
+            b.len()
+        )));
+    }
+    // Each object's pixels: (in a, in b).
+    type Pixels = (Vec<[f32; 4]>, Vec<[f32; 4]>);
+    let mut by_id: std::collections::BTreeMap<u16, Pixels> = Default::default();
+    for ((&id, p), q) in ids.iter().zip(a).zip(b) {
+        if crate::objects::surface_of(id).is_some() && finite(p) && finite(q) {
+            let entry = by_id.entry(id).or_default();
+            entry.0.push(*p);
+            entry.1.push(*q);
+        }
+    }
+    Ok(by_id
+        .into_iter()
+        .map(|(id, (pa, pb))| {
+            let mean = |v: &[[f32; 4]]| v.iter().map(l1).sum::<f64>() / (3 * v.len()) as f64;
+            let (ma, mb) = (mean(&pa), mean(&pb));
+            let hdr = hdr_metrics(&pa, &pb);
+            let surface = crate::objects::surface_of(id).unwrap_or_default() as usize;
+            ObjectDifference {
+                id,
+                name: names
+                    .get(surface)
+                    .cloned()
+                    .unwrap_or_else(|| format!("id {id}")),
+                pixels: pa.len(),
+                mean: ma,
+                reference_mean: mb,
+                bias: if mb > 0.0 { ma / mb - 1.0 } else { 0.0 },
+                rel_mse: hdr.rel_mse,
+                smape: hdr.smape,
+            }
+        })
+        .collect())
+}
+
+/// The sidecar of an object-ID image: the names of its surfaces (`ids.png` → `ids.json`).
+pub fn names_path(ids: &Path) -> std::path::PathBuf {
+    ids.with_extension("json")
+}
+
+#[derive(serde::Deserialize, Serialize)]
+struct IdNames {
+    /// `Scene::surfaces`: the name of ID k + 1 is entry k.
+    surfaces: Vec<String>,
+}
+
+/// Writes an object-ID image (`crate::objects`) as a 16-bit grey PNG, and its surfaces'
+/// names beside it (`names_path`).
+pub fn write_object_ids(
+    path: &Path,
+    ids: &[u16],
+    width: u32,
+    height: u32,
+    names: &[String],
+) -> Result<()> {
+    check_ids_path(path)?;
+    image::ImageBuffer::<image::Luma<u16>, _>::from_raw(width, height, ids.to_vec())
+        .ok_or_else(|| Error::Invalid("object-ID image has the wrong size".into()))?
+        .save(path)
+        .map_err(|e| Error::Invalid(format!("{}: cannot write image: {e}", path.display())))?;
+    let sidecar = names_path(path);
+    let json = serde_json::to_string_pretty(&IdNames {
+        surfaces: names.to_vec(),
+    })
+    .map_err(|e| Error::Invalid(format!("cannot encode surface names: {e}")))?;
+    std::fs::write(&sidecar, json + "\n")
+        .map_err(|e| Error::Invalid(format!("{}: cannot write: {e}", sidecar.display())))
+}
+
+/// Refuses an object-ID image path that does not name a PNG (checked before a render).
+pub fn check_ids_path(path: &Path) -> Result<()> {
+    let is_png = path
+        .extension()
+        .and_then(|e| e.to_str())
+        .is_some_and(|e| e.eq_ignore_ascii_case("png"));
+    if is_png {
+        Ok(())
+    } else {
+        Err(Error::Invalid(format!(
+            "{}: an object-ID image is written as PNG (16-bit grey): name it .png",
+            path.display()
+        )))
+    }
+}
+
+/// Reads an object-ID image with its size, and its surfaces' names where the sidecar exists.
+pub fn read_object_ids(path: &Path) -> Result<(Vec<u16>, u32, u32, Vec<String>)> {
+    let img = image::open(path)
+        .map_err(|e| Error::Invalid(format!("{}: cannot read image: {e}", path.display())))?;
+    if !matches!(img, image::DynamicImage::ImageLuma16(_)) {
+        return Err(Error::Invalid(format!(
+            "{}: not an object-ID image (16-bit grey PNG, as render --object-ids writes)",
+            path.display()
+        )));
+    }
+    let img = img.into_luma16();
+    let (w, h) = img.dimensions();
+    let sidecar = names_path(path);
+    let names = match std::fs::read_to_string(&sidecar) {
+        Ok(text) => {
+            serde_json::from_str::<IdNames>(&text)
+                .map_err(|e| Error::Invalid(format!("{}: {e}", sidecar.display())))?
+                .surfaces
+        }
+        Err(_) => Vec::new(),
+    };
+    Ok((img.into_raw(), w, h, names))
 }
 
 /// How a file's values read: EXR holds radiance, anything else display values.

@@ -213,6 +213,10 @@ enum Command {
         /// Print the figures as one JSON object on stdout.
         #[arg(long)]
         json: bool,
+        /// Also write which surface each pixel shows (16-bit grey PNG; names in FILE.json
+        /// beside it), for `compare --objects`.
+        #[arg(long, value_name = "FILE.png")]
+        object_ids: Option<PathBuf>,
     },
     /// Difference of image A against the reference B: relMSE, PSNR, SMAPE, FLIP, mean
     /// relative difference, pixels within 5 %, RMSE, energy (EXR for radiance, FLIP on the
@@ -226,6 +230,10 @@ enum Command {
         /// Print one JSON object on stdout.
         #[arg(long)]
         json: bool,
+        /// Also report the figures per object, over the pixels this object-ID image gives
+        /// each (render --object-ids; edge pixels left out).
+        #[arg(long, value_name = "IDS.png")]
+        objects: Option<PathBuf>,
     },
     /// A window that draws the scene in real time: direct light at once, global illumination
     /// when the bake (on a second thread) is in. Keys: see docs/viewer.md (H in the window).
@@ -362,7 +370,11 @@ fn run(cli: Cli) -> Result<()> {
             device,
             stats,
             json,
+            object_ids,
         } => {
+            if let Some(path) = &object_ids {
+                compare::check_ids_path(path)?;
+            }
             let mut scene = scene::load(&scene)?;
             bake.apply(&mut scene)?;
             let gpu = device.gpu()?;
@@ -377,6 +389,9 @@ fn run(cli: Cli) -> Result<()> {
                 spp,
             };
             let report = render::render(&scene, gpu.as_ref(), &opts, &output)?;
+            if let Some(path) = object_ids {
+                render::write_object_ids(&scene, &opts, &path)?;
+            }
             if json {
                 print_json(&report)?;
             } else if stats {
@@ -434,6 +449,7 @@ fn run(cli: Cli) -> Result<()> {
             b,
             heatmap,
             json,
+            objects,
         } => {
             let (pa, wa, ha) = compare::read_image(&a)?;
             let (pb, wb, hb) = compare::read_image(&b)?;
@@ -453,7 +469,17 @@ fn run(cli: Cli) -> Result<()> {
                     b.display()
                 )));
             }
-            let d = compare::difference_of(&pa, &pb, wa, ha, values)?;
+            let mut d = compare::difference_of(&pa, &pb, wa, ha, values)?;
+            if let Some(path) = objects {
+                let (ids, wi, hi, names) = compare::read_object_ids(&path)?;
+                if (wi, hi) != (wa, ha) {
+                    return Err(Error::Invalid(format!(
+                        "{} is {wi}×{hi} but the images are {wa}×{ha}",
+                        path.display()
+                    )));
+                }
+                d.objects = compare::per_object(&pa, &pb, &ids, &names)?;
+            }
             if let Some(path) = heatmap {
                 compare::heatmap(&compare::relative(&pa, &pb), wa, ha, &path)?;
             }
@@ -474,6 +500,18 @@ fn run(cli: Cli) -> Result<()> {
                     d.rmse,
                     100.0 * d.energy
                 ));
+                for o in &d.objects {
+                    say(format_args!(
+                        "{:<28} {:>7} px  mean {:.5} vs {:.5}  bias {:+7.2} %  relMSE {:.4e}  SMAPE {:.4}",
+                        o.name,
+                        o.pixels,
+                        o.mean,
+                        o.reference_mean,
+                        100.0 * o.bias,
+                        o.rel_mse,
+                        o.smape
+                    ));
+                }
             }
         }
         Command::Bench {

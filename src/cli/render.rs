@@ -72,6 +72,21 @@ pub struct Options {
     pub spp: u32,
 }
 
+/// Writes the object-ID image of the render `opts` describes (`crate::objects`) to `path`,
+/// with the surfaces' names beside it.
+pub fn write_object_ids(scene: &Scene, opts: &Options, path: &Path) -> Result<()> {
+    let [w0, h0] = scene.camera.resolution;
+    let view = View::new(
+        &scene.camera,
+        opts.width.unwrap_or(w0),
+        opts.height.unwrap_or(h0),
+    );
+    let grid = cpu::scene_grid(scene)?;
+    let cam = camera_uniform(&view, scene.bounds(), &opts.frame);
+    let ids = crate::objects::object_ids(scene, &grid, &cam, crate::objects::SAMPLES)?;
+    crate::cli::compare::write_object_ids(path, &ids, view.width, view.height, &scene.surfaces)
+}
+
 /// Refinement frames `render` averages unless told: enough for smooth edges, and with the
 /// default 4² area samples, one shadow ray per pixel and frame.
 pub const DEFAULT_SPP: u32 = 16;
@@ -495,7 +510,7 @@ fn render_path(
         Some(gpu) => {
             let mut renderer = FrameRenderer::new(gpu, scene)?;
             let t = Instant::now();
-            let targets = renderer.draw_path(gpu, scene, view, spp, each);
+            let targets = renderer.draw_path(gpu, scene, view, opts.frame.show, spp, each);
             bar.finish_and_clear();
             let shade = refined(ms_since(t), spp);
             let drawn = drawn_on_gpu(gpu, &targets?.hdr, pixels, format, &opts.tone, shade)?;
@@ -507,7 +522,7 @@ fn render_path(
             let grid = StageReport::ran(ms_since(t));
             let cam = camera_uniform(view, scene.bounds(), &opts.frame);
             let t = Instant::now();
-            let hdr = cpu_path(scene, &host_grid, &cam, spp);
+            let hdr = cpu_path(scene, &host_grid, &cam, opts.frame.show, spp);
             bar.finish_and_clear();
             let drawn = drawn_on_cpu(hdr?, format, &opts.tone, refined(ms_since(t), spp))?;
             (grid, drawn)

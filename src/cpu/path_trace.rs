@@ -12,7 +12,10 @@ use crate::shared::rng::{
     rand,
 };
 use crate::shared::sampling::{PI, frame_of};
-use crate::shared::splat::{SHADOW_RAY_BUDGET, pixel_ray};
+use crate::shared::splat::{
+    SHADOW_RAY_BUDGET, SHOW_DIRECT_DIFFUSE, SHOW_DIRECT_SPECULAR, SHOW_INDIRECT_DIFFUSE,
+    SHOW_INDIRECT_SPECULAR, pixel_ray,
+};
 use crate::shared::trace::{FAR, Geometry, trace_ray};
 use crate::shared::ward::{mean3, sample_bounce, ward_pdf, ward_specular};
 use crate::types::{Camera, Light, Material, NO_SPLAT, PathParams, light_kind};
@@ -38,12 +41,16 @@ fn brdf_pdf(n: Vec3, wo: Vec3, wi: Vec3, pd: f32, ps: f32, alpha: f32) -> f32 {
     pdf
 }
 
-fn brdf(n: Vec3, wo: Vec3, wi: Vec3, rho_d: Vec3, m: &Material) -> Vec3 {
-    let mut f = rho_d / PI;
+fn brdf(n: Vec3, wo: Vec3, wi: Vec3, rho_d: Vec3, m: &Material, wd: f32, ws: f32) -> Vec3 {
+    let mut f = rho_d / PI * wd;
     if m.roughness >= MIN_ALPHA {
-        f += Vec3::from(m.specular) * ward_specular(n, wi, wo, m.roughness);
+        f += Vec3::from(m.specular) * ward_specular(n, wi, wo, m.roughness) * ws;
     }
     f
+}
+
+fn shown(show: u32, bits: u32) -> f32 {
+    if show & bits != 0 { 1.0 } else { 0.0 }
 }
 
 /// One sample of pixel `i`.
@@ -64,6 +71,8 @@ fn sample(
     let mut radiance = Vec3::ZERO;
     let mut skip = NO_SPLAT;
     let mut pdf_brdf = 0.0;
+    let mut hit_shown = shown(params.show, SHOW_DIRECT_DIFFUSE);
+    let mut later_shown = 1.0;
     let lights = &lights[..params.light_count as usize];
     for depth in 0..=params.max_depth {
         let mut budget = SHADOW_RAY_BUDGET;
@@ -85,7 +94,7 @@ fn sample(
                 let pdf_light = light_t * light_t / (l.area * -d.dot(Vec3::from(l.direction)));
                 w = power_heuristic(pdf_brdf, pdf_light);
             }
-            radiance += throughput * (Vec3::from(l.power) / (PI * l.area)) * w;
+            radiance += throughput * (Vec3::from(l.power) / (PI * l.area)) * (w * hit_shown);
             break;
         }
         if hit.splat == NO_SPLAT || hit.aborted != 0 || depth == params.max_depth {
@@ -126,7 +135,15 @@ fn sample(
                 let pdf_light = ls.dist * ls.dist / (l.area * -ls.wi.dot(Vec3::from(l.direction)));
                 w = power_heuristic(pdf_light, brdf_pdf(n, wo, ls.wi, pd, ps, m.roughness));
             }
-            radiance += throughput * brdf(n, wo, ls.wi, rho_d, m) * ls.e * (cos_i * w);
+            let (wd, ws) = if depth == 0 {
+                (
+                    shown(params.show, SHOW_DIRECT_DIFFUSE),
+                    shown(params.show, SHOW_DIRECT_SPECULAR),
+                )
+            } else {
+                (later_shown, later_shown)
+            };
+            radiance += throughput * brdf(n, wo, ls.wi, rho_d, m, wd, ws) * ls.e * (cos_i * w);
         }
         if depth + 1 == params.max_depth {
             break;
@@ -140,6 +157,17 @@ fn sample(
         }
         let wi = next.dir;
         throughput *= next.weight;
+        if depth == 0 {
+            let (direct, indirect) = if next.specular {
+                (SHOW_DIRECT_SPECULAR, SHOW_INDIRECT_SPECULAR)
+            } else {
+                (SHOW_DIRECT_DIFFUSE, SHOW_INDIRECT_DIFFUSE)
+            };
+            hit_shown = shown(params.show, direct);
+            later_shown = shown(params.show, indirect);
+        } else {
+            hit_shown = later_shown;
+        }
         let mirror = next.specular && m.roughness < MIN_ALPHA;
         pdf_brdf = if mirror {
             0.0

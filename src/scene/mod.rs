@@ -38,6 +38,10 @@ pub struct Scene {
     pub lights: Vec<Light>,
     /// One line per object: what it is and how many splats it made.
     pub objects: Vec<ObjectSummary>,
+    /// The names of the scene's surfaces, which `Splat::object` indexes: one per object, but
+    /// a Cornell box's five walls apart ("#1 cornell_box floor"), so that an object-ID image
+    /// tells the walls apart.
+    pub surfaces: Vec<String>,
     /// Where this scene's origin lies in the file's coordinates (`recentre`); zero for a
     /// scene near the origin.
     pub origin: Vec3,
@@ -157,6 +161,7 @@ pub fn parse(path: &Path, text: &str) -> Result<Scene> {
     let base_dir = path.parent().unwrap_or(Path::new("."));
     let mut splats = Vec::new();
     let mut objects = Vec::new();
+    let mut surfaces = Vec::new();
     for (k, obj) in file.objects.iter().enumerate() {
         let span = obj.span();
         let obj = obj.get_ref();
@@ -171,7 +176,11 @@ pub fn parse(path: &Path, text: &str) -> Result<Scene> {
             base_dir,
             &material_index,
             &material_descs,
-            &mut splats,
+            Built {
+                splats: &mut splats,
+                surfaces: &mut surfaces,
+                name: surface_name(k, obj),
+            },
             &at,
         )?;
         objects.push(summary);
@@ -205,6 +214,7 @@ pub fn parse(path: &Path, text: &str) -> Result<Scene> {
         material_names,
         lights,
         objects,
+        surfaces,
         origin: Vec3::ZERO,
     };
     scene.recentre();
@@ -506,14 +516,39 @@ fn set_keys(o: &ObjectDesc) -> Vec<&'static str> {
     keys
 }
 
+/// Where an object's splats go: the scene's splats and surface names, and the object's name.
+struct Built<'a> {
+    splats: &'a mut Vec<Splat>,
+    surfaces: &'a mut Vec<String>,
+    name: String,
+}
+
+/// An object's name in object-ID images: its place in the file and its shape, and its
+/// material where it has one (a Cornell box's walls name themselves instead).
+fn surface_name(k: usize, o: &ObjectDesc) -> String {
+    let name = format!("#{} {}", k + 1, o.shape.name());
+    match &o.material {
+        Some(m) if o.shape != ShapeKind::CornellBox => format!("{name} ({m})"),
+        _ => name,
+    }
+}
+
+/// Names of a Cornell box's walls, in `shapes::cornell_walls`' order.
+const CORNELL_WALLS: [&str; 5] = ["floor", "ceiling", "back", "left", "right"];
+
 fn build_object(
     o: &ObjectDesc,
     base_dir: &Path,
     material_index: &dyn Fn(Option<&String>) -> std::result::Result<u32, String>,
     material_descs: &[MaterialDesc],
-    splats: &mut Vec<Splat>,
+    out: Built,
     at: &dyn Fn(String) -> Error,
 ) -> Result<ObjectSummary> {
+    let Built {
+        splats,
+        surfaces,
+        name,
+    } = out;
     for key in set_keys(o) {
         if !allowed_keys(o.shape).contains(&key) {
             return Err(at(format!("key `{key}` does not apply to this shape")));
@@ -524,7 +559,13 @@ fn build_object(
     let material = material_index(o.material.as_ref()).map_err(at)?;
     let diffuse_of = |mat: u32| material_descs[mat as usize].diffuse.rgb();
     let before = splats.len();
-    let mut push = |disks: &[Disk], mat: u32, diffuse: Option<&[[f32; 3]]>| {
+    // Each call is one surface, named `name` plus `part` where an object has several.
+    let mut push = |disks: &[Disk], mat: u32, diffuse: Option<&[[f32; 3]]>, part: &str| {
+        let object = surfaces.len() as u32;
+        surfaces.push(match part {
+            "" => name.clone(),
+            part => format!("{name} {part}"),
+        });
         for (k, d) in disks.iter().enumerate() {
             splats.push(Splat {
                 center: d.center.into(),
@@ -532,7 +573,7 @@ fn build_object(
                 normal: d.normal.into(),
                 material: mat,
                 diffuse: diffuse.map_or(diffuse_of(mat), |c| c[k]),
-                _pad: 0,
+                object,
             });
         }
     };
@@ -567,23 +608,23 @@ fn build_object(
                     4 => right,
                     _ => material,
                 };
-                push(&disks[start..start + n], mat, None);
+                push(&disks[start..start + n], mat, None, CORNELL_WALLS[wall]);
                 start += n;
             }
         }
         ShapeKind::Box => {
             shapes::cube(&m, spacing, &mut disks);
-            push(&disks, material, None);
+            push(&disks, material, None, "");
         }
         ShapeKind::Sphere => {
             let r = positive(o.radius.unwrap_or(1.0), "radius").map_err(at)?;
             shapes::sphere(&m, r, spacing, &mut disks);
-            push(&disks, material, None);
+            push(&disks, material, None, "");
         }
         ShapeKind::Quad => {
             let size = positive_size(o.size.unwrap_or([1.0, 1.0])).map_err(at)?;
             shapes::quad(&m, size, spacing, &mut disks);
-            push(&disks, material, None);
+            push(&disks, material, None, "");
         }
         ShapeKind::Model => {
             let rel = o
@@ -605,7 +646,7 @@ fn build_object(
                 .colors
                 .as_deref()
                 .filter(|_| o.vertex_colors.unwrap_or(true));
-            push(&placed, material, colors);
+            push(&placed, material, colors, "");
             source = Some(rel.clone());
         }
     }

@@ -67,7 +67,7 @@ pub fn random_splats(n: usize, rmin: f32, rmax: f32, seed: u64) -> Vec<Splat> {
             normal: rng.unit_vector(),
             material: 0,
             diffuse: [0.5; 3],
-            _pad: 0,
+            object: 0,
         })
         .collect()
 }

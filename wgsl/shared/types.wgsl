@@ -7,7 +7,7 @@ struct Splat {
     normal: vec3<f32>,
     material: u32,
     diffuse: vec3<f32>,
-    _pad: u32,
+    object: u32,
 }
 
 struct Material {
@@ -204,7 +204,7 @@ struct PathParams {
     seed: u32,
     max_depth: u32,
     light_count: u32,
-    _pad0: u32,
+    show: u32,
     _pad1: u32,
 }
 

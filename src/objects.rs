@@ -1,0 +1,93 @@
+//! Object-ID images: which of the scene's surfaces (`Scene::surfaces`) each pixel shows, so
+//! that an image's error can be measured per object (`lobelight compare --objects`) instead
+//! of diluted by the walls around it.
+//!
+//! A pixel is traced at several points within it (the refinement frames' jitter, so the points
+//! the still image averages): it names a surface only where every point sees that surface.
+//! Pixels on an edge between surfaces hold `MIXED` and pixels that see no surface (or see a
+//! light first) hold `NONE`; per-object figures leave both out, since an anti-aliased edge
+//! pixel belongs to no one object.
+
+use glam::{Vec2, Vec3};
+use rayon::prelude::*;
+
+use crate::error::{Error, Result};
+use crate::grid::SplatGrid;
+use crate::scene::Scene;
+use crate::shared::lights::area_light_hit;
+use crate::shared::splat::{SHADOW_RAY_BUDGET, pixel_ray};
+use crate::shared::trace::{FAR, Geometry, trace_ray};
+use crate::types::{Camera, NO_SPLAT};
+
+/// A pixel that shows no surface: the background, or a light in front of any surface.
+pub const NONE: u16 = 0;
+/// A pixel whose points see different surfaces (an edge).
+pub const MIXED: u16 = u16::MAX;
+/// Points traced per pixel: the still image's default refinement frames.
+pub const SAMPLES: u32 = 16;
+
+/// The ID of surface `k` (`Splat::object`) in an object-ID image.
+pub fn id_of(surface: u32) -> u16 {
+    (surface + 1) as u16
+}
+
+/// The surface an image ID names, if it names one.
+pub fn surface_of(id: u16) -> Option<u32> {
+    (id != NONE && id != MIXED).then(|| id as u32 - 1)
+}
+
+/// The ID of the surface (or NONE) that the ray through `pixel` (continuous pixel coordinates)
+/// sees first.
+fn seen(scene: &Scene, geo: &Geometry, cam: &Camera, pixel: Vec2) -> u16 {
+    let o = Vec3::from(cam.eye);
+    let d = pixel_ray(cam, pixel);
+    let mut budget = SHADOW_RAY_BUDGET;
+    let hit = trace_ray(geo, o, d, NO_SPLAT, FAR, &mut budget);
+    if hit.splat == NO_SPLAT || hit.aborted != 0 {
+        return NONE;
+    }
+    let light_first = scene.lights.iter().any(|l| {
+        let t = area_light_hit(l, o, d);
+        t > 0.0 && t < hit.t
+    });
+    if light_first {
+        return NONE;
+    }
+    id_of(scene.splats[hit.splat as usize].object)
+}
+
+/// The object-ID image of `cam` (`cam.size` pixels, row by row): per pixel the surface all of
+/// its `samples` points see (the first at the pixel's centre, then `frame::jitter`'s), else
+/// `MIXED`, or `NONE`.
+pub fn object_ids(scene: &Scene, grid: &SplatGrid, cam: &Camera, samples: u32) -> Result<Vec<u16>> {
+    if scene.surfaces.len() >= MIXED as usize - 1 {
+        return Err(Error::Invalid(format!(
+            "the scene has {} surfaces; an object-ID image (16 bits) names at most {}",
+            scene.surfaces.len(),
+            MIXED - 2
+        )));
+    }
+    let geo = Geometry {
+        grid,
+        splats: &scene.splats,
+    };
+    let cam = Camera {
+        jitter: [0.0; 2],
+        ..*cam
+    };
+    let (w, h) = (cam.size[0] as u32, cam.size[1] as u32);
+    let points: Vec<Vec2> = (0..samples.max(1))
+        .map(|k| Vec2::splat(0.5) + Vec2::from(crate::frame::jitter(k)))
+        .collect();
+    Ok((0..w * h)
+        .into_par_iter()
+        .map(|i| {
+            let px = Vec2::new((i % w) as f32, (i / w) as f32);
+            let first = seen(scene, &geo, &cam, px + points[0]);
+            let agree = points[1..]
+                .iter()
+                .all(|&p| seen(scene, &geo, &cam, px + p) == first);
+            if agree { first } else { MIXED }
+        })
+        .collect())
+}
