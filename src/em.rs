@@ -51,6 +51,10 @@ pub struct EmConfig {
     pub radius: f32,
     /// Half thickness of the slab around a splat's plane, in splat radii.
     pub slab: f32,
+    /// Most candidate photons one splat's fit visits per pass (0: all): past it an even
+    /// subset, reweighted, so the fit's time is bounded by splats, not photons; the splat's
+    /// irradiance still sums every photon (`em_fit.wgsl`, "Bounded cost").
+    pub fit_candidates: u32,
 }
 
 impl EmConfig {
@@ -100,6 +104,7 @@ impl EmConfig {
             } else {
                 0
             },
+            fit_candidates: self.fit_candidates,
             ..Default::default()
         }
     }
@@ -130,6 +135,9 @@ pub fn check_slab(slab: f32) -> std::result::Result<(), String> {
     }
     Ok(())
 }
+
+/// `EmConfig::fit_candidates` unless a scene or the command line says otherwise.
+pub const DEFAULT_FIT_CANDIDATES: u32 = 0;
 
 /// How a device runs the fit; the CPU mirror takes the same shape to add in the same order.
 #[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
@@ -166,14 +174,21 @@ pub fn iterations_per_dispatch(
         return Ok(all);
     }
     let wg = workgroup_size(loop_limited) as u64;
-    // Per pass: each candidate once, each accepted one four loops over the lobes, plus the
-    // rows, the sums and the reduction.
-    let per_pass = (max_candidates as u64).div_ceil(wg) * (1 + 4 * cfg.lobes as u64) + 200;
-    let passes = LOOP_BUDGET / per_pass;
+    // Per pass: each candidate visited once, each accepted one four loops over the lobes,
+    // plus the rows, the sums and the reduction. With `fit_candidates` a pass visits at most
+    // that many, and the final pass also tests every candidate once for the irradiance.
+    let candidates = max_candidates as u64;
+    let (visited, irradiance) = match cfg.fit_candidates {
+        0 => (candidates, 0),
+        cap => (candidates.min(cap as u64), candidates.div_ceil(wg)),
+    };
+    let per_pass = visited.div_ceil(wg) * (1 + 4 * cfg.lobes as u64) + 200;
+    let passes = LOOP_BUDGET.saturating_sub(irradiance) / per_pass;
     if passes < 3 {
         return Err(Error::Invalid(format!(
             "a splat has {max_candidates} candidate photons within the search radius, too many \
-             for this software device's loop limit: lower the radius or the photon count"
+             for this software device's loop limit: lower the radius, the photon count or \
+             fit_candidates"
         )));
     }
     // Two passes go to the gather and to the final (or hand-over) pass.

@@ -277,7 +277,9 @@ pub struct EmParams {
     /// Most lobes a splat may drop during its fit (0: every fitted splat keeps `lobes`); see
     /// `em_fit.wgsl`, "Pruning".
     pub prune: u32,
-    pub _pad1: u32,
+    /// Most candidate photons a fitted splat's EM visits; past it an even subset, reweighted
+    /// (0: all); see `em_fit.wgsl`, "Bounded cost".
+    pub fit_candidates: u32,
     pub _pad2: u32,
 }
 

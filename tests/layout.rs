@@ -152,7 +152,7 @@ fn rust_layouts() -> Vec<RustLayout> {
             iteration_end,
             workgroup_size,
             prune,
-            _pad1,
+            fit_candidates,
             _pad2
         }),
         layout!(Camera {

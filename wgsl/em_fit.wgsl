@@ -13,6 +13,14 @@
 // that hold the workgroup (the `subgroups` variant: no workgroup memory, no barrier; llvmpipe
 // fits 1.3x faster), else one column per invocation in workgroup memory and two barriers. Every invocation then runs the same M-step on the same totals.
 //
+// Bounded cost (em.fit_candidates > 0): a fitted splat with more candidates than that visits
+// only every s-th of them in its EM passes and its final per-lobe sums, s = ceil(candidates /
+// fit_candidates), each weighted s: an even, deterministic subset (the candidates lie in bin
+// order, the order of space) whose sums estimate the whole set's, so the fit's time is bounded
+// by splats, not photons. Its irradiance still sums every photon: the final pass adds them all
+// in a loop of its own that only tests position and adds power, and the lobes' RGB irradiance
+// is scaled per channel to that total. With s = 1 nothing changes.
+//
 // Passes: `iterations` EM passes (E-step + sums for the M-step), then one final pass with the
 // fitted lobes: RGB irradiance per lobe, total irradiance, and the log-likelihood.
 // Splats listed without the fit bit (not glossy) run only the final pass with no lobes.
@@ -126,11 +134,14 @@ var<private> streaming: bool;
 var<private> resume_row: u32;
 var<private> resume_j: u32;
 var<private> resume_offset: u32;
+// This splat's candidate stride s (see "Bounded cost") and WG * s, an invocation's step.
+var<private> stride: u32;
+var<private> step: u32;
 
 // First candidate of row [begin, ..) for invocation `lid`, whose candidates are those with
-// (offset + position in row) = lid mod WG.
+// (offset + position in row) = lid * stride mod WG * stride (every stride-th, dealt round).
 fn first_in_row(begin: u32, offset: u32, lid: u32) -> u32 {
-    return begin + (lid + WG - offset % WG) % WG;
+    return begin + (lid * stride + step - offset % step) % step;
 }
 
 struct Candidate {
@@ -148,7 +159,7 @@ fn accept(j: u32) -> Candidate {
     if c.ok {
         c.dir = oct_decode(g.direction);
         c.ok = dot(c.dir, normal) > 0.0;
-        c.weight = bin_power[j].w;
+        c.weight = bin_power[j].w * f32(stride);
     }
     return c;
 }
@@ -210,12 +221,15 @@ fn e_step(w: vec3<f32>, slot: u32, sparse: bool, full: bool) -> f32 {
 fn absorb(w: vec3<f32>, weight: f32, index: u32, slot: u32, kind: u32, sparse: bool, full: bool,
           losses: bool) {
     acc[SUM_WEIGHT] += weight;
-    acc[SUM_COUNT] += 1.0;
     if kind == PASS_FINAL {
         let power = bin_power[index].xyz;
-        acc[SUM_RGB] += power.x;
-        acc[SUM_RGB + 1u] += power.y;
-        acc[SUM_RGB + 2u] += power.z;
+        // A subset's final pass leaves the count and the irradiance to irradiance_pass.
+        if stride == 1u {
+            acc[SUM_COUNT] += 1.0;
+            acc[SUM_RGB] += power.x;
+            acc[SUM_RGB + 1u] += power.y;
+            acc[SUM_RGB + 2u] += power.z;
+        }
         if !fitting {
             return;
         }
@@ -228,6 +242,7 @@ fn absorb(w: vec3<f32>, weight: f32, index: u32, slot: u32, kind: u32, sparse: b
         }
         return;
     }
+    acc[SUM_COUNT] += 1.0;
     e_step(w, slot, sparse, full);
     for (var k = 0u; k < LOBES; k++) {
         let o = LOBE_SUMS + LOBE_SLOTS * k;
@@ -261,7 +276,7 @@ fn gather(lid: u32, box: BinBox) {
         let row = bin_row(box, r, bins);
         let begin = cell_start[row.x];
         let end = cell_start[row.y];
-        for (var j = first_in_row(begin, offset, lid); j < end; j += WG) {
+        for (var j = first_in_row(begin, offset, lid); j < end; j += step) {
             let c = accept(j);
             if !c.ok {
                 continue;
@@ -299,7 +314,7 @@ fn photon_pass(lid: u32, box: BinBox, kind: u32, sparse: bool, full: bool, losse
         let begin = cell_start[row.x];
         let end = cell_start[row.y];
         var j = select(first_in_row(begin, offset, lid), resume_j, r == resume_row);
-        for (; j < end; j += WG) {
+        for (; j < end; j += step) {
             let c = accept(j);
             if c.ok {
                 absorb(c.dir, c.weight, j, NOT_CACHED, kind, sparse, full, losses);
@@ -307,6 +322,37 @@ fn photon_pass(lid: u32, box: BinBox, kind: u32, sparse: bool, full: bool, losse
         }
         offset += end - begin;
     }
+}
+
+// Every photon of this invocation (every WG-th candidate, whatever the stride) into the
+// count and RGB sums: a subset's final pass (see "Bounded cost").
+fn irradiance_pass(lid: u32, box: BinBox) {
+    var offset = 0u;
+    for (var r = 0u; r < bin_row_count(box); r++) {
+        let row = bin_row(box, r, bins);
+        let begin = cell_start[row.x];
+        let end = cell_start[row.y];
+        for (var j = begin + (lid + WG - offset % WG) % WG; j < end; j += WG) {
+            if accept(j).ok {
+                let power = bin_power[j].xyz;
+                acc[SUM_COUNT] += 1.0;
+                acc[SUM_RGB] += power.x;
+                acc[SUM_RGB + 1u] += power.y;
+                acc[SUM_RGB + 2u] += power.z;
+            }
+        }
+        offset += end - begin;
+    }
+}
+
+// The candidates of the splat's bin rows (em_select counts the same).
+fn candidate_count(box: BinBox) -> u32 {
+    var n = 0u;
+    for (var r = 0u; r < bin_row_count(box); r++) {
+        let row = bin_row(box, r, bins);
+        n += cell_start[row.y] - cell_start[row.x];
+    }
+    return n;
 }
 
 // The lightest live lobe whose loss (see "Pruning" above) is under the penalty, after an EM
@@ -452,6 +498,11 @@ fn main(@builtin(workgroup_id) wg: vec3<u32>, @builtin(num_workgroups) num_wg: v
         }
     }
     let box = bin_box(center, em.radius, bins);
+    stride = 1u;
+    if fit && em.fit_candidates > 0u {
+        stride = max(1u, (candidate_count(box) + em.fit_candidates - 1u) / em.fit_candidates);
+    }
+    step = WG * stride;
     gather(lid, box);
     let sparse = SPARSE;
     let sums = LOBE_SUMS + LOBE_SLOTS * LOBES;
@@ -508,8 +559,22 @@ fn main(@builtin(workgroup_id) wg: vec3<u32>, @builtin(num_workgroups) num_wg: v
     }
     prepare_mixture();
     photon_pass(lid, box, PASS_FINAL, false, true, false);
+    if stride > 1u {
+        irradiance_pass(lid, box);
+    }
     reduce(lid, sums);
     let photons = u32(sum(SUM_COUNT));
+    // A subset's lobes share the irradiance of every photon, channel by channel.
+    var share = vec3<f32>(1.0);
+    if stride > 1u {
+        var lobe_rgb = vec3<f32>(0.0);
+        for (var k = 0u; k < LOBES; k++) {
+            let o = LOBE_SUMS + LOBE_SLOTS * k;
+            lobe_rgb += vec3<f32>(sum(o), sum(o + 1u), sum(o + 2u));
+        }
+        let rgb = vec3<f32>(sum(SUM_RGB), sum(SUM_RGB + 1u), sum(SUM_RGB + 2u));
+        share = select(vec3<f32>(0.0), rgb / lobe_rgb, lobe_rgb > vec3<f32>(0.0));
+    }
     let written = select(0u, countOneBits(alive), photons > 0u && fit);
     // Invocation t writes the t-th live lobe into slot t.
     var slot = 0u;
@@ -519,7 +584,7 @@ fn main(@builtin(workgroup_id) wg: vec3<u32>, @builtin(num_workgroups) num_wg: v
         }
         if slot == lid && lid < written {
             let o = LOBE_SUMS + LOBE_SLOTS * k;
-            let irradiance = vec3<f32>(sum(o), sum(o + 1u), sum(o + 2u)) * em.inv_area;
+            let irradiance = vec3<f32>(sum(o), sum(o + 1u), sum(o + 2u)) * share * em.inv_area;
             lobes[splat_index * em.lobes + lid] =
                 Lobe(mix_axis[k], mix_sharpness[k], irradiance, mix_weight[k]);
         }

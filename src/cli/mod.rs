@@ -87,6 +87,10 @@ struct BakeArgs {
     /// need).
     #[arg(long)]
     fixed_lobes: bool,
+    /// Most candidate photons one splat's lobe fit visits per pass (0: all); past it an even
+    /// subset, reweighted (irradiance still sums every photon).
+    #[arg(long, value_name = "N")]
+    fit_candidates: Option<u32>,
 }
 
 impl BakeArgs {
@@ -111,6 +115,9 @@ impl BakeArgs {
         }
         if let Some(f) = self.family {
             scene.bake.family = f;
+        }
+        if let Some(n) = self.fit_candidates {
+            scene.bake.fit_candidates = n;
         }
         scene.bake.sparse |= self.sparse;
         scene.bake.prune &= !self.fixed_lobes;

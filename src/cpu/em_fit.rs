@@ -61,6 +61,8 @@ struct Splat1 {
     mix_log: [f32; L],
     /// The lobes not dropped by pruning, one bit each.
     alive: u32,
+    /// The candidate stride s (`em_fit.wgsl`, "Bounded cost"); 1 visits every candidate.
+    stride: u32,
 }
 
 /// The workgroup's photon cache (workgroup memory in WGSL): slot c of invocation t at
@@ -104,8 +106,11 @@ impl Default for Invocation {
     }
 }
 
-fn first_in_row(wg: u32, begin: u32, offset: u32, lid: u32) -> u32 {
-    begin + (lid + wg - offset % wg) % wg
+/// Invocation `lid`'s first candidate of a row: (offset + position) = lid · stride mod
+/// wg · stride.
+fn first_in_row(wg: u32, stride: u32, begin: u32, offset: u32, lid: u32) -> u32 {
+    let step = wg * stride;
+    begin + (lid * stride + step - offset % step) % step
 }
 
 struct Candidate {
@@ -125,7 +130,7 @@ fn accept(inp: &Inputs, sp: &Splat1, j: u32) -> Candidate {
     if c.ok {
         c.dir = oct_decode(g.direction);
         c.ok = c.dir.dot(sp.normal) > 0.0;
-        c.weight = inp.bin_power[j as usize][3];
+        c.weight = inp.bin_power[j as usize][3] * sp.stride as f32;
     }
     c
 }
@@ -203,12 +208,14 @@ fn absorb(
     losses: bool,
 ) {
     v.acc[SUM_WEIGHT] += weight;
-    v.acc[SUM_COUNT] += 1.0;
     if kind == PASS_FINAL {
         let p = inp.bin_power[index as usize];
-        v.acc[SUM_RGB] += p[0];
-        v.acc[SUM_RGB + 1] += p[1];
-        v.acc[SUM_RGB + 2] += p[2];
+        if sp.stride == 1 {
+            v.acc[SUM_COUNT] += 1.0;
+            v.acc[SUM_RGB] += p[0];
+            v.acc[SUM_RGB + 1] += p[1];
+            v.acc[SUM_RGB + 2] += p[2];
+        }
         if sp.lobe_count == 0 {
             return;
         }
@@ -221,6 +228,7 @@ fn absorb(
         }
         return;
     }
+    v.acc[SUM_COUNT] += 1.0;
     e_step(inp.em, sp, v, w, slot, sparse, full);
     for k in 0..sp.lobe_count as usize {
         let o = LOBE_SUMS + LOBE_SLOTS * k;
@@ -257,7 +265,7 @@ fn gather(inp: &Inputs, sp: &Splat1, v: &mut Invocation, cache: &mut Cache, lid:
         let row = bin_row(bx, r, inp.bins);
         let begin = inp.cell_start[row.x as usize];
         let end = inp.cell_start[row.y as usize];
-        let mut j = first_in_row(inp.em.workgroup_size, begin, offset, lid);
+        let mut j = first_in_row(inp.em.workgroup_size, sp.stride, begin, offset, lid);
         while j < end {
             let c = accept(inp, sp, j);
             if c.ok {
@@ -273,7 +281,7 @@ fn gather(inp: &Inputs, sp: &Splat1, v: &mut Invocation, cache: &mut Cache, lid:
                 cache.index[slot] = j;
                 v.cached += 1;
             }
-            j += inp.em.workgroup_size;
+            j += inp.em.workgroup_size * sp.stride;
         }
         offset += end - begin;
     }
@@ -322,7 +330,7 @@ fn photon_pass(
         let mut j = if r == v.resume_row {
             v.resume_j
         } else {
-            first_in_row(inp.em.workgroup_size, begin, offset, lid)
+            first_in_row(inp.em.workgroup_size, sp.stride, begin, offset, lid)
         };
         while j < end {
             let c = accept(inp, sp, j);
@@ -331,10 +339,43 @@ fn photon_pass(
                     inp, sp, v, c.dir, c.weight, j, NOT_CACHED, kind, sparse, full, losses,
                 );
             }
-            j += inp.em.workgroup_size;
+            j += inp.em.workgroup_size * sp.stride;
         }
         offset += end - begin;
     }
+}
+
+/// `irradiance_pass` in WGSL: every photon of invocation `lid` into the count and RGB sums.
+fn irradiance_pass(inp: &Inputs, sp: &Splat1, v: &mut Invocation, lid: u32, bx: &BinBox) {
+    let wg = inp.em.workgroup_size;
+    let mut offset = 0;
+    for r in 0..bin_row_count(bx) {
+        let row = bin_row(bx, r, inp.bins);
+        let begin = inp.cell_start[row.x as usize];
+        let end = inp.cell_start[row.y as usize];
+        let mut j = begin + (lid + wg - offset % wg) % wg;
+        while j < end {
+            if accept(inp, sp, j).ok {
+                let p = inp.bin_power[j as usize];
+                v.acc[SUM_COUNT] += 1.0;
+                v.acc[SUM_RGB] += p[0];
+                v.acc[SUM_RGB + 1] += p[1];
+                v.acc[SUM_RGB + 2] += p[2];
+            }
+            j += wg;
+        }
+        offset += end - begin;
+    }
+}
+
+/// The candidates of a splat's bin rows.
+fn candidate_count(inp: &Inputs, bx: &BinBox) -> u32 {
+    (0..bin_row_count(bx))
+        .map(|r| {
+            let row = bin_row(bx, r, inp.bins);
+            inp.cell_start[row.y as usize] - inp.cell_start[row.x as usize]
+        })
+        .sum()
 }
 
 /// `weakest_lobe` in WGSL: the lightest live lobe whose loss is under the penalty after an EM
@@ -510,6 +551,10 @@ fn fit_splat(inp: &Inputs, splats: &[Splat], entry: u32, resume: &[Lobe]) -> Opt
         }
     }
     let bx = bin_box(sp.center, em.radius, inp.bins);
+    sp.stride = 1;
+    if fit && em.fit_candidates > 0 {
+        sp.stride = candidate_count(inp, &bx).div_ceil(em.fit_candidates).max(1);
+    }
     let mut cache = Cache {
         dir: vec![[0.0; 4]; CACHE_SLOTS as usize],
         index: vec![0; CACHE_SLOTS as usize],
@@ -593,9 +638,22 @@ fn fit_splat(inp: &Inputs, splats: &[Splat], entry: u32, resume: &[Lobe]) -> Opt
         photon_pass(
             inp, &sp, v, &cache, lid as u32, &bx, PASS_FINAL, false, true, false,
         );
+        if sp.stride > 1 {
+            irradiance_pass(inp, &sp, v, lid as u32, &bx);
+        }
     }
     let total = reduce(&inv, sums, butterfly);
     let photons = total[SUM_COUNT] as u32;
+    let rgb = Vec3::new(total[SUM_RGB], total[SUM_RGB + 1], total[SUM_RGB + 2]);
+    // A subset's lobes share the irradiance of every photon, channel by channel.
+    let mut share = Vec3::ONE;
+    if sp.stride > 1 {
+        let lobe_rgb = (0..sp.lobe_count as usize).fold(Vec3::ZERO, |s, k| {
+            let o = LOBE_SUMS + LOBE_SLOTS * k;
+            s + Vec3::new(total[o], total[o + 1], total[o + 2])
+        });
+        share = Vec3::select(lobe_rgb.cmpgt(Vec3::ZERO), rgb / lobe_rgb, Vec3::ZERO);
+    }
     let written = if photons > 0 {
         sp.alive.count_ones()
     } else {
@@ -607,16 +665,15 @@ fn fit_splat(inp: &Inputs, splats: &[Splat], entry: u32, resume: &[Lobe]) -> Opt
         .take(written as usize)
         .map(|k| {
             let o = LOBE_SUMS + LOBE_SLOTS * k;
-            let e = Vec3::new(total[o], total[o + 1], total[o + 2]) * em.inv_area;
+            let e = Vec3::new(total[o], total[o + 1], total[o + 2]) * share * em.inv_area;
             Lobe {
                 irradiance: e.into(),
                 ..mixture(&sp, k)
             }
         })
         .collect();
-    let rgb = Vec3::new(total[SUM_RGB], total[SUM_RGB + 1], total[SUM_RGB + 2]) * em.inv_area;
     let out = SplatLight {
-        irradiance: rgb.into(),
+        irradiance: (rgb * em.inv_area).into(),
         photons,
         log_likelihood: total[SUM_LOG],
         weight: total[SUM_WEIGHT],

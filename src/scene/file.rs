@@ -117,6 +117,10 @@ pub struct BakeDesc {
     /// Drop the lobes a splat's photons do not need (a BIC test after the fit), so splats
     /// lit from few directions keep fewer lobes and shade faster.
     pub prune: bool,
+    /// Most candidate photons one splat's lobe fit visits per pass (0: all): past it an even
+    /// subset, reweighted, bounds the fit's time by splats, not photons; irradiance still
+    /// sums every photon.
+    pub fit_candidates: u32,
 }
 
 impl Default for BakeDesc {
@@ -133,6 +137,7 @@ impl Default for BakeDesc {
             sparse: false,
             slab: 2.0,
             prune: true,
+            fit_candidates: crate::em::DEFAULT_FIT_CANDIDATES,
         }
     }
 }

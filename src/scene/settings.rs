@@ -33,6 +33,7 @@ impl EmConfig {
             prune: b.prune,
             radius: scene.search_radius(),
             slab: b.slab,
+            fit_candidates: b.fit_candidates,
         }
     }
 }

@@ -155,7 +155,7 @@ struct EmParams {
     iteration_end: u32,
     workgroup_size: u32,
     prune: u32,
-    _pad1: u32,
+    fit_candidates: u32,
     _pad2: u32,
 }
 
