@@ -6,7 +6,9 @@
 //! the still image averages): it names a surface only where every point sees that surface.
 //! Pixels on an edge between surfaces hold `MIXED` and pixels that see no surface (or see a
 //! light first) hold `NONE`; per-object figures leave both out, since an anti-aliased edge
-//! pixel belongs to no one object.
+//! pixel belongs to no one object. A light is a hundred times brighter than what it lights, so
+//! a sliver of it between the points would swamp a surface's pixel: the pixels next to one
+//! where a point sees a light are edges too.
 
 use glam::{Vec2, Vec3};
 use rayon::prelude::*;
@@ -36,24 +38,29 @@ pub fn surface_of(id: u16) -> Option<u32> {
     (id != NONE && id != MIXED).then(|| id as u32 - 1)
 }
 
-/// The ID of the surface (or NONE) that the ray through `pixel` (continuous pixel coordinates)
-/// sees first.
-fn seen(scene: &Scene, geo: &Geometry, cam: &Camera, pixel: Vec2) -> u16 {
+/// What a point of a pixel sees: a surface's ID, or NONE (with `LIGHT` where a light is in
+/// front).
+const LIGHT: u32 = 1 << 16;
+
+/// The ID of the surface that the ray through `pixel` (continuous pixel coordinates) sees
+/// first, or NONE, | LIGHT where that is a light.
+fn seen(scene: &Scene, geo: &Geometry, cam: &Camera, pixel: Vec2) -> u32 {
     let o = Vec3::from(cam.eye);
     let d = pixel_ray(cam, pixel);
     let mut budget = SHADOW_RAY_BUDGET;
     let hit = trace_ray(geo, o, d, NO_SPLAT, FAR, &mut budget);
-    if hit.splat == NO_SPLAT || hit.aborted != 0 {
-        return NONE;
-    }
+    let t_surface = if hit.splat == NO_SPLAT { FAR } else { hit.t };
     let light_first = scene.lights.iter().any(|l| {
         let t = area_light_hit(l, o, d);
-        t > 0.0 && t < hit.t
+        t > 0.0 && t < t_surface
     });
     if light_first {
-        return NONE;
+        return NONE as u32 | LIGHT;
     }
-    id_of(scene.splats[hit.splat as usize].object)
+    if hit.splat == NO_SPLAT || hit.aborted != 0 {
+        return NONE as u32;
+    }
+    id_of(scene.splats[hit.splat as usize].object) as u32
 }
 
 /// The object-ID image of `cam` (`cam.size` pixels, row by row): per pixel the surface all of
@@ -79,15 +86,35 @@ pub fn object_ids(scene: &Scene, grid: &SplatGrid, cam: &Camera, samples: u32) -
     let points: Vec<Vec2> = (0..samples.max(1))
         .map(|k| Vec2::splat(0.5) + Vec2::from(crate::frame::jitter(k)))
         .collect();
-    Ok((0..w * h)
+    // Per pixel: its ID, and whether a point of it sees a light.
+    let pixels: Vec<(u16, bool)> = (0..w * h)
         .into_par_iter()
         .map(|i| {
             let px = Vec2::new((i % w) as f32, (i / w) as f32);
             let first = seen(scene, &geo, &cam, px + points[0]);
-            let agree = points[1..]
-                .iter()
-                .all(|&p| seen(scene, &geo, &cam, px + p) == first);
-            if agree { first } else { MIXED }
+            let mut agree = true;
+            let mut light = first & LIGHT != 0;
+            for &p in &points[1..] {
+                let other = seen(scene, &geo, &cam, px + p);
+                agree &= other == first;
+                light |= other & LIGHT != 0;
+            }
+            let id = if agree { first as u16 } else { MIXED };
+            (id, light)
+        })
+        .collect();
+    let lit_nearby = |x: u32, y: u32| {
+        let near = |a: u32, n: u32| a.saturating_sub(1)..=(a + 1).min(n - 1);
+        near(y, h).any(|y| near(x, w).any(|x| pixels[(y * w + x) as usize].1))
+    };
+    Ok((0..w * h)
+        .map(|i| {
+            let id = pixels[i as usize].0;
+            if surface_of(id).is_some() && lit_nearby(i % w, i / w) {
+                MIXED
+            } else {
+                id
+            }
         })
         .collect())
 }

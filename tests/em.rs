@@ -414,10 +414,13 @@ fn gpu_fit_equals_cpu_fit_on_the_same_photons() {
         &map.photons,
     )
     .unwrap();
-    for (family, sparse) in [
-        (LobeFamily::Vmf, false),
-        (LobeFamily::Ward, false),
-        (LobeFamily::Vmf, true),
+    // (family, sparse EM, lobes): five lobes, whose rounding growth was measured (below), and
+    // the scenes' default of eight.
+    for (family, sparse, lobes) in [
+        (LobeFamily::Vmf, false, 5),
+        (LobeFamily::Ward, false, 5),
+        (LobeFamily::Vmf, true, 5),
+        (LobeFamily::Vmf, false, 8),
     ] {
         // EM amplifies rounding: where lobes compete for one cluster, a difference in the last
         // bits of exp/log (the GPU's are not the CPU's) grows about threefold per iteration
@@ -430,8 +433,13 @@ fn gpu_fit_equals_cpu_fit_on_the_same_photons() {
             sparse,
             fit_all: true,
             iterations: 5,
+            lobes,
             ..EmConfig::from_scene(&scene)
         };
+        // Eight lobes compete for a cluster more often than five, and there the growth of
+        // rounding outruns five iterations on a few splats (measured: 15 lobes of 187,264
+        // part, one in 12,000): they may part as sparse EM's may, one lobe in 1,000.
+        let may_part = sparse || lobes > 5;
         for shape in shapes(&gpu) {
             let c = cpu::fit_lobes(&em, &bins, &scene.splats, &scene.materials, shape).unwrap();
             let g = on_gpu_shaped(&gpu, &em, &bins, &scene.splats, &scene.materials, shape);
@@ -439,8 +447,8 @@ fn gpu_fit_equals_cpu_fit_on_the_same_photons() {
             assert_eq!(c.stats.fitted, g.stats.fitted);
             assert!(c.fitted().any(|l| l.lobes < em.lobes), "nothing pruned");
             assert_parity(
-                &format!("{family:?} sparse {sparse} {shape:?}"),
-                sparse,
+                &format!("{family:?} sparse {sparse}, {lobes} lobes, {shape:?}"),
+                may_part,
                 &c,
                 &g,
             );
@@ -536,17 +544,18 @@ fn a_bounded_fit_keeps_the_irradiance_and_the_lobes() {
     }
 }
 
-/// GPU lobes against the CPU mirror's, splat by splat (tolerances in the comments); `sparse`
-/// allows one lobe in 1,000 to part.
-fn assert_parity(label: &str, sparse: bool, c: &LobeMap, g: &LobeMap) {
+/// GPU lobes against the CPU mirror's, splat by splat (tolerances in the comments); `may_part`
+/// (sparse EM, or eight lobes) allows one lobe in 1,000 to part.
+fn assert_parity(label: &str, may_part: bool, c: &LobeMap, g: &LobeMap) {
     let mut worst = (0.0f32, 0.0f32, 0.0f32);
     let (mut compared, mut faint, mut off) = (0usize, 0usize, 0usize);
     for i in 0..c.light.len() {
         let (cl, gl) = (&c.light[i], &g.light[i]);
         assert_eq!(cl.photons, gl.photons, "splat {i}");
-        // Pruning's test is a threshold too: with sparse EM's parted responsibilities a
-        // splat may keep one lobe more on one side (counted below like parted lobes).
-        if cl.lobes != gl.lobes && sparse {
+        // Pruning's test is a threshold too: with sparse EM's parted responsibilities (or
+        // eight competing lobes) a splat may keep one lobe more on one side (counted below
+        // like parted lobes).
+        if cl.lobes != gl.lobes && may_part {
             eprintln!("splat {i}: {} lobes vs {}", gl.lobes, cl.lobes);
             off += 1;
             continue;
@@ -605,8 +614,9 @@ fn assert_parity(label: &str, sparse: bool, c: &LobeMap, g: &LobeMap) {
     );
     // Sparse EM has a threshold: a responsibility within rounding of 0.02 freezes on one
     // side and not on the other, and the splat's lobes then part by more than rounding.
-    // Allowed on one lobe in 1,000; plain EM must match everywhere.
-    let allowed = if sparse { compared / 1_000 } else { 0 };
+    // Allowed on one lobe in 1,000, as for eight competing lobes (the caller's comment);
+    // plain EM with five must match everywhere.
+    let allowed = if may_part { compared / 1_000 } else { 0 };
     assert!(off <= allowed, "{off} lobes apart (allowed {allowed})");
 }
 

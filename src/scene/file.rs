@@ -108,7 +108,7 @@ pub struct BakeDesc {
     /// Which photon hits are stored: "indirect" (bounce >= 1, the thesis's choice: direct
     /// light comes from shadow rays) or "all".
     pub store: StoreRange,
-    /// Lobe family: "ward" (the thesis's, default) or "vmf".
+    /// Lobe family: "vmf" (default) or "ward" (the thesis's).
     pub family: crate::em::LobeFamily,
     /// Sparse EM (thesis §3.5).
     pub sparse: bool,
@@ -128,12 +128,12 @@ impl Default for BakeDesc {
         BakeDesc {
             photons: 1_000_000,
             radius: None,
-            lobes: 5,
+            lobes: 8,
             iterations: 10,
             seed: 1,
             max_depth: 8,
             store: StoreRange::Indirect,
-            family: crate::em::LobeFamily::Ward,
+            family: crate::em::LobeFamily::Vmf,
             sparse: false,
             slab: 2.0,
             prune: true,
