@@ -228,7 +228,8 @@ pub fn traced_and_binned_gpu(
     let spin = progress.spinner("binning");
     let t = Instant::now();
     let radius = EmConfig::from_scene(scene).radius;
-    let bins = bin_photons(gpu, &traced, &bin_params(&on_gpu.grid.params, radius)?)?;
+    let params = bin_params(&on_gpu.grid.params, radius)?;
+    let bins = bin_photons(gpu, &traced, &on_gpu.splats, &params)?;
     let binning_ms = ms_since(t);
     spin.finish_and_clear();
     progress.done("binning", binning_ms, "");
@@ -263,7 +264,11 @@ pub fn bins_cpu(
     let spin = progress.spinner("binning");
     let t = Instant::now();
     let radius = EmConfig::from_scene(scene).radius;
-    let bins = cpu::bin_photons(&bin_params(&grid.params, radius)?, &map.photons)?;
+    let bins = cpu::bin_photons(
+        &bin_params(&grid.params, radius)?,
+        &map.photons,
+        &scene.splats,
+    )?;
     let binning_ms = ms_since(t);
     spin.finish_and_clear();
     progress.done("binning", binning_ms, "");

@@ -287,6 +287,7 @@ impl<B> Bins<B> {
 pub fn bin_photons<E: Executor>(
     ex: &mut E,
     pages: &[(&E::Buffer, u32)],
+    splats: &E::Buffer,
     params: &BinParams,
 ) -> Result<Bins<E::Buffer>> {
     let total: u64 = pages.iter().map(|p| p.1 as u64).sum();
@@ -325,6 +326,7 @@ pub fn bin_photons<E: Executor>(
             &scratch_cells,
             &scratch_geom,
             &scratch_power,
+            splats,
         ];
         ex.dispatch("bin_scatter", &bindings, groups("bin_scatter", count)?)?;
     }

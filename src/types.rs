@@ -220,7 +220,8 @@ pub struct SplatLight {
 
 /// A binned photon's geometry: position and the octahedral-encoded incident direction
 /// (two snorm16, see `wgsl/shared/octahedral.wgsl`). Its power lives in a parallel
-/// `vec4` array (RGB, then the EM weight `mean(RGB)`), so each array is 16 bytes a photon.
+/// `vec4` array (RGB, then the surface it landed on, `surface_encode` of its splat's normal;
+/// its EM weight is `mean(RGB)`), so each array is 16 bytes a photon.
 #[repr(C)]
 #[derive(Clone, Copy, Debug, Default, PartialEq, Pod, Zeroable)]
 pub struct BinnedPhoton {

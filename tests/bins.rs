@@ -78,12 +78,24 @@ fn gpu_bins_equal_cpu_bins_across_pages() {
     let traced = trace_photons(&gpu, &scene, &uploaded, &cfg, &mut |_, _| {}).unwrap();
     assert!(traced.pages.len() >= 3, "{} pages", traced.pages.len());
     let params = bin_params(&uploaded.grid.params, scene.search_radius()).unwrap();
-    let on_gpu = bin_photons(&gpu, &traced, &params)
+    let on_gpu = bin_photons(&gpu, &traced, &uploaded.splats, &params)
         .unwrap()
         .download(&gpu)
         .unwrap();
     let map = traced.download(&gpu).unwrap();
-    let on_cpu = cpu::bin_photons(&params, &map.photons).unwrap();
+    let on_cpu = cpu::bin_photons(&params, &map.photons, &scene.splats).unwrap();
+    // Each photon carries the surface it landed on.
+    let by_key: std::collections::HashMap<_, _> =
+        map.photons.iter().map(|m| (m.key(), m)).collect();
+    for (p, q) in on_cpu.power.iter().zip(&on_cpu.keys) {
+        let photon = by_key[&(q[0], q[1])];
+        let n = glam::Vec3::from(scene.splats[photon.splat as usize].normal);
+        let got = lobelight::shared::octahedral::surface_decode(p[3]);
+        assert!(
+            got.dot(n) > 0.9999,
+            "surface {got} of a photon on a splat facing {n}"
+        );
+    }
     assert_well_formed(&on_cpu, &map);
     assert_same_bins(&on_gpu, &on_cpu);
 }
@@ -117,9 +129,10 @@ fn long_cell_lists_sort_across_rank_chunks() {
         photons,
         stats: Default::default(),
     };
-    let on_cpu = cpu::bin_photons(&params, &map.photons).unwrap();
+    let on_cpu = cpu::bin_photons(&params, &map.photons, &splats).unwrap();
     let uploaded = GpuPhotons::upload(&gpu, &map).unwrap();
-    let binned = bin_photons(&gpu, &uploaded, &params).unwrap();
+    let splat_buffer = gpu.storage("splats", &splats).unwrap();
+    let binned = bin_photons(&gpu, &uploaded, &splat_buffer, &params).unwrap();
     assert_eq!(binned.rank_chunks, 3);
     let on_gpu = binned.download(&gpu).unwrap();
     assert_well_formed(&on_cpu, &map);

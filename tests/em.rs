@@ -77,7 +77,7 @@ impl Fixture {
 
     fn bins(&self) -> PhotonBins {
         let grid = grid_params(&self.splats, &Default::default()).unwrap();
-        cpu::bin_photons(&bin_params(&grid, R).unwrap(), &self.photons).unwrap()
+        cpu::bin_photons(&bin_params(&grid, R).unwrap(), &self.photons, &self.splats).unwrap()
     }
 }
 
@@ -412,6 +412,7 @@ fn gpu_fit_equals_cpu_fit_on_the_same_photons() {
     let bins = cpu::bin_photons(
         &bin_params(&grid.params, scene.search_radius()).unwrap(),
         &map.photons,
+        &scene.splats,
     )
     .unwrap();
     // (family, sparse EM, lobes): five lobes, whose rounding growth was measured (below), and
@@ -773,5 +774,48 @@ fn degenerate_inputs_give_finite_lobes() {
                 }
             }
         }
+    }
+}
+
+/// A photon counts for a splat only where it landed on a surface facing the splat's way
+/// (within 60°): near a corner the perpendicular surface's photons lie within R and within
+/// the slab too, and would count for both surfaces. Here 100 bright photons that landed on a
+/// wall facing +x lie on splat 0 (facing +z), arriving from its front: its photon count and
+/// irradiance are its own 200 photons' alone, on the mirror and on the device.
+#[test]
+fn photons_of_a_perpendicular_surface_do_not_count() {
+    let gpu = common::gpu();
+    let mut rng = Rng(31);
+    let truth = [(dir(20.0, 40.0), 0.08, 1.0)];
+    let own = mixture(&mut rng, LobeFamily::Ward, &truth, 200);
+    let mut fixture = Fixture::new(&[own.clone(), Vec::new()]);
+    fixture.splats[1].normal = [1.0, 0.0, 0.0];
+    let first = fixture.photons.len() as u32;
+    for k in 0..100u32 {
+        let a = k as f32 * 0.3;
+        fixture.photons.push(Photon {
+            position: [0.3 * R * a.cos(), 0.3 * R * a.sin(), 0.0],
+            bounce: 1,
+            direction: dir(30.0, 0.0).into(),
+            splat: 1,
+            power: [5.0; 3],
+            path: first + k,
+        });
+    }
+    let bins = fixture.bins();
+    let expected = own.iter().map(|(_, p)| p[0]).sum::<f32>() / (std::f32::consts::PI * R * R);
+    let cfg = config(LobeFamily::Ward, 2, 5);
+    let (splats, materials) = (&fixture.splats, &fixture.materials);
+    for (on, map) in [
+        ("CPU", on_cpu(&cfg, &bins, splats, materials)),
+        ("GPU", on_gpu(&gpu, &cfg, &bins, splats, materials)),
+    ] {
+        let l = &map.light[0];
+        assert_eq!(l.photons, 200, "{on}");
+        assert!(
+            (l.irradiance[0] / expected - 1.0).abs() < 1e-5,
+            "{on}: irradiance {} against its own photons' {expected}",
+            l.irradiance[0]
+        );
     }
 }

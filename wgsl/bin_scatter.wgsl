@@ -1,6 +1,6 @@
 // Photon binning, pass 2 of 4: copy the photons of one store page into a scratch list grouped
-// by cell, in the compact binned form (position + octahedral direction, RGB power + EM
-// weight), each with its sort key (path, bounce) and cell. Slots come from an atomic cursor
+// by cell, in the compact binned form (position + octahedral direction, RGB power + the
+// surface it landed on, surface_encode of its splat's normal), each with its sort key (path, bounce) and cell. Slots come from an atomic cursor
 // per cell, so the order inside a cell depends on scheduling until bin_rank and bin_place.
 // CPU mirror: src/cpu/bin_scatter.rs.
 
@@ -17,6 +17,7 @@
 @group(0) @binding(5) var<storage, read_write> scratch_cells: array<u32>;
 @group(0) @binding(6) var<storage, read_write> scratch_geom: array<BinnedPhoton>;
 @group(0) @binding(7) var<storage, read_write> scratch_power: array<vec4<f32>>;
+@group(0) @binding(8) var<storage, read> splats: array<Splat>;
 
 const WG: u32 = 64u;
 
@@ -33,7 +34,10 @@ fn main(@builtin(workgroup_id) wg: vec3<u32>, @builtin(num_workgroups) num_wg: v
     scratch_keys[slot] = vec2<u32>(p.path, p.bounce);
     scratch_cells[slot] = c;
     scratch_geom[slot] = BinnedPhoton(p.position, oct_encode(p.direction));
-    // The EM weight of a photon is the mean of its RGB power (thesis §3.5).
-    let weight = (p.power.x + p.power.y + p.power.z) * (1.0 / 3.0);
-    scratch_power[slot] = vec4<f32>(p.power, weight);
+    // A photon's splat is always one of the scene's; were it not, it faces nowhere in particular.
+    var n = vec3<f32>(0.0, 0.0, 1.0);
+    if p.splat < arrayLength(&splats) {
+        n = splats[p.splat].normal;
+    }
+    scratch_power[slot] = vec4<f32>(p.power, surface_encode(n));
 }

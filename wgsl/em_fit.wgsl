@@ -154,12 +154,13 @@ fn accept(j: u32) -> Candidate {
     var c: Candidate;
     let g = bin_geom[j];
     let d = g.position - center;
-    // Most candidates fail on position: the direction and the weight only load for the rest.
+    // Most candidates fail on position: the direction and the power only load for the rest.
     c.ok = dot(d, d) <= em.radius2 && abs(dot(d, normal)) <= slab;
     if c.ok {
+        let power = bin_power[j];
         c.dir = oct_decode(g.direction);
-        c.ok = dot(c.dir, normal) > 0.0;
-        c.weight = bin_power[j].w * f32(stride);
+        c.ok = dot(c.dir, normal) > 0.0 && dot(surface_decode(power.w), normal) >= SURFACE_COS_MIN;
+        c.weight = photon_weight(power.xyz) * f32(stride);
     }
     return c;
 }

@@ -1,7 +1,7 @@
 // The reference renderer's first pass (thesis section 4.2, docs/design.md section 7): per pixel,
 // the visible point by casting the view ray through the splat grid, and the radiance the
 // photon map reflects there directly: every binned photon within R of the point (in the
-// splat's slab, arriving from above it) with the exact Ward BRDF of its own direction,
+// splat's slab, on a surface facing its way, arriving from above it) with the exact Ward BRDF of its own direction,
 // weighted by the Epanechnikov kernel 2 / (pi R^2) (1 - d^2 / R^2). No lobes: the image the
 // lobes approximate. It writes what splat_attributes writes, with weight 1, so the same shade
 // pass adds the same direct light. A full-screen triangle, so the targets and their formats
@@ -37,12 +37,13 @@ fn gather(p: vec3<f32>, n: vec3<f32>, wo: vec3<f32>, rho_d: vec3<f32>, m: Materi
             if d2 > em.radius2 || abs(dot(d, n)) > slab {
                 continue;
             }
+            let power = bin_power[j];
             let wi = oct_decode(g.direction);
-            if dot(wi, n) <= 0.0 {
+            if dot(wi, n) <= 0.0 || dot(surface_decode(power.w), n) < SURFACE_COS_MIN {
                 continue;
             }
             let f = rho_d / PI + m.specular * ward_specular(n, wi, wo, m.roughness);
-            sum += (kernel * (1.0 - d2 * inv_r2)) * f * bin_power[j].xyz;
+            sum += (kernel * (1.0 - d2 * inv_r2)) * f * power.xyz;
         }
     }
     return sum;

@@ -248,7 +248,7 @@ pub fn em(
             let traced_stats = traced.stats.clone();
             let params = bin_params(&on_gpu.grid.params, cfg.radius)?;
             let t = Instant::now();
-            let bins = gpu_bins::bin_photons(gpu, &traced, &params)?;
+            let bins = gpu_bins::bin_photons(gpu, &traced, &on_gpu.splats, &params)?;
             let binning_ms = ms_since(t);
             drop(traced);
             let n = scene.splats.len() as u32;
@@ -276,7 +276,7 @@ pub fn em(
             let (traced, grid, _) = cpu::trace_scene(scene, photons, &mut |_, _| {})?;
             let params = bin_params(&grid.params, cfg.radius)?;
             let t = Instant::now();
-            let bins = cpu::bin_photons(&params, &traced.photons)?;
+            let bins = cpu::bin_photons(&params, &traced.photons, &scene.splats)?;
             let binning_ms = ms_since(t);
             let fit = |c: &EmConfig| {
                 cpu::fit_lobes(

@@ -2,8 +2,8 @@
 //! order; the GPU's depends on scheduling until `bin_rank` and `bin_place`.
 
 use crate::shared::bins::bin_of;
-use crate::shared::octahedral::oct_encode;
-use crate::types::{BinParams, BinnedPhoton, Photon};
+use crate::shared::octahedral::{oct_encode, surface_encode};
+use crate::types::{BinParams, BinnedPhoton, Photon, Splat};
 use glam::Vec3;
 
 pub const WG: u32 = 64;
@@ -18,6 +18,7 @@ pub fn bin_scatter(
     scratch_cells: &mut [u32],
     scratch_geom: &mut [BinnedPhoton],
     scratch_power: &mut [[f32; 4]],
+    splats: &[Splat],
     groups: u32,
 ) {
     for wg in 0..groups {
@@ -36,8 +37,10 @@ pub fn bin_scatter(
                 position: p.position,
                 direction: oct_encode(Vec3::from(p.direction)),
             };
-            let weight = (p.power[0] + p.power[1] + p.power[2]) * (1.0 / 3.0);
-            scratch_power[slot] = [p.power[0], p.power[1], p.power[2], weight];
+            let n = splats
+                .get(p.splat as usize)
+                .map_or(Vec3::Z, |s| Vec3::from(s.normal));
+            scratch_power[slot] = [p.power[0], p.power[1], p.power[2], surface_encode(n)];
         }
     }
 }

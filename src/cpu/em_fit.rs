@@ -7,9 +7,11 @@ use glam::Vec3;
 use rayon::prelude::*;
 
 use super::em_select::FIT_BIT;
-use crate::shared::bins::{BinBox, bin_box, bin_row, bin_row_count};
+use crate::shared::bins::{
+    BinBox, SURFACE_COS_MIN, bin_box, bin_row, bin_row_count, photon_weight,
+};
 use crate::shared::lobes::*;
-use crate::shared::octahedral::oct_decode;
+use crate::shared::octahedral::{oct_decode, surface_decode};
 use crate::shared::sampling::frame_of;
 use crate::types::{BinParams, BinnedPhoton, EmParams, Lobe, Splat, SplatLight};
 
@@ -128,9 +130,11 @@ fn accept(inp: &Inputs, sp: &Splat1, j: u32) -> Candidate {
         weight: 0.0,
     };
     if c.ok {
+        let power = inp.bin_power[j as usize];
         c.dir = oct_decode(g.direction);
-        c.ok = c.dir.dot(sp.normal) > 0.0;
-        c.weight = inp.bin_power[j as usize][3] * sp.stride as f32;
+        c.ok = c.dir.dot(sp.normal) > 0.0
+            && surface_decode(power[3]).dot(sp.normal) >= SURFACE_COS_MIN;
+        c.weight = photon_weight(power) * sp.stride as f32;
     }
     c
 }

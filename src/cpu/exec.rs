@@ -287,6 +287,7 @@ fn run(stage: &str, b: &[&CpuBuffer], groups: u32) -> Result<()> {
             let mut cells = get_mut(stage, b, 5)?;
             let mut geom = get_mut(stage, b, 6)?;
             let mut power = get_mut(stage, b, 7)?;
+            let splats = get(stage, b, 8)?;
             bin_scatter::bin_scatter(
                 &p,
                 view(&photons),
@@ -296,6 +297,7 @@ fn run(stage: &str, b: &[&CpuBuffer], groups: u32) -> Result<()> {
                 &mut cells,
                 view_mut(&mut geom),
                 view_mut(&mut power),
+                view(&splats),
                 groups,
             );
         }

@@ -142,13 +142,14 @@ pub fn trace_scene(
 }
 
 /// Photon binning on the CPU mirror (`sequence::bin_photons`) over one page holding every
-/// photon.
-pub fn bin_photons(params: &BinParams, photons: &[Photon]) -> Result<PhotonBins> {
+/// photon, which landed on `splats`.
+pub fn bin_photons(params: &BinParams, photons: &[Photon], splats: &[Splat]) -> Result<PhotonBins> {
     let n = u32::try_from(photons.len())
         .map_err(|_| Error::Invalid("too many photons to bin".into()))?;
     let mut ex = CpuExecutor::default();
     let page = ex.upload("photons", photons)?;
-    sequence::bin_photons(&mut ex, &[(&page, n)], params)?.read_back(&mut ex)
+    let splats = ex.upload("splats", splats)?;
+    sequence::bin_photons(&mut ex, &[(&page, n)], &splats, params)?.read_back(&mut ex)
 }
 
 /// The lobe fit on the CPU: `em_select`, then `em_fit` over the same dispatch ranges and

@@ -9,8 +9,8 @@ use rayon::prelude::*;
 
 use super::splat_attributes::Attributes;
 use crate::bins::PhotonBins;
-use crate::shared::bins::{bin_box, bin_row, bin_row_count};
-use crate::shared::octahedral::oct_decode;
+use crate::shared::bins::{SURFACE_COS_MIN, bin_box, bin_row, bin_row_count};
+use crate::shared::octahedral::{oct_decode, surface_decode};
 use crate::shared::sampling::PI;
 use crate::shared::splat::{SHADOW_RAY_BUDGET, pixel_ray};
 use crate::shared::trace::{FAR, Geometry, trace_ray};
@@ -42,12 +42,12 @@ fn gather(
             if d2 > em.radius2 || d.dot(n).abs() > slab {
                 continue;
             }
+            let power = bins.power[j as usize];
             let wi = oct_decode(g.direction);
-            if wi.dot(n) <= 0.0 {
+            if wi.dot(n) <= 0.0 || surface_decode(power[3]).dot(n) < SURFACE_COS_MIN {
                 continue;
             }
             let f = rho_d / PI + Vec3::from(m.specular) * ward_specular(n, wi, wo, m.roughness);
-            let power = bins.power[j as usize];
             sum += (kernel * (1.0 - d2 * inv_r2)) * f * Vec3::new(power[0], power[1], power[2]);
         }
     }

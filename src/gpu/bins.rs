@@ -33,8 +33,14 @@ impl GpuBins {
     }
 }
 
-/// Bins the photons of every store page on the device (`sequence::bin_photons`).
-pub fn bin_photons(gpu: &Gpu, photons: &GpuPhotons, params: &BinParams) -> Result<GpuBins> {
+/// Bins the photons of every store page on the device (`sequence::bin_photons`), which landed
+/// on `splats`.
+pub fn bin_photons(
+    gpu: &Gpu,
+    photons: &GpuPhotons,
+    splats: &wgpu::Buffer,
+    params: &BinParams,
+) -> Result<GpuBins> {
     let total: u64 = photons.pages.iter().map(|p| p.count).sum();
     check_binned(total, gpu.max_binding_bytes())?;
     let pages: Vec<(&wgpu::Buffer, u32)> = photons
@@ -43,7 +49,8 @@ pub fn bin_photons(gpu: &Gpu, photons: &GpuPhotons, params: &BinParams) -> Resul
         .map(|p| (&p.buffer, p.count as u32))
         .collect();
     let mut encoder = gpu.encoder("binning");
-    let bins = sequence::bin_photons(&mut GpuExecutor::new(gpu, &mut encoder), &pages, params)?;
+    let mut ex = GpuExecutor::new(gpu, &mut encoder);
+    let bins = sequence::bin_photons(&mut ex, &pages, splats, params)?;
     gpu.submit_and_wait(encoder)?;
     Ok(bins)
 }

@@ -11,6 +11,15 @@ pub const BIN_SPAN: u32 = 4;
 /// Entries of a cell list one `bin_rank` invocation compares against per dispatch.
 pub const RANK_CHUNK: u32 = 8192;
 
+/// A binned photon's EM weight: the mean of its RGB power (its power's w holds its surface).
+pub fn photon_weight(power: [f32; 4]) -> f32 {
+    (power[0] + power[1] + power[2]) * (1.0 / 3.0)
+}
+
+/// Least cosine between a photon's surface and a splat's normal for it to count
+/// (`SURFACE_COS_MIN` in WGSL).
+pub const SURFACE_COS_MIN: f32 = 0.5;
+
 pub fn bin_coord(p: Vec3, b: &BinParams) -> UVec3 {
     let top = (UVec3::from(b.dims) - UVec3::ONE).as_vec3();
     ((p - Vec3::from(b.origin)) * b.inv_cell_size)

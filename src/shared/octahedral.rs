@@ -35,3 +35,28 @@ pub fn oct_decode(code: u32) -> Vec3 {
     let xy = p - fold * sign_not_zero(p);
     Vec3::new(xy.x, xy.y, z).normalize()
 }
+
+/// `SURFACE_STEPS` in WGSL: 12 bits per axis of a surface code.
+const SURFACE_STEPS: f32 = 4095.0;
+
+/// A binned photon's surface (its splat's normal) as a whole number below 2²⁴ in an f32.
+pub fn surface_encode(n: Vec3) -> f32 {
+    let p = Vec2::new(n.x, n.y) / (n.x.abs() + n.y.abs() + n.z.abs());
+    let q = if n.z < 0.0 {
+        (Vec2::ONE - Vec2::new(p.y, p.x).abs()) * sign_not_zero(p)
+    } else {
+        p
+    };
+    let u =
+        ((q.clamp(Vec2::NEG_ONE, Vec2::ONE) * 0.5 + 0.5) * SURFACE_STEPS).map(f32::round_ties_even);
+    u.x + 4096.0 * u.y
+}
+
+pub fn surface_decode(code: f32) -> Vec3 {
+    let c = code as u32;
+    let p = Vec2::new((c % 4096) as f32, (c / 4096) as f32) * (2.0 / SURFACE_STEPS) - 1.0;
+    let z = 1.0 - p.x.abs() - p.y.abs();
+    let fold = (-z).max(0.0);
+    let xy = p - fold * sign_not_zero(p);
+    Vec3::new(xy.x, xy.y, z).normalize()
+}

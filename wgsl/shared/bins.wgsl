@@ -7,6 +7,17 @@
 // Entries of a cell list one bin_rank invocation compares against per dispatch.
 const RANK_CHUNK: u32 = 8192u;
 
+// A binned photon's power is (RGB, surface code): its EM weight, the mean of its RGB power
+// (thesis section 3.5), is computed where it is read.
+fn photon_weight(power: vec3<f32>) -> f32 {
+    return (power.x + power.y + power.z) * (1.0 / 3.0);
+}
+
+// A photon counts for a splat only if it landed on a surface facing the same way, within 60
+// degrees (surface_decode of its power's w against the splat's normal): near a corner, the
+// perpendicular surface's photons lie within the slab too, and would count for both.
+const SURFACE_COS_MIN: f32 = 0.5;
+
 fn bin_coord(p: vec3<f32>, b: BinParams) -> vec3<u32> {
     let top = vec3<f32>(b.dims - vec3<u32>(1u));
     return vec3<u32>(clamp(floor((p - b.origin) * b.inv_cell_size), vec3<f32>(0.0), top));
