@@ -1,6 +1,11 @@
 //! `--cache FILE`: the baked lobes on disk, keyed by a hash of everything the bake reads
 //! (splats, materials, lights, grid and bake settings, program version) and nothing it does
 //! not (camera, image size, tone mapping), so a new view loads them and any change re-bakes.
+//!
+//! Layout (little-endian): the magic bytes, a 64-bit FNV-1a checksum of everything after it,
+//! then the format version, the lobe count, the key, lobes per splat, the splat count, the
+//! packed lobes and the splats' light. A file whose checksum does not match (a byte flipped
+//! on disk or in a copy, a truncated write) is an error naming the file, never a silent image.
 
 use std::path::Path;
 
@@ -10,9 +15,12 @@ use crate::scene::Scene;
 use crate::types::{Lobe, SplatLight};
 
 const MAGIC: &[u8; 8] = b"LOBELITE";
-/// 2: lobes packed (`LobeMap::pack`), their count in the header's fourth field.
-const VERSION: u32 = 2;
-const HEADER: usize = 8 + 4 + 4 + 8 + 4 + 4;
+/// 2: lobes packed (`LobeMap::pack`), their count in the header; 3: a checksum after the magic.
+const VERSION: u32 = 3;
+/// The version of the files before the checksum, whose version field sits where the checksum
+/// now begins: such a file is stale, not corrupt.
+const VERSION_UNCHECKED: u32 = 2;
+const HEADER: usize = 8 + 8 + 4 + 4 + 8 + 4 + 4;
 
 /// 64-bit FNV-1a: small, and stable across platforms and compiler versions (the standard
 /// library's hasher promises neither).
@@ -65,17 +73,38 @@ pub fn load(path: &Path, key: u64, splats: usize) -> Result<std::result::Result<
         at: "header".into(),
         message: format!("not a lobelight bake cache: {why}"),
     };
-    if bytes.len() < HEADER || &bytes[..8] != MAGIC {
+    if bytes.len() < 12 || &bytes[..8] != MAGIC {
         return Err(bad("wrong magic bytes"));
     }
     let u32_at =
         |o: usize| u32::from_le_bytes([bytes[o], bytes[o + 1], bytes[o + 2], bytes[o + 3]]);
-    let mut key_bytes = [0u8; 8];
-    key_bytes.copy_from_slice(&bytes[16..24]);
-    if u32_at(8) != VERSION || u64::from_le_bytes(key_bytes) != key {
+    let u64_at = |o: usize| {
+        let mut b = [0u8; 8];
+        b.copy_from_slice(&bytes[o..o + 8]);
+        u64::from_le_bytes(b)
+    };
+    // A file of the format before the checksum: its size matches its own header.
+    let unchecked_len = |b: &[u8]| {
+        let payload = u32_at(12) as u64 * size_of::<Lobe>() as u64
+            + u32_at(28) as u64 * size_of::<SplatLight>() as u64;
+        b.len() >= 32 && b.len() as u64 == 32 + payload
+    };
+    if u32_at(8) == VERSION_UNCHECKED && unchecked_len(&bytes) {
         return Ok(Err(Miss::Stale));
     }
-    let (lobe_count, per_splat, count) = (u32_at(12) as usize, u32_at(24), u32_at(28) as usize);
+    if bytes.len() < HEADER {
+        return Err(bad("it is shorter than its header"));
+    }
+    if u64_at(8) != checksum(&bytes[16..]) {
+        return Err(bad(
+            "its checksum does not match its contents (the file is damaged); delete it to bake \
+             again",
+        ));
+    }
+    if u32_at(16) != VERSION || u64_at(24) != key {
+        return Ok(Err(Miss::Stale));
+    }
+    let (lobe_count, per_splat, count) = (u32_at(20) as usize, u32_at(32), u32_at(36) as usize);
     let lobe_bytes = lobe_count * size_of::<Lobe>();
     let light_bytes = count * size_of::<SplatLight>();
     if count != splats || bytes.len() != HEADER + lobe_bytes + light_bytes {
@@ -92,9 +121,17 @@ pub fn load(path: &Path, key: u64, splats: usize) -> Result<std::result::Result<
     Ok(Ok(map))
 }
 
+/// FNV-1a over `bytes`: any one changed byte changes it (each step is invertible).
+fn checksum(bytes: &[u8]) -> u64 {
+    let mut h = Fnv(0xcbf2_9ce4_8422_2325);
+    h.write(bytes);
+    h.0
+}
+
 pub fn save(path: &Path, key: u64, map: &LobeMap) -> Result<()> {
     let mut bytes = Vec::with_capacity(HEADER + map.lobes.len() * size_of::<Lobe>());
     bytes.extend_from_slice(MAGIC);
+    bytes.extend_from_slice(&[0u8; 8]);
     bytes.extend_from_slice(&VERSION.to_le_bytes());
     bytes.extend_from_slice(&(map.lobes.len() as u32).to_le_bytes());
     bytes.extend_from_slice(&key.to_le_bytes());
@@ -102,5 +139,7 @@ pub fn save(path: &Path, key: u64, map: &LobeMap) -> Result<()> {
     bytes.extend_from_slice(&(map.light.len() as u32).to_le_bytes());
     bytes.extend_from_slice(bytemuck::cast_slice(&map.lobes));
     bytes.extend_from_slice(bytemuck::cast_slice(&map.light));
+    let sum = checksum(&bytes[16..]);
+    bytes[8..16].copy_from_slice(&sum.to_le_bytes());
     std::fs::write(path, bytes).map_err(io(path))
 }
