@@ -19,9 +19,23 @@ use lobelight::photons::PhotonConfig;
 use lobelight::scene;
 use lobelight::tone::ToneConfig;
 
+/// Fails at once, naming the program and its Debian package, where `program` is not on the
+/// PATH: a viewer test without it would otherwise time out waiting for a window.
+fn require(program: &str, package: &str) {
+    let found = std::env::var_os("PATH")
+        .is_some_and(|paths| std::env::split_paths(&paths).any(|dir| dir.join(program).is_file()));
+    assert!(
+        found,
+        "{program} is missing: the viewer tests need it (install the {package} package; CI does)"
+    );
+}
+
 /// `xvfb-run -a` starting its search for a free display at a number of its own: two runs at
 /// once from the same number can both pick it, and the second viewer then finds no X server.
 fn xvfb_run() -> Command {
+    require("xvfb-run", "xvfb");
+    require("Xvfb", "xvfb");
+    require("xauth", "xauth");
     static NEXT: std::sync::atomic::AtomicU32 = std::sync::atomic::AtomicU32::new(0);
     let k = NEXT.fetch_add(1, std::sync::atomic::Ordering::Relaxed);
     let server = 100 + (std::process::id() % 100) * 20 + k;
@@ -365,6 +379,7 @@ fn a_moved_light_bakes_a_preview_then_in_full() {
 /// Each step waits for the window's title to say it happened (no fixed sleeps).
 #[test]
 fn the_keys_switch_views_move_the_light_and_quit() {
+    require("xdotool", "xdotool");
     let exe = env!("CARGO_BIN_EXE_lobelight");
     let dir = std::path::PathBuf::from(path("keys"));
     std::fs::create_dir_all(&dir).unwrap();
