@@ -519,3 +519,46 @@ fn headless_commands_print_no_driver_noise() {
     let stderr = String::from_utf8_lossy(&out.stderr);
     assert!(!stderr.contains("XDG_RUNTIME_DIR"), "stderr: {stderr}");
 }
+
+/// With no adapter at all (the Vulkan loader pointed at no driver), render and info run the
+/// CPU mirror and say so in one line that names lavapipe; a backend asked for by name stays an
+/// error.
+#[test]
+fn no_adapter_falls_back_to_the_cpu_mirror() {
+    let hidden = [
+        ("VK_ICD_FILENAMES", "/nonexistent/icd.json"),
+        ("VK_DRIVER_FILES", "/nonexistent/icd.json"),
+        ("WGPU_BACKEND", "vulkan"),
+    ];
+    let png = std::env::temp_dir()
+        .join(format!("lobelight-nogpu-{}.png", std::process::id()))
+        .display()
+        .to_string();
+    let render = [
+        "render",
+        "scenes/diffuse.toml",
+        "--photons",
+        "20000",
+        "--width",
+        "24",
+        "--height",
+        "24",
+        "-o",
+        &png,
+    ];
+    for args in [&["info", "scenes/cornell.toml"][..], &render[..]] {
+        let out = lobelight(args, &hidden);
+        let err = String::from_utf8_lossy(&out.stderr);
+        assert!(out.status.success(), "{args:?}: {err}");
+        let said: Vec<&str> = err.lines().filter(|l| l.contains("CPU mirror")).collect();
+        assert_eq!(said.len(), 1, "{args:?}: {err}");
+        assert!(said[0].contains("lavapipe"), "{}", said[0]);
+    }
+    assert!(std::path::Path::new(&png).is_file());
+    std::fs::remove_file(&png).ok();
+    let named = lobelight(
+        &["info", "scenes/cornell.toml", "--backend", "vulkan"],
+        &hidden,
+    );
+    assert!(!named.status.success());
+}

@@ -48,11 +48,20 @@ struct DeviceArgs {
 }
 
 impl DeviceArgs {
+    /// The device, or none for the CPU mirror: with `--cpu`, or when no adapter is found and
+    /// no backend was named (one line on stderr says so, and how to install lavapipe). A
+    /// backend named with `--backend` that has no adapter stays an error.
     fn gpu(&self) -> Result<Option<Gpu>> {
         if self.cpu {
-            Ok(None)
-        } else {
-            Gpu::new(self.backend).map(Some)
+            return Ok(None);
+        }
+        match Gpu::new(self.backend) {
+            Ok(gpu) => Ok(Some(gpu)),
+            Err(Error::NoAdapter(why)) if self.backend == BackendChoice::Auto => {
+                eprintln!("lobelight: running on the CPU mirror (slower): {why}");
+                Ok(None)
+            }
+            Err(e) => Err(e),
         }
     }
 }
