@@ -7,7 +7,7 @@
 use std::path::Path;
 
 use lobelight::scene;
-use lobelight::scene::model::{Mesh, obj, ply, to_splats};
+use lobelight::scene::model::{Mesh, obj, ply, text, to_splats};
 use proptest::prelude::*;
 
 /// Values an attacker would try where a number goes.
@@ -64,6 +64,14 @@ fn ply_file(format: &str) -> Vec<u8> {
 
 const OBJ: &str = "# a quad and a triangle\nv 0 0 0 1 0 0\nv 1 0 0 0 1 0\nv 1 1 0 0 0 1\n\
 v 0 1 0 1 1 1\nv 0.5 0.5 1 0.5 0.5 0.5\nvn 0 0 1\nf 1 2 3 4\nf 1//1 2//1 5//1\nf -1 -2 -3\n";
+
+/// A Leica `.pts` cloud: count line, then x y z intensity r g b.
+const PTS: &str = "5\n0 0 0 -100 10 20 30\n1 0 0 -90 40 50 60\n0 1 0 -80 70 80 90\n\
+1 1 0 -70 100 110 120\n0.5 0.5 0.1 -60 130 140 150\n";
+
+/// An `.xyz` cloud with normals and colours, comma-separated.
+const XYZ: &str = "# x,y,z,nx,ny,nz,r,g,b\n0,0,0,0,0,1,10,20,30\n1,0,0,0,0,1,40,50,60\n\
+0,1,0,0,0,1,70,80,90\n1,1,0,0,0,1,100,110,120\n0.5,0.5,0.05,0,0,1,130,140,150\n";
 
 const SCENE: &str = r#"[camera]
 eye = [0.0, 0.0, 4.0]
@@ -122,6 +130,10 @@ fn the_files_the_mutations_start_from_load() {
     }
     let mesh = obj::parse(Path::new("t.obj"), OBJ.as_bytes()).unwrap();
     assert!(to_splats(&mesh, Path::new("t.obj")).unwrap().disks.len() >= 4);
+    for (name, text) in [("t.pts", PTS), ("t.xyz", XYZ)] {
+        let mesh = text::parse(Path::new(name), text.as_bytes()).unwrap();
+        assert_eq!(to_splats(&mesh, Path::new(name)).unwrap().disks.len(), 5);
+    }
     let s = scene::parse(Path::new("t.toml"), SCENE).unwrap();
     assert!(s.splats.len() > 100);
 }
@@ -249,6 +261,24 @@ proptest! {
             bytes = apply(&bytes, m);
         }
         if let Ok(mesh) = obj::parse(Path::new("fuzz.obj"), &bytes) {
+            check_mesh(&mesh, bytes.len())?;
+        }
+    }
+
+    #[test]
+    fn mutated_text_cloud_is_an_error_or_a_sane_mesh(
+        pts in any::<bool>(),
+        changes in proptest::collection::vec(mutation(), 1..4),
+    ) {
+        let (name, mut bytes) = if pts {
+            ("fuzz.pts", PTS.as_bytes().to_vec())
+        } else {
+            ("fuzz.xyz", XYZ.as_bytes().to_vec())
+        };
+        for m in &changes {
+            bytes = apply(&bytes, m);
+        }
+        if let Ok(mesh) = text::parse(Path::new(name), &bytes) {
             check_mesh(&mesh, bytes.len())?;
         }
     }

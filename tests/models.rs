@@ -378,3 +378,78 @@ fn degenerate_faces_drop_unused_vertices() {
             .all(|d| d.radius.is_finite() && d.normal.is_finite())
     );
 }
+
+/// Text point clouds: the same points read alike from `.xyz` with normals, `.xyz` with an 8-bit
+/// colour, `.xyz` with both (commas and tabs), and a Leica `.pts` (count line, intensity, colour),
+/// gzipped too; each becomes closed, sanely sized splats facing outwards.
+#[test]
+fn text_point_clouds_read_every_layout() {
+    // A unit sphere's Fibonacci lattice: evenly spread, no point twice.
+    let n = 1200;
+    let pts: Vec<Vec3> = (0..n)
+        .map(|k| {
+            let z = 1.0 - (2 * k + 1) as f32 / n as f32;
+            let (r, phi) = ((1.0 - z * z).sqrt(), k as f32 * 2.399_963);
+            Vec3::new(r * phi.cos(), r * phi.sin(), z)
+        })
+        .collect();
+    let line = |p: &Vec3, rest: String| format!("{} {} {}{rest}\n", p.x, p.y, p.z);
+    let mut normals = String::from("# x y z nx ny nz\n");
+    let mut colours = String::new();
+    let mut both = String::from("// x,y,z,r,g,b,nx,ny,nz\n");
+    let mut leica = format!("{}\n", pts.len());
+    for (k, p) in pts.iter().enumerate() {
+        let c = [(k % 200) as u8 + 20, 100, 200];
+        normals += &line(p, format!(" {} {} {}", p.x, p.y, p.z));
+        colours += &line(p, format!(" {} {} {}", c[0], c[1], c[2]));
+        both += &format!(
+            "{},{},{},{},{},{},{},{},{}\n",
+            p.x, p.y, p.z, c[0], c[1], c[2], p.x, p.y, p.z
+        );
+        leica += &format!(
+            "{}\t{}\t{}\t-1200\t{}\t{}\t{}\n",
+            p.x, p.y, p.z, c[0], c[1], c[2]
+        );
+    }
+    let cases = [
+        ("n.xyz", normals.into_bytes(), true, false),
+        ("c.xyz", colours.into_bytes(), false, true),
+        ("b.xyz", both.into_bytes(), true, true),
+        ("l.pts", leica.clone().into_bytes(), false, true),
+        ("l.pts.gz", gzip(leica.as_bytes()), false, true),
+    ];
+    for (name, bytes, has_normals, has_colours) in cases {
+        let path = tmp(name, &bytes);
+        let mesh = model::load(&path).unwrap_or_else(|e| panic!("{name}: {e}"));
+        assert_eq!(mesh.positions.len(), pts.len(), "{name}");
+        assert!(mesh.faces.is_empty());
+        assert_eq!(mesh.normals.is_some(), has_normals, "{name}");
+        assert_eq!(mesh.colors.is_some(), has_colours, "{name}");
+        if let Some(c) = &mesh.colors {
+            assert_eq!(c[1], [21.0 / 255.0, 100.0 / 255.0, 200.0 / 255.0], "{name}");
+        }
+        let set = model::to_splats(&mesh, &path).unwrap();
+        assert_eq!(set.disks.len(), pts.len(), "{name}");
+        for d in &set.disks {
+            // Outward within the PCA's orientation (towards the cloud's outside).
+            assert!(d.normal.dot(d.center) > 0.9, "{name}: {d:?}");
+            assert!(d.radius > 0.01 && d.radius < 0.3, "{name}: {d:?}");
+        }
+    }
+}
+
+/// Malformed text clouds are errors naming the file and line.
+#[test]
+fn malformed_text_clouds_name_the_line() {
+    for (name, text, expect) in [
+        ("a.xyz", "0 0 0\n1 0 0\n0 1 zero\n", "line 3"),
+        ("b.xyz", "0 0 0\n1 0 0 5\n", "line 2"),
+        ("c.xyz", "0 0 0 1 2\n", "5 numbers"),
+        ("d.xyz", "# nothing\n\n", "no point"),
+        ("e.xyz", "0 0 0 0 0 1 300 0 0\n", "not 8-bit"),
+        ("f.pts", "2\n0 0 0\nnan 0 0\n", "line 3"),
+    ] {
+        let err = err_of(name, text.as_bytes());
+        assert!(err.contains(name) && err.contains(expect), "{name}: {err}");
+    }
+}

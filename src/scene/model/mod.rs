@@ -1,4 +1,5 @@
-//! Models: PLY and OBJ files (gzip too) read into a `Mesh`, then turned into splats.
+//! Models: PLY and OBJ files and text point clouds (.xyz, .pts; gzip too) read into a `Mesh`,
+//! then turned into splats.
 //! A mesh gives one splat per vertex with the area-weighted normal of its faces and a radius
 //! that covers its triangles; a point cloud uses its normals if it has them, PCA normals
 //! otherwise, and radii from the neighbour spacing (`normals`).
@@ -6,6 +7,7 @@
 pub mod normals;
 pub mod obj;
 pub mod ply;
+pub mod text;
 
 use std::io::Read;
 use std::path::Path;
@@ -56,11 +58,13 @@ pub fn load(path: &Path) -> Result<Mesh> {
         ply::parse(path, &bytes)?
     } else if name.ends_with(".obj") {
         obj::parse(path, &bytes)?
+    } else if name.ends_with(".xyz") || name.ends_with(".pts") {
+        text::parse(path, &bytes)?
     } else {
         return Err(Error::parse(
             path,
             "name",
-            "unknown model format: expected .ply, .obj, .ply.gz or .obj.gz",
+            "unknown model format: expected .ply, .obj, .xyz or .pts (each also gzipped, .gz)",
         ));
     };
     validate(path, &mesh)?;
