@@ -1,13 +1,15 @@
-//! Hostile inputs: valid PLY, OBJ and scene files, truncated, with bytes overwritten or
+//! Hostile inputs: valid PLY, OBJ, text cloud, LAS/LAZ and scene files, truncated, with bytes overwritten or
 //! inserted, with header counts and numbers replaced by huge, negative, NaN or infinite ones
 //! (property tests). Whatever comes in, the loaders give a clear error or a sanitised result
 //! (finite splats with positive radii and unit normals), never a panic, and what they build is
 //! bounded by the file's size.
 
+mod common;
+
 use std::path::Path;
 
 use lobelight::scene;
-use lobelight::scene::model::{Mesh, obj, ply, text, to_splats};
+use lobelight::scene::model::{Mesh, lidar, obj, ply, text, to_splats};
 use proptest::prelude::*;
 
 /// Values an attacker would try where a number goes.
@@ -130,6 +132,14 @@ fn the_files_the_mutations_start_from_load() {
     }
     let mesh = obj::parse(Path::new("t.obj"), OBJ.as_bytes()).unwrap();
     assert!(to_splats(&mesh, Path::new("t.obj")).unwrap().disks.len() >= 4);
+    for laz in [false, true] {
+        let bytes = common::write_las(&common::fibonacci_sphere(40), None, laz);
+        let mesh = lidar::parse(Path::new("t.las"), &bytes).unwrap();
+        assert_eq!(
+            to_splats(&mesh, Path::new("t.las")).unwrap().disks.len(),
+            40
+        );
+    }
     for (name, text) in [("t.pts", PTS), ("t.xyz", XYZ)] {
         let mesh = text::parse(Path::new(name), text.as_bytes()).unwrap();
         assert_eq!(to_splats(&mesh, Path::new(name)).unwrap().disks.len(), 5);
@@ -280,6 +290,23 @@ proptest! {
         }
         if let Ok(mesh) = text::parse(Path::new(name), &bytes) {
             check_mesh(&mesh, bytes.len())?;
+        }
+    }
+
+    #[test]
+    fn mutated_las_is_an_error_or_a_sane_mesh(
+        laz in any::<bool>(),
+        changes in proptest::collection::vec(mutation(), 1..4),
+    ) {
+        let colour = |k: usize| [k as u16 * 1000, 2000, 3000];
+        let pts = common::fibonacci_sphere(40);
+        let mut bytes = common::write_las(&pts, Some(&colour), laz);
+        for m in &changes {
+            bytes = apply(&bytes, m);
+        }
+        if let Ok(mesh) = lidar::parse(Path::new("fuzz.las"), &bytes) {
+            // A LAZ record may pack into a byte or two: bound by the file's size in points.
+            check_mesh(&mesh, 8 * bytes.len())?;
         }
     }
 }

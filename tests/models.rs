@@ -384,15 +384,7 @@ fn degenerate_faces_drop_unused_vertices() {
 /// gzipped too; each becomes closed, sanely sized splats facing outwards.
 #[test]
 fn text_point_clouds_read_every_layout() {
-    // A unit sphere's Fibonacci lattice: evenly spread, no point twice.
-    let n = 1200;
-    let pts: Vec<Vec3> = (0..n)
-        .map(|k| {
-            let z = 1.0 - (2 * k + 1) as f32 / n as f32;
-            let (r, phi) = ((1.0 - z * z).sqrt(), k as f32 * 2.399_963);
-            Vec3::new(r * phi.cos(), r * phi.sin(), z)
-        })
-        .collect();
+    let pts = common::fibonacci_sphere(1200);
     let line = |p: &Vec3, rest: String| format!("{} {} {}{rest}\n", p.x, p.y, p.z);
     let mut normals = String::from("# x y z nx ny nz\n");
     let mut colours = String::new();
@@ -452,4 +444,65 @@ fn malformed_text_clouds_name_the_line() {
         let err = err_of(name, text.as_bytes());
         assert!(err.contains(name) && err.contains(expect), "{name}: {err}");
     }
+}
+
+/// LAS and LAZ written by the `las` crate read back as the same cloud (to the file's 1 mm
+/// resolution), with 16-bit colours, or 8-bit colours stored in 16 bits; their splats close
+/// the sphere with outward PCA normals. A header announcing more points than the file holds,
+/// a truncated file and garbage are errors naming the file.
+#[test]
+fn las_and_laz_read_back_what_the_las_crate_wrote() {
+    let pts = common::fibonacci_sphere(1500);
+    let wide = |k: usize| [(k * 40) as u16, 30000, 65535];
+    let narrow = |k: usize| [(k % 256) as u16, 128, 255];
+    // (file, colour of point k, LAZ, the colours' full scale)
+    type Colour<'a> = Option<&'a dyn Fn(usize) -> [u16; 3]>;
+    let cases: [(&str, Colour, bool, f32); 4] = [
+        ("plain.las", None, false, 0.0),
+        ("wide.las", Some(&wide), false, 65535.0),
+        ("wide.laz", Some(&wide), true, 65535.0),
+        ("narrow.laz", Some(&narrow), true, 255.0),
+    ];
+    for (name, colours, laz, full) in cases {
+        let bytes = common::write_las(&pts, colours, laz);
+        let path = tmp(name, &bytes);
+        let mesh = model::load(&path).unwrap_or_else(|e| panic!("{name}: {e}"));
+        assert_eq!(mesh.positions.len(), pts.len(), "{name}");
+        for (a, b) in mesh.positions.iter().zip(&pts) {
+            assert!(
+                (*a - *b).abs().max_element() <= 0.0006,
+                "{name}: {a} vs {b}"
+            );
+        }
+        match (colours, &mesh.colors) {
+            (None, None) => {}
+            (Some(c), Some(read)) => {
+                for (k, got) in read.iter().enumerate().step_by(97) {
+                    let want = c(k).map(|v| v as f32 / full);
+                    assert_eq!(*got, want, "{name}: point {k}");
+                }
+            }
+            (c, read) => panic!(
+                "{name}: colours {} but read {}",
+                c.is_some(),
+                read.is_some()
+            ),
+        }
+        let set = model::to_splats(&mesh, &path).unwrap();
+        assert_eq!(set.disks.len(), pts.len(), "{name}");
+        assert!(
+            set.disks.iter().all(|d| d.normal.dot(d.center) > 0.9),
+            "{name}"
+        );
+    }
+    let good = common::write_las(&pts, None, false);
+    let err = err_of("cut.las", &good[..good.len() / 2]);
+    assert!(err.contains("cut.las"), "{err}");
+    let mut lying = good.clone();
+    // The legacy point count (LAS 1.2 header, offset 107) far past what the bytes hold.
+    lying[107..111].copy_from_slice(&u32::MAX.to_le_bytes());
+    let err = err_of("lying.las", &lying);
+    assert!(err.contains("lying.las"), "{err}");
+    let err = err_of("garbage.laz", b"not a lidar file at all");
+    assert!(err.contains("garbage.laz"), "{err}");
 }

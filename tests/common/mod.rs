@@ -76,3 +76,49 @@ pub fn random_splats(n: usize, rmin: f32, rmax: f32, seed: u64) -> Vec<Splat> {
 pub fn host_grid(scene: &lobelight::scene::Scene) -> lobelight::grid::SplatGrid {
     lobelight::cpu::scene_grid(scene).unwrap()
 }
+
+/// The unit sphere's Fibonacci lattice of `n` points.
+pub fn fibonacci_sphere(n: u32) -> Vec<glam::Vec3> {
+    (0..n)
+        .map(|k| {
+            let z = 1.0 - (2 * k + 1) as f32 / n as f32;
+            let (r, phi) = ((1.0 - z * z).sqrt(), k as f32 * 2.399_963);
+            glam::Vec3::new(r * phi.cos(), r * phi.sin(), z)
+        })
+        .collect()
+}
+
+/// A LAS file written by the `las` crate: `points` at 1 mm resolution, 16-bit colours where
+/// `colours`, LAZ-compressed where `laz`.
+pub fn write_las(
+    points: &[glam::Vec3],
+    colours: Option<&dyn Fn(usize) -> [u16; 3]>,
+    laz: bool,
+) -> Vec<u8> {
+    let mut builder = las::Builder::from((1, 2));
+    let mut format = las::point::Format::new(if colours.is_some() { 2 } else { 0 }).unwrap();
+    format.is_compressed = laz;
+    builder.point_format = format;
+    let t = las::Transform {
+        scale: 0.001,
+        offset: 0.0,
+    };
+    builder.transforms = las::Vector { x: t, y: t, z: t };
+    let header = builder.into_header().unwrap();
+    let mut writer = las::Writer::new(std::io::Cursor::new(Vec::new()), header).unwrap();
+    for (k, p) in points.iter().enumerate() {
+        writer
+            .write_point(las::Point {
+                x: p.x as f64,
+                y: p.y as f64,
+                z: p.z as f64,
+                color: colours.map(|c| {
+                    let [r, g, b] = c(k);
+                    las::Color::new(r, g, b)
+                }),
+                ..Default::default()
+            })
+            .unwrap();
+    }
+    writer.into_inner().unwrap().into_inner()
+}

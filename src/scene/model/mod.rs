@@ -1,9 +1,10 @@
-//! Models: PLY and OBJ files and text point clouds (.xyz, .pts; gzip too) read into a `Mesh`,
-//! then turned into splats.
+//! Models: PLY and OBJ files, text point clouds (.xyz, .pts; gzip too) and LAS/LAZ lidar read
+//! into a `Mesh`, then turned into splats.
 //! A mesh gives one splat per vertex with the area-weighted normal of its faces and a radius
 //! that covers its triangles; a point cloud uses its normals if it has them, PCA normals
 //! otherwise, and radii from the neighbour spacing (`normals`).
 
+pub mod lidar;
 pub mod normals;
 pub mod obj;
 pub mod ply;
@@ -60,11 +61,14 @@ pub fn load(path: &Path) -> Result<Mesh> {
         obj::parse(path, &bytes)?
     } else if name.ends_with(".xyz") || name.ends_with(".pts") {
         text::parse(path, &bytes)?
+    } else if name.ends_with(".las") || name.ends_with(".laz") {
+        lidar::parse(path, &bytes)?
     } else {
         return Err(Error::parse(
             path,
             "name",
-            "unknown model format: expected .ply, .obj, .xyz or .pts (each also gzipped, .gz)",
+            "unknown model format: expected .ply, .obj, .xyz, .pts (each also gzipped, .gz), \
+             .las or .laz",
         ));
     };
     validate(path, &mesh)?;

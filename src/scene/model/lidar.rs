@@ -1,0 +1,134 @@
+//! LAS and LAZ lidar point clouds (the `las` crate, LAZ through `laz`): positions (the file's
+//! scale and offset applied) and colours where the point format has them. Lidar points carry
+//! no normals: the splats' normals come from their neighbours (`normals::pca_normals`).
+//! Colours are 16-bit in the standard; files whose colours never exceed 255 hold 8-bit values,
+//! and are read as such.
+
+use std::io::Cursor;
+use std::path::Path;
+
+use glam::Vec3;
+
+use super::Mesh;
+use crate::error::{Error, Result};
+
+/// Points read per batch: the reader never holds more than one batch of raw records.
+const BATCH: u64 = 1 << 20;
+/// Most bytes of raw records one batch may take (a header may claim records of 64 KiB).
+const BATCH_BYTES: u64 = 64 << 20;
+
+/// Most points a header may announce for the bytes the file has: an uncompressed record
+/// takes its record length; a LAZ record compresses to no less than about a byte.
+fn plausible(points: u64, record: u64, bytes: usize, compressed: bool) -> bool {
+    let per_point = if compressed { 1 } else { record.max(1) };
+    points.saturating_mul(per_point) <= bytes as u64
+}
+
+/// Whether a LAZ file's chunk table announces no more chunks than the file has bytes: the
+/// LAZ reader sizes its table by that count before reading it, so a damaged count would ask
+/// for any amount of memory. The table's offset is the first 8 bytes of the point data (or, if
+/// they are −1, the file's last 8 bytes); other files pass.
+fn laz_chunks_plausible(bytes: &[u8]) -> bool {
+    let u32_at = |o: usize| {
+        bytes
+            .get(o..o + 4)
+            .map(|b| u32::from_le_bytes([b[0], b[1], b[2], b[3]]))
+    };
+    let i64_at = |o: usize| {
+        bytes.get(o..o + 8).map(|b| {
+            let mut a = [0u8; 8];
+            a.copy_from_slice(b);
+            i64::from_le_bytes(a)
+        })
+    };
+    let compressed = bytes.get(104).is_some_and(|f| f & 0x80 != 0);
+    let Some(points_at) = u32_at(96).filter(|_| compressed) else {
+        return true;
+    };
+    let table = match i64_at(points_at as usize) {
+        Some(-1) => bytes.len().checked_sub(8).and_then(i64_at),
+        other => other,
+    };
+    match table
+        .and_then(|t| usize::try_from(t).ok())
+        .and_then(|t| u32_at(t + 4))
+    {
+        Some(chunks) => chunks as usize <= bytes.len(),
+        None => true,
+    }
+}
+
+pub fn parse(path: &Path, bytes: &[u8]) -> Result<Mesh> {
+    let bad = |at: &str, e: las::Error| Error::parse(path, at, e.to_string());
+    if !laz_chunks_plausible(bytes) {
+        return Err(Error::parse(
+            path,
+            "chunk table",
+            "its LAZ chunk table announces more chunks than the file has bytes",
+        ));
+    }
+    let mut reader = las::Reader::new(Cursor::new(bytes.to_vec())).map_err(|e| bad("header", e))?;
+    let header = reader.header();
+    let count = header.number_of_points();
+    let format = *header.point_format();
+    let record = format.len() as u64;
+    if !plausible(count, record, bytes.len(), format.is_compressed) {
+        return Err(Error::parse(
+            path,
+            "header",
+            format!(
+                "it announces {count} points, more than its {} bytes hold",
+                bytes.len()
+            ),
+        ));
+    }
+    let mut mesh = Mesh::default();
+    let mut colors16: Vec<[u16; 3]> = Vec::new();
+    let mut data = las::PointDataBuilder::new()
+        .for_header(reader.header())
+        .build();
+    // Batches sized by what is left, so that a header's claims bound no allocation.
+    let batch = BATCH.min(BATCH_BYTES / record.max(1)).max(1);
+    loop {
+        let left = count.saturating_sub(mesh.positions.len() as u64);
+        if left == 0 {
+            break;
+        }
+        let read = reader
+            .fill_points(batch.min(left), &mut data)
+            .map_err(|e| bad(&format!("point #{}", mesh.positions.len() + 1), e))?;
+        if read == 0 {
+            break;
+        }
+        for point in data.points() {
+            let k = mesh.positions.len() + 1;
+            let p = point.map_err(|e| bad(&format!("point #{k}"), e))?;
+            let v = Vec3::new(p.x as f32, p.y as f32, p.z as f32);
+            if !v.is_finite() {
+                return Err(Error::parse(
+                    path,
+                    format!("point #{k}"),
+                    format!("position {v} is not finite"),
+                ));
+            }
+            mesh.positions.push(v);
+            if let Some(c) = p.color.filter(|_| format.has_color) {
+                colors16.push([c.red, c.green, c.blue]);
+            }
+        }
+    }
+    if mesh.positions.is_empty() {
+        return Err(Error::parse(path, "points", "the file holds no point"));
+    }
+    if colors16.len() == mesh.positions.len() {
+        let eight_bit = colors16.iter().flatten().all(|&c| c <= 255);
+        let full = if eight_bit { 255.0 } else { 65535.0 };
+        mesh.colors = Some(
+            colors16
+                .iter()
+                .map(|c| c.map(|v| v as f32 / full))
+                .collect(),
+        );
+    }
+    Ok(mesh)
+}
