@@ -294,6 +294,21 @@ proptest! {
     }
 
     #[test]
+    fn mutated_gaussian_ply_is_an_error_or_a_sane_mesh(
+        two_d in any::<bool>(),
+        changes in proptest::collection::vec(mutation(), 1..4),
+    ) {
+        let colour = |k: usize| [0.1 * (k % 10) as f32, 0.5, 0.9];
+        let mut bytes = common::gaussian_ply(&common::fibonacci_sphere(30), two_d, &colour);
+        for m in &changes {
+            bytes = apply(&bytes, m);
+        }
+        if let Ok(mesh) = ply::parse(Path::new("fuzz.ply"), &bytes) {
+            check_mesh(&mesh, bytes.len())?;
+        }
+    }
+
+    #[test]
     fn mutated_las_is_an_error_or_a_sane_mesh(
         laz in any::<bool>(),
         changes in proptest::collection::vec(mutation(), 1..4),

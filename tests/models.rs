@@ -506,3 +506,38 @@ fn las_and_laz_read_back_what_the_las_crate_wrote() {
     let err = err_of("garbage.laz", b"not a lidar file at all");
     assert!(err.contains("garbage.laz"), "{err}");
 }
+
+/// 3DGS and 2DGS captures: opaque Gaussians become splats at their means, facing out (the
+/// capture's signless normals oriented), of radius 2σ = 0.1, coloured by their DC term; faint
+/// ones are left out and counted.
+#[test]
+fn gaussian_splat_plys_become_splats() {
+    let pts = common::fibonacci_sphere(1000);
+    let colour = |k: usize| [0.2 + 0.6 * (k % 7) as f32 / 7.0, 0.5, 0.8];
+    for two_d in [false, true] {
+        let name = if two_d { "2dgs.ply" } else { "3dgs.ply" };
+        let path = tmp(name, &common::gaussian_ply(&pts, two_d, &colour));
+        let mesh = model::load(&path).unwrap_or_else(|e| panic!("{name}: {e}"));
+        assert_eq!(mesh.dropped, 200, "{name}");
+        assert_eq!(mesh.positions.len(), 800, "{name}");
+        let set = model::to_splats(&mesh, &path).unwrap();
+        assert_eq!(set.disks.len(), 800, "{name}");
+        assert_eq!(set.dropped, 200, "{name}");
+        let opaque: Vec<usize> = (0..pts.len()).filter(|k| k % 5 != 4).collect();
+        let colours = set.colors.as_ref().unwrap();
+        for ((d, &k), c) in set.disks.iter().zip(&opaque).zip(colours) {
+            assert!((d.center - pts[k]).length() < 1e-6, "{name}");
+            assert!(
+                d.normal.dot(pts[k]) > 0.999,
+                "{name}: point {k} faces {}",
+                d.normal
+            );
+            assert!((d.radius - 0.1).abs() < 1e-4, "{name}: radius {}", d.radius);
+            let want = colour(k).map(model::srgb_to_linear);
+            assert!(
+                (0..3).all(|i| (c[i] - want[i]).abs() < 1e-5),
+                "{name}: {c:?} {want:?}"
+            );
+        }
+    }
+}

@@ -122,3 +122,50 @@ pub fn write_las(
     }
     writer.into_inner().unwrap().into_inner()
 }
+
+/// A Gaussian-splat PLY as 3D Gaussian Splatting writes it (binary little endian floats: x y z,
+/// nx ny nz, f_dc_0..2, 45 f_rest, opacity, scale_0..2, rot_0..3), or as 2D Gaussian Splatting
+/// writes its surfels (two scales). One Gaussian per point: flat along the sphere's normal,
+/// in-plane scale 0.05, half of them turned upside down (a Gaussian's normal has no sign),
+/// every fifth one faint (opacity logit −3), coloured `colour(k)`.
+pub fn gaussian_ply(
+    pts: &[glam::Vec3],
+    two_d: bool,
+    colour: &dyn Fn(usize) -> [f32; 3],
+) -> Vec<u8> {
+    let mut header = format!(
+        "ply\nformat binary_little_endian 1.0\nelement vertex {}\n",
+        pts.len()
+    );
+    let mut names: Vec<String> = [
+        "x", "y", "z", "nx", "ny", "nz", "f_dc_0", "f_dc_1", "f_dc_2",
+    ]
+    .map(String::from)
+    .to_vec();
+    names.extend((0..45).map(|k| format!("f_rest_{k}")));
+    names.push("opacity".into());
+    names.extend((0..if two_d { 2 } else { 3 }).map(|k| format!("scale_{k}")));
+    names.extend((0..4).map(|k| format!("rot_{k}")));
+    for n in &names {
+        header += &format!("property float {n}\n");
+    }
+    header += "end_header\n";
+    let mut bytes = header.into_bytes();
+    for (k, p) in pts.iter().enumerate() {
+        let up = if k % 2 == 0 { *p } else { -*p };
+        let q = glam::Quat::from_rotation_arc(glam::Vec3::Z, up);
+        let dc = colour(k).map(|c| (c - 0.5) / 0.282_094_8);
+        let mut v = vec![p.x, p.y, p.z, 0.0, 0.0, 0.0, dc[0], dc[1], dc[2]];
+        v.extend([0.0; 45]);
+        v.push(if k % 5 == 4 { -3.0 } else { 3.0 });
+        v.extend([0.05f32.ln(), 0.05f32.ln()]);
+        if !two_d {
+            v.push(0.001f32.ln());
+        }
+        v.extend([q.w, q.x, q.y, q.z]);
+        for x in v {
+            bytes.extend_from_slice(&x.to_le_bytes());
+        }
+    }
+    bytes
+}

@@ -4,6 +4,7 @@
 //! that covers its triangles; a point cloud uses its normals if it has them, PCA normals
 //! otherwise, and radii from the neighbour spacing (`normals`).
 
+pub mod gaussians;
 pub mod lidar;
 pub mod normals;
 pub mod obj;
@@ -26,6 +27,11 @@ pub struct Mesh {
     pub normals: Option<Vec<Vec3>>,
     pub colors: Option<Vec<[f32; 3]>>,
     pub faces: Vec<[u32; 3]>,
+    /// Per-vertex splat radii where the file gives them (Gaussian splats); a cloud without
+    /// them takes radii from its neighbour spacing.
+    pub radii: Option<Vec<f32>>,
+    /// Vertices the reader left out (Gaussians too faint to be a surface).
+    pub dropped: usize,
 }
 
 impl Mesh {
@@ -93,6 +99,7 @@ fn validate(path: &Path, m: &Mesh) -> Result<()> {
     for (what, len) in [
         ("normals", m.normals.as_ref().map(Vec::len)),
         ("colors", m.colors.as_ref().map(Vec::len)),
+        ("radii", m.radii.as_ref().map(Vec::len)),
     ] {
         if let Some(len) = len.filter(|&l| l != m.positions.len()) {
             return Err(Error::parse(
@@ -110,7 +117,8 @@ fn validate(path: &Path, m: &Mesh) -> Result<()> {
 pub struct SplatSet {
     pub disks: Vec<Disk>,
     pub colors: Option<Vec<[f32; 3]>>,
-    /// Vertices no (non-degenerate) face uses: they have no normal or extent.
+    /// Vertices no (non-degenerate) face uses (they have no normal or extent), and those the
+    /// reader left out (`Mesh::dropped`).
     pub dropped: usize,
 }
 
@@ -123,20 +131,36 @@ pub fn srgb_to_linear(c: f32) -> f32 {
     }
 }
 
+/// `v` scaled to unit length, or zero where it has no direction f32 can normalise (zero,
+/// not finite, or so short that its squared length is denormal).
+fn unit_or_zero(v: Vec3) -> Vec3 {
+    if v.is_finite() && v.length_squared() >= f32::MIN_POSITIVE {
+        v.normalize()
+    } else {
+        Vec3::ZERO
+    }
+}
+
 pub fn to_splats(mesh: &Mesh, path: &Path) -> Result<SplatSet> {
     // `load` validated already; a mesh built elsewhere is checked here, not trusted.
     validate(path, mesh)?;
     let (normals, radii) = if mesh.faces.is_empty() {
-        let radii = normals::spacing_radii(&mesh.positions);
+        let radii = match &mesh.radii {
+            Some(r) => r.clone(),
+            None => normals::spacing_radii(&mesh.positions),
+        };
         let normals = match &mesh.normals {
-            Some(n) => n.iter().map(|v| v.normalize_or_zero()).collect(),
+            Some(n) => n.iter().map(|&v| unit_or_zero(v)).collect(),
             None => normals::pca_normals(&mesh.positions),
         };
         (normals, radii)
     } else {
         mesh_normals_and_radii(mesh)
     };
-    let mut set = SplatSet::default();
+    let mut set = SplatSet {
+        dropped: mesh.dropped,
+        ..Default::default()
+    };
     let mut colors = mesh.colors.as_ref().map(|_| Vec::new());
     for (i, p) in mesh.positions.iter().enumerate() {
         let (n, r) = (normals[i], radii[i]);

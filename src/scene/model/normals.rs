@@ -57,6 +57,13 @@ pub fn pca_normals(points: &[Vec3]) -> Vec<Vec3> {
     normals
 }
 
+/// Turns given normals (whose sign means nothing, as a Gaussian's) to one consistent side, as
+/// `pca_normals` orients its own.
+pub fn orient_normals(points: &[Vec3], normals: &mut [Vec3]) {
+    let neighbours = knn(points, NORMAL_K);
+    orient(points, &neighbours, normals);
+}
+
 fn covariance(pts: &[Vec3]) -> Mat3 {
     let mean = pts.iter().copied().sum::<Vec3>() / pts.len().max(1) as f32;
     let mut c = Mat3::ZERO;

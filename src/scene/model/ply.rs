@@ -5,7 +5,7 @@
 
 use std::path::Path;
 
-use super::Mesh;
+use super::{Mesh, gaussians, normals};
 use crate::error::{Error, Result};
 
 #[derive(Clone, Copy, Debug, PartialEq)]
@@ -308,7 +308,25 @@ pub fn parse(path: &Path, bytes: &[u8]) -> Result<Mesh> {
     for e in &header.elements {
         read_element(path, e, source.as_mut(), &mut mesh)?;
     }
+    // Gaussians' normals have no sign: turn them to one side, as a cloud's PCA normals are.
+    if mesh.radii.is_some()
+        && let Some(n) = mesh.normals.as_mut()
+    {
+        normals::orient_normals(&mesh.positions, n);
+    }
     Ok(mesh)
+}
+
+/// The columns of a Gaussian-splat vertex (`gaussians::Columns`), where the element has them.
+fn gaussian_columns(find: &dyn Fn(&[&str]) -> Option<usize>) -> Option<gaussians::Columns> {
+    let one = |n: &str| find(&[n]);
+    Some(gaussians::Columns {
+        dc: [one("f_dc_0")?, one("f_dc_1")?, one("f_dc_2")?],
+        opacity: one("opacity")?,
+        scale: [one("scale_0")?, one("scale_1")?],
+        scale_2: one("scale_2"),
+        rot: [one("rot_0")?, one("rot_1")?, one("rot_2")?, one("rot_3")?],
+    })
 }
 
 fn read_element(path: &Path, e: &Element, src: &mut dyn Source, mesh: &mut Mesh) -> Result<()> {
@@ -336,7 +354,12 @@ fn read_element(path: &Path, e: &Element, src: &mut dyn Source, mesh: &mut Mesh)
             "vertices need x, y and z properties",
         ));
     }
-    let has_normals = is_vertex && nrm.iter().all(Option::is_some);
+    let gaussian = if is_vertex {
+        gaussian_columns(&find)
+    } else {
+        None
+    };
+    let has_normals = is_vertex && nrm.iter().all(Option::is_some) && gaussian.is_none();
     let has_colors = is_vertex && col.iter().all(Option::is_some);
     let color_scale = match col[0].map(|i| &e.properties[i]) {
         Some(Property::Scalar(_, t)) if t.is_integer() => 1.0 / 255.0,
@@ -382,7 +405,21 @@ fn read_element(path: &Path, e: &Element, src: &mut dyn Source, mesh: &mut Mesh)
             }
         }
         src.end_element().map_err(|m| at(m, src.line()))?;
-        if is_vertex {
+        if let Some(c) = &gaussian {
+            let p = pos.map(|i| values[i.unwrap_or(0)] as f32);
+            if !p.iter().all(|x| x.is_finite()) {
+                return Err(at(format!("position {p:?} is not finite"), src.line()));
+            }
+            match gaussians::read(c, &values) {
+                Some(g) => {
+                    mesh.positions.push(p.into());
+                    mesh.normals.get_or_insert_with(Vec::new).push(g.normal);
+                    mesh.radii.get_or_insert_with(Vec::new).push(g.radius);
+                    mesh.colors.get_or_insert_with(Vec::new).push(g.color);
+                }
+                None => mesh.dropped += 1,
+            }
+        } else if is_vertex {
             let p = pos.map(|i| values[i.unwrap_or(0)] as f32);
             if !p.iter().all(|x| x.is_finite()) {
                 return Err(at(format!("position {p:?} is not finite"), src.line()));
