@@ -1,4 +1,5 @@
-//! Hostile inputs: valid PLY, OBJ, text cloud, LAS/LAZ and scene files, truncated, with bytes overwritten or
+//! Hostile inputs: valid PLY (meshes, clouds, Gaussian splats), OBJ, text cloud, LAS/LAZ, E57
+//! and scene files, truncated, with bytes overwritten or
 //! inserted, with header counts and numbers replaced by huge, negative, NaN or infinite ones
 //! (property tests). Whatever comes in, the loaders give a clear error or a sanitised result
 //! (finite splats with positive radii and unit normals), never a panic, and what they build is
@@ -9,7 +10,7 @@ mod common;
 use std::path::Path;
 
 use lobelight::scene;
-use lobelight::scene::model::{Mesh, lidar, obj, ply, text, to_splats};
+use lobelight::scene::model::{Mesh, lidar, obj, ply, scan, text, to_splats};
 use proptest::prelude::*;
 
 /// Values an attacker would try where a number goes.
@@ -304,6 +305,20 @@ proptest! {
             bytes = apply(&bytes, m);
         }
         if let Ok(mesh) = ply::parse(Path::new("fuzz.ply"), &bytes) {
+            check_mesh(&mesh, bytes.len())?;
+        }
+    }
+
+    #[test]
+    fn mutated_e57_is_an_error_or_a_sane_mesh(
+        changes in proptest::collection::vec(mutation(), 1..4),
+    ) {
+        let colour = |k: usize| [k as u8, 20, 30];
+        let mut bytes = common::write_e57(&[(common::fibonacci_sphere(30), [0.0; 3])], &colour);
+        for m in &changes {
+            bytes = apply(&bytes, m);
+        }
+        if let Ok(mesh) = scan::parse(Path::new("fuzz.e57"), &bytes) {
             check_mesh(&mesh, bytes.len())?;
         }
     }

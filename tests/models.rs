@@ -541,3 +541,43 @@ fn gaussian_splat_plys_become_splats() {
         }
     }
 }
+
+/// An E57 file of two scans written by the `e57` crate, each in its own frame with a pose:
+/// read back as one cloud in the file's frame (poses applied), with its 8-bit colours, the
+/// returns that did not come back left out and counted, and splats that close the sphere.
+/// Damaged files are errors naming the file.
+#[test]
+fn e57_scans_read_back_in_one_frame() {
+    let pts = common::fibonacci_sphere(1600);
+    let (upper, lower): (Vec<Vec3>, Vec<Vec3>) = pts.iter().partition(|p| p.z >= 0.0);
+    let shift = Vec3::new(0.0, 0.0, -3.0);
+    let lower_local: Vec<Vec3> = lower.iter().map(|p| *p - shift).collect();
+    let colour = |k: usize| [(k % 250) as u8, 128, 255];
+    let bytes = common::write_e57(
+        &[
+            (upper.clone(), [0.0; 3]),
+            (
+                lower_local,
+                [shift.x as f64, shift.y as f64, shift.z as f64],
+            ),
+        ],
+        &colour,
+    );
+    let path = tmp("scan.e57", &bytes);
+    let mesh = model::load(&path).unwrap();
+    assert_eq!(mesh.positions.len(), pts.len());
+    assert_eq!(mesh.dropped, 2, "one invalid return a scan");
+    for (got, want) in mesh.positions.iter().zip(upper.iter().chain(&lower)) {
+        assert!((*got - *want).length() < 1e-5, "{got} vs {want}");
+    }
+    let colours = mesh.colors.as_ref().unwrap();
+    assert_eq!(colours[3], [3.0 / 255.0, 128.0 / 255.0, 1.0]);
+    let set = model::to_splats(&mesh, &path).unwrap();
+    assert_eq!(set.disks.len(), pts.len());
+    assert_eq!(set.dropped, 2);
+    assert!(set.disks.iter().all(|d| d.normal.dot(d.center) > 0.9));
+    let err = err_of("cut.e57", &bytes[..bytes.len() / 2]);
+    assert!(err.contains("cut.e57"), "{err}");
+    let err = err_of("garbage.e57", b"ASTM-E57 but not really");
+    assert!(err.contains("garbage.e57"), "{err}");
+}

@@ -169,3 +169,77 @@ pub fn gaussian_ply(
     }
     bytes
 }
+
+/// An E57 file written by the `e57` crate: one scan per entry of `scans` (its points in the
+/// scan's own frame, and the pose's translation that moves them into the file's frame), with
+/// 8-bit colours `colour(k)` and every point after the last marked invalid where `invalid`.
+pub fn write_e57(
+    scans: &[(Vec<glam::Vec3>, [f64; 3])],
+    colour: &dyn Fn(usize) -> [u8; 3],
+) -> Vec<u8> {
+    use e57::{Record, RecordValue};
+    let path = std::env::temp_dir().join(format!(
+        "lobelight-e57-{}-{:?}.e57",
+        std::process::id(),
+        std::thread::current().id()
+    ));
+    {
+        let mut writer = e57::E57Writer::from_file(&path, "file-guid").unwrap();
+        for (s, (points, t)) in scans.iter().enumerate() {
+            let prototype = vec![
+                Record::CARTESIAN_X_F32,
+                Record::CARTESIAN_Y_F32,
+                Record::CARTESIAN_Z_F32,
+                Record::CARTESIAN_INVALID_STATE,
+                Record::COLOR_RED_U8,
+                Record::COLOR_GREEN_U8,
+                Record::COLOR_BLUE_U8,
+            ];
+            let mut pc = writer
+                .add_pointcloud(&format!("scan-{s}"), prototype)
+                .unwrap();
+            pc.set_transform(Some(e57::Transform {
+                rotation: e57::Quaternion {
+                    w: 1.0,
+                    x: 0.0,
+                    y: 0.0,
+                    z: 0.0,
+                },
+                translation: e57::Translation {
+                    x: t[0],
+                    y: t[1],
+                    z: t[2],
+                },
+            }));
+            for (k, p) in points.iter().enumerate() {
+                let [r, g, b] = colour(k);
+                pc.add_point(vec![
+                    RecordValue::Single(p.x),
+                    RecordValue::Single(p.y),
+                    RecordValue::Single(p.z),
+                    RecordValue::Integer(0),
+                    RecordValue::Integer(r as i64),
+                    RecordValue::Integer(g as i64),
+                    RecordValue::Integer(b as i64),
+                ])
+                .unwrap();
+            }
+            // One return that did not come back.
+            pc.add_point(vec![
+                RecordValue::Single(0.0),
+                RecordValue::Single(0.0),
+                RecordValue::Single(0.0),
+                RecordValue::Integer(2),
+                RecordValue::Integer(0),
+                RecordValue::Integer(0),
+                RecordValue::Integer(0),
+            ])
+            .unwrap();
+            pc.finalize().unwrap();
+        }
+        writer.finalize().unwrap();
+    }
+    let bytes = std::fs::read(&path).unwrap();
+    std::fs::remove_file(&path).ok();
+    bytes
+}

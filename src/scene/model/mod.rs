@@ -1,5 +1,5 @@
-//! Models: PLY and OBJ files, text point clouds (.xyz, .pts; gzip too) and LAS/LAZ lidar read
-//! into a `Mesh`, then turned into splats.
+//! Models: PLY and OBJ files, text point clouds (.xyz, .pts; gzip too), LAS/LAZ lidar and E57
+//! scans read into a `Mesh`, then turned into splats.
 //! A mesh gives one splat per vertex with the area-weighted normal of its faces and a radius
 //! that covers its triangles; a point cloud uses its normals if it has them, PCA normals
 //! otherwise, and radii from the neighbour spacing (`normals`).
@@ -9,6 +9,7 @@ pub mod lidar;
 pub mod normals;
 pub mod obj;
 pub mod ply;
+pub mod scan;
 pub mod text;
 
 use std::io::Read;
@@ -69,12 +70,14 @@ pub fn load(path: &Path) -> Result<Mesh> {
         text::parse(path, &bytes)?
     } else if name.ends_with(".las") || name.ends_with(".laz") {
         lidar::parse(path, &bytes)?
+    } else if name.ends_with(".e57") {
+        scan::parse(path, &bytes)?
     } else {
         return Err(Error::parse(
             path,
             "name",
             "unknown model format: expected .ply, .obj, .xyz, .pts (each also gzipped, .gz), \
-             .las or .laz",
+             .las, .laz or .e57",
         ));
     };
     validate(path, &mesh)?;
