@@ -562,3 +562,77 @@ fn no_adapter_falls_back_to_the_cpu_mirror() {
     );
     assert!(!named.status.success());
 }
+
+/// `render --views` draws a sequence from one bake, each view to its numbered file; `--shard
+/// K/N` draws every N-th view from K, so the shards together draw each view once.
+#[test]
+fn views_render_a_sequence_and_shards_split_it() {
+    let dir = std::env::temp_dir().join(format!("lobelight-views-{}", std::process::id()));
+    std::fs::create_dir_all(&dir).unwrap();
+    let views = dir.join("views.toml");
+    std::fs::write(&views, "[orbit]\nframes = 5\ndegrees = 40.0\n").unwrap();
+    let out = |name: &str| dir.join(name).display().to_string();
+    let (views_arg, cache) = (views.display().to_string(), out("bake.cache"));
+    let run = |pattern: &str, shard: Option<&str>| {
+        let o = out(pattern);
+        let mut args = vec![
+            "render",
+            "scenes/diffuse.toml",
+            "--photons",
+            "20000",
+            "--width",
+            "24",
+            "--height",
+            "24",
+            "--spp",
+            "1",
+            "--views",
+            &views_arg,
+            "--cache",
+            &cache,
+            "-o",
+            &o,
+            "--json",
+        ];
+        if let Some(s) = shard {
+            args.extend(["--shard", s]);
+        }
+        lobelight(&args, &[])
+    };
+    let all = run("all_##.png", None);
+    assert!(
+        all.status.success(),
+        "{}",
+        String::from_utf8_lossy(&all.stderr)
+    );
+    let report: serde_json::Value = serde_json::from_slice(&all.stdout).unwrap();
+    assert_eq!(report["views"].as_array().unwrap().len(), 5);
+    for k in 0..5 {
+        assert!(dir.join(format!("all_{k:02}.png")).is_file(), "view {k}");
+    }
+    let mut drawn = Vec::new();
+    for shard in ["0/2", "1/2"] {
+        let r = run("part_##.png", Some(shard));
+        assert!(r.status.success(), "{}", String::from_utf8_lossy(&r.stderr));
+        let report: serde_json::Value = serde_json::from_slice(&r.stdout).unwrap();
+        assert_eq!(report["cache_hit"], true, "shards share the bake");
+        drawn.extend(
+            report["views"]
+                .as_array()
+                .unwrap()
+                .iter()
+                .map(|v| v["index"].as_u64().unwrap()),
+        );
+    }
+    drawn.sort();
+    assert_eq!(drawn, vec![0, 1, 2, 3, 4]);
+    // The same view from a shard and from the whole run is the same image.
+    let a = std::fs::read(dir.join("all_03.png")).unwrap();
+    let b = std::fs::read(dir.join("part_03.png")).unwrap();
+    assert_eq!(a, b);
+    for bad in ["2/2", "1", "a/b"] {
+        let r = run("bad_##.png", Some(bad));
+        assert!(!r.status.success(), "--shard {bad} was accepted");
+    }
+    std::fs::remove_dir_all(&dir).ok();
+}

@@ -47,6 +47,17 @@ struct DeviceArgs {
     backend: BackendChoice,
 }
 
+/// `--shard K/N`: two whole numbers with K below N.
+fn parse_shard(s: &str) -> std::result::Result<(u32, u32), String> {
+    let bad = || format!("`{s}` is not K/N (two whole numbers, K below N, e.g. 0/4)");
+    let (k, n) = s.split_once('/').ok_or_else(bad)?;
+    let (k, n) = (
+        k.trim().parse::<u32>().map_err(|_| bad())?,
+        n.trim().parse::<u32>().map_err(|_| bad())?,
+    );
+    if k < n { Ok((k, n)) } else { Err(bad()) }
+}
+
 impl DeviceArgs {
     /// The device, or none for the CPU mirror: with `--cpu`, or when no adapter is found and
     /// no backend was named (one line on stderr says so, and how to install lavapipe). A
@@ -233,6 +244,14 @@ enum Command {
         /// beside it), for `compare --objects`.
         #[arg(long, value_name = "FILE.png")]
         object_ids: Option<PathBuf>,
+        /// An image sequence from one bake: the cameras FILE lists ([[view]] tables and/or an
+        /// [orbit]), each written to OUT numbered (a run of # in its name, else _NNNN).
+        #[arg(long, value_name = "FILE")]
+        views: Option<PathBuf>,
+        /// With --views: draw only the views whose index is K modulo N (K in 0..N), so N
+        /// machines that share the bake cache split the sequence.
+        #[arg(long, value_name = "K/N", value_parser = parse_shard, requires = "views")]
+        shard: Option<(u32, u32)>,
     },
     /// Difference of image A against the reference B: relMSE, PSNR, SMAPE, FLIP, mean
     /// relative difference, pixels within 5 %, RMSE, energy (EXR for radiance, FLIP on the
@@ -387,14 +406,22 @@ fn run(cli: Cli) -> Result<()> {
             stats,
             json,
             object_ids,
+            views,
+            shard,
         } => {
             if let Some(path) = &object_ids {
                 compare::check_ids_path(path)?;
             }
             let mut scene = scene::load(&scene)?;
             bake.apply(&mut scene)?;
+            let views = match &views {
+                Some(path) => scene::views::load(path, &scene.camera)?,
+                None => Vec::new(),
+            };
             let gpu = device.gpu()?;
             let opts = render::Options {
+                views,
+                shard,
                 method,
                 width,
                 height,
@@ -412,6 +439,15 @@ fn run(cli: Cli) -> Result<()> {
                 print_json(&report)?;
             } else if stats {
                 eprintln!("{report}");
+            } else if let (Some(first), Some(last)) = (report.views.first(), report.views.last()) {
+                eprintln!(
+                    "wrote {} views ({} … {}, {}×{})",
+                    report.views.len(),
+                    first.output,
+                    last.output,
+                    report.width,
+                    report.height
+                );
             } else {
                 eprintln!(
                     "wrote {} ({}×{})",

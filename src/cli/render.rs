@@ -23,6 +23,7 @@ use crate::gpu::tone::tone_map;
 use crate::photons::{PhotonConfig, ms_since};
 use crate::renderer::FrameRenderer;
 use crate::scene::Scene;
+use crate::scene::file::CameraDesc;
 use crate::shared::tone::srgb_byte;
 use crate::shared::trace::Geometry;
 use crate::tone::ToneConfig;
@@ -70,6 +71,12 @@ pub struct Options {
     /// its share of shadow rays; 1 is one exact frame at the pixel centres; 0 is the frame a
     /// moving camera gets (direct light as `frame.direct` says).
     pub spp: u32,
+    /// An image sequence from one bake (`--views`): these cameras instead of the scene's, each
+    /// written to the output's name numbered (`scene::views::numbered`).
+    pub views: Vec<CameraDesc>,
+    /// Draw only the views whose index is K modulo N (`--shard K/N`), so that N machines
+    /// sharing a bake cache split a sequence.
+    pub shard: Option<(u32, u32)>,
 }
 
 /// Writes the object-ID image of the render `opts` describes (`crate::objects`) to `path`,
@@ -115,6 +122,9 @@ pub struct RenderReport {
     /// The log-average luminance the tone map keyed on (0 when it did not run).
     pub log_average: f32,
     pub stages: Stages,
+    /// With `--views`: each image drawn (this shard's), with its time from the bake in memory.
+    #[serde(skip_serializing_if = "Vec::is_empty")]
+    pub views: Vec<ShotReport>,
 }
 
 impl std::fmt::Display for RenderReport {
@@ -214,8 +224,31 @@ pub fn render(
         )));
     }
     let (adapter, backend) = adapter_names(gpu);
+    let mut views = Vec::new();
     let (stages, cache_hit, log_average) = match opts.method {
-        Method::Lobes => render_lobes(scene, gpu, opts, &view, format, output)?,
+        Method::Lobes => {
+            let numbered = shots(opts, &view, width, height, output)?;
+            let shots: Vec<Shot> = numbered.iter().map(|(_, s)| s.clone()).collect();
+            let (stages, hit, done) = render_lobes(scene, gpu, opts, &shots, format)?;
+            if !opts.views.is_empty() {
+                views = numbered
+                    .iter()
+                    .zip(&done.each)
+                    .map(|((index, s), &ms)| ShotReport {
+                        index: *index,
+                        output: s.output.display().to_string(),
+                        ms,
+                    })
+                    .collect();
+            }
+            (stages, hit, done.log_average)
+        }
+        _ if !opts.views.is_empty() => {
+            return Err(Error::Invalid(format!(
+                "--views draws a sequence from one bake: it is for --method lobes, not {}",
+                opts.method.name()
+            )));
+        }
         Method::Photons => (
             render_photons(scene, gpu, opts, &view, format, output)?,
             false,
@@ -241,7 +274,51 @@ pub fn render(
         cache_hit,
         log_average,
         stages,
+        views,
     })
+}
+
+/// The images to draw, with their places in the view list: the scene's camera to `output`,
+/// or with `--views` this shard's views, each to its numbered file.
+fn shots(
+    opts: &Options,
+    view: &View,
+    width: u32,
+    height: u32,
+    output: &Path,
+) -> Result<Vec<(usize, Shot)>> {
+    if opts.views.is_empty() {
+        if opts.shard.is_some() {
+            return Err(Error::Invalid(
+                "--shard splits a view list: give it with --views FILE".into(),
+            ));
+        }
+        let shot = Shot {
+            view: view.clone(),
+            output: output.to_path_buf(),
+        };
+        return Ok(vec![(0, shot)]);
+    }
+    let (k, n) = opts.shard.unwrap_or((0, 1));
+    if n == 0 || k >= n {
+        return Err(Error::Invalid(format!(
+            "--shard {k}/{n}: K must be below N (shards 0/N to N-1/N)"
+        )));
+    }
+    let count = opts.views.len();
+    Ok(opts
+        .views
+        .iter()
+        .enumerate()
+        .filter(|(i, _)| *i as u32 % n == k)
+        .map(|(i, cam)| {
+            let shot = Shot {
+                view: View::new(cam, width, height),
+                output: crate::scene::views::numbered(output, i, count),
+            };
+            (i, shot)
+        })
+        .collect())
 }
 
 /// The bake from the cache file when it matches, else baked (and saved when asked).
@@ -369,37 +446,80 @@ fn write_drawn(drawn: &Drawn, progress: &Progress, view: &View, output: &Path) -
     }
 }
 
-/// The renderer: bake (or load), splat passes, tone map, write.
+/// One image of a render: its view and its file.
+#[derive(Clone)]
+pub struct Shot {
+    pub view: View,
+    pub output: PathBuf,
+}
+
+/// What one image of a view sequence took (`RenderReport::views`).
+#[derive(Clone, Debug, Serialize)]
+pub struct ShotReport {
+    /// Its place in the view list (shards keep the list's numbers).
+    pub index: usize,
+    pub output: String,
+    /// Drawing, tone mapping and writing it, from the bake in memory.
+    pub ms: f64,
+}
+
+/// What drawing the shots gave: the last one's stages and log-average, and each one's time.
+struct Shots {
+    shade: StageReport,
+    tonemap: StageReport,
+    log_average: f32,
+    each: Vec<f64>,
+}
+
+/// The renderer: bake (or load) once, then for each shot the splat passes, tone map, write.
 fn render_lobes(
     scene: &Scene,
     gpu: Option<&Gpu>,
     opts: &Options,
-    view: &View,
+    shots: &[Shot],
     format: ImageFormat,
-    output: &Path,
-) -> Result<(Stages, bool, f32)> {
+) -> Result<(Stages, bool, Shots)> {
     let progress = Progress::new(opts.progress);
-    let cam = camera_uniform(view, scene.bounds(), &opts.frame);
-    let pixels = view.width * view.height;
-    let (baked, hit, grid, drawn) = match gpu {
+    let mut done = Shots {
+        shade: StageReport::skipped("no view to draw"),
+        tonemap: StageReport::skipped("no view to draw"),
+        log_average: 0.0,
+        each: Vec::with_capacity(shots.len()),
+    };
+    let mut record = |drawn: Drawn, shot: &Shot, t: Instant| -> Result<()> {
+        write_drawn(&drawn, &progress, &shot.view, &shot.output)?;
+        done.each.push(ms_since(t));
+        done.log_average = drawn.log_sum.map_or(0.0, crate::tone::log_average);
+        (done.shade, done.tonemap) = (drawn.shade, drawn.tonemap);
+        Ok(())
+    };
+    let (baked, hit, grid) = match gpu {
         Some(gpu) => {
             let mut renderer = FrameRenderer::new(gpu, scene)?;
             let on_gpu = BakeDevice::Gpu(gpu, &renderer.on_gpu);
             let (baked, hit) = bake_or_load(scene, on_gpu, opts, &progress)?;
-            let t = Instant::now();
             renderer.set_lobes(gpu, scene, &baked.lobes)?;
-            let targets = if opts.spp == 0 {
-                renderer.draw(gpu, scene, view, &opts.frame)?
-            } else {
-                let bar = progress.bar(opts.spp as u64);
-                let each = |k: u32| bar.set_position(k as u64 + 1);
-                let drawn = renderer.draw_refined(gpu, scene, view, &opts.frame, opts.spp, each);
-                bar.finish_and_clear();
-                drawn?
-            };
-            let shade = refined(ms_since(t), opts.spp);
-            let drawn = drawn_on_gpu(gpu, &targets.hdr, pixels, format, &opts.tone, shade)?;
-            (baked, hit, StageReport::ran(renderer.on_gpu.grid_ms), drawn)
+            for shot in shots {
+                let (t, view) = (Instant::now(), &shot.view);
+                let targets = if opts.spp == 0 {
+                    renderer.draw(gpu, scene, view, &opts.frame)?
+                } else {
+                    let bar = progress.bar(opts.spp as u64);
+                    let each = |k: u32| bar.set_position(k as u64 + 1);
+                    let drawn =
+                        renderer.draw_refined(gpu, scene, view, &opts.frame, opts.spp, each);
+                    bar.finish_and_clear();
+                    drawn?
+                };
+                let shade = refined(ms_since(t), opts.spp);
+                let pixels = view.width * view.height;
+                record(
+                    drawn_on_gpu(gpu, &targets.hdr, pixels, format, &opts.tone, shade)?,
+                    shot,
+                    t,
+                )?;
+            }
+            (baked, hit, StageReport::ran(renderer.on_gpu.grid_ms))
         }
         None => {
             let t = Instant::now();
@@ -407,30 +527,28 @@ fn render_lobes(
             let grid = StageReport::ran(ms_since(t));
             let (baked, hit) = bake_or_load(scene, BakeDevice::Cpu(&host_grid), opts, &progress)?;
             let params = shade_params(scene, &baked.lobes, &opts.frame);
-            let t = Instant::now();
-            let hdr = match opts.spp {
-                0 => cpu_frame(scene, &host_grid, &baked.lobes, &cam, &params)?,
-                spp => cpu_refined(scene, &host_grid, &baked.lobes, &cam, &params, spp),
-            };
-            let shade = refined(ms_since(t), opts.spp);
-            let drawn = drawn_on_cpu(hdr, format, &opts.tone, shade)?;
-            (baked, hit, grid, drawn)
+            for shot in shots {
+                let t = Instant::now();
+                let cam = camera_uniform(&shot.view, scene.bounds(), &opts.frame);
+                let hdr = match opts.spp {
+                    0 => cpu_frame(scene, &host_grid, &baked.lobes, &cam, &params)?,
+                    spp => cpu_refined(scene, &host_grid, &baked.lobes, &cam, &params, spp),
+                };
+                let shade = refined(ms_since(t), opts.spp);
+                record(drawn_on_cpu(hdr, format, &opts.tone, shade)?, shot, t)?;
+            }
+            (baked, hit, grid)
         }
     };
-    write_drawn(&drawn, &progress, view, output)?;
     let stages = Stages {
         grid,
         photons: baked.photons,
         binning: baked.binning,
         em: baked.em,
-        shade: drawn.shade,
-        tonemap: drawn.tonemap,
+        shade: done.shade.clone(),
+        tonemap: done.tonemap.clone(),
     };
-    Ok((
-        stages,
-        hit,
-        drawn.log_sum.map_or(0.0, crate::tone::log_average),
-    ))
+    Ok((stages, hit, done))
 }
 
 /// `--method reference`: photons traced and binned (no fit), gathered per pixel at the

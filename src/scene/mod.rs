@@ -5,6 +5,7 @@ pub mod file;
 pub mod model;
 mod settings;
 pub mod shapes;
+pub mod views;
 
 use std::path::{Path, PathBuf};
 
@@ -110,7 +111,7 @@ pub fn load(path: &Path) -> Result<Scene> {
     parse(path, &text)
 }
 
-fn line_of(text: &str, offset: usize) -> usize {
+pub(crate) fn line_of(text: &str, offset: usize) -> usize {
     text[..offset.min(text.len())].matches('\n').count() + 1
 }
 
@@ -225,7 +226,8 @@ fn finite3(v: [f32; 3]) -> bool {
     v.iter().all(|x| x.is_finite())
 }
 
-fn validate_camera(c: &CameraDesc) -> std::result::Result<(), String> {
+/// A camera that can draw (also each view of a view list, `views`).
+pub(crate) fn validate_camera(c: &CameraDesc) -> std::result::Result<(), String> {
     if !(finite3(c.eye) && finite3(c.target) && finite3(c.up)) {
         return Err("eye, target and up must be finite".into());
     }

@@ -1,0 +1,148 @@
+//! View lists (`render --views FILE`): the cameras of an image sequence drawn from one bake. A
+//! TOML file holds explicit cameras, an orbit, or both (the explicit ones first):
+//!
+//! ```toml
+//! [[view]]                 # any [camera] key but `resolution`; the scene's camera fills the rest
+//! eye = [0.5, 0.2, 3.5]
+//! target = [0.0, 0.0, 0.0]
+//!
+//! [orbit]                  # the scene's camera turned about an axis through its target
+//! frames = 36              # views, evenly over `degrees`
+//! degrees = 360.0          # default 360
+//! axis = [0.0, 1.0, 0.0]   # default: the camera's up
+//! ```
+
+use std::path::Path;
+
+use glam::{Quat, Vec3};
+use serde::Deserialize;
+
+use super::file::{CameraDesc, FovAxis};
+use crate::error::{Error, Result};
+
+/// Most views one file may make: past it a typo in `frames` is likelier than intent.
+pub const MAX_VIEWS: u32 = 1_000_000;
+
+#[derive(Debug, Default, Deserialize)]
+#[serde(deny_unknown_fields)]
+struct ViewsFile {
+    #[serde(default)]
+    view: Vec<ViewDesc>,
+    orbit: Option<Orbit>,
+}
+
+#[derive(Debug, Deserialize)]
+#[serde(deny_unknown_fields)]
+struct ViewDesc {
+    eye: Option<[f32; 3]>,
+    target: Option<[f32; 3]>,
+    up: Option<[f32; 3]>,
+    fov: Option<f32>,
+    fov_axis: Option<FovAxis>,
+}
+
+#[derive(Debug, Deserialize)]
+#[serde(deny_unknown_fields)]
+struct Orbit {
+    frames: u32,
+    #[serde(default = "full_turn")]
+    degrees: f32,
+    axis: Option<[f32; 3]>,
+}
+
+fn full_turn() -> f32 {
+    360.0
+}
+
+/// The cameras `path` lists, in order, each completing `base` (the scene's camera).
+pub fn load(path: &Path, base: &CameraDesc) -> Result<Vec<CameraDesc>> {
+    let bytes = Error::read_regular_file(path)?;
+    let text = std::str::from_utf8(&bytes)
+        .map_err(|e| Error::parse(path, "text", format!("not UTF-8 text: {e}")))?;
+    parse(path, text, base)
+}
+
+pub fn parse(path: &Path, text: &str, base: &CameraDesc) -> Result<Vec<CameraDesc>> {
+    let file: ViewsFile = toml::from_str(text).map_err(|e| {
+        let at = e.span().map_or_else(
+            || "top".to_string(),
+            |s| format!("line {}", super::line_of(text, s.start)),
+        );
+        Error::parse(path, at, e.message().trim().to_string())
+    })?;
+    let mut views = Vec::new();
+    for (k, v) in file.view.iter().enumerate() {
+        let cam = CameraDesc {
+            eye: v.eye.unwrap_or(base.eye),
+            target: v.target.unwrap_or(base.target),
+            up: v.up.unwrap_or(base.up),
+            fov: v.fov.unwrap_or(base.fov),
+            fov_axis: v.fov_axis.unwrap_or(base.fov_axis),
+            resolution: base.resolution,
+        };
+        super::validate_camera(&cam)
+            .map_err(|m| Error::parse(path, format!("view #{}", k + 1), m))?;
+        views.push(cam);
+    }
+    if let Some(o) = &file.orbit {
+        let bad = |m: String| Error::parse(path, "orbit", m);
+        if !(1..=MAX_VIEWS).contains(&o.frames) {
+            return Err(bad(format!(
+                "frames must be within 1..={MAX_VIEWS}, got {}",
+                o.frames
+            )));
+        }
+        let axis = Vec3::from(o.axis.unwrap_or(base.up));
+        if !(o.degrees.is_finite() && axis.is_finite() && axis.length() > 1e-6) {
+            return Err(bad(
+                "degrees must be a number and axis a nonzero vector".into()
+            ));
+        }
+        let (eye, target) = (Vec3::from(base.eye), Vec3::from(base.target));
+        for k in 0..o.frames {
+            let turn = (o.degrees * k as f32 / o.frames as f32).to_radians();
+            let q = Quat::from_axis_angle(axis.normalize(), turn);
+            let cam = CameraDesc {
+                eye: (target + q * (eye - target)).to_array(),
+                up: (q * Vec3::from(base.up)).to_array(),
+                ..base.clone()
+            };
+            super::validate_camera(&cam).map_err(|m| bad(format!("frame {k}: {m}")))?;
+            views.push(cam);
+        }
+    }
+    if views.is_empty() {
+        return Err(Error::parse(
+            path,
+            "views",
+            "the file lists no view: add a [[view]] or an [orbit]",
+        ));
+    }
+    Ok(views)
+}
+
+/// The file of view `k` of `count` in the sequence named by `output`: a run of `#` in its name
+/// becomes `k` zero-padded to that width (`frame_####.png`), else `_k` (padded to the count's
+/// digits) goes before the extension.
+pub fn numbered(output: &Path, k: usize, count: usize) -> std::path::PathBuf {
+    let name = output
+        .file_name()
+        .map_or_else(String::new, |n| n.to_string_lossy().into_owned());
+    let digits = count.saturating_sub(1).max(1).to_string().len().max(4);
+    let named = match name.find('#') {
+        Some(start) => {
+            let run = name[start..].chars().take_while(|&c| c == '#').count();
+            format!("{}{k:0run$}{}", &name[..start], &name[start + run..])
+        }
+        None => {
+            let stem = output
+                .file_stem()
+                .map_or_else(String::new, |n| n.to_string_lossy().into_owned());
+            match output.extension() {
+                Some(ext) => format!("{stem}_{k:0digits$}.{}", ext.to_string_lossy()),
+                None => format!("{stem}_{k:0digits$}"),
+            }
+        }
+    };
+    output.with_file_name(named)
+}
