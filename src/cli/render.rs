@@ -294,7 +294,7 @@ fn shots(
             ));
         }
         let shot = Shot {
-            view: view.clone(),
+            view: *view,
             output: output.to_path_buf(),
         };
         return Ok(vec![(0, shot)]);
