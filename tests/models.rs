@@ -581,3 +581,109 @@ fn e57_scans_read_back_in_one_frame() {
     let err = err_of("garbage.e57", b"ASTM-E57 but not really");
     assert!(err.contains("garbage.e57"), "{err}");
 }
+
+/// A coarse mesh sampled at a spacing: a 10 × 4 quad of two triangles, and a sliver, become
+/// splats of about that spacing (one per spacing² of area, give or take the sub-triangles'
+/// shape) that cover every point of every triangle, facing the triangle's way, with
+/// interpolated colours.
+#[test]
+fn coarse_meshes_are_sampled_without_holes() {
+    use lobelight::scene::model::surface::sample_surface;
+    let mut m = Mesh::default();
+    m.positions = vec![
+        Vec3::new(0.0, 0.0, 0.0),
+        Vec3::new(10.0, 0.0, 0.0),
+        Vec3::new(10.0, 4.0, 0.0),
+        Vec3::new(0.0, 4.0, 0.0),
+        Vec3::new(0.0, 0.0, 1.0),
+        Vec3::new(10.0, 0.0, 1.0),
+        Vec3::new(5.0, 0.0, 1.05),
+    ];
+    m.colors = Some(vec![
+        [0.0; 3], [1.0; 3], [1.0; 3], [0.0; 3], [0.5; 3], [0.5; 3], [0.5; 3],
+    ]);
+    m.faces = vec![[0, 1, 2], [0, 2, 3], [4, 5, 6]];
+    let spacing = 0.25;
+    let s = sample_surface(&m, spacing);
+    let quad = s.disks.iter().filter(|d| d.normal.z > 0.99).count();
+    let per_area = quad as f32 * spacing * spacing / 40.0;
+    assert!(
+        (0.8..=2.5).contains(&per_area),
+        "{quad} splats on the quad ({per_area} a spacing²)"
+    );
+    assert!(
+        s.disks.iter().all(|d| d.radius <= 1.5 * spacing),
+        "a splat wider than 1.5 spacings"
+    );
+    let mut rng = common::Rng(8);
+    for k in 0..6000 {
+        let f = m.faces[k % 3];
+        let (mut a, mut b) = (rng.f32(), rng.f32());
+        if a + b > 1.0 {
+            (a, b) = (1.0 - a, 1.0 - b);
+        }
+        let [p0, p1, p2] = f.map(|i| m.positions[i as usize]);
+        let q = p0 + a * (p1 - p0) + b * (p2 - p0);
+        assert!(
+            covered(q, &s.disks, 1e-4),
+            "point {q} of face {f:?} is in a hole"
+        );
+    }
+    // Colours: linear at the centroid, so the quad's left edge is dark and its right bright.
+    let colours = s.colors.as_ref().unwrap();
+    for (d, c) in s.disks.iter().zip(colours) {
+        if d.normal.z > 0.99 && d.center.x < 0.3 {
+            assert!(c[0] < 0.01, "{d:?} {c:?}");
+        }
+    }
+}
+
+/// An OBJ with an MTL library: a coarse model is sampled at the default spacing (1/80 of its
+/// extent), its faces keep the materials the MTL defines (Kd the albedo, Ks and Ns a Ward
+/// lobe), one surface each; a material the scene names instead overrides them; a material the
+/// library does not define is an error naming it.
+#[test]
+fn obj_materials_become_ward_materials() {
+    let obj = "mtllib room.mtl\nv 0 0 0\nv 4 0 0\nv 4 4 0\nv 0 4 0\nv 0 0 4\nv 4 0 4\n\
+               usemtl paint\nf 1 2 3 4\nusemtl metal\nf 1 2 6 5\n";
+    let mtl =
+        "newmtl paint\nKd 0.2 0.4 0.6\nnewmtl metal\nKd 0.1 0.1 0.1\nKs 0.5 0.5 0.5\nNs 198\n";
+    let obj_path = tmp("room.obj", obj.as_bytes());
+    tmp("room.mtl", mtl.as_bytes());
+    let dir = obj_path.parent().unwrap();
+    let scene_text = |material: &str| {
+        format!(
+            "[[light]]\ntype = \"point\"\nposition = [2.0, 2.0, 2.0]\nintensity = 1.0\n\n\
+             [[object]]\nshape = \"model\"\npath = \"room.obj\"\n{material}"
+        )
+    };
+    let scene_path = dir.join("room.toml");
+    std::fs::write(&scene_path, scene_text("")).unwrap();
+    let scene = lobelight::scene::load(&scene_path).unwrap();
+    assert_eq!(scene.surfaces, ["#1 model paint", "#1 model metal"]);
+    let index = |name: &str| scene.material_names.iter().position(|n| n == name).unwrap();
+    let (paint, metal) = (index("#1 model/paint"), index("#1 model/metal"));
+    assert_eq!(scene.materials[paint].specular, [0.0; 3]);
+    assert_eq!(scene.materials[metal].specular, [0.5; 3]);
+    assert!((scene.materials[metal].roughness - 0.1).abs() < 1e-6);
+    let on = |k: usize| scene.splats.iter().filter(move |s| s.material == k as u32);
+    // 4 × 4 faces at 0.05 a splat: several thousand each, none as large as the face.
+    assert!(on(paint).count() > 3000 && on(metal).count() > 3000);
+    assert!(on(paint).all(|s| s.diffuse == [0.2, 0.4, 0.6] && s.radius < 0.1));
+    // The scene names a material: the MTL's are not used.
+    std::fs::write(
+        &scene_path,
+        format!(
+            "[materials.grey]\ndiffuse = 0.5\n\n{}",
+            scene_text("material = \"grey\"\n")
+        ),
+    )
+    .unwrap();
+    let named = lobelight::scene::load(&scene_path).unwrap();
+    assert!(!named.material_names.iter().any(|n| n.contains("paint")));
+    assert!(named.splats.iter().all(|s| s.diffuse == [0.5; 3]));
+    tmp("room.mtl", b"newmtl paint\nKd 0.2 0.4 0.6\n");
+    std::fs::write(&scene_path, scene_text("")).unwrap();
+    let err = lobelight::scene::load(&scene_path).unwrap_err().to_string();
+    assert!(err.contains("metal") && err.contains("room.mtl"), "{err}");
+}

