@@ -122,7 +122,7 @@ fn validate(path: &Path, m: &Mesh) -> Result<()> {
         return Err(Error::parse(path, "vertices", "the model has no vertices"));
     }
     let materials = m.materials.len() as u32;
-    let bad_material = m.face_materials.len() != 0 && m.face_materials.len() != m.faces.len()
+    let bad_material = !m.face_materials.is_empty() && m.face_materials.len() != m.faces.len()
         || m.face_materials
             .iter()
             .any(|&k| k != u32::MAX && k >= materials);

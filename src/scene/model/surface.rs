@@ -25,7 +25,7 @@ pub fn sample_surface(mesh: &Mesh, spacing: f32) -> SplatSet {
     for (f, face) in mesh.faces.iter().enumerate() {
         let [a, b, c] = face.map(|i| mesh.positions[i as usize]);
         let normal = (b - a).cross(c - a);
-        if !(normal.length() > 0.0) || !normal.is_finite() {
+        if !normal.is_finite() || normal.length() <= 0.0 {
             set.dropped += 1;
             continue;
         }
