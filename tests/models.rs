@@ -589,20 +589,22 @@ fn e57_scans_read_back_in_one_frame() {
 #[test]
 fn coarse_meshes_are_sampled_without_holes() {
     use lobelight::scene::model::surface::sample_surface;
-    let mut m = Mesh::default();
-    m.positions = vec![
-        Vec3::new(0.0, 0.0, 0.0),
-        Vec3::new(10.0, 0.0, 0.0),
-        Vec3::new(10.0, 4.0, 0.0),
-        Vec3::new(0.0, 4.0, 0.0),
-        Vec3::new(0.0, 0.0, 1.0),
-        Vec3::new(10.0, 0.0, 1.0),
-        Vec3::new(5.0, 0.0, 1.05),
-    ];
-    m.colors = Some(vec![
-        [0.0; 3], [1.0; 3], [1.0; 3], [0.0; 3], [0.5; 3], [0.5; 3], [0.5; 3],
-    ]);
-    m.faces = vec![[0, 1, 2], [0, 2, 3], [4, 5, 6]];
+    let m = Mesh {
+        positions: vec![
+            Vec3::new(0.0, 0.0, 0.0),
+            Vec3::new(10.0, 0.0, 0.0),
+            Vec3::new(10.0, 4.0, 0.0),
+            Vec3::new(0.0, 4.0, 0.0),
+            Vec3::new(0.0, 0.0, 1.0),
+            Vec3::new(10.0, 0.0, 1.0),
+            Vec3::new(5.0, 0.0, 1.05),
+        ],
+        colors: Some(vec![
+            [0.0; 3], [1.0; 3], [1.0; 3], [0.0; 3], [0.5; 3], [0.5; 3], [0.5; 3],
+        ]),
+        faces: vec![[0, 1, 2], [0, 2, 3], [4, 5, 6]],
+        ..Default::default()
+    };
     let spacing = 0.25;
     let s = sample_surface(&m, spacing);
     let quad = s.disks.iter().filter(|d| d.normal.z > 0.99).count();

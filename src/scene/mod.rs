@@ -194,8 +194,6 @@ pub fn parse(path: &Path, text: &str) -> Result<Scene> {
             "the scene has no splats: add at least one [[object]]".into(),
         ));
     }
-    let mut material_names = material_names;
-    let mut materials = materials;
     for (name, m) in extra_materials {
         materials.push(material(&m).map_err(|msg| invalid(format!("material {name}: {msg}")))?);
         material_names.push(name);
