@@ -14,6 +14,8 @@ fn small_plan() -> SweepPlan {
         size: 32,
         base_photons: 60_000,
         reference_photons: 200_000,
+        reference_spp: 64,
+        path_spp: vec![4],
         photons: vec![30_000, 200_000],
         iterations: vec![2, 10],
         radius_scales: vec![1.0, 2.0],
@@ -32,14 +34,22 @@ fn a_small_sweep_writes_its_tables_and_charts() {
     let dir = std::env::temp_dir().join(format!("lobelight-sweep-{}", std::process::id()));
     let plan = small_plan();
     let r = sweep(&[("cornell".into(), scene)], Some(&gpu), &plan, &dir).unwrap();
-    assert_eq!(r.rows.len(), 11);
+    assert_eq!(r.rows.len(), 12);
+    let path = r.rows.iter().find(|row| row.knob == "path").unwrap();
+    assert_eq!(path.value, "4 spp");
+    assert_eq!(r.references[0].spp, 64);
+    // Per object: the Cornell box's five walls and two blocks, in every row.
+    assert!(
+        r.rows.iter().all(|row| row.objects.len() == 7),
+        "{:?}",
+        path.objects
+    );
     for row in &r.rows {
         assert!(row.rel_mse.is_finite() && row.rel_mse > 0.0, "{row:?}");
         assert!(row.smape > 0.0 && row.smape < 1.0, "{row:?}");
         assert!(row.bake_ms > 0.0 && row.frame_ms > 0.0, "{row:?}");
     }
-    // The reference's own photon count, lobes fitted to the same photons: the error left is
-    // the lobes' and the photons' noise, far under that of a tenth of the photons.
+    // More photons, less error against the path-traced reference.
     let by = |knob: &str, value: &str| {
         r.rows
             .iter()
@@ -50,7 +60,7 @@ fn a_small_sweep_writes_its_tables_and_charts() {
     assert!(by("photons", "200k") < by("photons", "30k"), "{:?}", r.rows);
     let csv = std::fs::read_to_string(dir.join("sweep.csv")).unwrap();
     assert!(csv.starts_with("scene,knob,value,photons"));
-    assert_eq!(csv.lines().count(), 12);
+    assert_eq!(csv.lines().count(), 13);
     assert!(csv.lines().next().unwrap().ends_with(",prune,lobes_kept"));
     let md = std::fs::read_to_string(dir.join("sweep.md")).unwrap();
     assert!(md.contains("| iterations | 10 |"), "{md}");

@@ -1,14 +1,15 @@
-//! `lobelight bench sweep` (thesis chapter 4 in one command): for each scene, a photon-map
-//! reference (`--method reference` with the most photons of the plan), then one lobe render
+//! `lobelight bench sweep` (thesis chapter 4 in one command): for each scene, the path
+//! tracer's converged image as the reference (`--method path`, `reference_spp` samples a
+//! pixel), the path tracer's own images at fewer samples (knob `path`), then one lobe render
 //! per setting of one knob at a time from a base (photons emitted, EM iterations, search
-//! radius, lobes per splat, splat count, lobe family), each with its bake time, its frame time
-//! and its error against the reference. Writes `sweep.csv`, `sweep.md`, one chart per scene
-//! (`sweep_<scene>.png`: error against bake time and against frame time) and the references
-//! (`reference_<scene>.exr`).
+//! radius, lobes per splat, splat count, lobe family, pruning), each with its bake time, its
+//! frame time and its error against the reference, over the image and per object. Writes
+//! `sweep.csv`, `sweep.md`, one chart per scene (`sweep_<scene>.png`: error against bake time
+//! and against frame time; a path row's image costs its whole time, as bake and as frame) and
+//! the references (`reference_<scene>.exr`).
 //!
-//! Both images get the same direct light from the same shade pass, so the error is the
-//! indirect light's: the lobes' fit and shading against the photons they stand for, plus the
-//! photon noise of both.
+//! The lobe renders cast shadow rays for direct light at the pixel centres (one frame), so
+//! their error is the indirect light's and the anti-aliasing the reference's jitter adds.
 
 use std::fmt::Write as _;
 use std::path::Path;
@@ -16,20 +17,22 @@ use std::time::Instant;
 
 use serde::Serialize;
 
-use crate::bake::{BakeDevice, Progress, bake, bins_cpu};
+use crate::bake::{BakeDevice, Progress, bake};
 use crate::camera::View;
-use crate::cli::compare::{Values, difference_of};
+use crate::cli::compare::{Difference, ObjectDifference, Values, difference_of, per_object};
 use crate::cli::measure::median;
 use crate::cli::plot::{Chart, Series};
 use crate::cpu;
 use crate::em::LobeFamily;
 use crate::error::{Error, Result};
-use crate::frame::{Direct, FrameConfig, camera_uniform, cpu_frame, cpu_reference, shade_params};
+use crate::frame::{Direct, FrameConfig, camera_uniform, cpu_frame, cpu_path, shade_params};
 use crate::gpu::Gpu;
+use crate::objects::{SAMPLES, object_ids};
 use crate::photons::ms_since;
 use crate::renderer::FrameRenderer;
 use crate::scene::Scene;
 use crate::shared::rng::{pcg_hash, unit_float};
+use crate::shared::splat::SHOW_ALL;
 
 /// What a sweep varies, and around what.
 #[derive(Clone, Debug, Serialize)]
@@ -38,8 +41,14 @@ pub struct SweepPlan {
     pub size: u32,
     /// Photons of the base setting (every knob but `photons` keeps it).
     pub base_photons: u64,
-    /// Photons of the reference.
+    /// Photons of the photon-gather image a sweep once used as its reference; the reference is
+    /// now the path tracer (`reference_spp`). Kept in the plan for scripts that read it.
     pub reference_photons: u64,
+    /// Samples per pixel of the reference: the path tracer's converged image of the scene.
+    pub reference_spp: u32,
+    /// The path tracer's own rows: its image at these samples per pixel, timed, against the
+    /// reference (knob `path`), so one chart compares a bake plus views with rendering each.
+    pub path_spp: Vec<u32>,
     pub photons: Vec<u64>,
     pub iterations: Vec<u32>,
     /// Search radii as multiples of the scene's.
@@ -60,6 +69,8 @@ impl Default for SweepPlan {
             size: 256,
             base_photons: 1_000_000,
             reference_photons: 10_000_000,
+            reference_spp: 1024,
+            path_spp: vec![4, 16, 64, 256],
             photons: vec![300_000, 600_000, 1_000_000, 3_000_000, 10_000_000],
             iterations: vec![2, 5, 10, 20, 100],
             radius_scales: vec![0.5, 0.75, 1.0, 1.5, 2.0],
@@ -85,7 +96,8 @@ enum Setting {
 }
 
 /// The knobs a sweep can turn, by name.
-pub const KNOBS: [&str; 7] = [
+pub const KNOBS: [&str; 8] = [
+    "path",
     "photons",
     "iterations",
     "radius",
@@ -154,6 +166,7 @@ impl SweepPlan {
         keep(&mut self.splat_fractions, turned("splats"));
         keep(&mut self.families, turned("family"));
         keep(&mut self.prune, turned("prune"));
+        keep(&mut self.path_spp, turned("path"));
         Ok(self)
     }
 }
@@ -225,6 +238,8 @@ pub struct SweepRow {
     /// Lobe pruning, and the lobes the bake kept.
     pub prune: bool,
     pub lobes_kept: u64,
+    /// The figures per object of the scene (`compare --objects`'s).
+    pub objects: Vec<ObjectDifference>,
 }
 
 /// A setting that could not run on this device, with the reason (e.g. a software device's
@@ -240,9 +255,12 @@ pub struct SweepSkip {
 #[derive(Clone, Debug, Serialize)]
 pub struct SweepReference {
     pub scene: String,
+    /// 0: the reference is the path tracer's, which traces no photon map.
     pub photons: u64,
+    /// The path tracer's samples per pixel.
+    pub spp: u32,
     pub splats: usize,
-    /// Photons, binning, gather and shade.
+    /// Rendering it.
     pub ms: f64,
     pub image: String,
 }
@@ -341,28 +359,18 @@ impl Runner<'_> {
         })
     }
 
-    fn reference(&mut self, scene: &Scene, view: &View) -> Result<Vec<[f32; 4]>> {
-        let progress = Progress::new(true);
-        let cfg = FrameConfig::default();
+    /// The path tracer's image of `view` at `spp` samples per pixel.
+    fn path(&mut self, scene: &Scene, view: &View, spp: u32) -> Result<Vec<[f32; 4]>> {
         match self {
             Runner::Gpu(gpu, slot) => {
                 let renderer = renderer_on(gpu, slot, scene)?;
-                let binned = renderer.bins(gpu, scene, &progress)?;
-                renderer.draw_reference(gpu, scene, &binned, view, &cfg)?;
+                renderer.draw_path(gpu, scene, view, SHOW_ALL, spp, |_| {})?;
                 renderer.read_hdr(gpu)
             }
             Runner::Cpu => {
-                let cam = camera_uniform(view, scene.bounds(), &cfg);
+                let cam = camera_uniform(view, scene.bounds(), &FrameConfig::default());
                 let grid = cpu::scene_grid(scene)?;
-                let binned = bins_cpu(scene, &grid, &progress)?;
-                Ok(cpu_reference(
-                    scene,
-                    &grid,
-                    &binned.bins,
-                    &binned.em,
-                    &cam,
-                    &cfg,
-                ))
+                cpu_path(scene, &grid, &cam, SHOW_ALL, spp)
             }
         }
     }
@@ -395,22 +403,63 @@ pub fn sweep(
         let radius = scene.search_radius();
         let mut base = scene.clone();
         base.bake.photons = plan.base_photons;
-        let reference_scene = apply(&base, Setting::Photons(plan.reference_photons), radius);
         eprintln!(
-            "sweep {name}: reference, {} photons",
-            plan.reference_photons
+            "sweep {name}: reference, the path tracer at {} samples a pixel",
+            plan.reference_spp
         );
         let t = Instant::now();
-        let reference = runner.reference(&reference_scene, &view)?;
+        let reference = runner.path(scene, &view, plan.reference_spp)?;
         let image = out_dir.join(format!("reference_{name}.exr"));
         crate::cli::render::write_exr(&image, &reference, plan.size, plan.size)?;
         references.push(SweepReference {
             scene: name.clone(),
-            photons: plan.reference_photons,
+            photons: 0,
+            spp: plan.reference_spp,
             splats: scene.splats.len(),
             ms: ms_since(t),
             image: image.display().to_string(),
         });
+        // Which surface each pixel shows, for the per-object figures.
+        let cam = camera_uniform(&view, scene.bounds(), &FrameConfig::default());
+        let ids = object_ids(scene, &cpu::scene_grid(scene)?, &cam, SAMPLES)?;
+        let against = |hdr: &[[f32; 4]]| -> Result<(Difference, Vec<ObjectDifference>)> {
+            let d = difference_of(hdr, &reference, plan.size, plan.size, Values::Radiance)?;
+            Ok((d, per_object(hdr, &reference, &ids, &scene.surfaces)?))
+        };
+        // The path tracer's own rows: each image costs its whole time, every view again.
+        for &spp in &plan.path_spp {
+            let t = Instant::now();
+            let hdr = runner.path(scene, &view, spp)?;
+            let ms = ms_since(t);
+            let (d, objects) = against(&hdr)?;
+            let row = SweepRow {
+                scene: name.clone(),
+                knob: "path".into(),
+                value: format!("{spp} spp"),
+                photons: 0,
+                iterations: 0,
+                radius: 0.0,
+                lobes: 0,
+                family: scene.bake.family,
+                splats: scene.splats.len(),
+                photons_ms: 0.0,
+                binning_ms: 0.0,
+                em_ms: 0.0,
+                bake_ms: ms,
+                frame_ms: ms,
+                rel_mse: d.rel_mse,
+                smape: d.smape,
+                flip: d.flip,
+                prune: false,
+                lobes_kept: 0,
+                objects,
+            };
+            eprintln!(
+                "sweep {name}: path       {:>6}  image {:>8.0} ms  relMSE {:.4}  SMAPE {:.4}",
+                row.value, row.frame_ms, row.rel_mse, row.smape
+            );
+            rows.push(row);
+        }
         for setting in plan.settings() {
             let s = apply(&base, setting, radius);
             let run = match runner.lobes(&s, &view, plan.frames) {
@@ -430,7 +479,7 @@ pub fn sweep(
                     continue;
                 }
             };
-            let d = difference_of(&run.hdr, &reference, plan.size, plan.size, Values::Radiance)?;
+            let (d, objects) = against(&run.hdr)?;
             let row = SweepRow {
                 scene: name.clone(),
                 knob: setting.knob().into(),
@@ -451,6 +500,7 @@ pub fn sweep(
                 flip: d.flip,
                 prune: s.bake.prune,
                 lobes_kept: run.lobes_kept,
+                objects,
             };
             eprintln!(
                 "sweep {name}: {:<10} {:>6}  bake {:>8.0} ms  frame {:>6.1} ms  relMSE {:.4}  SMAPE {:.4}",
