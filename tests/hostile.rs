@@ -135,7 +135,7 @@ fn the_files_the_mutations_start_from_load() {
     assert!(to_splats(&mesh, Path::new("t.obj")).unwrap().disks.len() >= 4);
     for laz in [false, true] {
         let bytes = common::write_las(&common::fibonacci_sphere(40), None, laz);
-        let mesh = lidar::parse(Path::new("t.las"), &bytes).unwrap();
+        let mesh = lidar::parse(Path::new("t.las"), bytes).unwrap();
         assert_eq!(
             to_splats(&mesh, Path::new("t.las")).unwrap().disks.len(),
             40
@@ -318,7 +318,7 @@ proptest! {
         for m in &changes {
             bytes = apply(&bytes, m);
         }
-        if let Ok(mesh) = scan::parse(Path::new("fuzz.e57"), &bytes) {
+        if let Ok(mesh) = scan::parse(Path::new("fuzz.e57"), bytes.clone()) {
             check_mesh(&mesh, bytes.len())?;
         }
     }
@@ -334,7 +334,7 @@ proptest! {
         for m in &changes {
             bytes = apply(&bytes, m);
         }
-        if let Ok(mesh) = lidar::parse(Path::new("fuzz.las"), &bytes) {
+        if let Ok(mesh) = lidar::parse(Path::new("fuzz.las"), bytes.clone()) {
             // A LAZ record may pack into a byte or two: bound by the file's size in points.
             check_mesh(&mesh, 8 * bytes.len())?;
         }

@@ -79,15 +79,17 @@ pub struct Options {
     pub shard: Option<(u32, u32)>,
 }
 
+/// The image's size: `--width`/`--height`, else the scene camera's resolution.
+fn image_size(scene: &Scene, opts: &Options) -> (u32, u32) {
+    let [w, h] = scene.camera.resolution;
+    (opts.width.unwrap_or(w), opts.height.unwrap_or(h))
+}
+
 /// Writes the object-ID image of the render `opts` describes (`crate::objects`) to `path`,
 /// with the surfaces' names beside it.
 pub fn write_object_ids(scene: &Scene, opts: &Options, path: &Path) -> Result<()> {
-    let [w0, h0] = scene.camera.resolution;
-    let view = View::new(
-        &scene.camera,
-        opts.width.unwrap_or(w0),
-        opts.height.unwrap_or(h0),
-    );
+    let (width, height) = image_size(scene, opts);
+    let view = View::new(&scene.camera, width, height);
     let grid = cpu::scene_grid(scene)?;
     let cam = camera_uniform(&view, scene.bounds(), &opts.frame);
     let ids = crate::objects::object_ids(scene, &grid, &cam, crate::objects::SAMPLES)?;
@@ -207,8 +209,7 @@ pub fn render(
     opts: &Options,
     output: &Path,
 ) -> Result<RenderReport> {
-    let [w0, h0] = scene.camera.resolution;
-    let (width, height) = (opts.width.unwrap_or(w0), opts.height.unwrap_or(h0));
+    let (width, height) = image_size(scene, opts);
     crate::scene::check_resolution(width, height).map_err(Error::Invalid)?;
     if let Some(gpu) = gpu {
         gpu.check_image(width, height)?;

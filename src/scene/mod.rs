@@ -111,19 +111,22 @@ pub fn load(path: &Path) -> Result<Scene> {
     parse(path, &text)
 }
 
-pub(crate) fn line_of(text: &str, offset: usize) -> usize {
+/// A TOML file's parse error, at the line it names (scene files, view lists).
+pub(crate) fn toml_error(path: &Path, text: &str, e: toml::de::Error) -> Error {
+    let at = e.span().map_or_else(
+        || "top".to_string(),
+        |s| format!("line {}", line_of(text, s.start)),
+    );
+    Error::parse(path, at, e.message().trim().to_string())
+}
+
+fn line_of(text: &str, offset: usize) -> usize {
     text[..offset.min(text.len())].matches('\n').count() + 1
 }
 
 /// Builds a scene from TOML text; `path` names it in errors and anchors model paths.
 pub fn parse(path: &Path, text: &str) -> Result<Scene> {
-    let file: SceneFile = toml::from_str(text).map_err(|e| {
-        let at = e.span().map_or_else(
-            || "top".to_string(),
-            |s| format!("line {}", line_of(text, s.start)),
-        );
-        Error::parse(path, at, e.message().trim().to_string())
-    })?;
+    let file: SceneFile = toml::from_str(text).map_err(|e| toml_error(path, text, e))?;
     let at_line = |span: std::ops::Range<usize>, msg: String| {
         Error::at_line(path, line_of(text, span.start), msg)
     };
@@ -713,7 +716,13 @@ fn build_object(
             {
                 // The file's materials (MTL), one surface each, unless the scene names one.
                 Some(of_disk) => {
-                    for (k, mm) in mesh.materials.iter().enumerate() {
+                    // The disks of each material in one pass (last: faces with none).
+                    let none = mesh.materials.len();
+                    let mut groups = vec![Vec::new(); none + 1];
+                    for (i, &k) in of_disk.iter().enumerate() {
+                        groups[(k as usize).min(none)].push(i);
+                    }
+                    for (mm, pick) in mesh.materials.iter().zip(&groups) {
                         if !mm.defined {
                             return Err(at(format!(
                                 "its material `{}` is not defined by the file's material \
@@ -726,9 +735,6 @@ fn build_object(
                         let desc = mtl_material(mm);
                         let albedo = desc.diffuse.rgb();
                         extra_materials.push((format!("{name}/{}", mm.name), desc));
-                        let pick: Vec<usize> = (0..placed.len())
-                            .filter(|&i| of_disk[i] == k as u32)
-                            .collect();
                         let disks: Vec<Disk> = pick.iter().map(|&i| placed[i]).collect();
                         // The scene's material list gets these after all objects: the splats
                         // carry their albedo here (the vertex colours', where there are any).
@@ -740,10 +746,7 @@ fn build_object(
                             push(&disks, index, Some(&albedos), &mm.name);
                         }
                     }
-                    let rest: Vec<Disk> = (0..placed.len())
-                        .filter(|&i| of_disk[i] == u32::MAX)
-                        .map(|i| placed[i])
-                        .collect();
+                    let rest: Vec<Disk> = groups[none].iter().map(|&i| placed[i]).collect();
                     if !rest.is_empty() {
                         push(&rest, material, None, "");
                     }

@@ -63,13 +63,7 @@ pub fn load(path: &Path, base: &CameraDesc) -> Result<Vec<CameraDesc>> {
 }
 
 pub fn parse(path: &Path, text: &str, base: &CameraDesc) -> Result<Vec<CameraDesc>> {
-    let file: ViewsFile = toml::from_str(text).map_err(|e| {
-        let at = e.span().map_or_else(
-            || "top".to_string(),
-            |s| format!("line {}", super::line_of(text, s.start)),
-        );
-        Error::parse(path, at, e.message().trim().to_string())
-    })?;
+    let file: ViewsFile = toml::from_str(text).map_err(|e| super::toml_error(path, text, e))?;
     let mut views = Vec::new();
     for (k, v) in file.view.iter().enumerate() {
         let cam = CameraDesc {

@@ -56,10 +56,12 @@ pub fn read(c: &Columns, values: &[f64]) -> Option<Gaussian> {
     }
     let q = q.normalize();
     let axes = [q * Vec3::X, q * Vec3::Y, q * Vec3::Z];
-    let mut scales = [c.scale[0], c.scale[1]]
-        .map(|i| (values[i] as f32).exp())
-        .to_vec();
-    scales.push(c.scale_2.map_or(0.0, |i| (values[i] as f32).exp()));
+    let scale = |i: usize| (values[i] as f32).exp();
+    let scales = [
+        scale(c.scale[0]),
+        scale(c.scale[1]),
+        c.scale_2.map_or(0.0, scale),
+    ];
     // The axis of least scale is the normal (2DGS: the third, whose scale is zero).
     let k = (0..3)
         .min_by(|&a, &b| scales[a].total_cmp(&scales[b]))

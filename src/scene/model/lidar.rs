@@ -58,28 +58,27 @@ fn laz_chunks_plausible(bytes: &[u8]) -> bool {
     }
 }
 
-pub fn parse(path: &Path, bytes: &[u8]) -> Result<Mesh> {
+/// Parses a LAS or LAZ file's `bytes` (the reader keeps them: no copy of a large file).
+pub fn parse(path: &Path, bytes: Vec<u8>) -> Result<Mesh> {
     let bad = |at: &str, e: las::Error| Error::parse(path, at, e.to_string());
-    if !laz_chunks_plausible(bytes) {
+    if !laz_chunks_plausible(&bytes) {
         return Err(Error::parse(
             path,
             "chunk table",
             "its LAZ chunk table announces more chunks than the file has bytes",
         ));
     }
-    let mut reader = las::Reader::new(Cursor::new(bytes.to_vec())).map_err(|e| bad("header", e))?;
+    let size = bytes.len();
+    let mut reader = las::Reader::new(Cursor::new(bytes)).map_err(|e| bad("header", e))?;
     let header = reader.header();
     let count = header.number_of_points();
     let format = *header.point_format();
     let record = format.len() as u64;
-    if !plausible(count, record, bytes.len(), format.is_compressed) {
+    if !plausible(count, record, size, format.is_compressed) {
         return Err(Error::parse(
             path,
             "header",
-            format!(
-                "it announces {count} points, more than its {} bytes hold",
-                bytes.len()
-            ),
+            format!("it announces {count} points, more than its {size} bytes hold"),
         ));
     }
     let mut mesh = Mesh::default();

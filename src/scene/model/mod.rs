@@ -102,9 +102,9 @@ pub fn load(path: &Path) -> Result<Mesh> {
     } else if name.ends_with(".xyz") || name.ends_with(".pts") {
         text::parse(path, &bytes)?
     } else if name.ends_with(".las") || name.ends_with(".laz") {
-        lidar::parse(path, &bytes)?
+        lidar::parse(path, bytes)?
     } else if name.ends_with(".e57") {
-        scan::parse(path, &bytes)?
+        scan::parse(path, bytes)?
     } else {
         return Err(Error::parse(
             path,

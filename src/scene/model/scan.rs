@@ -12,10 +12,11 @@ use glam::Vec3;
 use super::Mesh;
 use crate::error::{Error, Result};
 
-pub fn parse(path: &Path, bytes: &[u8]) -> Result<Mesh> {
+/// Parses an E57 file's `bytes` (the reader keeps them: no copy of a large file).
+pub fn parse(path: &Path, bytes: Vec<u8>) -> Result<Mesh> {
     let bad = |at: String, e: e57::Error| Error::parse(path, at, e.to_string());
     let mut reader =
-        e57::E57Reader::new(Cursor::new(bytes.to_vec())).map_err(|e| bad("header".into(), e))?;
+        e57::E57Reader::new(Cursor::new(bytes)).map_err(|e| bad("header".into(), e))?;
     let clouds = reader.pointclouds();
     let mut mesh = Mesh::default();
     let mut colors = Vec::new();
