@@ -237,9 +237,9 @@ pub struct LobeMap {
 }
 
 impl LobeMap {
-    /// The map of a fit whose lobes are `dense` (`per_splat` slots a splat, as the fit writes
-    /// them), keeping only the lobes written: each splat's `first_lobe` points into the packed
-    /// list. Diffuse and dark splats take no room; with nothing fitted (nothing glossy lit)
+    /// The map of a fit whose lobes are `dense` (`per_splat` slots for each fitted splat, from
+    /// its `first_lobe`, as the fit writes them), keeping only the lobes written, in splat
+    /// order: each splat's `first_lobe` then points into the packed list. Diffuse and dark splats take no room; with nothing fitted (nothing glossy lit)
     /// the map, the cache file and the frame hold no lobes at all, and `lobes_per_splat` is 0.
     pub fn pack(
         per_splat: u32,
@@ -249,12 +249,14 @@ impl LobeMap {
     ) -> LobeMap {
         let k = per_splat as usize;
         let mut lobes = Vec::new();
-        for (i, l) in light.iter_mut().enumerate() {
+        for l in light.iter_mut() {
             let count = (l.lobes as usize).min(k);
-            l.lobes = count as u32;
+            let at = l.first_lobe as usize;
+            let written = dense.get(at..at + count).unwrap_or_default();
+            l.lobes = written.len() as u32;
             // 0 for a splat without lobes: its light stays as the fit wrote it.
             l.first_lobe = if count > 0 { lobes.len() as u32 } else { 0 };
-            lobes.extend_from_slice(&dense[i * k..i * k + count]);
+            lobes.extend_from_slice(written);
         }
         LobeMap {
             lobes_per_splat: if lobes.is_empty() { 0 } else { per_splat },

@@ -411,9 +411,8 @@ pub fn fit_lobes<E: Executor>(
     cfg.validate()?;
     let splat_count = input.splat_count;
     let n = splat_count as u64;
-    let lobes = ex.zeroed("lobes", (n * cfg.lobes as u64).max(1) * 32)?;
     let light = ex.zeroed("splat light", n.max(1) * 32)?;
-    let fit_list = ex.zeroed("fit list", n.max(1) * 4)?;
+    let fit_list = ex.zeroed("fit list", n.max(1) * 8)?;
     let counters = ex.zeroed("em counters", 12)?;
     let select = ex.uniform("em select params", &cfg.params(splat_count, 0, shape))?;
     let bindings = [
@@ -430,6 +429,8 @@ pub fn fit_lobes<E: Executor>(
         [a, b, c] => (a, b, c),
         _ => return Err(Error::Gpu("em counters readback was short".into())),
     };
+    // Lobes for the fitted splats alone, at the slots em_select gave them.
+    let lobes = ex.zeroed("lobes", (fitted as u64 * cfg.lobes as u64).max(1) * 32)?;
     let chunk = iterations_per_dispatch(cfg, max_candidates, shape.loop_limited)?;
     let constants = [
         ("LOBES", cfg.lobes as f64),

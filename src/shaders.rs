@@ -4,7 +4,10 @@
 //! most once per shader, so stages can import `types` and a shared module that also imports
 //! it. `// #ifdef name`, `// #else` and `// #endif` keep or drop lines by the defines a
 //! pipeline is built with (a variant that uses an optional device feature, such as
-//! subgroups). Errors name the file and line.
+//! subgroups). `// #paged` before a storage array's declaration makes it a paged array (see
+//! `Paging`): the stage reads it through `NAME_at(i)` and writes it through `NAME_put(i, v)`,
+//! so that the host can bind an array larger than one storage binding as several. Errors name
+//! the file and line.
 
 use std::collections::{HashMap, HashSet};
 use std::path::Path;
@@ -209,10 +212,22 @@ pub fn resolve_with(
     lookup: &dyn Fn(&str) -> Option<&'static str>,
     defines: &[&str],
 ) -> Result<String> {
+    resolve_paged(path, text, lookup, defines, &Paging::default())
+}
+
+/// `resolve_with`, with the paged arrays laid out as `paging` says.
+pub fn resolve_paged(
+    path: &str,
+    text: &str,
+    lookup: &dyn Fn(&str) -> Option<&'static str>,
+    defines: &[&str],
+    paging: &Paging,
+) -> Result<String> {
     let mut out = String::with_capacity(text.len() * 2);
     let mut ctx = Splice {
         lookup,
         defines,
+        paging,
         done: HashSet::new(),
         active: vec![path.to_owned()],
     };
@@ -223,6 +238,7 @@ pub fn resolve_with(
 struct Splice<'a> {
     lookup: &'a dyn Fn(&str) -> Option<&'static str>,
     defines: &'a [&'a str],
+    paging: &'a Paging,
     /// Modules already spliced.
     done: HashSet<String>,
     /// The chain of files being spliced (for cycles).
@@ -233,17 +249,34 @@ struct Splice<'a> {
 fn directive(line: &str) -> Option<(&str, &str)> {
     let rest = line.trim_start().strip_prefix("// #")?;
     let (kind, arg) = rest.split_once(' ').unwrap_or((rest, ""));
-    matches!(kind, "ifdef" | "else" | "endif").then_some((kind, arg.trim()))
+    matches!(kind, "ifdef" | "else" | "endif" | "paged").then_some((kind, arg.trim()))
 }
 
 fn splice(path: &str, text: &str, ctx: &mut Splice, out: &mut String) -> Result<()> {
     // One entry per open `#ifdef`: whether its current branch is kept, and its line.
     let mut branches: Vec<(bool, usize)> = Vec::new();
+    // Set by `// #paged`: the next line declares a paged array.
+    let mut paged = false;
     for (n, line) in text.lines().enumerate() {
         let err = |msg: String| Error::at_line(Path::new(path), n + 1, msg);
         let kept = branches.iter().all(|b| b.0);
+        if paged {
+            paged = false;
+            if kept {
+                let decl = PagedDecl::parse(line).ok_or_else(|| {
+                    err(format!(
+                        "`// #paged` must precede `@group(G) @binding(B) var<storage, ..> NAME: array<T>;`, \
+                         not '{}'",
+                        line.trim()
+                    ))
+                })?;
+                decl.write(ctx.paging, out);
+                continue;
+            }
+        }
         if let Some((kind, arg)) = directive(line) {
             match (kind, branches.last_mut()) {
+                ("paged", _) if arg.is_empty() => paged = true,
                 ("ifdef", _) if !arg.is_empty() => {
                     branches.push((ctx.defines.contains(&arg), n + 1));
                 }
@@ -336,4 +369,213 @@ fn validate_with(
         )
     })?;
     Ok(module)
+}
+
+/// Binding numbers of a paged array's pages: page k of the array declared at binding B is
+/// bound at B + k × PAGE_BINDING_STEP (wgpu allows binding numbers below 1000).
+pub const PAGE_BINDING_STEP: u32 = 100;
+
+/// Most pages one paged array can be split into.
+pub const MAX_PAGES: u32 = 9;
+
+/// How a pipeline variant splits its paged arrays (`// #paged`) into bindings. An array that
+/// fits one storage binding has one page and is read as before, so scenes that fit pay
+/// nothing; a larger one is bound as `pages` windows of 2^shift elements of one buffer, and
+/// its accessors pick the window by the index's high bits.
+#[derive(Clone, Debug, Default, PartialEq, Eq, Hash)]
+pub struct Paging {
+    pub arrays: Vec<PagedArray>,
+}
+
+/// One paged array's layout in a `Paging`.
+#[derive(Clone, Debug, PartialEq, Eq, Hash)]
+pub struct PagedArray {
+    /// The array's name in the WGSL.
+    pub name: String,
+    /// Bindings it takes, at least 2 (an array of one page is not listed).
+    pub pages: u32,
+    /// log2 of the elements in one page.
+    pub shift: u32,
+}
+
+impl Paging {
+    /// The layout of array `name`, if it has more than one page.
+    pub fn of(&self, name: &str) -> Option<&PagedArray> {
+        self.arrays.iter().find(|a| a.name == name)
+    }
+
+    /// A key for pipeline caches: empty when nothing is split.
+    pub fn key(&self) -> String {
+        self.arrays
+            .iter()
+            .map(|a| format!(" {}:{}x2^{}", a.name, a.pages, a.shift))
+            .collect()
+    }
+}
+
+/// A paged array's declaration, parsed from its line.
+struct PagedDecl<'a> {
+    group: u32,
+    binding: u32,
+    access: &'a str,
+    name: &'a str,
+    elem: &'a str,
+}
+
+impl<'a> PagedDecl<'a> {
+    /// `@group(G) @binding(B) var<storage, ACCESS> NAME: array<T>;`
+    fn parse(line: &'a str) -> Option<PagedDecl<'a>> {
+        let number = |s: &str, tag: &str| -> Option<u32> {
+            let rest = &s[s.find(tag)? + tag.len()..];
+            rest[..rest.find(')')?].trim().parse().ok()
+        };
+        let (group, binding) = (number(line, "@group(")?, number(line, "@binding(")?);
+        let rest = &line[line.find("var<storage,")? + "var<storage,".len()..];
+        let (access, rest) = rest.split_once('>')?;
+        let (name, ty) = rest.split_once(':')?;
+        let ty = ty.trim().strip_suffix(';')?.trim();
+        let elem = ty.strip_prefix("array<")?.strip_suffix('>')?.trim();
+        let name = name.trim();
+        let ok = !name.is_empty() && name.chars().all(|c| c.is_ascii_alphanumeric() || c == '_');
+        ok.then_some(PagedDecl {
+            group,
+            binding,
+            access: access.trim(),
+            name,
+            elem,
+        })
+    }
+
+    /// The declaration of every page, and the accessors: `NAME_at(i)`, `NAME_len()`, and
+    /// `NAME_put(i, v)` where the array is writable.
+    fn write(&self, paging: &Paging, out: &mut String) {
+        let PagedDecl {
+            group,
+            binding,
+            access,
+            name,
+            elem,
+        } = *self;
+        let layout = paging.of(name);
+        let pages = layout.map_or(1, |l| l.pages);
+        for k in 0..pages {
+            let (b, page) = match k {
+                0 => (binding, name.to_owned()),
+                _ => (binding + k * PAGE_BINDING_STEP, format!("{name}_page{k}")),
+            };
+            out.push_str(&format!(
+                "@group({group}) @binding({b}) var<storage, {access}> {page}: array<{elem}>;\n"
+            ));
+        }
+        let writable = access == "read_write";
+        let Some(layout) = layout else {
+            out.push_str(&format!(
+                "fn {name}_at(i: u32) -> {elem} {{ return {name}[i]; }}\n\
+                 fn {name}_len() -> u32 {{ return arrayLength(&{name}); }}\n"
+            ));
+            if writable {
+                out.push_str(&format!(
+                    "fn {name}_put(i: u32, v: {elem}) {{ {name}[i] = v; }}\n"
+                ));
+            }
+            return;
+        };
+        let (shift, mask) = (layout.shift, (1u64 << layout.shift) - 1);
+        // Every page but the last is full (`Gpu::paging`).
+        let last = pages - 1;
+        out.push_str(&format!(
+            "fn {name}_len() -> u32 {{ return arrayLength(&{name}_page{last}) + {}u; }}\n",
+            (last as u64) << shift
+        ));
+        let cases = |body: &dyn Fn(&str) -> String| {
+            let mut s = String::new();
+            for k in 1..pages {
+                s.push_str(&format!(
+                    "        case {k}u: {{ {} }}\n",
+                    body(&format!("{name}_page{k}"))
+                ));
+            }
+            s.push_str(&format!("        default: {{ {} }}\n", body(name)));
+            s
+        };
+        out.push_str(&format!(
+            "fn {name}_at(i: u32) -> {elem} {{\n    let j = i & {mask}u;\n    \
+             switch i >> {shift}u {{\n{}    }}\n}}\n",
+            cases(&|page| format!("return {page}[j];"))
+        ));
+        if writable {
+            out.push_str(&format!(
+                "fn {name}_put(i: u32, v: {elem}) {{\n    let j = i & {mask}u;\n    \
+                 switch i >> {shift}u {{\n{}    }}\n}}\n",
+                cases(&|page| format!("{page}[j] = v;"))
+            ));
+        }
+    }
+}
+
+/// A paged array a stage declares: where it is bound (page 0) and its element stride.
+#[derive(Clone, Debug, PartialEq, Eq)]
+pub struct PagedBinding {
+    pub name: String,
+    pub group: u32,
+    pub binding: u32,
+    pub stride: u32,
+}
+
+/// The full source of a stage with `defines` and its paged arrays laid out as `paging` says.
+pub fn resolve_stage_paged(name: &str, defines: &[&str], paging: &Paging) -> Result<String> {
+    let file =
+        stage(name).ok_or_else(|| Error::Invalid(format!("no shader stage named '{name}'")))?;
+    resolve_paged(
+        &format!("wgsl/{name}.wgsl"),
+        file.text,
+        &|m| SHARED.iter().find(|s| s.name == m).map(|s| s.text),
+        defines,
+        paging,
+    )
+}
+
+/// The paged arrays of a stage (those with a `NAME_at` accessor), read once per process.
+pub fn paged_bindings(name: &str) -> Result<Vec<PagedBinding>> {
+    static PAGED: OnceLock<Mutex<HashMap<String, Vec<PagedBinding>>>> = OnceLock::new();
+    let cache = PAGED.get_or_init(Default::default);
+    if let Some(p) = cache.lock().ok().and_then(|m| m.get(name).cloned()) {
+        return Ok(p);
+    }
+    let source = resolve_stage(name)?;
+    let module = naga::front::wgsl::parse_str(&source).map_err(|e| {
+        Error::parse(
+            Path::new(&format!("wgsl/{name}.wgsl")),
+            "after import resolution",
+            e.emit_to_string(&source),
+        )
+    })?;
+    let accessor = |n: &str| {
+        let at = format!("{n}_at");
+        module
+            .functions
+            .iter()
+            .any(|(_, f)| f.name.as_deref() == Some(at.as_str()))
+    };
+    let mut paged = Vec::new();
+    for (_, var) in module.global_variables.iter() {
+        let (Some(rb), Some(var_name)) = (&var.binding, &var.name) else {
+            continue;
+        };
+        if !accessor(var_name) {
+            continue;
+        }
+        if let naga::TypeInner::Array { stride, .. } = module.types[var.ty].inner {
+            paged.push(PagedBinding {
+                name: var_name.clone(),
+                group: rb.group,
+                binding: rb.binding,
+                stride,
+            });
+        }
+    }
+    if let Ok(mut m) = cache.lock() {
+        m.insert(name.to_owned(), paged.clone());
+    }
+    Ok(paged)
 }

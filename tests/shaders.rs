@@ -235,3 +235,61 @@ fn stage_bindings_are_read_from_the_wgsl() {
         assert!(shape.bindings[0] > 0, "{}", stage.name);
     }
 }
+
+/// Every stage validates with each of its paged arrays split into three pages, and declares
+/// the pages where the host binds them.
+#[test]
+fn every_paged_variant_validates_with_naga() {
+    use lobelight::shaders::{PAGE_BINDING_STEP, PagedArray, Paging, paged_bindings};
+    let mut paged_stages = 0;
+    for stage in STAGES {
+        let paged = paged_bindings(stage.name).unwrap();
+        if paged.is_empty() {
+            continue;
+        }
+        paged_stages += 1;
+        let paging = Paging {
+            arrays: paged
+                .iter()
+                .map(|p| PagedArray {
+                    name: p.name.clone(),
+                    pages: 3,
+                    shift: 10,
+                })
+                .collect(),
+        };
+        let source = shaders::resolve_stage_paged(stage.name, &[], &paging).unwrap();
+        let module = shaders::validate(stage.name, &source).unwrap_or_else(|e| panic!("{e}"));
+        for p in &paged {
+            for k in 0..3 {
+                let binding = p.binding + k * PAGE_BINDING_STEP;
+                let declared = module.global_variables.iter().any(|(_, v)| {
+                    v.binding
+                        .as_ref()
+                        .is_some_and(|b| b.group == p.group && b.binding == binding)
+                });
+                assert!(
+                    declared,
+                    "{}: page {k} of {} is not at {binding}",
+                    stage.name, p.name
+                );
+            }
+        }
+    }
+    // The splats alone are paged in every stage that reads them.
+    assert!(
+        paged_stages >= 15,
+        "only {paged_stages} stages have paged arrays"
+    );
+}
+
+#[test]
+fn paged_needs_a_storage_array_declaration() {
+    let err = shaders::resolve("wgsl/x.wgsl", "// #paged\nconst A: u32 = 1u;\n", &lookup)
+        .unwrap_err()
+        .to_string();
+    assert!(
+        err.contains("wgsl/x.wgsl") && err.contains("line 2"),
+        "{err}"
+    );
+}

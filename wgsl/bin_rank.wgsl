@@ -12,6 +12,7 @@
 @group(0) @binding(0) var<uniform> bins: BinParams;
 @group(0) @binding(1) var<storage, read> cell_start: array<u32>;
 @group(0) @binding(2) var<storage, read> scratch_keys: array<vec2<u32>>;
+// #paged
 @group(0) @binding(3) var<storage, read> scratch_cells: array<u32>;
 @group(0) @binding(4) var<storage, read_write> slots: array<u32>;
 
@@ -29,7 +30,7 @@ fn main(@builtin(workgroup_id) wg: vec3<u32>, @builtin(num_workgroups) num_wg: v
         return;
     }
     let key = scratch_keys[e];
-    let c = scratch_cells[e];
+    let c = scratch_cells_at(e);
     let begin = cell_start[c] + bins.rank_chunk * RANK_CHUNK;
     let end = min(cell_start[c + 1u], begin + RANK_CHUNK);
     var rank = 0u;

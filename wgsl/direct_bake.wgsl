@@ -16,8 +16,10 @@
 @group(0) @binding(0) var<uniform> params: DirectParams;
 @group(0) @binding(1) var<storage, read> lights: array<Light>;
 // Per splat: (shadowed irradiance from every light, 0).
+// #paged
 @group(0) @binding(2) var<storage, read_write> direct: array<vec4<f32>>;
 // Per splat and light, at splat * light_count + light: visibility in [0, 1].
+// #paged
 @group(0) @binding(3) var<storage, read_write> visibility: array<f32>;
 
 const WG: u32 = 64u;
@@ -29,7 +31,7 @@ fn main(@builtin(workgroup_id) wg: vec3<u32>, @builtin(num_workgroups) num_wg: v
     if i >= params.splat_count {
         return;
     }
-    let s = splats[i];
+    let s = splats_at(i);
     let o = s.center + params.shadow_bias * s.normal;
     let key = pcg_hash(pcg_hash(params.seed) + i);
     var total = vec3<f32>(0.0);
@@ -56,8 +58,8 @@ fn main(@builtin(workgroup_id) wg: vec3<u32>, @builtin(num_workgroups) num_wg: v
         total += open * (1.0 / f32(n * n));
         // A light the centre does not see at all may still light the disk's rim: unshadowed.
         let seen = unshadowed.x + unshadowed.y + unshadowed.z;
-        visibility[i * params.light_count + li] =
-            select(1.0, (open.x + open.y + open.z) / seen, seen > 0.0);
+        let seen_open = select(1.0, (open.x + open.y + open.z) / seen, seen > 0.0);
+        visibility_put(i * params.light_count + li, seen_open);
     }
-    direct[i] = vec4<f32>(total, 0.0);
+    direct_put(i, vec4<f32>(total, 0.0));
 }

@@ -51,12 +51,15 @@
 
 @group(0) @binding(0) var<uniform> em: EmParams;
 @group(0) @binding(1) var<uniform> bins: BinParams;
+// #paged
 @group(0) @binding(2) var<storage, read> splats: array<Splat>;
-@group(0) @binding(3) var<storage, read> fit_list: array<u32>;
+@group(0) @binding(3) var<storage, read> fit_list: array<vec2<u32>>;
 @group(0) @binding(4) var<storage, read> cell_start: array<u32>;
 @group(0) @binding(5) var<storage, read> bin_geom: array<BinnedPhoton>;
 @group(0) @binding(6) var<storage, read> bin_power: array<vec4<f32>>;
+// #paged
 @group(0) @binding(7) var<storage, read_write> lobes: array<Lobe>;
+// #paged
 @group(0) @binding(8) var<storage, read_write> light: array<SplatLight>;
 
 // Lobes per splat and lobe family, fixed when the pipeline is made (the host passes
@@ -100,7 +103,7 @@ const SUMS: u32 = 54u;
 const PASS_EM: u32 = 0u;
 const PASS_FINAL: u32 = 1u;
 
-var<workgroup> shared_entry: u32;
+var<workgroup> shared_entry: vec2<u32>;
 var<workgroup> shared_drop: u32;
 var<workgroup> cache_dir: array<vec4<f32>, CACHE_SLOTS>;
 var<workgroup> cache_index: array<u32, CACHE_SLOTS>;
@@ -463,10 +466,13 @@ fn main(@builtin(workgroup_id) wg: vec3<u32>, @builtin(num_workgroups) num_wg: v
     if lid == 0u {
         shared_entry = fit_list[index];
     }
-    let entry = workgroupUniformLoad(&shared_entry);
+    let listed = workgroupUniformLoad(&shared_entry);
+    let entry = listed.x;
     let splat_index = entry & ~FIT_BIT;
     let fit = (entry & FIT_BIT) != 0u;
-    let s = splats[splat_index];
+    // The splat's lobes in the lobe buffer, which holds the fitted splats' alone.
+    let first = listed.y * em.lobes;
+    let s = splats_at(splat_index);
     center = s.center;
     normal = s.normal;
     slab = em.slab * s.radius;
@@ -485,7 +491,7 @@ fn main(@builtin(workgroup_id) wg: vec3<u32>, @builtin(num_workgroups) num_wg: v
             mix_sharpness[k] = initial_sharpness(FAMILY);
             mix_weight[k] = 1.0 / f32(LOBES);
         } else {
-            let l = lobes[splat_index * em.lobes + k];
+            let l = lobes_at(first + k);
             mix_axis[k] = l.axis;
             mix_sharpness[k] = l.sharpness;
             mix_weight[k] = l.weight;
@@ -553,8 +559,8 @@ fn main(@builtin(workgroup_id) wg: vec3<u32>, @builtin(num_workgroups) num_wg: v
     if !last {
         if lid < LOBES && fit {
             let sharpness = select(0.0, mix_sharpness[lid], (alive & (1u << lid)) != 0u);
-            lobes[splat_index * em.lobes + lid] =
-                Lobe(mix_axis[lid], sharpness, vec3<f32>(0.0), mix_weight[lid]);
+            let lobe = Lobe(mix_axis[lid], sharpness, vec3<f32>(0.0), mix_weight[lid]);
+            lobes_put(first + lid, lobe);
         }
         return;
     }
@@ -586,8 +592,8 @@ fn main(@builtin(workgroup_id) wg: vec3<u32>, @builtin(num_workgroups) num_wg: v
         if slot == lid && lid < written {
             let o = LOBE_SUMS + LOBE_SLOTS * k;
             let irradiance = vec3<f32>(sum(o), sum(o + 1u), sum(o + 2u)) * share * em.inv_area;
-            lobes[splat_index * em.lobes + lid] =
-                Lobe(mix_axis[k], mix_sharpness[k], irradiance, mix_weight[k]);
+            let lobe = Lobe(mix_axis[k], mix_sharpness[k], irradiance, mix_weight[k]);
+            lobes_put(first + lid, lobe);
         }
         slot += 1u;
     }
@@ -599,6 +605,7 @@ fn main(@builtin(workgroup_id) wg: vec3<u32>, @builtin(num_workgroups) num_wg: v
         out.log_likelihood = sum(SUM_LOG);
         out.weight = sum(SUM_WEIGHT);
         out.lobes = written;
-        light[splat_index] = out;
+        out.first_lobe = select(0u, first, fit);
+        light_put(splat_index, out);
     }
 }

@@ -1,8 +1,10 @@
 // Lobe fit, pass 1 of 2: list the splats that have binned photons near them, so em_fit spends
 // no workgroup on the others (their outputs stay zero). An entry is the splat index, with the
-// top bit set when the splat's lobes are fitted (a glossy material, or EM_FIT_ALL); other
-// listed splats only gather their total irradiance. The list's order depends on scheduling,
-// but each em_fit workgroup writes only its own splat, so the results do not.
+// top bit set when the splat's lobes are fitted (a glossy material, or EM_FIT_ALL), and the
+// fitted splat's slot in the lobe buffer, so that it holds lobes for fitted splats alone;
+// other listed splats only gather their total irradiance. The list's order and the slots
+// depend on scheduling, but each em_fit workgroup writes only its own splat's light and slot,
+// and the host packs the lobes in splat order (LobeMap::pack), so the results do not.
 // counters = [listed splats, most candidate photons of a listed splat, splats fitted].
 // CPU mirror: src/cpu/em_select.rs.
 
@@ -13,10 +15,11 @@
 
 @group(0) @binding(0) var<uniform> em: EmParams;
 @group(0) @binding(1) var<uniform> bins: BinParams;
+// #paged
 @group(0) @binding(2) var<storage, read> splats: array<Splat>;
 @group(0) @binding(3) var<storage, read> materials: array<Material>;
 @group(0) @binding(4) var<storage, read> cell_start: array<u32>;
-@group(0) @binding(5) var<storage, read_write> fit_list: array<u32>;
+@group(0) @binding(5) var<storage, read_write> fit_list: array<vec2<u32>>;
 @group(0) @binding(6) var<storage, read_write> counters: array<atomic<u32>, 3>;
 
 const WG: u32 = 64u;
@@ -28,7 +31,7 @@ fn main(@builtin(workgroup_id) wg: vec3<u32>, @builtin(num_workgroups) num_wg: v
     if i >= em.splat_count {
         return;
     }
-    let s = splats[i];
+    let s = splats_at(i);
     let box = bin_box(s.center, em.radius, bins);
     var candidates = 0u;
     for (var r = 0u; r < bin_row_count(box); r++) {
@@ -40,10 +43,11 @@ fn main(@builtin(workgroup_id) wg: vec3<u32>, @builtin(num_workgroups) num_wg: v
     }
     let glossy = any(materials[s.material].specular > vec3<f32>(0.0));
     let fit = glossy || (em.flags & EM_FIT_ALL) != 0u;
-    let slot = atomicAdd(&counters[0], 1u);
-    fit_list[slot] = i | select(0u, FIT_BIT, fit);
-    atomicMax(&counters[1], candidates);
+    var lobe_slot = 0u;
     if fit {
-        atomicAdd(&counters[2], 1u);
+        lobe_slot = atomicAdd(&counters[2], 1u);
     }
+    let slot = atomicAdd(&counters[0], 1u);
+    fit_list[slot] = vec2<u32>(i | select(0u, FIT_BIT, fit), lobe_slot);
+    atomicMax(&counters[1], candidates);
 }

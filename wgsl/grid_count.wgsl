@@ -8,6 +8,7 @@
 // #import grid
 
 @group(0) @binding(0) var<uniform> grid: GridParams;
+// #paged
 @group(0) @binding(1) var<storage, read> splats: array<Splat>;
 @group(0) @binding(2) var<storage, read_write> cell_counts: array<atomic<u32>>;
 @group(0) @binding(3) var<storage, read_write> max_cell_len: atomic<u32>;
@@ -21,7 +22,7 @@ fn main(@builtin(workgroup_id) wg: vec3<u32>, @builtin(num_workgroups) num_wg: v
     if i >= grid.splat_count {
         return;
     }
-    let r = disk_cell_range(splats[i], grid);
+    let r = disk_cell_range(splats_at(i), grid);
     for (var z = r.lo.z; z <= r.hi.z; z++) {
         for (var y = r.lo.y; y <= r.hi.y; y++) {
             for (var x = r.lo.x; x <= r.hi.x; x++) {

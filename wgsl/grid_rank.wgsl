@@ -11,8 +11,11 @@
 
 @group(0) @binding(0) var<uniform> grid: GridParams;
 @group(0) @binding(1) var<storage, read> cell_start: array<u32>;
+// #paged
 @group(0) @binding(2) var<storage, read> scratch_splats: array<u32>;
+// #paged
 @group(0) @binding(3) var<storage, read> scratch_cells: array<u32>;
+// #paged
 @group(0) @binding(4) var<storage, read_write> cell_splats: array<u32>;
 
 const WG: u32 = 64u;
@@ -24,13 +27,13 @@ fn main(@builtin(workgroup_id) wg: vec3<u32>, @builtin(num_workgroups) num_wg: v
     if e >= grid.entry_count {
         return;
     }
-    let i = scratch_splats[e];
-    let c = scratch_cells[e];
+    let i = scratch_splats_at(e);
+    let c = scratch_cells_at(e);
     let begin = cell_start[c];
     let end = cell_start[c + 1u];
     var rank = 0u;
     for (var k = begin; k < end; k++) {
-        rank += u32(scratch_splats[k] < i);
+        rank += u32(scratch_splats_at(k) < i);
     }
-    cell_splats[begin + rank] = i;
+    cell_splats_put(begin + rank, i);
 }

@@ -114,7 +114,7 @@ fn main(@builtin(workgroup_id) wg: vec3<u32>, @builtin(num_workgroups) num_wg: v
         if hit.splat == NO_SPLAT || hit.aborted != 0u || depth == params.max_depth {
             break;
         }
-        let s = splats[hit.splat];
+        let s = splats_at(hit.splat);
         let m = materials[s.material];
         let p = o + hit.t * d;
         let n = s.normal;

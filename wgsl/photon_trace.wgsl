@@ -115,7 +115,7 @@ fn main(@builtin(workgroup_id) wg: vec3<u32>, @builtin(num_workgroups) num_wg: v
             atomicAdd(&counters.escaped, 1u);
             return;
         }
-        let s = splats[hit.splat];
+        let s = splats_at(hit.splat);
         let p = o + hit.t * d;
         let wi = -d;
         if bounce >= params.min_bounce {

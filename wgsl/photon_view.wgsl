@@ -49,7 +49,7 @@ fn main(@builtin(workgroup_id) wg: vec3<u32>, @builtin(num_workgroups) num_wg: v
     if pixel.x < 0 {
         return;
     }
-    let s = splats[p.splat];
+    let s = splats_at(p.splat);
     let to_eye = cam.eye - p.position;
     if dot(s.normal, to_eye) <= 0.0 {
         return;

@@ -62,7 +62,7 @@ fn fs_main(@builtin(position) pixel: vec4<f32>) -> Attributes {
     if hit.splat == NO_SPLAT {
         discard;
     }
-    let s = splats[hit.splat];
+    let s = splats_at(hit.splat);
     let m = materials[s.material];
     let gloss = (m.specular.x + m.specular.y + m.specular.z) * (1.0 / 3.0);
     let p = cam.eye + hit.t * d;

@@ -12,6 +12,7 @@
 // #import splat_shading
 
 @group(0) @binding(0) var<uniform> cam: Camera;
+// #paged
 @group(0) @binding(1) var<storage, read> splats: array<Splat>;
 @group(0) @binding(10) var<uniform> tiles: TileParams;
 @group(0) @binding(11) var<storage, read> tile_start: array<u32>;
@@ -43,7 +44,7 @@ fn main(@builtin(workgroup_id) wg: vec3<u32>, @builtin(num_workgroups) num_wg: v
     // Pass 1: the nearest surface's depth, pushed back (reversed depth: greater is nearer).
     var nearest = 0.0;
     for (var k = begin; k < end; k++) {
-        let s = splats[tile_splats[k]];
+        let s = splats_at(tile_splats[k]);
         let h = splat_hit(s, cam.eye, d);
         if covers(cam, h, d) {
             nearest = max(nearest, view_depth(cam, h.t * z_of + cam.depth_tolerance * s.radius));
@@ -57,7 +58,7 @@ fn main(@builtin(workgroup_id) wg: vec3<u32>, @builtin(num_workgroups) num_wg: v
     let baked = params.direct == DIRECT_BAKED;
     for (var k = begin; k < end; k++) {
         let i = tile_splats[k];
-        let s = splats[i];
+        let s = splats_at(i);
         let h = splat_hit(s, cam.eye, d);
         if !covers(cam, h, d) || !(view_depth(cam, h.t * z_of) >= nearest) {
             continue;

@@ -8,6 +8,7 @@
 
 @group(0) @binding(0) var<uniform> cam: Camera;
 @group(0) @binding(1) var<uniform> tiles: TileParams;
+// #paged
 @group(0) @binding(2) var<storage, read> splats: array<Splat>;
 @group(0) @binding(3) var<storage, read_write> counts: array<atomic<u32>>;
 
@@ -20,7 +21,7 @@ fn main(@builtin(workgroup_id) wg: vec3<u32>, @builtin(num_workgroups) num_wg: v
     if i >= tiles.splat_count {
         return;
     }
-    let r = tile_rect(cam, splats[i], tiles.tiles_x, tiles.tiles_y);
+    let r = tile_rect(cam, splats_at(i), tiles.tiles_x, tiles.tiles_y);
     for (var ty = r.y; ty <= r.w && r.x <= r.z; ty++) {
         for (var tx = r.x; tx <= r.z; tx++) {
             atomicAdd(&counts[ty * tiles.tiles_x + tx], 1u);

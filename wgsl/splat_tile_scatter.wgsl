@@ -9,9 +9,11 @@
 
 @group(0) @binding(0) var<uniform> cam: Camera;
 @group(0) @binding(1) var<uniform> tiles: TileParams;
+// #paged
 @group(0) @binding(2) var<storage, read> splats: array<Splat>;
 @group(0) @binding(3) var<storage, read> tile_start: array<u32>;
 @group(0) @binding(4) var<storage, read_write> cursor: array<atomic<u32>>;
+// #paged
 @group(0) @binding(5) var<storage, read_write> scratch_splats: array<u32>;
 @group(0) @binding(6) var<storage, read_write> scratch_tiles: array<u32>;
 
@@ -24,12 +26,12 @@ fn main(@builtin(workgroup_id) wg: vec3<u32>, @builtin(num_workgroups) num_wg: v
     if i >= tiles.splat_count {
         return;
     }
-    let r = tile_rect(cam, splats[i], tiles.tiles_x, tiles.tiles_y);
+    let r = tile_rect(cam, splats_at(i), tiles.tiles_x, tiles.tiles_y);
     for (var ty = r.y; ty <= r.w && r.x <= r.z; ty++) {
         for (var tx = r.x; tx <= r.z; tx++) {
             let t = ty * tiles.tiles_x + tx;
             let e = tile_start[t] + atomicAdd(&cursor[t], 1u);
-            scratch_splats[e] = i;
+            scratch_splats_put(e, i);
             scratch_tiles[e] = t;
         }
     }

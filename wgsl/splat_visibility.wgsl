@@ -7,16 +7,17 @@
 // #import splat
 
 @group(0) @binding(0) var<uniform> cam: Camera;
+// #paged
 @group(0) @binding(1) var<storage, read> splats: array<Splat>;
 
 @vertex
 fn vs_main(@builtin(vertex_index) corner: u32, @builtin(instance_index) i: u32) -> SplatVertex {
-    return splat_vertex(cam, splats[i], i, corner);
+    return splat_vertex(cam, splats_at(i), i, corner);
 }
 
 @fragment
 fn fs_main(v: SplatVertex) -> @builtin(frag_depth) f32 {
-    let s = splats[v.splat];
+    let s = splats_at(v.splat);
     let d = pixel_ray(cam, v.position.xy);
     let h = splat_hit(s, cam.eye, d);
     if !covers(cam, h, d) {

@@ -464,7 +464,7 @@ pub fn em_fit(
     em: &EmParams,
     bins: &BinParams,
     splats: &[Splat],
-    fit_list: &[u32],
+    fit_list: &[[u32; 2]],
     cell_start: &[u32],
     bin_geom: &[BinnedPhoton],
     bin_power: &[[f32; 4]],
@@ -484,13 +484,18 @@ pub fn em_fit(
         .into_par_iter()
         .filter(|&index| index < em.active_count)
         .filter_map(|index| {
-            let entry = fit_list[index as usize];
-            let base = ((entry & !FIT_BIT) as usize) * k;
-            fit_splat(&inp, splats, entry, &lobes[base..base + k])
+            let [entry, lobe_slot] = fit_list[index as usize];
+            // The lobe buffer holds the fitted splats' alone (see em_select).
+            let first = lobe_slot * em.lobes;
+            let resume = match entry & FIT_BIT {
+                0 => &[][..],
+                _ => &lobes[first as usize..first as usize + k],
+            };
+            fit_splat(&inp, splats, entry, first, resume)
         })
         .collect();
-    for (splat_index, written, out) in results {
-        let base = splat_index as usize * k;
+    for (splat_index, first, written, out) in results {
+        let base = first as usize;
         lobes[base..base + written.len()].copy_from_slice(&written);
         if let Some(out) = out {
             light[splat_index as usize] = out;
@@ -509,10 +514,17 @@ fn mixture(sp: &Splat1, k: usize) -> Lobe {
 }
 
 /// What one workgroup writes: its splat, the lobes, and the splat's light (last dispatch).
-type Written = (u32, Vec<Lobe>, Option<SplatLight>);
+/// What one workgroup writes: its splat, the first of its lobe slots, its lobes and light.
+type Written = (u32, u32, Vec<Lobe>, Option<SplatLight>);
 
 /// The body of `main` for one workgroup; `resume` is the splat's slice of the lobe buffer.
-fn fit_splat(inp: &Inputs, splats: &[Splat], entry: u32, resume: &[Lobe]) -> Option<Written> {
+fn fit_splat(
+    inp: &Inputs,
+    splats: &[Splat],
+    entry: u32,
+    first: u32,
+    resume: &[Lobe],
+) -> Option<Written> {
     let em = inp.em;
     let splat_index = entry & !FIT_BIT;
     let fit = entry & FIT_BIT != 0;
@@ -635,7 +647,7 @@ fn fit_splat(inp: &Inputs, splats: &[Splat], entry: u32, resume: &[Lobe]) -> Opt
                 ..mixture(&sp, k)
             })
             .collect();
-        return Some((splat_index, kept, None));
+        return Some((splat_index, first, kept, None));
     }
     prepare_mixture(em, &mut sp);
     for (lid, v) in inv.iter_mut().enumerate() {
@@ -682,8 +694,8 @@ fn fit_splat(inp: &Inputs, splats: &[Splat], entry: u32, resume: &[Lobe]) -> Opt
         log_likelihood: total[SUM_LOG],
         weight: total[SUM_WEIGHT],
         lobes: written,
-        // Set when the lobes are packed (`LobeMap::pack`).
-        first_lobe: 0,
+        // Where the fit wrote them; `LobeMap::pack` moves them into splat order.
+        first_lobe: if fit { first } else { 0 },
     };
-    Some((splat_index, fitted, Some(out)))
+    Some((splat_index, first, fitted, Some(out)))
 }

@@ -1,4 +1,5 @@
-//! Mirror of `wgsl/em_select.wgsl`. Sequential, so the list is in splat order.
+//! Mirror of `wgsl/em_select.wgsl`. Sequential, so the list and the lobe slots are in splat
+//! order.
 
 use glam::Vec3;
 
@@ -17,7 +18,7 @@ pub fn em_select(
     splats: &[Splat],
     materials: &[Material],
     cell_start: &[u32],
-    active: &mut [u32],
+    active: &mut [[u32; 2]],
     counters: &mut [u32; 3],
     groups: u32,
 ) {
@@ -42,13 +43,15 @@ pub fn em_select(
                 .iter()
                 .any(|&x| x > 0.0);
             let fit = glossy || em.flags & EM_FIT_ALL != 0;
-            let slot = counters[0] as usize;
-            counters[0] += 1;
-            active[slot] = i | if fit { FIT_BIT } else { 0 };
-            counters[1] = counters[1].max(candidates);
+            let mut lobe_slot = 0;
             if fit {
+                lobe_slot = counters[2];
                 counters[2] += 1;
             }
+            let slot = counters[0] as usize;
+            counters[0] += 1;
+            active[slot] = [i | if fit { FIT_BIT } else { 0 }, lobe_slot];
+            counters[1] = counters[1].max(candidates);
         }
     }
 }

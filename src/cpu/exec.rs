@@ -349,7 +349,7 @@ fn run(stage: &str, b: &[&CpuBuffer], groups: u32) -> Result<()> {
                 splats,
                 materials,
                 &cell_start,
-                &mut active,
+                view_mut(&mut active),
                 counters,
                 groups,
             );
@@ -368,7 +368,7 @@ fn run(stage: &str, b: &[&CpuBuffer], groups: u32) -> Result<()> {
                 &em,
                 &bins,
                 view(&splats),
-                &fit_list,
+                view(&fit_list),
                 &cell_start,
                 view(&geom),
                 view(&power),

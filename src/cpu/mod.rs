@@ -182,7 +182,7 @@ pub fn fit_lobes(
     };
     let fit = sequence::fit_lobes(&mut ex, &input, cfg, shape)?;
     let n = splats.len();
-    let dense = ex.read::<Lobe>(&fit.lobes, n * cfg.lobes as usize)?;
+    let dense = ex.read::<Lobe>(&fit.lobes, fit.fitted as usize * cfg.lobes as usize)?;
     let light = ex.read::<SplatLight>(&fit.light, n)?;
     let stats = EmStats {
         listed: fit.listed,

@@ -29,7 +29,8 @@ impl GpuLobes {
         let dense = if self.stats.fitted == 0 {
             Vec::new()
         } else {
-            gpu.read::<Lobe>(&self.lobes, n * self.lobes_per_splat as usize)?
+            let fitted = self.stats.fitted as usize;
+            gpu.read::<Lobe>(&self.lobes, fitted * self.lobes_per_splat as usize)?
         };
         let light = gpu.read::<SplatLight>(&self.light, n)?;
         let per_splat = if dense.is_empty() {

@@ -77,9 +77,10 @@ impl Executor for GpuExecutor<'_> {
         bindings: &[&wgpu::Buffer],
         groups: u32,
     ) -> Result<()> {
-        let pipeline = self.gpu.variant(stage, defines, constants)?;
+        let paging = self.gpu.paging(stage, &[bindings])?;
+        let pipeline = self.gpu.variant_paged(stage, defines, constants, &paging)?;
         self.gpu
-            .dispatch_pipeline(self.encoder, stage, &pipeline, &[bindings], groups)
+            .dispatch_pipeline(self.encoder, stage, &pipeline, &paging, &[bindings], groups)
     }
 
     fn copy(

@@ -5,12 +5,16 @@
 
 use super::exec::GpuExecutor;
 use super::scene::GpuScene;
-use super::{Gpu, buffer_entries};
+use std::collections::HashMap;
+use std::sync::Mutex;
+
+use super::Gpu;
 use crate::em::LobeMap;
 use crate::error::{Error, Result};
 use crate::frame::Splatter;
 use crate::scene::Scene;
 use crate::sequence::{Direct, TileLists, bin_splat_tiles};
+use crate::shaders::{PAGE_BINDING_STEP, Paging};
 use crate::shared::splat::SPLAT_CORNERS;
 use crate::types::{Camera, DIRECT_BAKED, ShadeParams};
 
@@ -148,14 +152,13 @@ struct Uniforms {
 /// The compiled splat passes of one device.
 pub struct SplatPipelines {
     format: wgpu::TextureFormat,
-    visibility: wgpu::RenderPipeline,
-    attributes: wgpu::RenderPipeline,
-    /// `fs_baked`: the attribute pass with baked direct light, two targets.
-    attributes_baked: wgpu::RenderPipeline,
-    /// The compute splatter's tile pass, where the device can run it (`compute_splatter`).
-    splat_compute: Option<wgpu::ComputePipeline>,
-    shade: wgpu::ComputePipeline,
-    shade_layouts: [wgpu::BindGroupLayout; 2],
+    /// The raster passes by the paging of the arrays they bind (`shaders::Paging`): the
+    /// unpaged ones, built with the rest, serve every scene whose arrays fit one binding each.
+    raster: Mutex<HashMap<(Raster, Paging), wgpu::RenderPipeline>>,
+    /// The shade pass by the paging of the scene's geometry.
+    shade: Mutex<HashMap<Paging, ShadePipeline>>,
+    /// The device can run the compute splatter's tile pass (`compute_splatter_fits`).
+    splat_compute: bool,
 }
 
 /// The targets of one image size, and the HDR image the frame ends in.
@@ -188,8 +191,8 @@ impl FrameTargets {
     }
 }
 
-fn module(gpu: &Gpu, name: &'static str) -> Result<wgpu::ShaderModule> {
-    let source = crate::shaders::resolve_stage(name)?;
+fn module(gpu: &Gpu, name: &'static str, paging: &Paging) -> Result<wgpu::ShaderModule> {
+    let source = crate::shaders::resolve_stage_paged(name, &[], paging)?;
     Ok(gpu
         .device
         .create_shader_module(wgpu::ShaderModuleDescriptor {
@@ -204,7 +207,7 @@ pub(super) fn raster_pipeline(
     depth: Option<wgpu::DepthStencilState>,
     targets: &[Option<wgpu::ColorTargetState>],
 ) -> Result<wgpu::RenderPipeline> {
-    raster_pipeline_at(gpu, name, "fs_main", depth, targets)
+    raster_pipeline_at(gpu, name, "fs_main", depth, targets, &Paging::default())
 }
 
 /// `raster_pipeline` with the fragment entry point `fragment`.
@@ -214,8 +217,9 @@ pub(super) fn raster_pipeline_at(
     fragment: &'static str,
     depth: Option<wgpu::DepthStencilState>,
     targets: &[Option<wgpu::ColorTargetState>],
+    paging: &Paging,
 ) -> Result<wgpu::RenderPipeline> {
-    let module = module(gpu, name)?;
+    let module = module(gpu, name, paging)?;
     Ok(gpu
         .device
         .create_render_pipeline(&wgpu::RenderPipelineDescriptor {
@@ -269,8 +273,8 @@ const READ: wgpu::BufferBindingType = wgpu::BufferBindingType::Storage { read_on
 const READ_WRITE: wgpu::BufferBindingType = wgpu::BufferBindingType::Storage { read_only: false };
 
 /// `shade`'s bind group layouts, spelled out: a derived layout would ask for filterable
-/// textures, which f32 targets are not.
-fn shade_layouts(gpu: &Gpu) -> [wgpu::BindGroupLayout; 2] {
+/// textures, which f32 targets are not. The geometry's paged arrays take a binding a page.
+fn shade_layouts(gpu: &Gpu, paging: &Paging) -> Result<[wgpu::BindGroupLayout; 2]> {
     let texture = |binding| {
         layout_entry(
             binding,
@@ -285,14 +289,121 @@ fn shade_layouts(gpu: &Gpu) -> [wgpu::BindGroupLayout; 2] {
     frame.extend((2..6).map(texture));
     frame.extend([buffer_entry(6, READ), buffer_entry(7, READ_WRITE)]);
     let mut geometry = vec![buffer_entry(0, UNIFORM)];
+    for p in crate::shaders::paged_bindings("shade")? {
+        let pages = paging.of(&p.name).map_or(1, |l| l.pages);
+        geometry.extend((1..pages).map(|k| buffer_entry(p.binding + k * PAGE_BINDING_STEP, READ)));
+    }
     geometry.extend((1..5).map(|b| buffer_entry(b, READ)));
-    [frame, geometry].map(|entries| {
+    Ok([frame, geometry].map(|entries| {
         gpu.device
             .create_bind_group_layout(&wgpu::BindGroupLayoutDescriptor {
                 label: Some("shade"),
                 entries: &entries,
             })
-    })
+    }))
+}
+
+/// The shade pass of one paging of the scene's geometry, with its layouts.
+#[derive(Clone)]
+struct ShadePipeline {
+    pipeline: wgpu::ComputePipeline,
+    layouts: [wgpu::BindGroupLayout; 2],
+}
+
+impl ShadePipeline {
+    fn new(gpu: &Gpu, paging: &Paging) -> Result<ShadePipeline> {
+        let layouts = shade_layouts(gpu, paging)?;
+        let layout = gpu
+            .device
+            .create_pipeline_layout(&wgpu::PipelineLayoutDescriptor {
+                label: Some("shade"),
+                bind_group_layouts: &[Some(&layouts[0]), Some(&layouts[1])],
+                immediate_size: 0,
+            });
+        let module = module(gpu, "shade", paging)?;
+        let pipeline = gpu
+            .device
+            .create_compute_pipeline(&wgpu::ComputePipelineDescriptor {
+                label: Some("shade"),
+                layout: Some(&layout),
+                module: &module,
+                entry_point: Some("main"),
+                compilation_options: wgpu::PipelineCompilationOptions {
+                    constants: &[],
+                    zero_initialize_workgroup_memory: false,
+                },
+                cache: None,
+            });
+        gpu.check()?;
+        Ok(ShadePipeline { pipeline, layouts })
+    }
+}
+
+/// The raster passes' pipelines.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Hash)]
+enum Raster {
+    Visibility,
+    Attributes,
+    /// `fs_baked`: the attribute pass with baked direct light, two targets.
+    AttributesBaked,
+}
+
+impl Raster {
+    fn build(
+        self,
+        gpu: &Gpu,
+        format: wgpu::TextureFormat,
+        paging: &Paging,
+    ) -> Result<wgpu::RenderPipeline> {
+        let depth = |compare, write| wgpu::DepthStencilState {
+            format: DEPTH,
+            depth_write_enabled: Some(write),
+            depth_compare: Some(compare),
+            stencil: Default::default(),
+            bias: Default::default(),
+        };
+        let add = wgpu::BlendComponent {
+            src_factor: wgpu::BlendFactor::One,
+            dst_factor: wgpu::BlendFactor::One,
+            operation: wgpu::BlendOperation::Add,
+        };
+        let target = Some(wgpu::ColorTargetState {
+            format,
+            blend: Some(wgpu::BlendState {
+                color: add,
+                alpha: add,
+            }),
+            write_mask: wgpu::ColorWrites::ALL,
+        });
+        let test = Some(depth(wgpu::CompareFunction::GreaterEqual, false));
+        match self {
+            // Reversed depth: greater is nearer.
+            Raster::Visibility => raster_pipeline_at(
+                gpu,
+                "splat_visibility",
+                "fs_main",
+                Some(depth(wgpu::CompareFunction::Greater, true)),
+                &[],
+                paging,
+            ),
+            Raster::Attributes => raster_pipeline_at(
+                gpu,
+                "splat_attributes",
+                "fs_main",
+                test,
+                &vec![target; TARGETS],
+                paging,
+            ),
+            Raster::AttributesBaked => raster_pipeline_at(
+                gpu,
+                "splat_attributes",
+                "fs_baked",
+                test,
+                &[target.clone(), target],
+                paging,
+            ),
+        }
+    }
 }
 
 /// Storage buffers `splat_compute` binds: the splats, the eight of `splat_shading`, and the
@@ -318,99 +429,53 @@ impl SplatPipelines {
                  allows {have}"
             )));
         }
-        let depth = |compare, write| wgpu::DepthStencilState {
-            format: DEPTH,
-            depth_write_enabled: Some(write),
-            depth_compare: Some(compare),
-            stencil: Default::default(),
-            bias: Default::default(),
-        };
-        let add = wgpu::BlendComponent {
-            src_factor: wgpu::BlendFactor::One,
-            dst_factor: wgpu::BlendFactor::One,
-            operation: wgpu::BlendOperation::Add,
-        };
-        let target = Some(wgpu::ColorTargetState {
+        let pipelines = SplatPipelines {
             format,
-            blend: Some(wgpu::BlendState {
-                color: add,
-                alpha: add,
-            }),
-            write_mask: wgpu::ColorWrites::ALL,
-        });
-        // Reversed depth: greater is nearer.
-        let visibility = raster_pipeline(
-            gpu,
-            "splat_visibility",
-            Some(depth(wgpu::CompareFunction::Greater, true)),
-            &[],
-        )?;
-        let attributes = raster_pipeline(
-            gpu,
-            "splat_attributes",
-            Some(depth(wgpu::CompareFunction::GreaterEqual, false)),
-            &[
-                target.clone(),
-                target.clone(),
-                target.clone(),
-                target.clone(),
-            ],
-        )?;
-        let attributes_baked = raster_pipeline_at(
-            gpu,
-            "splat_attributes",
-            "fs_baked",
-            Some(depth(wgpu::CompareFunction::GreaterEqual, false)),
-            &[target.clone(), target],
-        )?;
-        let splat_compute = if compute_splatter_fits(gpu, format) {
-            let module = module(gpu, "splat_compute")?;
-            Some(
-                gpu.device
-                    .create_compute_pipeline(&wgpu::ComputePipelineDescriptor {
-                        label: Some("splat_compute"),
-                        layout: None,
-                        module: &module,
-                        entry_point: Some("main"),
-                        compilation_options: Default::default(),
-                        cache: None,
-                    }),
-            )
-        } else {
-            None
+            raster: Default::default(),
+            shade: Default::default(),
+            splat_compute: compute_splatter_fits(gpu, format),
         };
-        let shade_layouts = shade_layouts(gpu);
-        let layout = gpu
-            .device
-            .create_pipeline_layout(&wgpu::PipelineLayoutDescriptor {
-                label: Some("shade"),
-                bind_group_layouts: &[Some(&shade_layouts[0]), Some(&shade_layouts[1])],
-                immediate_size: 0,
-            });
-        let module = module(gpu, "shade")?;
-        let shade = gpu
-            .device
-            .create_compute_pipeline(&wgpu::ComputePipelineDescriptor {
-                label: Some("shade"),
-                layout: Some(&layout),
-                module: &module,
-                entry_point: Some("main"),
-                compilation_options: wgpu::PipelineCompilationOptions {
-                    constants: &[],
-                    zero_initialize_workgroup_memory: false,
-                },
-                cache: None,
-            });
+        // Compiled now, so that a device that cannot run them says so before any work.
+        let unpaged = Paging::default();
+        for which in [
+            Raster::Visibility,
+            Raster::Attributes,
+            Raster::AttributesBaked,
+        ] {
+            pipelines.raster(gpu, which, &unpaged)?;
+        }
+        pipelines.shade_pipeline(gpu, &unpaged)?;
+        if pipelines.splat_compute {
+            gpu.pipeline("splat_compute")?;
+        }
         gpu.check()?;
-        Ok(SplatPipelines {
-            format,
-            visibility,
-            attributes,
-            attributes_baked,
-            splat_compute,
-            shade,
-            shade_layouts,
-        })
+        Ok(pipelines)
+    }
+
+    /// The raster pipeline `which` for arrays paged as `paging`, built on first use.
+    fn raster(&self, gpu: &Gpu, which: Raster, paging: &Paging) -> Result<wgpu::RenderPipeline> {
+        let key = (which, paging.clone());
+        if let Some(p) = self.raster.lock().ok().and_then(|m| m.get(&key).cloned()) {
+            return Ok(p);
+        }
+        let pipeline = which.build(gpu, self.format, paging)?;
+        gpu.check()?;
+        if let Ok(mut m) = self.raster.lock() {
+            m.insert(key, pipeline.clone());
+        }
+        Ok(pipeline)
+    }
+
+    /// The shade pass for geometry paged as `paging`, built on first use.
+    fn shade_pipeline(&self, gpu: &Gpu, paging: &Paging) -> Result<ShadePipeline> {
+        if let Some(p) = self.shade.lock().ok().and_then(|m| m.get(paging).cloned()) {
+            return Ok(p);
+        }
+        let pipeline = ShadePipeline::new(gpu, paging)?;
+        if let Ok(mut m) = self.shade.lock() {
+            m.insert(paging.clone(), pipeline.clone());
+        }
+        Ok(pipeline)
     }
 
     pub fn targets(&self, gpu: &Gpu, width: u32, height: u32) -> Result<FrameTargets> {
@@ -420,8 +485,8 @@ impl SplatPipelines {
         };
         let attachment = wgpu::TextureUsages::RENDER_ATTACHMENT;
         let storage = match self.splat_compute {
-            Some(_) => wgpu::TextureUsages::STORAGE_BINDING,
-            None => wgpu::TextureUsages::empty(),
+            true => wgpu::TextureUsages::STORAGE_BINDING,
+            false => wgpu::TextureUsages::empty(),
         };
         let depth = texture("splat depth", DEPTH, attachment);
         let sums = (0..TARGETS)
@@ -526,7 +591,7 @@ impl SplatPipelines {
     /// over each tile's list costs more than the rasterizer's triangle setup saves;
     /// docs/measurements.md), and no other device class has been measured yet.
     pub fn uses_compute(&self, splatter: Splatter) -> Result<bool> {
-        let can = self.splat_compute.is_some();
+        let can = self.splat_compute;
         match splatter {
             Splatter::Raster => Ok(false),
             Splatter::Compute if can => Ok(true),
@@ -556,7 +621,7 @@ impl SplatPipelines {
             *uniforms.tiles.borrow_mut() = Some(lists);
             return Ok(());
         }
-        let (Some(pipeline), Some(lists)) = (&self.splat_compute, &*uniforms.tiles.borrow()) else {
+        let (true, Some(lists)) = (self.splat_compute, &*uniforms.tiles.borrow()) else {
             return Err(Error::Invalid(
                 "the compute splatter's tile pass ran before its binning".into(),
             ));
@@ -564,7 +629,9 @@ impl SplatPipelines {
         let tile_params = gpu.uniform("tile params", &lists.params);
         let mut buffers = scene.shading(&uniforms.cam, &uniforms.params).to_vec();
         buffers.extend([&tile_params, &lists.start, &lists.splats]);
-        let mut entries = buffer_entries(&buffers);
+        let paging = gpu.paging("splat_compute", &[&buffers])?;
+        let pipeline = &gpu.variant_paged("splat_compute", &[], &[], &paging)?;
+        let mut entries = gpu.paged_entries("splat_compute", 0, &buffers, &paging)?;
         entries.extend(
             out.sums
                 .iter()
@@ -604,12 +671,20 @@ impl SplatPipelines {
         if uniforms.compute && pass != SplatPass::Shade {
             return self.record_compute(gpu, encoder, scene, uniforms, out, pass);
         }
-        let buffers = |pipeline: &wgpu::RenderPipeline, list: &[&wgpu::Buffer]| {
-            gpu.device.create_bind_group(&wgpu::BindGroupDescriptor {
-                label: None,
+        // A raster pass's pipeline for the paging of `list`, and its bind group.
+        let bound = |which: Raster, list: &[&wgpu::Buffer]| -> Result<_> {
+            let stage = match which {
+                Raster::Visibility => "splat_visibility",
+                _ => "splat_attributes",
+            };
+            let paging = gpu.paging(stage, &[list])?;
+            let pipeline = self.raster(gpu, which, &paging)?;
+            let group = gpu.device.create_bind_group(&wgpu::BindGroupDescriptor {
+                label: Some(stage),
                 layout: &pipeline.get_bind_group_layout(0),
-                entries: &buffer_entries(list),
-            })
+                entries: &gpu.paged_entries(stage, 0, list, &paging)?,
+            });
+            Ok((pipeline, group))
         };
         let depth_attachment = |load| {
             Some(wgpu::RenderPassDepthStencilAttachment {
@@ -622,7 +697,7 @@ impl SplatPipelines {
             })
         };
         if pass == SplatPass::Visibility {
-            let vis_group = buffers(&self.visibility, &[cam_buf, scene.splats]);
+            let (pipeline, vis_group) = bound(Raster::Visibility, &[cam_buf, scene.splats])?;
             let mut pass = encoder.begin_render_pass(&wgpu::RenderPassDescriptor {
                 label: Some("splat_visibility"),
                 color_attachments: &[],
@@ -631,15 +706,15 @@ impl SplatPipelines {
                 occlusion_query_set: None,
                 multiview_mask: None,
             });
-            pass.set_pipeline(&self.visibility);
+            pass.set_pipeline(&pipeline);
             pass.set_bind_group(0, &vis_group, &[]);
             pass.draw(0..SPLAT_CORNERS, 0..scene.splat_count);
             return Ok(());
         }
         if pass == SplatPass::Attributes {
-            let pipeline = match uniforms.direct {
-                DIRECT_BAKED => &self.attributes_baked,
-                _ => &self.attributes,
+            let which = match uniforms.direct {
+                DIRECT_BAKED => Raster::AttributesBaked,
+                _ => Raster::Attributes,
             };
             let all = scene.shading(cam_buf, params_buf);
             // `fs_main` reads none of the direct bake's bindings (the lights, the bake's two
@@ -649,7 +724,7 @@ impl SplatPipelines {
             } else {
                 all.len() - 3
             };
-            let attr_group = buffers(pipeline, &all[..used]);
+            let (pipeline, attr_group) = bound(which, &all[..used])?;
             let mut color = out.cleared_sums();
             if uniforms.direct == DIRECT_BAKED {
                 color.truncate(2);
@@ -662,7 +737,7 @@ impl SplatPipelines {
                 occlusion_query_set: None,
                 multiview_mask: None,
             });
-            pass.set_pipeline(pipeline);
+            pass.set_pipeline(&pipeline);
             pass.set_bind_group(0, &attr_group, &[]);
             pass.draw(0..SPLAT_CORNERS, 0..scene.splat_count);
             return Ok(());
@@ -694,10 +769,12 @@ impl SplatPipelines {
             binding: 7,
             resource: out.hdr.as_entire_binding(),
         });
-        let geometry_entries = buffer_entries(&scene.geometry);
+        let paging = gpu.paging("shade", &[&[], &scene.geometry])?;
+        let shade = self.shade_pipeline(gpu, &paging)?;
+        let geometry_entries = gpu.paged_entries("shade", 1, &scene.geometry, &paging)?;
         let groups = [frame_entries, geometry_entries]
             .iter()
-            .zip(&self.shade_layouts)
+            .zip(&shade.layouts)
             .map(|(entries, layout)| {
                 gpu.device.create_bind_group(&wgpu::BindGroupDescriptor {
                     label: Some("shade"),
@@ -712,7 +789,7 @@ impl SplatPipelines {
             label: Some("shade"),
             timestamp_writes: None,
         });
-        pass.set_pipeline(&self.shade);
+        pass.set_pipeline(&shade.pipeline);
         for (g, group) in groups.iter().enumerate() {
             pass.set_bind_group(g as u32, group, &[]);
         }

@@ -22,6 +22,7 @@ use bytemuck::Pod;
 use wgpu::util::DeviceExt;
 
 use crate::error::{Error, Result};
+use crate::shaders::{MAX_PAGES, PAGE_BINDING_STEP, PagedArray, Paging};
 
 /// Which graphics API to run on.
 #[derive(Clone, Copy, Debug, Default, PartialEq, Eq, serde::Serialize)]
@@ -56,6 +57,9 @@ pub struct Gpu {
     pub limits: wgpu::Limits,
     /// Subgroup operations are enabled (`wgpu::Features::SUBGROUP`, where the device has it).
     pub subgroups: bool,
+    /// Bytes of one page of a paged array (`shaders::Paging`): the largest storage binding,
+    /// or less where a test makes small scenes page.
+    page_bytes: u64,
     pipelines: Mutex<HashMap<String, wgpu::ComputePipeline>>,
     /// The adapter the device came from (a window's surface asks it what it supports).
     pub adapter: wgpu::Adapter,
@@ -178,7 +182,11 @@ impl Gpu {
             }
         }));
         let subgroups = device.features().contains(wgpu::Features::SUBGROUP);
+        let page_bytes = limits
+            .max_storage_buffer_binding_size
+            .min(limits.max_buffer_size);
         let gpu = Gpu {
+            page_bytes,
             device,
             queue,
             info,
@@ -224,11 +232,21 @@ impl Gpu {
         defines: &[&str],
         constants: &[(&str, f64)],
     ) -> Result<wgpu::ComputePipeline> {
-        let key = constants
-            .iter()
-            .fold(format!("{name} [{}]", defines.join(",")), |k, (c, v)| {
-                format!("{k} {c}={v}")
-            });
+        self.variant_paged(name, defines, constants, &Paging::default())
+    }
+
+    /// `variant`, with its paged arrays split as `paging` says (`Gpu::paging`).
+    pub fn variant_paged(
+        &self,
+        name: &'static str,
+        defines: &[&str],
+        constants: &[(&str, f64)],
+        paging: &Paging,
+    ) -> Result<wgpu::ComputePipeline> {
+        let key = constants.iter().fold(
+            format!("{name} [{}]{}", defines.join(","), paging.key()),
+            |k, (c, v)| format!("{k} {c}={v}"),
+        );
         let mut cache = self
             .pipelines
             .lock()
@@ -236,7 +254,7 @@ impl Gpu {
         if let Some(p) = cache.get(&key) {
             return Ok(p.clone());
         }
-        let source = crate::shaders::resolve_stage_with(name, defines)?;
+        let source = crate::shaders::resolve_stage_paged(name, defines, paging)?;
         let module = self
             .device
             .create_shader_module(wgpu::ShaderModuleDescriptor {
@@ -287,7 +305,9 @@ impl Gpu {
         if groups == 0 {
             return Ok(());
         }
-        self.dispatch_pipeline(encoder, stage, &self.pipeline(stage)?, bind_groups, groups)
+        let paging = self.paging(stage, bind_groups)?;
+        let pipeline = self.variant_paged(stage, &[], &[], &paging)?;
+        self.dispatch_pipeline(encoder, stage, &pipeline, &paging, bind_groups, groups)
     }
 
     /// Records one dispatch of an already compiled (e.g. specialized) pipeline.
@@ -296,23 +316,23 @@ impl Gpu {
         encoder: &mut wgpu::CommandEncoder,
         stage: &'static str,
         pipeline: &wgpu::ComputePipeline,
+        paging: &Paging,
         bind_groups: &[&[&wgpu::Buffer]],
         groups: u32,
     ) -> Result<()> {
         if groups == 0 {
             return Ok(());
         }
-        let bind_groups: Vec<wgpu::BindGroup> = bind_groups
-            .iter()
-            .enumerate()
-            .map(|(g, buffers)| {
-                self.device.create_bind_group(&wgpu::BindGroupDescriptor {
-                    label: Some(stage),
-                    layout: &pipeline.get_bind_group_layout(g as u32),
-                    entries: &buffer_entries(buffers),
-                })
-            })
-            .collect();
+        let mut made = Vec::with_capacity(bind_groups.len());
+        for (g, buffers) in bind_groups.iter().enumerate() {
+            let entries = self.paged_entries(stage, g as u32, buffers, paging)?;
+            made.push(self.device.create_bind_group(&wgpu::BindGroupDescriptor {
+                label: Some(stage),
+                layout: &pipeline.get_bind_group_layout(g as u32),
+                entries: &entries,
+            }));
+        }
+        let bind_groups = made;
         let (x, y) = self.dispatch_dims(groups)?;
         let mut pass = encoder.begin_compute_pass(&wgpu::ComputePassDescriptor {
             label: Some(stage),
@@ -451,14 +471,119 @@ impl Gpu {
         Ok(())
     }
 
+    /// Refuses a buffer larger than the device allows, or than a paged array can take (its
+    /// bindings are checked when bound, `paged_entries`).
     fn check_size(&self, label: &str, bytes: u64) -> Result<()> {
-        let max = self.max_binding_bytes();
+        let max = self
+            .limits
+            .max_buffer_size
+            .min(self.max_binding_bytes() * MAX_PAGES as u64);
         if bytes > max {
             return Err(Error::Invalid(format!(
-                "{label}: {bytes} bytes exceed this device's largest storage binding ({max} bytes)"
+                "{label}: {bytes} bytes exceed this device's largest buffer ({max} bytes: \
+                 {MAX_PAGES} of its largest storage binding, {} bytes)",
+                self.max_binding_bytes()
             )));
         }
         Ok(())
+    }
+
+    /// Makes arrays of more than `bytes` bytes page (tests of paging on small scenes); at most
+    /// the largest storage binding.
+    pub fn with_page_bytes(mut self, bytes: u64) -> Gpu {
+        self.page_bytes = bytes.clamp(256, self.max_binding_bytes());
+        self
+    }
+
+    /// How `stage`'s paged arrays split, bound to `bind_groups` (one buffer list per group, in
+    /// binding order): an array larger than one page takes windows of 2^shift elements, the
+    /// most that fit a page.
+    pub fn paging(&self, stage: &str, bind_groups: &[&[&wgpu::Buffer]]) -> Result<Paging> {
+        let mut arrays = Vec::new();
+        for p in crate::shaders::paged_bindings(stage)? {
+            let Some(buffer) = bind_groups
+                .get(p.group as usize)
+                .and_then(|g| g.get(p.binding as usize))
+            else {
+                continue;
+            };
+            let size = buffer.size();
+            if size <= self.page_bytes {
+                continue;
+            }
+            let per_page = self.page_bytes / p.stride.max(1) as u64;
+            let shift = per_page.max(1).ilog2();
+            let page = (p.stride as u64) << shift;
+            let pages = size.div_ceil(page) as u32;
+            if pages > MAX_PAGES {
+                return Err(Error::Invalid(format!(
+                    "{stage}: '{}' holds {size} bytes, more than the {MAX_PAGES} pages of \
+                     {page} bytes a paged array is bound as on this device",
+                    p.name
+                )));
+            }
+            arrays.push(PagedArray {
+                name: p.name,
+                pages,
+                shift,
+            });
+        }
+        Ok(Paging { arrays })
+    }
+
+    /// Bind group entries of group `group` of `stage` for `buffers` in binding order: a paged
+    /// array's pages as windows of its buffer (`paging`), every other buffer whole, which
+    /// must fit one storage binding.
+    pub fn paged_entries<'a>(
+        &self,
+        stage: &str,
+        group: u32,
+        buffers: &[&'a wgpu::Buffer],
+        paging: &Paging,
+    ) -> Result<Vec<wgpu::BindGroupEntry<'a>>> {
+        let paged = crate::shaders::paged_bindings(stage)?;
+        let mut entries = Vec::with_capacity(buffers.len());
+        for (b, &buffer) in buffers.iter().enumerate() {
+            let binding = b as u32;
+            let name = paged
+                .iter()
+                .find(|p| p.group == group && p.binding == binding)
+                .map(|p| (p.name.as_str(), p.stride));
+            let Some((layout, stride)) = name.and_then(|(n, s)| paging.of(n).map(|l| (l, s)))
+            else {
+                if buffer.size() > self.max_binding_bytes() {
+                    return Err(Error::Invalid(format!(
+                        "{stage}: binding {group}.{binding} holds {} bytes, more than this \
+                         device's largest storage binding ({} bytes)",
+                        buffer.size(),
+                        self.max_binding_bytes()
+                    )));
+                }
+                entries.push(wgpu::BindGroupEntry {
+                    binding,
+                    resource: buffer.as_entire_binding(),
+                });
+                continue;
+            };
+            let page = (stride as u64) << layout.shift;
+            for k in 0..layout.pages {
+                let offset = k as u64 * page;
+                // A page past the buffer's end (never indexed) binds the first page again.
+                let (offset, size) = match buffer.size().checked_sub(offset) {
+                    Some(left) if left > 0 => (offset, left.min(page)),
+                    _ => (0, page.min(buffer.size())),
+                };
+                entries.push(wgpu::BindGroupEntry {
+                    binding: binding + k * PAGE_BINDING_STEP,
+                    resource: wgpu::BindingResource::Buffer(wgpu::BufferBinding {
+                        buffer,
+                        offset,
+                        size: wgpu::BufferSize::new(size),
+                    }),
+                });
+            }
+        }
+        Ok(entries)
     }
 
     /// Copies `count` elements of `buffer` back to the host.
@@ -528,8 +653,8 @@ fn required_limits(adapter: &wgpu::Limits) -> wgpu::Limits {
         max_buffer_size: adapter.max_buffer_size,
         max_storage_buffer_binding_size: adapter.max_storage_buffer_binding_size,
         // The compute splatter binds 11 (`gpu::frame::SPLAT_COMPUTE_BUFFERS`); where the adapter
-        // offers fewer, it is not used.
-        max_storage_buffers_per_shader_stage: adapter.max_storage_buffers_per_shader_stage.min(16),
+        // offers fewer, it is not used. A paged array takes one a page (`Gpu::paging`).
+        max_storage_buffers_per_shader_stage: adapter.max_storage_buffers_per_shader_stage.min(32),
         max_storage_textures_per_shader_stage: adapter.max_storage_textures_per_shader_stage.min(4),
         max_compute_workgroups_per_dimension: adapter.max_compute_workgroups_per_dimension,
         // The attribute pass writes four RGBA float targets.

@@ -52,6 +52,17 @@ impl ReferencePipeline {
             &bins.geom,
             &bins.power,
         ];
+        if !gpu
+            .paging("reference_gather", &[&own, &scene.geometry])?
+            .arrays
+            .is_empty()
+        {
+            return Err(crate::Error::Invalid(
+                "the photon-map reference binds the scene's splats and grid whole; this scene's \
+                 do not fit one storage binding (use --method path)"
+                    .into(),
+            ));
+        }
         let groups: Vec<wgpu::BindGroup> = [buffer_entries(&own), buffer_entries(&scene.geometry)]
             .iter()
             .enumerate()

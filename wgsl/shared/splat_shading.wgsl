@@ -10,13 +10,17 @@
 
 @group(0) @binding(2) var<uniform> params: ShadeParams;
 @group(0) @binding(3) var<storage, read> materials: array<Material>;
+// #paged
 @group(0) @binding(4) var<storage, read> splat_light: array<SplatLight>;
+// #paged
 @group(0) @binding(5) var<storage, read> lobes: array<Lobe>;
 @group(0) @binding(6) var<storage, read> lobe_norms: array<f32>;
 @group(0) @binding(7) var<storage, read> lights: array<Light>;
 // The direct bake's (direct_bake.wgsl): per splat (shadowed irradiance, 0), and per splat and
 // light the light's visibility. Read only when params.direct is DIRECT_BAKED.
+// #paged
 @group(0) @binding(8) var<storage, read> direct: array<vec4<f32>>;
+// #paged
 @group(0) @binding(9) var<storage, read> visibility: array<f32>;
 
 // The hemispherical integral of a lobe of width beta2 about axis (lobe_norms).
@@ -31,12 +35,12 @@ fn lobe_norm(n: vec3<f32>, axis: vec3<f32>, beta2: f32) -> f32 {
 
 // Radiance leaving splat `i` towards wo by the light its photons brought (thesis 3.6.1).
 fn indirect(i: u32, s: Splat, m: Material, wo: vec3<f32>) -> vec3<f32> {
-    let light = splat_light[i];
+    let light = splat_light_at(i);
     var spec = vec3<f32>(0.0);
     let first = light.first_lobe;
     let shown = select(0u, light.lobes, (params.show & SHOW_INDIRECT_SPECULAR) != 0u);
     for (var k = 0u; k < shown; k++) {
-        let lobe = lobes[first + k];
+        let lobe = lobes_at(first + k);
         let beta2 = lobe_beta2(params.family, lobe.sharpness);
         let norm = lobe_norm(s.normal, lobe.axis, beta2);
         spec += lobe.irradiance * lobe_specular(s.normal, wo, lobe.axis, m.roughness, beta2, norm);
@@ -61,7 +65,7 @@ fn specular_sample(n: vec3<f32>, wo: vec3<f32>, alpha: f32, ls: LightSample) -> 
 fn baked_direct(i: u32, s: Splat, m: Material, p: vec3<f32>, wo: vec3<f32>) -> vec3<f32> {
     var out = vec3<f32>(0.0);
     if (params.show & SHOW_DIRECT_DIFFUSE) != 0u {
-        out = s.diffuse * (direct[i].xyz / PI);
+        out = s.diffuse * (direct_at(i).xyz / PI);
     }
     let glossy = m.roughness >= MIN_ALPHA && any(m.specular > vec3<f32>(0.0));
     if (params.show & SHOW_DIRECT_SPECULAR) == 0u || !glossy {
@@ -69,7 +73,7 @@ fn baked_direct(i: u32, s: Splat, m: Material, p: vec3<f32>, wo: vec3<f32>) -> v
     }
     var spec = vec3<f32>(0.0);
     for (var li = 0u; li < params.light_count; li++) {
-        let vis = visibility[i * params.light_count + li];
+        let vis = visibility_at(i * params.light_count + li);
         let l = lights[li];
         if !(vis > 0.0) {
             continue;

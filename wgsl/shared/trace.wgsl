@@ -24,8 +24,10 @@
 // #import grid
 
 @group(1) @binding(0) var<uniform> grid: GridParams;
+// #paged
 @group(1) @binding(1) var<storage, read> splats: array<Splat>;
 @group(1) @binding(2) var<storage, read> cell_start: array<u32>;
+// #paged
 @group(1) @binding(3) var<storage, read> cell_splats: array<u32>;
 @group(1) @binding(4) var<storage, read> cell_dist: array<u32>;
 
@@ -102,11 +104,11 @@ fn trace_ray(o: vec3<f32>, d: vec3<f32>, skip: u32, t_max: f32, budget: ptr<func
                     return hit;
                 }
                 *budget -= 1u;
-                let s = cell_splats[e];
+                let s = cell_splats_at(e);
                 if s == skip {
                     continue;
                 }
-                let th = intersect_disk(splats[s], o, d);
+                let th = intersect_disk(splats_at(s), o, d);
                 if th > 0.0 && th < hit.t && th <= limit {
                     hit.t = th;
                     hit.splat = s;
