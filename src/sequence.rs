@@ -392,16 +392,21 @@ pub struct FitInput<'a, B> {
 pub struct Fit<B> {
     pub lobes: B,
     pub light: B,
+    /// Splats on the fit list: those fitted, and those not fitted with too many candidates
+    /// for one invocation.
     pub listed: u32,
+    /// Splats on the gather list (`em_gather`).
+    pub gathered: u32,
     pub fitted: u32,
     pub max_candidates: u32,
     pub dispatches: u32,
 }
 
-/// The lobe fit: `em_select` lists the splats with photons near them → (split: the list's
-/// length and the most candidates any splat has, which sizes the dispatches on a loop-limited
-/// device) → `em_fit`, one workgroup per listed splat, in one dispatch or in several that hand
-/// the mixture over through the lobe buffer.
+/// The lobe fit: `em_select` lists the splats with photons near them, in two lists → (split:
+/// the lists' lengths and the most candidates a fit-list splat has, which sizes the
+/// dispatches on a loop-limited device) → `em_gather`, one invocation per splat of the gather
+/// list (irradiance alone) → `em_fit`, one workgroup per splat of the fit list, in one
+/// dispatch or in several that hand the mixture over through the lobe buffer.
 pub fn fit_lobes<E: Executor>(
     ex: &mut E,
     input: &FitInput<E::Buffer>,
@@ -413,7 +418,8 @@ pub fn fit_lobes<E: Executor>(
     let n = splat_count as u64;
     let light = ex.zeroed("splat light", n.max(1) * 32)?;
     let fit_list = ex.zeroed("fit list", n.max(1) * 8)?;
-    let counters = ex.zeroed("em counters", 12)?;
+    let gather_list = ex.zeroed("gather list", n.max(1) * 4)?;
+    let counters = ex.zeroed("em counters", 16)?;
     let select = ex.uniform("em select params", &cfg.params(splat_count, 0, shape))?;
     let bindings = [
         &select,
@@ -423,12 +429,28 @@ pub fn fit_lobes<E: Executor>(
         input.cell_start,
         &fit_list,
         &counters,
+        &gather_list,
     ];
     ex.dispatch("em_select", &bindings, groups("em_select", splat_count)?)?;
-    let (listed, max_candidates, fitted) = match ex.read::<u32>(&counters, 3)?[..] {
-        [a, b, c] => (a, b, c),
+    let (listed, max_candidates, fitted, gathered) = match ex.read::<u32>(&counters, 4)?[..] {
+        [a, b, c, d] => (a, b, c, d),
         _ => return Err(Error::Gpu("em counters readback was short".into())),
     };
+    let gather = ex.uniform(
+        "em gather params",
+        &cfg.params(splat_count, gathered, shape),
+    )?;
+    let bindings = [
+        &gather,
+        input.bin_params,
+        input.splats,
+        &gather_list,
+        input.cell_start,
+        input.geom,
+        input.power,
+        &light,
+    ];
+    ex.dispatch("em_gather", &bindings, groups("em_gather", gathered)?)?;
     // Lobes for the fitted splats alone, at the slots em_select gave them.
     let lobes = ex.zeroed("lobes", (fitted as u64 * cfg.lobes as u64).max(1) * 32)?;
     let chunk = iterations_per_dispatch(cfg, max_candidates, shape.loop_limited)?;
@@ -469,6 +491,7 @@ pub fn fit_lobes<E: Executor>(
         lobes,
         light,
         listed,
+        gathered,
         fitted,
         max_candidates,
         dispatches,

@@ -54,6 +54,7 @@ pub const STAGES: &[WgslFile] = &[
     stage!("bin_rank"),
     stage!("bin_place"),
     stage!("em_select"),
+    stage!("em_gather"),
     stage!("em_fit"),
     stage!("scan_reduce"),
     stage!("scan_apply"),

@@ -819,3 +819,78 @@ fn photons_of_a_perpendicular_surface_do_not_count() {
         );
     }
 }
+
+/// Splats that are not fitted and have few candidates gather their irradiance in one
+/// invocation each (`em_gather`): the device gives the CPU mirror's sums, and the same photon
+/// count and (but for the order of the sums) irradiance and weight as a workgroup of
+/// `em_fit`'s final pass over the same photons.
+#[test]
+fn gathered_irradiance_equals_the_fit_pass() {
+    let gpu = common::gpu();
+    let scene = scene::load(Path::new("scenes/cornell.toml")).unwrap();
+    let cfg = PhotonConfig {
+        photons: 40_000,
+        ..PhotonConfig::from_scene(&scene)
+    };
+    let (map, grid, _) = cpu::trace_scene(&scene, &cfg, &mut |_, _| {}).unwrap();
+    let bins = cpu::bin_photons(
+        &bin_params(&grid.params, scene.search_radius()).unwrap(),
+        &map.photons,
+        &scene.splats,
+    )
+    .unwrap();
+    let em = EmConfig {
+        iterations: 3,
+        fit_candidates: 0,
+        ..EmConfig::from_scene(&scene)
+    };
+    let all = EmConfig {
+        fit_all: true,
+        ..em.clone()
+    };
+    let shape = shapes(&gpu)[0];
+    let c = cpu::fit_lobes(&em, &bins, &scene.splats, &scene.materials, shape).unwrap();
+    let g = on_gpu_shaped(&gpu, &em, &bins, &scene.splats, &scene.materials, shape);
+    let fit = on_gpu_shaped(&gpu, &all, &bins, &scene.splats, &scene.materials, shape);
+    let diffuse = |i: usize| {
+        let m = scene.materials[scene.splats[i].material as usize];
+        m.specular.iter().all(|&s| s == 0.0)
+    };
+    let mut gathered = 0;
+    for i in (0..scene.splats.len()).filter(|&i| diffuse(i)) {
+        let (a, b, w) = (&c.light[i], &g.light[i], &fit.light[i]);
+        assert_eq!(a.photons, b.photons, "splat {i}: photons, CPU vs GPU");
+        assert_eq!(
+            b.photons, w.photons,
+            "splat {i}: photons, gathered vs fitted"
+        );
+        if b.photons == 0 {
+            continue;
+        }
+        gathered += 1;
+        for (x, y, what) in [
+            (
+                Vec3::from(a.irradiance),
+                Vec3::from(b.irradiance),
+                "CPU vs GPU",
+            ),
+            (
+                Vec3::from(w.irradiance),
+                Vec3::from(b.irradiance),
+                "fitted vs gathered",
+            ),
+        ] {
+            let rel = (x - y).abs().max_element() / x.max_element().max(1e-30);
+            assert!(rel < 1e-5, "splat {i}: irradiance {what}: {x} vs {y}");
+        }
+        assert!(
+            ((a.weight - b.weight) / a.weight).abs() < 1e-5,
+            "splat {i}: weight"
+        );
+        assert_eq!((b.lobes, b.log_likelihood), (0, 0.0), "splat {i}: no lobes");
+    }
+    assert!(
+        gathered > 10_000,
+        "only {gathered} diffuse splats gathered photons"
+    );
+}

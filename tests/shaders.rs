@@ -164,6 +164,7 @@ fn mirror_workgroup_shapes_match_the_wgsl() {
         ("bin_rank", bin_rank::WG, 1),
         ("bin_place", bin_place::WG, 1),
         ("em_select", em_select::WG, 1),
+        ("em_gather", em_gather::WG, 1),
         ("scan_reduce", scan_reduce::WG, scan_reduce::ITEMS),
         ("scan_apply", scan_apply::WG, scan_apply::ITEMS),
         ("tonemap_reduce", tonemap_reduce::WG, tonemap_reduce::ITEMS),

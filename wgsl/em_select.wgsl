@@ -1,11 +1,14 @@
-// Lobe fit, pass 1 of 2: list the splats that have binned photons near them, so em_fit spends
-// no workgroup on the others (their outputs stay zero). An entry is the splat index, with the
+// Lobe fit, pass 1 of 3: list the splats that have binned photons near them, so em_fit and
+// em_gather spend no work on the others (their outputs stay zero). A splat that is not fitted
+// and has at most GATHER_MAX candidates goes to the gather list: em_gather sums its irradiance
+// in one invocation, where a workgroup of em_fit would cost many times more. An entry is the splat index, with the
 // top bit set when the splat's lobes are fitted (a glossy material, or EM_FIT_ALL), and the
 // fitted splat's slot in the lobe buffer, so that it holds lobes for fitted splats alone;
 // other listed splats only gather their total irradiance. The list's order and the slots
 // depend on scheduling, but each em_fit workgroup writes only its own splat's light and slot,
 // and the host packs the lobes in splat order (LobeMap::pack), so the results do not.
-// counters = [listed splats, most candidate photons of a listed splat, splats fitted].
+// counters = [fit-list splats, most candidate photons of a fit-list splat, splats fitted,
+// gather-list splats].
 // CPU mirror: src/cpu/em_select.rs.
 
 // #import types
@@ -20,7 +23,8 @@
 @group(0) @binding(3) var<storage, read> materials: array<Material>;
 @group(0) @binding(4) var<storage, read> cell_start: array<u32>;
 @group(0) @binding(5) var<storage, read_write> fit_list: array<vec2<u32>>;
-@group(0) @binding(6) var<storage, read_write> counters: array<atomic<u32>, 3>;
+@group(0) @binding(6) var<storage, read_write> counters: array<atomic<u32>, 4>;
+@group(0) @binding(7) var<storage, read_write> gather_list: array<u32>;
 
 const WG: u32 = 64u;
 
@@ -43,6 +47,10 @@ fn main(@builtin(workgroup_id) wg: vec3<u32>, @builtin(num_workgroups) num_wg: v
     }
     let glossy = any(materials[s.material].specular > vec3<f32>(0.0));
     let fit = glossy || (em.flags & EM_FIT_ALL) != 0u;
+    if !fit && candidates <= GATHER_MAX {
+        gather_list[atomicAdd(&counters[3], 1u)] = i;
+        return;
+    }
     var lobe_slot = 0u;
     if fit {
         lobe_slot = atomicAdd(&counters[2], 1u);

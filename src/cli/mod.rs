@@ -10,6 +10,7 @@ pub mod measure;
 pub mod plot;
 pub mod rebake;
 pub mod render;
+pub mod scale;
 pub mod sweep;
 pub mod view;
 
@@ -331,6 +332,9 @@ enum Command {
         /// family, prune), comma-separated; default all.
         #[arg(long, value_delimiter = ',')]
         knobs: Vec<String>,
+        /// `scale` only: the splat counts of the generated clouds, comma-separated.
+        #[arg(long, value_delimiter = ',', default_values_t = scale::DEFAULT_SIZES)]
+        sizes: Vec<u64>,
     },
 }
 
@@ -351,6 +355,10 @@ enum BenchKind {
     /// Bake time, frame time and error against the photon-map reference while one setting
     /// varies at a time (photons, iterations, radius, lobes, splats, family): tables and charts.
     Sweep,
+    /// Generated terrain clouds of growing size (`--sizes`, default 1, 3 and 10 M splats)
+    /// written as PLY to the output folder: load, grid, bake and frame time, peak memory and
+    /// how each grows with the splat count (no scene).
+    Scale,
 }
 
 fn to_json<T: serde::Serialize>(value: &T) -> Result<serde_json::Value> {
@@ -576,6 +584,24 @@ fn run(cli: Cli) -> Result<()> {
             print_report(json, &r)?;
         }
         Command::Bench {
+            what: BenchKind::Scale,
+            output,
+            device,
+            json,
+            sizes,
+            ..
+        } => {
+            let Some(gpu) = device.gpu()? else {
+                return Err(Error::Invalid(
+                    "bench scale measures the device's path and needs a GPU adapter (lavapipe will \
+                     do): the CPU mirror would take hours at these sizes"
+                        .into(),
+                ));
+            };
+            let r = scale::scale(&gpu, &sizes, &output)?;
+            print_report(json, &r)?;
+        }
+        Command::Bench {
             what: BenchKind::Sweep,
             scenes,
             output,
@@ -659,7 +685,9 @@ fn run(cli: Cli) -> Result<()> {
                         let r = bench::em(&scene, gpu.as_ref(), &photons, &em)?;
                         (r.to_string(), to_json(&r)?)
                     }
-                    BenchKind::Convolution | BenchKind::Sweep => unreachable!("handled above"),
+                    BenchKind::Convolution | BenchKind::Sweep | BenchKind::Scale => {
+                        unreachable!("handled above")
+                    }
                 };
                 if !json {
                     say(format_args!("{text}\n"));

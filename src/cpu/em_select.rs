@@ -4,7 +4,7 @@
 use glam::Vec3;
 
 use crate::shared::bins::{bin_box, bin_row, bin_row_count};
-use crate::shared::lobes::EM_FIT_ALL;
+use crate::shared::lobes::{EM_FIT_ALL, GATHER_MAX};
 use crate::types::{BinParams, EmParams, Material, Splat};
 
 pub const WG: u32 = 64;
@@ -19,7 +19,8 @@ pub fn em_select(
     materials: &[Material],
     cell_start: &[u32],
     active: &mut [[u32; 2]],
-    counters: &mut [u32; 3],
+    counters: &mut [u32; 4],
+    gather_list: &mut [u32],
     groups: u32,
 ) {
     for wg in 0..groups {
@@ -43,6 +44,11 @@ pub fn em_select(
                 .iter()
                 .any(|&x| x > 0.0);
             let fit = glossy || em.flags & EM_FIT_ALL != 0;
+            if !fit && candidates <= GATHER_MAX {
+                gather_list[counters[3] as usize] = i;
+                counters[3] += 1;
+                continue;
+            }
             let mut lobe_slot = 0;
             if fit {
                 lobe_slot = counters[2];

@@ -6,7 +6,7 @@ use std::rc::Rc;
 
 use bytemuck::Pod;
 
-use super::{bin_count, bin_place, bin_rank, bin_scatter, em_fit, em_select};
+use super::{bin_count, bin_place, bin_rank, bin_scatter, em_fit, em_gather, em_select};
 use super::{
     direct_bake, path_trace, photon_resolve, photon_trace, photon_view, scan_apply, scan_reduce,
     tonemap_apply, tonemap_reduce,
@@ -338,8 +338,9 @@ fn run(stage: &str, b: &[&CpuBuffer], groups: u32) -> Result<()> {
             let cell_start = get(stage, b, 4)?;
             let mut active = get_mut(stage, b, 5)?;
             let mut counters = get_mut(stage, b, 6)?;
-            let counters: &mut [u32; 3] = counters
-                .get_mut(..3)
+            let mut gather_list = get_mut(stage, b, 7)?;
+            let counters: &mut [u32; 4] = counters
+                .get_mut(..4)
                 .and_then(|c| c.try_into().ok())
                 .ok_or_else(|| Error::Invalid(format!("{stage}: counters too short")))?;
             let (splats, materials) = (view(&splats), view(&materials));
@@ -351,6 +352,28 @@ fn run(stage: &str, b: &[&CpuBuffer], groups: u32) -> Result<()> {
                 &cell_start,
                 view_mut(&mut active),
                 counters,
+                &mut gather_list,
+                groups,
+            );
+        }
+        "em_gather" => {
+            let em = param(stage, b, 0)?;
+            let bins = param(stage, b, 1)?;
+            let splats = get(stage, b, 2)?;
+            let gather_list = get(stage, b, 3)?;
+            let cell_start = get(stage, b, 4)?;
+            let geom = get(stage, b, 5)?;
+            let power = get(stage, b, 6)?;
+            let mut light = get_mut(stage, b, 7)?;
+            em_gather::em_gather(
+                &em,
+                &bins,
+                view(&splats),
+                &gather_list,
+                &cell_start,
+                view(&geom),
+                view(&power),
+                view_mut(&mut light),
                 groups,
             );
         }

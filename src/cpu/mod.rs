@@ -9,6 +9,7 @@ pub mod bin_rank;
 pub mod bin_scatter;
 pub mod direct_bake;
 pub mod em_fit;
+pub mod em_gather;
 pub mod em_select;
 pub mod exec;
 pub mod grid_count;
@@ -185,7 +186,7 @@ pub fn fit_lobes(
     let dense = ex.read::<Lobe>(&fit.lobes, fit.fitted as usize * cfg.lobes as usize)?;
     let light = ex.read::<SplatLight>(&fit.light, n)?;
     let stats = EmStats {
-        listed: fit.listed,
+        listed: fit.listed + fit.gathered,
         fitted: fit.fitted,
         max_candidates: fit.max_candidates,
         dispatches: fit.dispatches,

@@ -112,7 +112,7 @@ pub fn fit_lobes_shaped(
         light: fit.light,
         splat_count,
         stats: EmStats {
-            listed: fit.listed,
+            listed: fit.listed + fit.gathered,
             fitted: fit.fitted,
             max_candidates: fit.max_candidates,
             photons: 0,

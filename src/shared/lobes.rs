@@ -15,6 +15,8 @@ pub const EM_FIT_ALL: u32 = 4;
 /// The invocations' sums combine by a subgroup butterfly (the `subgroups` variant of
 /// `em_fit`); the CPU mirror then adds in that order.
 pub const EM_SUBGROUP_REDUCE: u32 = 8;
+/// Most candidate photons of a splat `em_gather` sums in one invocation.
+pub const GATHER_MAX: u32 = 16384;
 
 pub const SPARSE_THRESHOLD: f32 = 0.02;
 pub const SPARSE_PERIOD: u32 = 8;

@@ -26,6 +26,9 @@ const EM_SUBGROUP_REDUCE: u32 = 8u;
 
 // A fit-list entry is a splat index with this bit set when the splat's lobes are fitted.
 const FIT_BIT: u32 = 0x80000000u;
+// Most candidate photons of a splat em_gather sums in one invocation (em_select): well under
+// llvmpipe's loop limit of about 65k iterations.
+const GATHER_MAX: u32 = 16384u;
 
 // Sparse EM (thesis 3.5): responsibilities under this stay frozen between full updates.
 const SPARSE_THRESHOLD: f32 = 0.02;

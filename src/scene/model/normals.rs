@@ -8,6 +8,7 @@ use std::num::NonZeroUsize;
 
 use glam::{Mat3, Vec3};
 use kiddo::{ImmutableKdTree, SquaredEuclidean};
+use rayon::prelude::*;
 
 /// Neighbours used for a normal (the point itself included).
 const NORMAL_K: usize = 12;
@@ -22,8 +23,9 @@ fn knn(points: &[Vec3], k: usize) -> Vec<Vec<(u32, f32)>> {
         return vec![Vec::new(); points.len()];
     };
     let k = NonZeroUsize::new(k.min(points.len()).max(1)).unwrap_or(NonZeroUsize::MIN);
+    // Each query is independent: in parallel, in the points' order.
     entries
-        .iter()
+        .par_iter()
         .map(|q| {
             tree.query(q)
                 .nearest_n::<SquaredEuclidean<f32>>(k)

@@ -1,0 +1,280 @@
+//! `lobelight bench scale`: generated terrain clouds of growing size (1, 3 and 10 M splats by
+//! default), each written as a binary PLY with normals, then loaded, gridded, baked and drawn
+//! on the device: the time of each step, the peak memory, and how each grows with the splat
+//! count. The clouds and their scene files stay in the output folder (a later run reuses them),
+//! so any step can be run again by hand with `lobelight render`.
+
+use std::io::Write;
+use std::path::{Path, PathBuf};
+use std::time::Instant;
+
+use serde::Serialize;
+
+use crate::bake::Progress;
+use crate::camera::View;
+use crate::cli::measure::median;
+use crate::error::{Error, Result};
+use crate::frame::FrameConfig;
+use crate::gpu::Gpu;
+use crate::photons::ms_since;
+use crate::renderer::FrameRenderer;
+use crate::scene;
+
+/// The splat counts `bench scale` measures unless told.
+pub const DEFAULT_SIZES: [u64; 3] = [1_000_000, 3_000_000, 10_000_000];
+
+/// Moving frames timed per size (after one untimed frame), at `FRAME_SIZE`.
+const TIMED_FRAMES: usize = 3;
+const FRAME_SIZE: (u32, u32) = (512, 512);
+
+#[derive(Debug, Serialize)]
+pub struct ScaleBench {
+    pub adapter: String,
+    pub backend: String,
+    pub rows: Vec<ScaleRow>,
+    /// How each time grows with the splat count from the smallest size to the largest: the
+    /// exponent k in time ∝ splats^k (1 is linear).
+    pub growth: Growth,
+}
+
+/// One cloud's figures. Times in milliseconds.
+#[derive(Debug, Serialize)]
+pub struct ScaleRow {
+    pub splats: u64,
+    pub file: String,
+    pub file_bytes: u64,
+    /// Reading the PLY into points and normals (`scene::model::load`), and its rate.
+    pub read_ms: f64,
+    pub read_mb_per_s: f64,
+    /// The whole scene load: the read, then disks of the points (radii from the neighbour
+    /// spacing, a k-d tree query per point) placed in the scene.
+    pub load_ms: f64,
+    /// Uploading the splats and building the splat grid.
+    pub grid_ms: f64,
+    pub photons_ms: f64,
+    pub binning_ms: f64,
+    pub em_ms: f64,
+    /// The direct bake: each splat's visibility of each light.
+    pub direct_ms: f64,
+    /// Photons, binning, EM and the direct bake.
+    pub bake_ms: f64,
+    /// Median moving-camera frame at 512², tone map included.
+    pub frame_ms: f64,
+    /// Peak resident memory of the process so far (sizes run smallest first, so it is this
+    /// size's peak): on lavapipe device buffers live in it too. `None` off Linux.
+    pub peak_rss_bytes: Option<u64>,
+}
+
+#[derive(Debug, Default, Serialize)]
+pub struct Growth {
+    pub load: f64,
+    pub grid: f64,
+    pub bake: f64,
+    pub frame: f64,
+    pub peak_rss: Option<f64>,
+}
+
+/// Runs the scale benchmark on `gpu` for clouds of `sizes` splats, writing them to `dir`.
+pub fn scale(gpu: &Gpu, sizes: &[u64], dir: &Path) -> Result<ScaleBench> {
+    if sizes.is_empty() || sizes.contains(&0) {
+        return Err(Error::Invalid(
+            "bench scale needs splat counts above 0 (--sizes 1000000,3000000)".into(),
+        ));
+    }
+    std::fs::create_dir_all(dir).map_err(|e| Error::io(dir, e))?;
+    let mut sizes = sizes.to_vec();
+    sizes.sort_unstable();
+    let mut rows = Vec::new();
+    for &n in &sizes {
+        eprintln!("bench scale: {n} splats");
+        let scene_path = write_terrain(dir, n)?;
+        rows.push(measure(gpu, &scene_path, n)?);
+    }
+    let growth = growth(&rows);
+    Ok(ScaleBench {
+        adapter: gpu.info.name.clone(),
+        backend: gpu.backend_name().into(),
+        rows,
+        growth,
+    })
+}
+
+fn measure(gpu: &Gpu, scene_path: &Path, n: u64) -> Result<ScaleRow> {
+    let ply = terrain_file(scene_path.parent().unwrap_or(Path::new(".")), n);
+    let file_bytes = std::fs::metadata(&ply)
+        .map_err(|e| Error::io(&ply, e))?
+        .len();
+    let t = Instant::now();
+    drop(scene::model::load(&ply)?);
+    let read_ms = ms_since(t);
+    let t = Instant::now();
+    let scene = scene::load(scene_path)?;
+    let load_ms = ms_since(t);
+    let mut renderer = FrameRenderer::new(gpu, &scene)?;
+    let grid_ms = renderer.on_gpu.grid_ms;
+    let baked = renderer.bake(gpu, &scene, &Progress::new(true))?;
+    let direct_ms = renderer.bake_direct(gpu, &scene)?;
+    let stage = |r: &crate::bake::StageReport| r.ms.unwrap_or(0.0);
+    let (photons_ms, binning_ms, em_ms) = (
+        stage(&baked.photons),
+        stage(&baked.binning),
+        stage(&baked.em),
+    );
+    let view = View::new(&scene.camera, FRAME_SIZE.0, FRAME_SIZE.1);
+    let cfg = FrameConfig::default();
+    let tone = crate::tone::ToneConfig::default();
+    let mut times = Vec::new();
+    for _ in 0..=TIMED_FRAMES {
+        let t = Instant::now();
+        renderer.draw(gpu, &scene, &view, &cfg)?;
+        renderer.tone_map(gpu, &tone)?;
+        times.push(ms_since(t));
+    }
+    let row = ScaleRow {
+        splats: scene.splats.len() as u64,
+        file: ply.display().to_string(),
+        file_bytes,
+        read_ms,
+        read_mb_per_s: file_bytes as f64 / 1e6 / (read_ms / 1e3).max(1e-9),
+        load_ms,
+        grid_ms,
+        photons_ms,
+        binning_ms,
+        em_ms,
+        direct_ms,
+        bake_ms: photons_ms + binning_ms + em_ms + direct_ms,
+        frame_ms: median(times[1..].to_vec()),
+        peak_rss_bytes: crate::cli::measure::peak_rss_bytes(),
+    };
+    Ok(row)
+}
+
+/// The exponent k of time ∝ splats^k between the first and last rows.
+fn growth(rows: &[ScaleRow]) -> Growth {
+    let (Some(a), Some(b)) = (rows.first(), rows.last()) else {
+        return Growth::default();
+    };
+    let span = (b.splats as f64 / a.splats.max(1) as f64).ln();
+    if rows.len() < 2 || span <= 0.0 {
+        return Growth::default();
+    }
+    let k = |x: f64, y: f64| (y.max(1e-9) / x.max(1e-9)).ln() / span;
+    Growth {
+        load: k(a.load_ms, b.load_ms),
+        grid: k(a.grid_ms, b.grid_ms),
+        bake: k(a.bake_ms, b.bake_ms),
+        frame: k(a.frame_ms, b.frame_ms),
+        peak_rss: match (a.peak_rss_bytes, b.peak_rss_bytes) {
+            (Some(x), Some(y)) => Some(k(x as f64, y as f64)),
+            _ => None,
+        },
+    }
+}
+
+fn terrain_file(dir: &Path, n: u64) -> PathBuf {
+    dir.join(format!("terrain_{n}.ply"))
+}
+
+/// The height field of the generated terrain and its gradient.
+fn height(x: f32, z: f32) -> (f32, f32, f32) {
+    let h = 0.15 * (3.0 * x).sin() * (2.0 * z).cos() + 0.05 * (9.0 * x + 4.0 * z).sin();
+    let dx = 0.45 * (3.0 * x).cos() * (2.0 * z).cos() + 0.45 * (9.0 * x + 4.0 * z).cos();
+    let dz = -0.3 * (3.0 * x).sin() * (2.0 * z).sin() + 0.2 * (9.0 * x + 4.0 * z).cos();
+    (h, dx, dz)
+}
+
+/// Writes the terrain of `n` points (a binary PLY with normals, unless one of that size is
+/// already there) and its scene file; returns the scene file's path.
+fn write_terrain(dir: &Path, n: u64) -> Result<PathBuf> {
+    let ply = terrain_file(dir, n);
+    let header = format!(
+        "ply\nformat binary_little_endian 1.0\nelement vertex {n}\nproperty float x\n\
+         property float y\nproperty float z\nproperty float nx\nproperty float ny\n\
+         property float nz\nend_header\n"
+    );
+    let expected = header.len() as u64 + n * 24;
+    let current = std::fs::metadata(&ply).map(|m| m.len()).ok();
+    if current != Some(expected) {
+        let file = std::fs::File::create(&ply).map_err(|e| Error::io(&ply, e))?;
+        let mut out = std::io::BufWriter::with_capacity(1 << 20, file);
+        let io = |e| Error::io(&ply, e);
+        out.write_all(header.as_bytes()).map_err(io)?;
+        let side = (n as f64).sqrt().ceil() as u64;
+        let step = 2.0 / (side.max(2) - 1) as f32;
+        for i in 0..n {
+            let (x, z) = (
+                -1.0 + (i % side) as f32 * step,
+                -1.0 + (i / side) as f32 * step,
+            );
+            let (y, dx, dz) = height(x, z);
+            let len = (dx * dx + 1.0 + dz * dz).sqrt();
+            for v in [x, y, z, -dx / len, 1.0 / len, -dz / len] {
+                out.write_all(&v.to_le_bytes()).map_err(io)?;
+            }
+        }
+        out.flush().map_err(io)?;
+    }
+    let scene = dir.join(format!("terrain_{n}.toml"));
+    let text = format!(
+        "# A generated terrain of {n} points (lobelight bench scale).\n\n\
+         [camera]\neye = [0.0, 1.6, 2.2]\ntarget = [0.0, 0.0, 0.0]\nfov = 45\n\
+         resolution = [512, 512]\n\n[materials.ground]\ndiffuse = [0.6, 0.55, 0.5]\n\n\
+         [[light]]\ntype = \"directional\"\ndirection = [-0.6, -1.0, -0.4]\n\
+         irradiance = [2.0, 1.9, 1.7]\n\n[[object]]\nshape = \"model\"\n\
+         path = \"terrain_{n}.ply\"\nmaterial = \"ground\"\n"
+    );
+    std::fs::write(&scene, text).map_err(|e| Error::io(&scene, e))?;
+    Ok(scene)
+}
+
+fn mib(bytes: u64) -> String {
+    format!("{:.0} MiB", bytes as f64 / (1 << 20) as f64)
+}
+
+impl std::fmt::Display for ScaleBench {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        writeln!(f, "device {} ({})", self.adapter, self.backend)?;
+        writeln!(
+            f,
+            "{:>10} {:>8} {:>8} {:>8} {:>8} {:>9} {:>8} {:>8} {:>9} {:>9} {:>9}",
+            "splats",
+            "read ms",
+            "MB/s",
+            "load ms",
+            "grid ms",
+            "photons",
+            "binning",
+            "EM ms",
+            "direct ms",
+            "frame ms",
+            "peak"
+        )?;
+        for r in &self.rows {
+            writeln!(
+                f,
+                "{:>10} {:>8.0} {:>8.0} {:>8.0} {:>8.0} {:>9.0} {:>8.0} {:>8.0} {:>9.0} {:>9.0} {:>9}",
+                r.splats,
+                r.read_ms,
+                r.read_mb_per_s,
+                r.load_ms,
+                r.grid_ms,
+                r.photons_ms,
+                r.binning_ms,
+                r.em_ms,
+                r.direct_ms,
+                r.frame_ms,
+                r.peak_rss_bytes.map_or("-".into(), mib)
+            )?;
+        }
+        let g = &self.growth;
+        write!(
+            f,
+            "growth (time ∝ splats^k): load {:.2}, grid {:.2}, bake {:.2}, frame {:.2}",
+            g.load, g.grid, g.bake, g.frame
+        )?;
+        if let Some(m) = g.peak_rss {
+            write!(f, ", peak memory {m:.2}")?;
+        }
+        Ok(())
+    }
+}
