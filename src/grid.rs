@@ -12,7 +12,8 @@ use glam::{UVec3, Vec3};
 pub struct GridConfig {
     /// Target number of cells per splat: the cell edge is `cbrt(volume / (cells_per_splat * N))`.
     pub cells_per_splat: f32,
-    /// Cap on cells along any axis, which bounds memory (`max_dim³` counters).
+    /// Cap on cells along any axis. Memory is bounded by `MAX_GRID_CELLS` in all, so a flat
+    /// scene (a terrain, a facade) may have fine cells along its two long axes.
     pub max_dim: u32,
 }
 
@@ -20,10 +21,16 @@ impl Default for GridConfig {
     fn default() -> Self {
         GridConfig {
             cells_per_splat: 2.0,
-            max_dim: 256,
+            max_dim: 1024,
         }
     }
 }
+
+/// Most cells a grid has: 256³, four arrays of a u32 per cell (64 MiB each) while it is built.
+/// Past it the cells grow. With 256 cells per axis instead, a 10 M-splat terrain had 150
+/// splats in a cell, and its photons and shadow rays tested them all (docs/measurements.md,
+/// "Scale").
+pub const MAX_GRID_CELLS: u64 = 1 << 24;
 
 /// A splat every stage can work with: finite, a positive radius, a unit normal, a finite
 /// non-negative albedo.
@@ -149,13 +156,26 @@ pub fn grid_params(splats: &[Splat], cfg: &GridConfig) -> Result<GridParams> {
         (splats.iter().map(|s| s.radius as f64).sum::<f64>() / splats.len() as f64) as f32;
     let mut cell = (volume / target_cells).cbrt() as f32;
     cell = cell.max(mean_radius).max(floor).max(f32::MIN_POSITIVE);
-    let dims = (extent / cell)
-        .ceil()
-        .max(Vec3::ONE)
-        .min(Vec3::splat(max_dim))
-        .as_uvec3();
-    let cell_count = dims.x as u64 * dims.y as u64 * dims.z as u64;
-    if cell_count >= u32::MAX as u64 {
+    let dims_of = |cell: f32| {
+        (extent / cell)
+            .ceil()
+            .max(Vec3::ONE)
+            .min(Vec3::splat(max_dim))
+            .as_uvec3()
+    };
+    let count = |d: UVec3| d.x as u64 * d.y as u64 * d.z as u64;
+    let mut dims = dims_of(cell);
+    // Coarser cells until the grid fits its cap (each step by the cube root of the excess,
+    // plus a little: the rounding up of each axis can keep it just over).
+    for _ in 0..64 {
+        if count(dims) <= MAX_GRID_CELLS {
+            break;
+        }
+        cell *= (count(dims) as f32 / MAX_GRID_CELLS as f32).cbrt() * 1.01;
+        dims = dims_of(cell);
+    }
+    let cell_count = count(dims);
+    if cell_count > MAX_GRID_CELLS {
         return Err(Error::Invalid(format!(
             "grid of {cell_count} cells is too large"
         )));
