@@ -61,13 +61,14 @@ impl PhotonBins {
     }
 }
 
-/// Checks that `photons` binned photons fit the device's largest binding.
-pub fn check_binned(photons: u64, max_binding: u64) -> Result<()> {
-    if photons * 16 > max_binding {
+/// Checks that `photons` binned photons fit the largest array of 16-byte records the device
+/// holds (`max_bytes`, over several bindings: `Gpu::max_array_bytes`).
+pub fn check_binned(photons: u64, max_bytes: u64) -> Result<()> {
+    if photons * 16 > max_bytes {
         return Err(Error::Invalid(format!(
-            "{photons} stored photons exceed what one buffer binding holds for binning \
-             ({} photons on this device): emit fewer photons",
-            max_binding / 16
+            "{photons} stored photons exceed what the binning's buffers hold on this device \
+             ({} photons): emit fewer photons",
+            max_bytes / 16
         )));
     }
     Ok(())

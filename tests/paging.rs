@@ -45,6 +45,11 @@ fn a_paged_grid_equals_the_cpu_grid() {
 fn bake_and_draw(gpu: &Gpu, scene: &Scene) -> (Vec<u8>, Vec<Vec<[f32; 4]>>) {
     let on_gpu = GpuScene::upload(gpu, scene).unwrap();
     let baked = bake(scene, BakeDevice::Gpu(gpu, &on_gpu), &Progress::new(false)).unwrap();
+    let stored = baked.photons.stored.unwrap_or(0);
+    assert!(
+        stored * 16 > 512 << 10,
+        "the bins should page: {stored} photons"
+    );
     let lobes = bytemuck::cast_slice(&baked.lobes.lobes).to_vec();
     let mut renderer = FrameRenderer::new(gpu, scene).unwrap();
     renderer.set_lobes(gpu, scene, &baked.lobes).unwrap();
@@ -76,7 +81,7 @@ fn a_paged_bake_and_frame_equal_the_unpaged_ones() {
     scene.bake.photons = 100_000;
     let whole = common::gpu();
     // 512 KiB pages: the splats (6 pages), their light, the glossy block's lobes, the direct
-    // bake and the grid's cell lists take several each.
+    // bake, the grid's cell lists and the photon bins take several each.
     let page = 512 << 10;
     let paged = common::gpu().with_page_bytes(page);
     assert!(

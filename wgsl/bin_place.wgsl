@@ -7,11 +7,17 @@
 
 @group(0) @binding(0) var<uniform> bins: BinParams;
 @group(0) @binding(1) var<storage, read> slots: array<u32>;
+// #paged
 @group(0) @binding(2) var<storage, read> scratch_keys: array<vec2<u32>>;
+// #paged
 @group(0) @binding(3) var<storage, read> scratch_geom: array<BinnedPhoton>;
+// #paged
 @group(0) @binding(4) var<storage, read> scratch_power: array<vec4<f32>>;
+// #paged
 @group(0) @binding(5) var<storage, read_write> bin_keys: array<vec2<u32>>;
+// #paged
 @group(0) @binding(6) var<storage, read_write> bin_geom: array<BinnedPhoton>;
+// #paged
 @group(0) @binding(7) var<storage, read_write> bin_power: array<vec4<f32>>;
 
 const WG: u32 = 64u;
@@ -24,7 +30,7 @@ fn main(@builtin(workgroup_id) wg: vec3<u32>, @builtin(num_workgroups) num_wg: v
         return;
     }
     let slot = slots[e];
-    bin_keys[slot] = scratch_keys[e];
-    bin_geom[slot] = scratch_geom[e];
-    bin_power[slot] = scratch_power[e];
+    bin_keys_put(slot, scratch_keys_at(e));
+    bin_geom_put(slot, scratch_geom_at(e));
+    bin_power_put(slot, scratch_power_at(e));
 }

@@ -11,6 +11,7 @@
 
 @group(0) @binding(0) var<uniform> bins: BinParams;
 @group(0) @binding(1) var<storage, read> cell_start: array<u32>;
+// #paged
 @group(0) @binding(2) var<storage, read> scratch_keys: array<vec2<u32>>;
 // #paged
 @group(0) @binding(3) var<storage, read> scratch_cells: array<u32>;
@@ -29,13 +30,13 @@ fn main(@builtin(workgroup_id) wg: vec3<u32>, @builtin(num_workgroups) num_wg: v
     if e >= bins.photon_count {
         return;
     }
-    let key = scratch_keys[e];
+    let key = scratch_keys_at(e);
     let c = scratch_cells_at(e);
     let begin = cell_start[c] + bins.rank_chunk * RANK_CHUNK;
     let end = min(cell_start[c + 1u], begin + RANK_CHUNK);
     var rank = 0u;
     for (var k = begin; k < end; k++) {
-        rank += u32(key_less(scratch_keys[k], key));
+        rank += u32(key_less(scratch_keys_at(k), key));
     }
     if bins.rank_chunk == 0u {
         slots[e] = cell_start[c] + rank;

@@ -13,10 +13,13 @@
 @group(0) @binding(1) var<storage, read> photons: array<Photon>;
 @group(0) @binding(2) var<storage, read> cell_start: array<u32>;
 @group(0) @binding(3) var<storage, read_write> cell_cursor: array<atomic<u32>>;
+// #paged
 @group(0) @binding(4) var<storage, read_write> scratch_keys: array<vec2<u32>>;
 // #paged
 @group(0) @binding(5) var<storage, read_write> scratch_cells: array<u32>;
+// #paged
 @group(0) @binding(6) var<storage, read_write> scratch_geom: array<BinnedPhoton>;
+// #paged
 @group(0) @binding(7) var<storage, read_write> scratch_power: array<vec4<f32>>;
 // #paged
 @group(0) @binding(8) var<storage, read> splats: array<Splat>;
@@ -33,13 +36,13 @@ fn main(@builtin(workgroup_id) wg: vec3<u32>, @builtin(num_workgroups) num_wg: v
     let p = photons[i];
     let c = bin_of(p.position, bins);
     let slot = cell_start[c] + atomicAdd(&cell_cursor[c], 1u);
-    scratch_keys[slot] = vec2<u32>(p.path, p.bounce);
+    scratch_keys_put(slot, vec2<u32>(p.path, p.bounce));
     scratch_cells_put(slot, c);
-    scratch_geom[slot] = BinnedPhoton(p.position, oct_encode(p.direction));
+    scratch_geom_put(slot, BinnedPhoton(p.position, oct_encode(p.direction)));
     // A photon's splat is always one of the scene's; were it not, it faces nowhere in particular.
     var n = vec3<f32>(0.0, 0.0, 1.0);
     if p.splat < splats_len() {
         n = splats_at(p.splat).normal;
     }
-    scratch_power[slot] = vec4<f32>(p.power, surface_encode(n));
+    scratch_power_put(slot, vec4<f32>(p.power, surface_encode(n)));
 }

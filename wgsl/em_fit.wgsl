@@ -55,7 +55,9 @@
 @group(0) @binding(2) var<storage, read> splats: array<Splat>;
 @group(0) @binding(3) var<storage, read> fit_list: array<vec2<u32>>;
 @group(0) @binding(4) var<storage, read> cell_start: array<u32>;
+// #paged
 @group(0) @binding(5) var<storage, read> bin_geom: array<BinnedPhoton>;
+// #paged
 @group(0) @binding(6) var<storage, read> bin_power: array<vec4<f32>>;
 // #paged
 @group(0) @binding(7) var<storage, read_write> lobes: array<Lobe>;
@@ -155,12 +157,12 @@ struct Candidate {
 
 fn accept(j: u32) -> Candidate {
     var c: Candidate;
-    let g = bin_geom[j];
+    let g = bin_geom_at(j);
     let d = g.position - center;
     // Most candidates fail on position: the direction and the power only load for the rest.
     c.ok = dot(d, d) <= em.radius2 && abs(dot(d, normal)) <= slab;
     if c.ok {
-        let power = bin_power[j];
+        let power = bin_power_at(j);
         c.dir = oct_decode(g.direction);
         c.ok = dot(c.dir, normal) > 0.0 && dot(surface_decode(power.w), normal) >= SURFACE_COS_MIN;
         c.weight = photon_weight(power.xyz) * f32(stride);
@@ -226,7 +228,7 @@ fn absorb(w: vec3<f32>, weight: f32, index: u32, slot: u32, kind: u32, sparse: b
           losses: bool) {
     acc[SUM_WEIGHT] += weight;
     if kind == PASS_FINAL {
-        let power = bin_power[index].xyz;
+        let power = bin_power_at(index).xyz;
         // A subset's final pass leaves the count and the irradiance to irradiance_pass.
         if stride == 1u {
             acc[SUM_COUNT] += 1.0;
@@ -338,7 +340,7 @@ fn irradiance_pass(lid: u32, box: BinBox) {
         let end = cell_start[row.y];
         for (var j = begin + (lid + WG - offset % WG) % WG; j < end; j += WG) {
             if accept(j).ok {
-                let power = bin_power[j].xyz;
+                let power = bin_power_at(j).xyz;
                 acc[SUM_COUNT] += 1.0;
                 acc[SUM_RGB] += power.x;
                 acc[SUM_RGB + 1u] += power.y;

@@ -18,7 +18,9 @@
 @group(0) @binding(2) var<storage, read> splats: array<Splat>;
 @group(0) @binding(3) var<storage, read> gather_list: array<u32>;
 @group(0) @binding(4) var<storage, read> cell_start: array<u32>;
+// #paged
 @group(0) @binding(5) var<storage, read> bin_geom: array<BinnedPhoton>;
+// #paged
 @group(0) @binding(6) var<storage, read> bin_power: array<vec4<f32>>;
 // #paged
 @group(0) @binding(7) var<storage, read_write> light: array<SplatLight>;
@@ -42,12 +44,12 @@ fn main(@builtin(workgroup_id) wg: vec3<u32>, @builtin(num_workgroups) num_wg: v
     for (var r = 0u; r < bin_row_count(box); r++) {
         let row = bin_row(box, r, bins);
         for (var j = cell_start[row.x]; j < cell_start[row.y]; j++) {
-            let g = bin_geom[j];
+            let g = bin_geom_at(j);
             let d = g.position - s.center;
             if dot(d, d) > em.radius2 || abs(dot(d, s.normal)) > slab {
                 continue;
             }
-            let power = bin_power[j];
+            let power = bin_power_at(j);
             let dir = oct_decode(g.direction);
             if dot(dir, s.normal) > 0.0
                 && dot(surface_decode(power.w), s.normal) >= SURFACE_COS_MIN {

@@ -18,7 +18,9 @@
 @group(0) @binding(2) var<storage, read> materials: array<Material>;
 @group(0) @binding(3) var<uniform> bins: BinParams;
 @group(0) @binding(4) var<storage, read> bin_start: array<u32>;
+// #paged
 @group(0) @binding(5) var<storage, read> bin_geom: array<BinnedPhoton>;
+// #paged
 @group(0) @binding(6) var<storage, read> bin_power: array<vec4<f32>>;
 
 // Radiance the photons within R of p reflect towards wo, on a splat of normal n.
@@ -31,13 +33,13 @@ fn gather(p: vec3<f32>, n: vec3<f32>, wo: vec3<f32>, rho_d: vec3<f32>, m: Materi
     for (var r = 0u; r < bin_row_count(box); r++) {
         let row = bin_row(box, r, bins);
         for (var j = bin_start[row.x]; j < bin_start[row.y]; j++) {
-            let g = bin_geom[j];
+            let g = bin_geom_at(j);
             let d = g.position - p;
             let d2 = dot(d, d);
             if d2 > em.radius2 || abs(dot(d, n)) > slab {
                 continue;
             }
-            let power = bin_power[j];
+            let power = bin_power_at(j);
             let wi = oct_decode(g.direction);
             if dot(wi, n) <= 0.0 || dot(surface_decode(power.w), n) < SURFACE_COS_MIN {
                 continue;

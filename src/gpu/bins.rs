@@ -42,7 +42,7 @@ pub fn bin_photons(
     params: &BinParams,
 ) -> Result<GpuBins> {
     let total: u64 = photons.pages.iter().map(|p| p.count).sum();
-    check_binned(total, gpu.max_binding_bytes())?;
+    check_binned(total, gpu.max_array_bytes(16))?;
     let pages: Vec<(&wgpu::Buffer, u32)> = photons
         .pages
         .iter()

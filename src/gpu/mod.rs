@@ -488,6 +488,14 @@ impl Gpu {
         Ok(())
     }
 
+    /// Bytes of the largest paged array of `stride`-byte elements: `MAX_PAGES` pages, within
+    /// the largest buffer.
+    pub fn max_array_bytes(&self, stride: u64) -> u64 {
+        let stride = stride.max(1);
+        let page = stride << (self.page_bytes / stride).max(1).ilog2();
+        (page * MAX_PAGES as u64).min(self.limits.max_buffer_size)
+    }
+
     /// Makes arrays of more than `bytes` bytes page (tests of paging on small scenes); at most
     /// the largest storage binding.
     pub fn with_page_bytes(mut self, bytes: u64) -> Gpu {
