@@ -689,3 +689,48 @@ fn obj_materials_become_ward_materials() {
     let err = lobelight::scene::load(&scene_path).unwrap_err().to_string();
     assert!(err.contains("metal") && err.contains("room.mtl"), "{err}");
 }
+
+/// In an OBJ whose faces partly have MTL materials, the faces without one keep their vertex
+/// colours (`v x y z r g b`), as in a model with no materials at all.
+#[test]
+fn obj_faces_without_a_material_keep_their_vertex_colours() {
+    let obj = "mtllib mixed.mtl\nv 0 0 0 1 0 0\nv 4 0 0 1 0 0\nv 4 4 0 1 0 0\nv 0 4 0 1 0 0\n\
+               v 0 0 4 0 0 1\nv 4 0 4 0 0 1\nf 1 2 6 5\nusemtl paint\nf 1 2 3 4\n";
+    let obj_path = tmp("mixed.obj", obj.as_bytes());
+    tmp("mixed.mtl", b"newmtl paint\nKd 0.2 0.4 0.6\n");
+    let scene_path = obj_path.parent().unwrap().join("mixed.toml");
+    std::fs::write(
+        &scene_path,
+        "[[light]]\ntype = \"point\"\nposition = [2.0, 2.0, 2.0]\nintensity = 1.0\n\n\
+         [[object]]\nshape = \"model\"\npath = \"mixed.obj\"\n",
+    )
+    .unwrap();
+    let scene = lobelight::scene::load(&scene_path).unwrap();
+    let paint = scene
+        .material_names
+        .iter()
+        .position(|n| n == "#1 model/paint")
+        .unwrap();
+    let (painted, plain): (Vec<&lobelight::types::Splat>, Vec<_>) = scene
+        .splats
+        .iter()
+        .partition(|s| s.material == paint as u32);
+    assert!(painted.len() > 1000 && plain.len() > 1000);
+    // Where a face has both, its vertex colours are its albedo (its vertices here are red).
+    assert!(painted.iter().all(|s| s.diffuse == [1.0, 0.0, 0.0]));
+    // The plain face runs from red (its z = 0 edge) to blue (z = 4): coloured, not the default
+    // material's grey, and both ends are seen.
+    let red = plain
+        .iter()
+        .filter(|s| s.diffuse[0] > 0.9 && s.diffuse[2] < 0.1)
+        .count();
+    let blue = plain
+        .iter()
+        .filter(|s| s.diffuse[2] > 0.9 && s.diffuse[0] < 0.1)
+        .count();
+    assert!(
+        red > 10 && blue > 10,
+        "{red} red, {blue} blue splats of {}",
+        plain.len()
+    );
+}

@@ -746,9 +746,12 @@ fn build_object(
                             push(&disks, index, Some(&albedos), &mm.name);
                         }
                     }
+                    // Faces with no material keep their vertex colours, as in a model with none.
                     let rest: Vec<Disk> = groups[none].iter().map(|&i| placed[i]).collect();
+                    let rest_colors: Option<Vec<[f32; 3]>> =
+                        colors.map(|c| groups[none].iter().map(|&i| c[i]).collect());
                     if !rest.is_empty() {
-                        push(&rest, material, None, "");
+                        push(&rest, material, rest_colors.as_deref(), "");
                     }
                 }
                 None => push(&placed, material, colors, ""),
