@@ -20,7 +20,7 @@ pub struct GridConfig {
 impl Default for GridConfig {
     fn default() -> Self {
         GridConfig {
-            cells_per_splat: 2.0,
+            cells_per_splat: 8.0,
             max_dim: 1024,
         }
     }
