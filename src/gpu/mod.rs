@@ -480,8 +480,9 @@ impl Gpu {
             .min(self.max_binding_bytes() * MAX_PAGES as u64);
         if bytes > max {
             return Err(Error::Invalid(format!(
-                "{label}: {bytes} bytes exceed this device's largest buffer ({max} bytes: \
-                 {MAX_PAGES} of its largest storage binding, {} bytes)",
+                "{label}: {bytes} bytes exceed the most this device holds in one array ({max} \
+                 bytes: at most {MAX_PAGES} storage bindings of {} bytes, within its largest \
+                 buffer)",
                 self.max_binding_bytes()
             )));
         }
@@ -497,9 +498,10 @@ impl Gpu {
     }
 
     /// Makes arrays of more than `bytes` bytes page (tests of paging on small scenes); at most
-    /// the largest storage binding.
+    /// the largest storage binding, at least 64 KiB (pages of records up to 64 bytes then start
+    /// at multiples of 4 KiB, aligned for any device's binding offsets).
     pub fn with_page_bytes(mut self, bytes: u64) -> Gpu {
-        self.page_bytes = bytes.clamp(256, self.max_binding_bytes());
+        self.page_bytes = bytes.clamp(1 << 16, self.max_binding_bytes());
         self
     }
 
