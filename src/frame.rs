@@ -353,7 +353,7 @@ pub fn cpu_frame_into(
     hdr: &mut [[f32; 4]],
 ) {
     let tiles = cpu::splat_visibility::bin_tiles(cam, &scene.splats);
-    let depth = cpu::splat_visibility::splat_visibility(cam, &scene.splats, &tiles);
+    let visible = cpu::splat_visibility::splat_visibility(cam, &scene.splats, &tiles);
     let baked = cpu::splat_attributes::BakedDirect {
         lights: &scene.lights,
         direct: &direct.direct,
@@ -368,7 +368,7 @@ pub fn cpu_frame_into(
         &lobes.lobes,
         crate::convolution::lobe_norms(),
         &baked,
-        &depth,
+        &visible,
         &tiles,
     );
     let geo = Geometry {

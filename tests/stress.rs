@@ -201,7 +201,13 @@ fn moved(scene: &Scene, s: f32, offset: Vec3) -> Scene {
 /// The glossy Cornell box scaled to 1e-4, and moved 1e5 from the origin (where one f32 ulp is
 /// 0.008, a third of the splat spacing): baked and drawn on both paths. Unmoved, the far box
 /// drew 1.5 % of its pixels more than 5 % apart on the two paths (visibility decided in the
-/// offset's last digits); moved back to the origin as the loader does, it agrees like any.
+/// offset's last digits); moved back to the origin as the loader does, it agrees like any,
+/// but for the pixels on the blocks' edges: there the splats' centres, rounded to 0.008 on
+/// the way, put the nearest splats of two faces at equal depths, and each path shows the face
+/// whose splat its own rounding finds nearest (the front target, `same_surface`). A dark face
+/// against a lit one is a large relative difference in a few pixels, so the far box is held
+/// to the share of pixels within 5 % and to its energy rather than to the mean relative
+/// difference.
 #[test]
 fn far_and_tiny_scenes_bake_and_draw_alike() {
     let gpu = common::gpu();
@@ -222,7 +228,16 @@ fn far_and_tiny_scenes_bake_and_draw_alike() {
             "{what}"
         );
         let view = View::new(&scene.camera, 40, 40);
-        check(&what, &frames(&gpu, &scene, &on_cpu, &view));
+        let images = frames(&gpu, &scene, &on_cpu, &view);
+        if offset == Vec3::ZERO {
+            check(&what, &images);
+            continue;
+        }
+        let d = difference(&images[0], &images[1]).unwrap();
+        assert!(
+            d.within_5_percent >= WITHIN_5_PERCENT && d.energy.abs() <= 0.01 && d.non_finite == 0,
+            "{what}: {d:?}"
+        );
     }
 }
 

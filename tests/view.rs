@@ -160,9 +160,13 @@ fn the_photon_view_shows_the_bakes_photons() {
 
 /// On a GL-only machine the viewer runs on GL: its scripted view matches the Vulkan
 /// offscreen render (the GL fallback traces the same photons; tests/cli.rs) within the
-/// tolerance above. Both draw moving frames (`--spp 0`): a per-pixel shadow ray that grazes
-/// a disk's rim can go either way between two drivers' float paths and move a pixel by a
-/// sixteenth of its direct light, where the direct bake's rays are blended away.
+/// tolerance above, but for one pixel in a thousand. Both draw moving frames (`--spp 0`): a
+/// per-pixel shadow ray that grazes a disk's rim can go either way between two drivers' float
+/// paths and move a pixel by a sixteenth of its direct light, where the direct bake's rays
+/// are blended away. And a pixel on a block's edge shows the one surface whose splat is
+/// nearest (the front target, `same_surface`), as a ray tracer's pixel does: where the nearest
+/// splats of the two faces lie within the drivers' rounding of each other, the two drivers
+/// may pick different faces (4 pixels of 6,912 here).
 #[test]
 fn the_viewer_runs_on_gl() {
     let moving = ["--spp", "0"];
@@ -174,7 +178,12 @@ fn the_viewer_runs_on_gl() {
         &["--backend", "vulkan", moving[0], moving[1]],
         &path("offscreen-vk.png"),
     );
-    assert_one_step(&a, &b, w, h, "GL window against Vulkan");
+    let d = difference_of(&a, &b, w, h, Values::Display).unwrap();
+    assert!(d.mean_relative <= 0.005, "GL window against Vulkan: {d:?}");
+    assert!(
+        d.within_5_percent >= 0.999,
+        "GL window against Vulkan: {d:?}"
+    );
 }
 
 /// `bench frame --window` adds the window's figures (swap chain included) under `window`,

@@ -1,5 +1,6 @@
 // Splat pass 2, attributes (docs/design.md sections 7-8): the splats within the depth
-// tolerance of the visible surface (depth test against pass 1, no depth writes) add
+// tolerance of the visible surface (depth test against pass 1, no depth writes) and facing
+// its way (pass 1's front target) add
 // weight x (what the shade pass needs) into four float targets by additive blending, in
 // draw order. Each fragment is shaded from its own splat's lobes with its own view ray:
 // the indirect light, diffuse from the total irradiance and specular from every lobe, and
@@ -12,6 +13,13 @@
 @group(0) @binding(0) var<uniform> cam: Camera;
 // #paged
 @group(0) @binding(1) var<storage, read> splats: array<Splat>;
+// Pass 1's front target: the normal of each pixel's nearest splat.
+@group(0) @binding(10) var front: texture_2d<u32>;
+
+// Whether splat s is of the surface the pixel sees (same_surface).
+fn in_front(v: SplatVertex, s: Splat) -> bool {
+    return same_surface(textureLoad(front, vec2<i32>(v.position.xy), 0).x, s.normal);
+}
 
 @vertex
 fn vs_main(@builtin(vertex_index) corner: u32, @builtin(instance_index) i: u32) -> SplatVertex {
@@ -23,7 +31,7 @@ fn fs_main(v: SplatVertex) -> Attributes {
     let s = splats_at(v.splat);
     let d = pixel_ray(cam, v.position.xy);
     let h = splat_hit(s, cam.eye, d);
-    if !covers(cam, h, d) {
+    if !covers(cam, h, d) || !in_front(v, s) {
         discard;
     }
     let w = splat_weight(h.q);
@@ -52,7 +60,7 @@ fn fs_baked(v: SplatVertex) -> BakedAttributes {
     let s = splats_at(v.splat);
     let d = pixel_ray(cam, v.position.xy);
     let h = splat_hit(s, cam.eye, d);
-    if !covers(cam, h, d) {
+    if !covers(cam, h, d) || !in_front(v, s) {
         discard;
     }
     let w = splat_weight(h.q);

@@ -1,8 +1,8 @@
 // Compute splatter, pass 3 (docs/design.md section 8): the two raster passes in one compute
 // pass without triangles. One workgroup per screen tile, one invocation per pixel: over the
 // tile's splats in index order (the raster passes' draw order), first the nearest depth
-// pushed back by the tolerance (pass 1's depth test), then the weighted attributes of every
-// splat within it (pass 2's blending), summed in registers and stored once. It writes what the
+// pushed back by the tolerance and its normal (pass 1), then the weighted attributes of every
+// splat within it and facing its way (pass 2's blending), summed in registers and stored once. It writes what the
 // attribute pass blends, so the shade pass follows unchanged. CPU mirror: the raster passes'
 // (src/cpu/splat_visibility.rs, src/cpu/splat_attributes.rs), which sum per pixel in the same
 // order.
@@ -41,13 +41,19 @@ fn main(@builtin(workgroup_id) wg: vec3<u32>, @builtin(num_workgroups) num_wg: v
     let z_of = dot(d, cam.forward);
     let begin = tile_start[t];
     let end = tile_start[t + 1u];
-    // Pass 1: the nearest surface's depth, pushed back (reversed depth: greater is nearer).
+    // Pass 1: the nearest surface's depth, pushed back (reversed depth: greater is nearer),
+    // and its normal: the first of the nearest, as the raster pass's `Greater` test keeps.
     var nearest = 0.0;
+    var front = 0u;
     for (var k = begin; k < end; k++) {
         let s = splats_at(tile_splats[k]);
         let h = splat_hit(s, cam.eye, d);
         if covers(cam, h, d) {
-            nearest = max(nearest, view_depth(cam, h.t * z_of + cam.depth_tolerance * s.radius));
+            let z = view_depth(cam, h.t * z_of + cam.depth_tolerance * s.radius);
+            if z > nearest {
+                nearest = z;
+                front = oct_encode(s.normal);
+            }
         }
     }
     // Pass 2: every splat within the tolerance, in draw order.
@@ -60,7 +66,8 @@ fn main(@builtin(workgroup_id) wg: vec3<u32>, @builtin(num_workgroups) num_wg: v
         let i = tile_splats[k];
         let s = splats_at(i);
         let h = splat_hit(s, cam.eye, d);
-        if !covers(cam, h, d) || !(view_depth(cam, h.t * z_of) >= nearest) {
+        if !covers(cam, h, d) || !(view_depth(cam, h.t * z_of) >= nearest)
+            || !same_surface(front, s.normal) {
             continue;
         }
         let w = splat_weight(h.q);

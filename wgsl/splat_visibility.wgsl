@@ -1,7 +1,8 @@
 // Splat pass 1, visibility (docs/design.md section 8): every front-facing splat as a triangle; the
 // fragment shader intersects the pixel's view ray with the disk, discards outside it, and
-// writes the hit's depth pushed back by `depth_tolerance` splat radii along view z. The
-// attribute pass then blends every splat within that tolerance of the nearest surface.
+// writes the hit's depth pushed back by `depth_tolerance` splat radii along view z, and the
+// splat's normal (octahedral) into the front target. The attribute pass then blends every
+// splat within that tolerance of the nearest surface and facing its way (same_surface).
 // Depth is reversed (greater is nearer). Twin: src/cpu/splat_visibility.rs.
 
 // #import splat
@@ -15,8 +16,13 @@ fn vs_main(@builtin(vertex_index) corner: u32, @builtin(instance_index) i: u32) 
     return splat_vertex(cam, splats_at(i), i, corner);
 }
 
+struct Visible {
+    @builtin(frag_depth) depth: f32,
+    @location(0) front: u32,
+}
+
 @fragment
-fn fs_main(v: SplatVertex) -> @builtin(frag_depth) f32 {
+fn fs_main(v: SplatVertex) -> Visible {
     let s = splats_at(v.splat);
     let d = pixel_ray(cam, v.position.xy);
     let h = splat_hit(s, cam.eye, d);
@@ -24,5 +30,5 @@ fn fs_main(v: SplatVertex) -> @builtin(frag_depth) f32 {
         discard;
     }
     let z = h.t * dot(d, cam.forward);
-    return view_depth(cam, z + cam.depth_tolerance * s.radius);
+    return Visible(view_depth(cam, z + cam.depth_tolerance * s.radius), oct_encode(s.normal));
 }

@@ -5,13 +5,13 @@
 
 use glam::{Vec3, Vec4};
 
-use super::splat_visibility::{TILE, Tiles, gather, raster};
+use super::splat_visibility::{TILE, Tiles, Visible, gather, raster};
 use crate::shared::lights::{LightSample, MIN_ALPHA, area_point, sample_light};
 use crate::shared::lobe_brdf::{lobe_specular, norm_at, norm_lookup};
 use crate::shared::sampling::PI;
 use crate::shared::splat::{
     SHOW_DIRECT_DIFFUSE, SHOW_DIRECT_SPECULAR, SHOW_INDIRECT_DIFFUSE, SHOW_INDIRECT_SPECULAR,
-    covers, lobe_beta2, pixel_ray, splat_hit, splat_weight, view_depth,
+    covers, lobe_beta2, pixel_ray, same_surface, splat_hit, splat_weight, view_depth,
 };
 use crate::shared::ward::ward_specular;
 use crate::types::{
@@ -136,7 +136,7 @@ pub fn splat_attributes(
     lobes: &[Lobe],
     lobe_norms: &[f32],
     baked: &BakedDirect,
-    depth: &[f32],
+    visible: &[Visible],
     tiles: &Tiles,
 ) -> Attributes {
     let eye = Vec3::from(cam.eye);
@@ -157,7 +157,11 @@ pub fn splat_attributes(
                 tile.x0 as usize + local % TILE as usize,
                 tile.y0 as usize + local / TILE as usize,
             );
-            if !(view_depth(cam, h.t * d.dot(forward)) >= depth[y * width + x]) {
+            // ... and a splat of the surface the pixel sees (the front target).
+            let seen = visible[y * width + x];
+            if !(view_depth(cam, h.t * d.dot(forward)) >= seen.depth)
+                || !same_surface(seen.front, Vec3::from(s.normal))
+            {
                 return;
             }
             let w = splat_weight(h.q);

@@ -8,6 +8,7 @@
 use glam::{Vec2, Vec3};
 use rayon::prelude::*;
 
+use crate::shared::octahedral::oct_encode;
 use crate::shared::splat::{
     SPLAT_CORNERS, clip_position, covers, faces_camera, pixel_ray, splat_corner, splat_hit,
     view_depth,
@@ -144,15 +145,16 @@ pub fn gather<P: Copy + Default>(tiles: &Tiles, blocks: &[(Rect, Vec<P>)]) -> Ve
     image
 }
 
-/// The depth buffer of the visibility pass: per pixel, the greatest (nearest) reversed depth
-/// of a covering splat's hit pushed back by the tolerance; 0 where nothing covers.
-pub fn splat_visibility(cam: &Camera, splats: &[Splat], tiles: &Tiles) -> Vec<f32> {
+/// The visibility pass's targets: per pixel, the greatest (nearest) reversed depth of a
+/// covering splat's hit pushed back by the tolerance, 0 where nothing covers, and the normal
+/// of the first splat that reached it.
+pub fn splat_visibility(cam: &Camera, splats: &[Splat], tiles: &Tiles) -> Vec<Visible> {
     let eye = Vec3::from(cam.eye);
     let forward = Vec3::from(cam.forward);
     let blocks = raster(
         tiles,
-        || vec![0.0f32; (TILE * TILE) as usize],
-        |depth, _, i, local, centre| {
+        || vec![Visible::default(); (TILE * TILE) as usize],
+        |out, _, i, local, centre| {
             let s = &splats[i as usize];
             let d = pixel_ray(cam, centre);
             let h = splat_hit(s, eye, d);
@@ -161,11 +163,22 @@ pub fn splat_visibility(cam: &Camera, splats: &[Splat], tiles: &Tiles) -> Vec<f3
             }
             let z = h.t * d.dot(forward);
             let v = view_depth(cam, z + cam.depth_tolerance * s.radius);
-            // Depth test `Greater`.
-            if v > depth[local] {
-                depth[local] = v;
+            // Depth test `Greater`; the front target is written with the depth.
+            if v > out[local].depth {
+                out[local] = Visible {
+                    depth: v,
+                    front: oct_encode(Vec3::from(s.normal)),
+                };
             }
         },
     );
     gather(tiles, &blocks)
+}
+
+/// What the visibility pass leaves at a pixel: the depth buffer's value and the front
+/// target's (the nearest splat's normal, octahedral).
+#[derive(Clone, Copy, Debug, Default, PartialEq)]
+pub struct Visible {
+    pub depth: f32,
+    pub front: u32,
 }

@@ -32,6 +32,10 @@ pub fn accumulation_format(gpu: &Gpu) -> wgpu::TextureFormat {
 }
 
 const DEPTH: wgpu::TextureFormat = wgpu::TextureFormat::Depth32Float;
+/// The visibility pass's front target: the nearest splat's normal, octahedral.
+const FRONT: wgpu::TextureFormat = wgpu::TextureFormat::R32Uint;
+/// The attribute pass's binding of the front target.
+const FRONT_BINDING: u32 = 10;
 const TARGETS: usize = 4;
 
 /// What the splat passes read of a baked scene, all on the device.
@@ -166,6 +170,8 @@ pub struct FrameTargets {
     pub width: u32,
     pub height: u32,
     depth: wgpu::TextureView,
+    /// The nearest splat's normal per pixel (`FRONT`).
+    front: wgpu::TextureView,
     sums: Vec<wgpu::TextureView>,
     /// Linear HDR radiance, one `vec4<f32>` per pixel, rows from the top.
     pub hdr: wgpu::Buffer,
@@ -383,7 +389,11 @@ impl Raster {
                 "splat_visibility",
                 "fs_main",
                 Some(depth(wgpu::CompareFunction::Greater, true)),
-                &[],
+                &[Some(wgpu::ColorTargetState {
+                    format: FRONT,
+                    blend: None,
+                    write_mask: wgpu::ColorWrites::ALL,
+                })],
                 paging,
             ),
             Raster::Attributes => raster_pipeline_at(
@@ -489,6 +499,11 @@ impl SplatPipelines {
             false => wgpu::TextureUsages::empty(),
         };
         let depth = texture("splat depth", DEPTH, attachment);
+        let front = texture(
+            "splat front",
+            FRONT,
+            attachment | wgpu::TextureUsages::TEXTURE_BINDING,
+        );
         let sums = (0..TARGETS)
             .map(|_| {
                 texture(
@@ -503,6 +518,7 @@ impl SplatPipelines {
             width,
             height,
             depth,
+            front,
             sums,
             hdr,
         })
@@ -671,7 +687,8 @@ impl SplatPipelines {
         if uniforms.compute && pass != SplatPass::Shade {
             return self.record_compute(gpu, encoder, scene, uniforms, out, pass);
         }
-        // A raster pass's pipeline for the paging of `list`, and its bind group.
+        // A raster pass's pipeline for the paging of `list`, and its bind group (the attribute
+        // passes also read the front target).
         let bound = |which: Raster, list: &[&wgpu::Buffer]| -> Result<_> {
             let stage = match which {
                 Raster::Visibility => "splat_visibility",
@@ -679,10 +696,17 @@ impl SplatPipelines {
             };
             let paging = gpu.paging(stage, &[list])?;
             let pipeline = self.raster(gpu, which, &paging)?;
+            let mut entries = gpu.paged_entries(stage, 0, list, &paging)?;
+            if which != Raster::Visibility {
+                entries.push(wgpu::BindGroupEntry {
+                    binding: FRONT_BINDING,
+                    resource: wgpu::BindingResource::TextureView(&out.front),
+                });
+            }
             let group = gpu.device.create_bind_group(&wgpu::BindGroupDescriptor {
                 label: Some(stage),
                 layout: &pipeline.get_bind_group_layout(0),
-                entries: &gpu.paged_entries(stage, 0, list, &paging)?,
+                entries: &entries,
             });
             Ok((pipeline, group))
         };
@@ -698,9 +722,18 @@ impl SplatPipelines {
         };
         if pass == SplatPass::Visibility {
             let (pipeline, vis_group) = bound(Raster::Visibility, &[cam_buf, scene.splats])?;
+            let front = Some(wgpu::RenderPassColorAttachment {
+                view: &out.front,
+                depth_slice: None,
+                resolve_target: None,
+                ops: wgpu::Operations {
+                    load: wgpu::LoadOp::Clear(wgpu::Color::TRANSPARENT),
+                    store: wgpu::StoreOp::Store,
+                },
+            });
             let mut pass = encoder.begin_render_pass(&wgpu::RenderPassDescriptor {
                 label: Some("splat_visibility"),
-                color_attachments: &[],
+                color_attachments: &[front],
                 depth_stencil_attachment: depth_attachment(wgpu::LoadOp::Clear(0.0)),
                 timestamp_writes: None,
                 occlusion_query_set: None,

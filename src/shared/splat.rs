@@ -10,6 +10,15 @@ use super::sampling::frame_of;
 use crate::types::{Camera, Splat};
 
 pub const KERNEL_SHARPNESS: f32 = 2.0;
+
+/// A fragment blends only where its splat's normal is within 60° of the normal of the pixel's
+/// nearest splat (`front`, octahedral, the visibility pass's second output); see
+/// `wgsl/shared/splat.wgsl`.
+pub const FRONT_COS_MIN: f32 = 0.5;
+
+pub fn same_surface(front: u32, n: Vec3) -> bool {
+    super::octahedral::oct_decode(front).dot(n) >= FRONT_COS_MIN
+}
 pub const SHADOW_RAY_BUDGET: u32 = 16_384;
 
 /// Light terms a frame shows (`ShadeParams::show`): direct diffuse and specular (shadow rays),

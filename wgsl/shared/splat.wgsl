@@ -11,10 +11,22 @@
 // #import sampling
 // #import ward
 // #import lobes
+// #import octahedral
 
 // The radial kernel exp(-KERNEL_SHARPNESS q) of q = d^2 / r^2: 1 at the centre, e^-2 at
 // the rim, so a pixel that only rims cover still gets a well-defined normalised value.
 const KERNEL_SHARPNESS: f32 = 2.0;
+
+// A fragment blends into a pixel only where its splat's normal is within 60 degrees of the
+// normal of the pixel's nearest splat (the visibility pass's second output): the surface the
+// pixel sees. Without it, disks that overhang a face's edge blended the light of the face
+// across the edge into its neighbour (+4.6 % direct light on the small block of the default
+// scene, docs/measurements.md). Twin: src/shared/splat.rs.
+const FRONT_COS_MIN: f32 = 0.5;
+
+fn same_surface(front: u32, n: vec3<f32>) -> bool {
+    return dot(oct_decode(front), n) >= FRONT_COS_MIN;
+}
 
 // Shadow rays spend at most this many grid steps and disk tests (see trace.wgsl).
 const SHADOW_RAY_BUDGET: u32 = 16384u;
