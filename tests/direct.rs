@@ -137,30 +137,42 @@ fn a_one_sample_still_is_the_exact_frame() {
 }
 
 /// A still image of 8 jittered frames, on the device and on the mirror: the same image within
-/// the splat passes' parity tolerances.
+/// the splat passes' parity tolerances. Also the glossy direct light alone of the box of
+/// spheres, where the near-mirror sphere's lobe is narrower than the light, so that its
+/// direct light also takes a sample of the lobe (multiple importance sampling).
 #[test]
 fn refined_still_matches_the_cpu_mirror() {
     let gpu = common::gpu();
-    let scene = cornell(20_000);
-    let grid = common::host_grid(&scene);
-    let lobes = cpu_bake(&scene);
+    let cornell = cornell(20_000);
+    refined_parity(&gpu, &cornell, &FrameConfig::default(), "cornell");
+    let mut spheres = scene::load(Path::new("scenes/cornell_spheres.toml")).unwrap();
+    spheres.bake.photons = 20_000;
+    let specular = FrameConfig {
+        show: lobelight::shared::splat::SHOW_DIRECT_SPECULAR,
+        ..Default::default()
+    };
+    refined_parity(&gpu, &spheres, &specular, "spheres, glossy direct light");
+}
+
+fn refined_parity(gpu: &lobelight::gpu::Gpu, scene: &Scene, cfg: &FrameConfig, what: &str) {
+    let grid = common::host_grid(scene);
+    let lobes = cpu_bake(scene);
     let view = View::new(&scene.camera, 64, 64);
-    let cfg = FrameConfig::default();
-    let mut renderer = FrameRenderer::new(&gpu, &scene).unwrap();
-    renderer.set_lobes(&gpu, &scene, &lobes).unwrap();
+    let mut renderer = FrameRenderer::new(gpu, scene).unwrap();
+    renderer.set_lobes(gpu, scene, &lobes).unwrap();
     let mut frames = 0;
     renderer
-        .draw_refined(&gpu, &scene, &view, &cfg, 8, |_| frames += 1)
+        .draw_refined(gpu, scene, &view, cfg, 8, |_| frames += 1)
         .unwrap();
     assert_eq!(frames, 8);
-    let still = renderer.read_hdr(&gpu).unwrap();
-    let cam = camera_uniform(&view, scene.bounds(), &cfg);
-    let params = shade_params(&scene, &lobes, &cfg);
-    let mirror = cpu_refined(&scene, &grid, &lobes, &cam, &params, 8);
+    let still = renderer.read_hdr(gpu).unwrap();
+    let cam = camera_uniform(&view, scene.bounds(), cfg);
+    let params = shade_params(scene, &lobes, cfg);
+    let mirror = cpu_refined(scene, &grid, &lobes, &cam, &params, 8);
     let d = difference(&still, &mirror).unwrap();
-    eprintln!("device against mirror: {d:?}");
-    assert!(d.mean_relative <= 0.01, "{d:?}");
-    assert!(d.within_5_percent >= 0.99, "{d:?}");
+    eprintln!("{what}: device against mirror: {d:?}");
+    assert!(d.mean_relative <= 0.01, "{what}: {d:?}");
+    assert!(d.within_5_percent >= 0.99, "{what}: {d:?}");
 }
 
 /// The still image against the exact one-frame render (256², on the device): the same light,

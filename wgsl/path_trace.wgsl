@@ -32,12 +32,6 @@ const WG: u32 = 64u;
 const RNG_LIGHT_U: u32 = 7u;
 const RNG_LIGHT_V: u32 = 8u;
 
-// The power heuristic's weight of a strategy of pdf a against one of pdf b.
-fn power_heuristic(a: f32, b: f32) -> f32 {
-    let a2 = a * a;
-    return select(0.0, a2 / (a2 + b * b), a2 > 0.0);
-}
-
 // The pdf (solid angle) of choosing wi by the BRDF sampling below, from wo.
 fn brdf_pdf(n: vec3<f32>, wo: vec3<f32>, wi: vec3<f32>, pd: f32, ps: f32, alpha: f32) -> f32 {
     let ci = dot(n, wi);

@@ -33,16 +33,9 @@ struct Surface {
     alpha: f32,
 }
 
-fn brdf(sf: Surface, wi: vec3<f32>) -> vec3<f32> {
-    var f = sf.rho_d / PI;
-    if sf.alpha >= MIN_ALPHA {
-        f += sf.rho_s * ward_specular(sf.n, wi, sf.wo, sf.alpha);
-    }
-    return f;
-}
-
-// Reflected radiance of one light sample, if nothing shadows it.
-fn shade_sample(sf: Surface, ls: LightSample) -> vec3<f32> {
+// Reflected radiance of one light sample, if nothing shadows it, its specular part weighted by
+// `spec_weight` (multiple importance sampling against the BRDF's samples).
+fn shade_sample(sf: Surface, ls: LightSample, spec_weight: f32) -> vec3<f32> {
     let cos_i = dot(sf.n, ls.wi);
     if !(cos_i > 0.0) || all(ls.e <= vec3<f32>(0.0)) {
         return vec3<f32>(0.0);
@@ -53,7 +46,60 @@ fn shade_sample(sf: Surface, ls: LightSample) -> vec3<f32> {
     if hit.splat != NO_SPLAT {
         return vec3<f32>(0.0);
     }
-    return brdf(sf, ls.wi) * ls.e * cos_i;
+    var f = sf.rho_d / PI;
+    if sf.alpha >= MIN_ALPHA {
+        f += spec_weight * sf.rho_s * ward_specular(sf.n, ls.wi, sf.wo, sf.alpha);
+    }
+    return f * ls.e * cos_i;
+}
+
+// The solid-angle pdf of area light l's uniform point sample seen from distance `dist` along
+// `wi`, times `count` samples.
+fn area_pdf(l: Light, wi: vec3<f32>, dist: f32, count: f32) -> f32 {
+    let cos_l = -dot(wi, l.direction);
+    return select(0.0, count * dist * dist / (l.area * cos_l), cos_l > 0.0);
+}
+
+// Whether the Ward lobe at sf is narrower than area light l seen from it (4 pi alpha^2, about
+// the reflected lobe's solid angle, under the light's A cos / d^2): the light's points then
+// seldom meet the lobe, which one sample of the lobe finds (the path tracer does the same).
+// Wider lobes are lit by the light's strata alone, which vary less than a random lobe sample.
+fn narrow_lobe(sf: Surface, l: Light) -> bool {
+    if !(sf.alpha >= MIN_ALPHA) || all(sf.rho_s <= vec3<f32>(0.0)) {
+        return false;
+    }
+    let to = l.position + 0.5 * (l.edge_u + l.edge_v) - sf.p;
+    let d2 = dot(to, to);
+    let cos_l = -dot(to, l.direction) * inverseSqrt(d2);
+    return 4.0 * PI * sf.alpha * sf.alpha * d2 < l.area * max(cos_l, 0.0);
+}
+
+// The glossy part of area light l's direct light by one sample of the Ward lobe (random
+// numbers at r and r + 1), weighted by the power heuristic against the frame's `count` light
+// samples.
+fn specular_by_brdf(sf: Surface, l: Light, r: u32, count: f32) -> vec3<f32> {
+    let s = ward_sample(frame_of(sf.n), sf.wo, unit_float(pcg_hash(r)),
+                        unit_float(pcg_hash(r + 1u)), sf.alpha);
+    let wi = s.wo;
+    let cos_i = dot(sf.n, wi);
+    if !(s.weight > 0.0) || !(cos_i > 0.0) {
+        return vec3<f32>(0.0);
+    }
+    let o = sf.p + params.shadow_bias * sf.n;
+    let t = area_light_hit(l, o, wi);
+    if !(t > 0.0) {
+        return vec3<f32>(0.0);
+    }
+    var budget = SHADOW_RAY_BUDGET;
+    if trace_ray(o, wi, NO_SPLAT, t - params.shadow_bias, &budget).splat != NO_SPLAT {
+        return vec3<f32>(0.0);
+    }
+    let pdf_brdf = ward_pdf(sf.n, sf.wo, wi, sf.alpha);
+    let pdf_light = area_pdf(l, wi, t, count);
+    let radiance = l.power / (PI * l.area);
+    // f L cos / pdf_brdf times the heuristic's pdf_brdf^2 / (pdf_brdf^2 + pdf_light^2).
+    let scale = pdf_brdf / (pdf_brdf * pdf_brdf + pdf_light * pdf_light);
+    return sf.rho_s * ward_specular(sf.n, wi, sf.wo, sf.alpha) * radiance * (cos_i * scale);
 }
 
 fn direct(sf: Surface, pixel: u32) -> vec3<f32> {
@@ -62,18 +108,34 @@ fn direct(sf: Surface, pixel: u32) -> vec3<f32> {
     for (var li = 0u; li < params.light_count; li++) {
         let l = lights[li];
         if l.kind != LIGHT_AREA {
-            sum += shade_sample(sf, sample_light(l, sf.p, 0.0, 0.0));
+                sum += shade_sample(sf, sample_light(l, sf.p, 0.0, 0.0), 1.0);
             continue;
         }
-        // This frame's strata of the n x n grid: all of them, or a refinement frame's share.
+        // This frame's strata of the n x n grid: all of them, or a refinement frame's share;
+        // a lobe narrower than the light adds one sample of its own, each strategy's glossy
+        // part weighted by the power heuristic.
         let n = params.area_samples;
+        let count = f32(params.area_count);
+        let glossy = narrow_lobe(sf, l);
         var area_sum = vec3<f32>(0.0);
         for (var k = 0u; k < params.area_count; k++) {
             let j = (params.area_first + k) % (n * n);
             let uv = area_point(j, n, key + (li * n * n + j) * 2u, true);
-            area_sum += shade_sample(sf, sample_light(l, sf.p, uv.x, uv.y));
+            let ls = sample_light(l, sf.p, uv.x, uv.y);
+            var w = 1.0;
+            if glossy {
+                let pdf_brdf = ward_pdf(sf.n, sf.wo, ls.wi, sf.alpha);
+                w = power_heuristic(area_pdf(l, ls.wi, ls.dist, count), pdf_brdf);
+            }
+            area_sum += shade_sample(sf, ls, w);
         }
-        sum += area_sum * (1.0 / f32(params.area_count));
+        sum += area_sum * (1.0 / count);
+        if glossy {
+            // Random numbers past every stratum's, fresh in every refinement frame (the
+            // strata's change by stratum; the key only by round).
+            let r = pcg_hash(key + params.sample) + (params.light_count * n * n + li) * 2u;
+            sum += specular_by_brdf(sf, l, r, count);
+        }
     }
     return sum;
 }

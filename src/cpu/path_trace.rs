@@ -11,7 +11,7 @@ use crate::shared::rng::{
     RNG_BOUNCE_U, RNG_BOUNCE_V, RNG_EMIT_POS_U, RNG_EMIT_POS_V, RNG_ROULETTE, path_key, pcg_hash,
     rand,
 };
-use crate::shared::sampling::{PI, frame_of};
+use crate::shared::sampling::{PI, frame_of, power_heuristic};
 use crate::shared::splat::{
     SHADOW_RAY_BUDGET, SHOW_DIRECT_DIFFUSE, SHOW_DIRECT_SPECULAR, SHOW_INDIRECT_DIFFUSE,
     SHOW_INDIRECT_SPECULAR, pixel_ray,
@@ -23,11 +23,6 @@ use crate::types::{Camera, Light, Material, NO_SPLAT, PathParams, light_kind};
 pub const WG: u32 = 64;
 pub const RNG_LIGHT_U: u32 = 7;
 pub const RNG_LIGHT_V: u32 = 8;
-
-fn power_heuristic(a: f32, b: f32) -> f32 {
-    let a2 = a * a;
-    if a2 > 0.0 { a2 / (a2 + b * b) } else { 0.0 }
-}
 
 fn brdf_pdf(n: Vec3, wo: Vec3, wi: Vec3, pd: f32, ps: f32, alpha: f32) -> f32 {
     let ci = n.dot(wi);

@@ -8,13 +8,13 @@ use glam::{Vec2, Vec3, Vec4};
 use rayon::prelude::*;
 
 use crate::shared::lights::{LightSample, MIN_ALPHA, area_light_hit, area_point, sample_light};
-use crate::shared::rng::pcg_hash;
-use crate::shared::sampling::PI;
+use crate::shared::rng::{pcg_hash, unit_float};
+use crate::shared::sampling::{PI, frame_of, power_heuristic};
 use crate::shared::splat::{
     SHADOW_RAY_BUDGET, SHOW_DIRECT_DIFFUSE, SHOW_DIRECT_SPECULAR, pixel_ray,
 };
 use crate::shared::trace::{FAR, Geometry, trace_ray};
-use crate::shared::ward::ward_specular;
+use crate::shared::ward::{ward_pdf, ward_sample, ward_specular};
 use crate::types::{Camera, DIRECT_RAYS, Light, NO_SPLAT, ShadeParams, light_kind};
 
 use super::splat_attributes::Attributes;
@@ -29,15 +29,13 @@ struct Surface {
     alpha: f32,
 }
 
-fn brdf(sf: &Surface, wi: Vec3) -> Vec3 {
-    let mut f = sf.rho_d / PI;
-    if sf.alpha >= MIN_ALPHA {
-        f += sf.rho_s * ward_specular(sf.n, wi, sf.wo, sf.alpha);
-    }
-    f
-}
-
-fn shade_sample(params: &ShadeParams, geo: &Geometry, sf: &Surface, ls: &LightSample) -> Vec3 {
+fn shade_sample(
+    params: &ShadeParams,
+    geo: &Geometry,
+    sf: &Surface,
+    ls: &LightSample,
+    spec_weight: f32,
+) -> Vec3 {
     let cos_i = sf.n.dot(ls.wi);
     if !(cos_i > 0.0) || ls.e.cmple(Vec3::ZERO).all() {
         return Vec3::ZERO;
@@ -55,7 +53,66 @@ fn shade_sample(params: &ShadeParams, geo: &Geometry, sf: &Surface, ls: &LightSa
     if hit.splat != NO_SPLAT {
         return Vec3::ZERO;
     }
-    brdf(sf, ls.wi) * ls.e * cos_i
+    let mut f = sf.rho_d / PI;
+    if sf.alpha >= MIN_ALPHA {
+        f += spec_weight * sf.rho_s * ward_specular(sf.n, ls.wi, sf.wo, sf.alpha);
+    }
+    f * ls.e * cos_i
+}
+
+fn area_pdf(l: &Light, wi: Vec3, dist: f32, count: f32) -> f32 {
+    let cos_l = -wi.dot(Vec3::from(l.direction));
+    if cos_l > 0.0 {
+        count * dist * dist / (l.area * cos_l)
+    } else {
+        0.0
+    }
+}
+
+fn narrow_lobe(sf: &Surface, l: &Light) -> bool {
+    if !(sf.alpha >= MIN_ALPHA) || sf.rho_s.cmple(Vec3::ZERO).all() {
+        return false;
+    }
+    let centre = Vec3::from(l.position) + 0.5 * (Vec3::from(l.edge_u) + Vec3::from(l.edge_v));
+    let to = centre - sf.p;
+    let d2 = to.dot(to);
+    let cos_l = -to.dot(Vec3::from(l.direction)) / d2.sqrt();
+    4.0 * PI * sf.alpha * sf.alpha * d2 < l.area * cos_l.max(0.0)
+}
+
+fn specular_by_brdf(
+    params: &ShadeParams,
+    geo: &Geometry,
+    sf: &Surface,
+    l: &Light,
+    r: u32,
+    count: f32,
+) -> Vec3 {
+    let (u1, u2) = (
+        unit_float(pcg_hash(r)),
+        unit_float(pcg_hash(r.wrapping_add(1))),
+    );
+    let s = ward_sample(&frame_of(sf.n), sf.wo, u1, u2, sf.alpha);
+    let wi = s.wo;
+    let cos_i = sf.n.dot(wi);
+    if !(s.weight > 0.0) || !(cos_i > 0.0) {
+        return Vec3::ZERO;
+    }
+    let o = sf.p + params.shadow_bias * sf.n;
+    let t = area_light_hit(l, o, wi);
+    if !(t > 0.0) {
+        return Vec3::ZERO;
+    }
+    let mut budget = SHADOW_RAY_BUDGET;
+    let hit = trace_ray(geo, o, wi, NO_SPLAT, t - params.shadow_bias, &mut budget);
+    if hit.splat != NO_SPLAT {
+        return Vec3::ZERO;
+    }
+    let pdf_brdf = ward_pdf(sf.n, sf.wo, wi, sf.alpha);
+    let pdf_light = area_pdf(l, wi, t, count);
+    let radiance = Vec3::from(l.power) / (PI * l.area);
+    let scale = pdf_brdf / (pdf_brdf * pdf_brdf + pdf_light * pdf_light);
+    sf.rho_s * ward_specular(sf.n, wi, sf.wo, sf.alpha) * radiance * (cos_i * scale)
 }
 
 fn direct(
@@ -69,19 +126,34 @@ fn direct(
     let key = pcg_hash(pcg_hash(params.seed).wrapping_add(pixel));
     for (li, l) in lights.iter().enumerate().take(params.light_count as usize) {
         if l.kind != light_kind::AREA {
-            sum += shade_sample(params, geo, sf, &sample_light(l, sf.p, 0.0, 0.0));
+            sum += shade_sample(params, geo, sf, &sample_light(l, sf.p, 0.0, 0.0), 1.0);
             continue;
         }
-        // This frame's strata of the n × n grid: all of them, or a refinement frame's share.
+        // This frame's strata of the n × n grid: all of them, or a refinement frame's share;
+        // a lobe narrower than the light adds one sample of its own (multiple importance
+        // sampling; see `wgsl/shade.wgsl`).
         let n = params.area_samples;
+        let count = params.area_count as f32;
+        let glossy = narrow_lobe(sf, l);
         let mut area_sum = Vec3::ZERO;
         for k in 0..params.area_count {
             let j = (params.area_first + k) % (n * n);
             let r = key.wrapping_add((li as u32 * n * n + j).wrapping_mul(2));
             let uv = area_point(j, n, r, true);
-            area_sum += shade_sample(params, geo, sf, &sample_light(l, sf.p, uv.x, uv.y));
+            let ls = sample_light(l, sf.p, uv.x, uv.y);
+            let mut w = 1.0;
+            if glossy {
+                let pdf_brdf = ward_pdf(sf.n, sf.wo, ls.wi, sf.alpha);
+                w = power_heuristic(area_pdf(l, ls.wi, ls.dist, count), pdf_brdf);
+            }
+            area_sum += shade_sample(params, geo, sf, &ls, w);
         }
-        sum += area_sum * (1.0 / params.area_count as f32);
+        sum += area_sum * (1.0 / count);
+        if glossy {
+            let r = pcg_hash(key.wrapping_add(params.sample))
+                .wrapping_add((params.light_count * n * n + li as u32).wrapping_mul(2));
+            sum += specular_by_brdf(params, geo, sf, l, r, count);
+        }
     }
     sum
 }

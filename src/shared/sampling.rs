@@ -60,3 +60,10 @@ pub fn smoothstep(edge0: f32, edge1: f32, x: f32) -> f32 {
     let t = ((x - edge0) / (edge1 - edge0)).clamp(0.0, 1.0);
     t * t * (3.0 - 2.0 * t)
 }
+
+/// The power heuristic's weight of a strategy of pdf `a` against one of pdf `b` (each pdf
+/// times its sample count).
+pub fn power_heuristic(a: f32, b: f32) -> f32 {
+    let a2 = a * a;
+    if a2 > 0.0 { a2 / (a2 + b * b) } else { 0.0 }
+}

@@ -51,3 +51,10 @@ fn sample_disk(u1: f32, u2: f32) -> vec2<f32> {
     let phi = 2.0 * PI * u2;
     return vec2<f32>(r * cos(phi), r * sin(phi));
 }
+
+// The power heuristic's weight of a strategy of pdf a against one of pdf b (each pdf times its
+// sample count).
+fn power_heuristic(a: f32, b: f32) -> f32 {
+    let a2 = a * a;
+    return select(0.0, a2 / (a2 + b * b), a2 > 0.0);
+}
