@@ -80,7 +80,16 @@ pub fn info(scene: &Scene, gpu: Option<&Gpu>) -> Result<Info> {
         // Offsets, plus the build's scratch (two u32 per entry) and final lists.
         let grid = (params.cell_count as u64 + 1) * 4 * 2 + entries * 4 * 3;
         let photons = scene.bake.photons * std::mem::size_of::<Photon>() as u64;
-        let lobes = n * scene.bake.lobes as u64 * std::mem::size_of::<Lobe>() as u64;
+        // Lobes for glossy splats alone (the fit keeps none for the others).
+        let glossy = scene
+            .splats
+            .iter()
+            .filter(|s| {
+                let m = &scene.materials[s.material as usize];
+                m.specular.iter().any(|&x| x > 0.0)
+            })
+            .count() as u64;
+        let lobes = glossy * scene.bake.lobes as u64 * std::mem::size_of::<Lobe>() as u64;
         Memory {
             splats,
             grid,
