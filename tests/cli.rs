@@ -636,3 +636,58 @@ fn views_render_a_sequence_and_shards_split_it() {
     }
     std::fs::remove_dir_all(&dir).ok();
 }
+
+/// `bench scale` on two small generated clouds: its JSON keys (a contract), one row per size in
+/// ascending order with the splats it asked for, positive times, and the clouds and scene
+/// files left in the output folder. A size of 0 is a clear error.
+#[test]
+fn bench_scale_reports_each_size() {
+    let dir = std::env::temp_dir().join("lobelight-bench-scale");
+    let _ = std::fs::remove_dir_all(&dir);
+    let out = dir.to_string_lossy().into_owned();
+    let v = json(&[
+        "bench",
+        "scale",
+        "--sizes",
+        "4000,1000",
+        "-o",
+        &out,
+        "--photons",
+        "1000",
+        "--json",
+    ]);
+    for key in ["adapter", "backend", "rows", "growth"] {
+        assert!(v.get(key).is_some(), "missing key {key}: {v}");
+    }
+    let rows = v["rows"].as_array().unwrap();
+    assert_eq!(rows.len(), 2);
+    for (row, n) in rows.iter().zip([1000, 4000]) {
+        assert_eq!(row["splats"], n, "{row}");
+        assert_eq!(row["photons"], 1000, "the bake options apply: {row}");
+        for key in [
+            "read_ms",
+            "read_mb_per_s",
+            "load_ms",
+            "grid_ms",
+            "photons_ms",
+            "binning_ms",
+            "em_ms",
+            "direct_ms",
+            "bake_ms",
+            "frame_ms",
+        ] {
+            assert!(row[key].as_f64().is_some_and(|x| x > 0.0), "{key}: {row}");
+        }
+        assert!(dir.join(format!("terrain_{n}.ply")).is_file());
+        assert!(dir.join(format!("terrain_{n}.toml")).is_file());
+    }
+    for key in ["load", "grid", "bake", "frame"] {
+        assert!(
+            v["growth"][key].as_f64().is_some_and(f64::is_finite),
+            "{key}: {v}"
+        );
+    }
+    let bad = lobelight(&["bench", "scale", "--sizes", "0", "-o", &out], &[]);
+    assert!(!bad.status.success());
+    assert!(String::from_utf8_lossy(&bad.stderr).contains("above 0"));
+}

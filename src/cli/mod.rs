@@ -586,6 +586,7 @@ fn run(cli: Cli) -> Result<()> {
         Command::Bench {
             what: BenchKind::Scale,
             output,
+            bake,
             device,
             json,
             sizes,
@@ -598,7 +599,7 @@ fn run(cli: Cli) -> Result<()> {
                         .into(),
                 ));
             };
-            let r = scale::scale(&gpu, &sizes, &output)?;
+            let r = scale::scale(&gpu, &sizes, &output, &|scene| bake.apply(scene))?;
             print_report(json, &r)?;
         }
         Command::Bench {

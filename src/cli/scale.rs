@@ -2,7 +2,8 @@
 //! default), each written as a binary PLY with normals, then loaded, gridded, baked and drawn
 //! on the device: the time of each step, the peak memory, and how each grows with the splat
 //! count. The clouds and their scene files stay in the output folder (a later run reuses them),
-//! so any step can be run again by hand with `lobelight render`.
+//! so any step can be run again by hand with `lobelight render`. Bake options (`--photons`, …)
+//! apply to every size.
 
 use std::io::Write;
 use std::path::{Path, PathBuf};
@@ -51,6 +52,8 @@ pub struct ScaleRow {
     pub load_ms: f64,
     /// Uploading the splats and building the splat grid.
     pub grid_ms: f64,
+    /// Photons emitted by the bake (1 M, or `--photons`).
+    pub photons: u64,
     pub photons_ms: f64,
     pub binning_ms: f64,
     pub em_ms: f64,
@@ -74,8 +77,11 @@ pub struct Growth {
     pub peak_rss: Option<f64>,
 }
 
+/// Bake settings from the command line, applied to each generated scene.
+pub type Settings<'a> = &'a dyn Fn(&mut crate::scene::Scene) -> Result<()>;
+
 /// Runs the scale benchmark on `gpu` for clouds of `sizes` splats, writing them to `dir`.
-pub fn scale(gpu: &Gpu, sizes: &[u64], dir: &Path) -> Result<ScaleBench> {
+pub fn scale(gpu: &Gpu, sizes: &[u64], dir: &Path, settings: Settings) -> Result<ScaleBench> {
     if sizes.is_empty() || sizes.contains(&0) {
         return Err(Error::Invalid(
             "bench scale needs splat counts above 0 (--sizes 1000000,3000000)".into(),
@@ -88,7 +94,7 @@ pub fn scale(gpu: &Gpu, sizes: &[u64], dir: &Path) -> Result<ScaleBench> {
     for &n in &sizes {
         eprintln!("bench scale: {n} splats");
         let scene_path = write_terrain(dir, n)?;
-        rows.push(measure(gpu, &scene_path, n)?);
+        rows.push(measure(gpu, &scene_path, n, settings)?);
     }
     let growth = growth(&rows);
     Ok(ScaleBench {
@@ -99,7 +105,7 @@ pub fn scale(gpu: &Gpu, sizes: &[u64], dir: &Path) -> Result<ScaleBench> {
     })
 }
 
-fn measure(gpu: &Gpu, scene_path: &Path, n: u64) -> Result<ScaleRow> {
+fn measure(gpu: &Gpu, scene_path: &Path, n: u64, settings: Settings) -> Result<ScaleRow> {
     let ply = terrain_file(scene_path.parent().unwrap_or(Path::new(".")), n);
     let file_bytes = std::fs::metadata(&ply)
         .map_err(|e| Error::io(&ply, e))?
@@ -108,8 +114,9 @@ fn measure(gpu: &Gpu, scene_path: &Path, n: u64) -> Result<ScaleRow> {
     drop(scene::model::load(&ply)?);
     let read_ms = ms_since(t);
     let t = Instant::now();
-    let scene = scene::load(scene_path)?;
+    let mut scene = scene::load(scene_path)?;
     let load_ms = ms_since(t);
+    settings(&mut scene)?;
     let mut renderer = FrameRenderer::new(gpu, &scene)?;
     let grid_ms = renderer.on_gpu.grid_ms;
     let baked = renderer.bake(gpu, &scene, &Progress::new(true))?;
@@ -138,6 +145,7 @@ fn measure(gpu: &Gpu, scene_path: &Path, n: u64) -> Result<ScaleRow> {
         read_mb_per_s: file_bytes as f64 / 1e6 / (read_ms / 1e3).max(1e-9),
         load_ms,
         grid_ms,
+        photons: scene.bake.photons,
         photons_ms,
         binning_ms,
         em_ms,
