@@ -11,7 +11,7 @@
 
 use std::collections::{HashMap, HashSet};
 use std::path::Path;
-use std::sync::{Mutex, OnceLock};
+use std::sync::{Arc, Mutex, OnceLock};
 
 use crate::error::{Error, Result};
 
@@ -126,12 +126,19 @@ impl StageShape {
     }
 }
 
-/// The shape of a stage, read once per process from its WGSL with naga.
-pub fn stage_shape(name: &str) -> Result<StageShape> {
-    static SHAPES: OnceLock<Mutex<HashMap<String, StageShape>>> = OnceLock::new();
-    let shapes = SHAPES.get_or_init(Default::default);
-    if let Some(s) = shapes.lock().ok().and_then(|m| m.get(name).copied()) {
-        return Ok(s);
+/// What the host reads of a stage's WGSL: its shape and its paged arrays.
+#[derive(Clone, Debug)]
+struct Reflected {
+    shape: StageShape,
+    paged: Vec<PagedBinding>,
+}
+
+/// A stage's WGSL read with naga, once per process.
+fn reflect(name: &str) -> Result<Arc<Reflected>> {
+    static REFLECTED: OnceLock<Mutex<HashMap<String, Arc<Reflected>>>> = OnceLock::new();
+    let cache = REFLECTED.get_or_init(Default::default);
+    if let Some(r) = cache.lock().ok().and_then(|m| m.get(name).cloned()) {
+        return Ok(r);
     }
     let source = resolve_stage(name)?;
     let module = naga::front::wgsl::parse_str(&source).map_err(|e| {
@@ -141,11 +148,19 @@ pub fn stage_shape(name: &str) -> Result<StageShape> {
             e.emit_to_string(&source),
         )
     })?;
-    let shape = read_shape(&module);
-    if let Ok(mut m) = shapes.lock() {
-        m.insert(name.to_owned(), shape);
+    let reflected = Arc::new(Reflected {
+        shape: read_shape(&module),
+        paged: read_paged(&module),
+    });
+    if let Ok(mut m) = cache.lock() {
+        m.insert(name.to_owned(), reflected.clone());
     }
-    Ok(shape)
+    Ok(reflected)
+}
+
+/// The shape of a stage, read once per process from its WGSL with naga.
+pub fn stage_shape(name: &str) -> Result<StageShape> {
+    reflect(name).map(|r| r.shape)
 }
 
 fn read_shape(module: &naga::Module) -> StageShape {
@@ -187,14 +202,7 @@ pub fn resolve_stage(name: &str) -> Result<String> {
 
 /// The full source of a stage with its imports resolved and `defines` defined.
 pub fn resolve_stage_with(name: &str, defines: &[&str]) -> Result<String> {
-    let file =
-        stage(name).ok_or_else(|| Error::Invalid(format!("no shader stage named '{name}'")))?;
-    resolve_with(
-        &format!("wgsl/{name}.wgsl"),
-        file.text,
-        &|m| SHARED.iter().find(|s| s.name == m).map(|s| s.text),
-        defines,
-    )
+    resolve_stage_paged(name, defines, &Paging::default())
 }
 
 /// Resolves `// #import` lines of `text` (named `path` in errors) using `lookup` for modules.
@@ -538,19 +546,10 @@ pub fn resolve_stage_paged(name: &str, defines: &[&str], paging: &Paging) -> Res
 
 /// The paged arrays of a stage (those with a `NAME_at` accessor), read once per process.
 pub fn paged_bindings(name: &str) -> Result<Vec<PagedBinding>> {
-    static PAGED: OnceLock<Mutex<HashMap<String, Vec<PagedBinding>>>> = OnceLock::new();
-    let cache = PAGED.get_or_init(Default::default);
-    if let Some(p) = cache.lock().ok().and_then(|m| m.get(name).cloned()) {
-        return Ok(p);
-    }
-    let source = resolve_stage(name)?;
-    let module = naga::front::wgsl::parse_str(&source).map_err(|e| {
-        Error::parse(
-            Path::new(&format!("wgsl/{name}.wgsl")),
-            "after import resolution",
-            e.emit_to_string(&source),
-        )
-    })?;
+    reflect(name).map(|r| r.paged.clone())
+}
+
+fn read_paged(module: &naga::Module) -> Vec<PagedBinding> {
     let accessor = |n: &str| {
         let at = format!("{n}_at");
         module
@@ -575,8 +574,5 @@ pub fn paged_bindings(name: &str) -> Result<Vec<PagedBinding>> {
             });
         }
     }
-    if let Ok(mut m) = cache.lock() {
-        m.insert(name.to_owned(), paged.clone());
-    }
-    Ok(paged)
+    paged
 }

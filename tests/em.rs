@@ -16,7 +16,7 @@ use lobelight::gpu::bins::GpuBins;
 use lobelight::gpu::em::{fit_lobes_shaped, fit_shape};
 use lobelight::grid::grid_params;
 use lobelight::photons::PhotonConfig;
-use lobelight::scene::{self, file::StoreRange};
+use lobelight::scene::{self, Scene, file::StoreRange};
 use lobelight::shared::sampling::{frame_of, polar, to_world};
 use lobelight::shared::ward::ward_half_vector;
 use lobelight::types::{Material, Photon, Splat};
@@ -399,14 +399,15 @@ fn pruning_keeps_the_lobes_the_photons_need() {
     }
 }
 
-#[test]
-fn gpu_fit_equals_cpu_fit_on_the_same_photons() {
-    let gpu = common::gpu();
+/// The default scene with 40 k photons traced and binned on the CPU mirror (`store`: which
+/// hits store photons, the scene's choice where `None`).
+fn cornell_bins(store: Option<StoreRange>) -> (Scene, PhotonBins) {
     let scene = scene::load(Path::new("scenes/cornell.toml")).unwrap();
+    let base = PhotonConfig::from_scene(&scene);
     let cfg = PhotonConfig {
         photons: 40_000,
-        store: StoreRange::All,
-        ..PhotonConfig::from_scene(&scene)
+        store: store.unwrap_or(base.store),
+        ..base
     };
     let (map, grid, _) = cpu::trace_scene(&scene, &cfg, &mut |_, _| {}).unwrap();
     let bins = cpu::bin_photons(
@@ -415,6 +416,13 @@ fn gpu_fit_equals_cpu_fit_on_the_same_photons() {
         &scene.splats,
     )
     .unwrap();
+    (scene, bins)
+}
+
+#[test]
+fn gpu_fit_equals_cpu_fit_on_the_same_photons() {
+    let gpu = common::gpu();
+    let (scene, bins) = cornell_bins(Some(StoreRange::All));
     // (family, sparse EM, lobes): five lobes, whose rounding growth was measured (below), and
     // the scenes' default of eight.
     for (family, sparse, lobes) in [
@@ -827,18 +835,7 @@ fn photons_of_a_perpendicular_surface_do_not_count() {
 #[test]
 fn gathered_irradiance_equals_the_fit_pass() {
     let gpu = common::gpu();
-    let scene = scene::load(Path::new("scenes/cornell.toml")).unwrap();
-    let cfg = PhotonConfig {
-        photons: 40_000,
-        ..PhotonConfig::from_scene(&scene)
-    };
-    let (map, grid, _) = cpu::trace_scene(&scene, &cfg, &mut |_, _| {}).unwrap();
-    let bins = cpu::bin_photons(
-        &bin_params(&grid.params, scene.search_radius()).unwrap(),
-        &map.photons,
-        &scene.splats,
-    )
-    .unwrap();
+    let (scene, bins) = cornell_bins(None);
     let em = EmConfig {
         iterations: 3,
         fit_candidates: 0,

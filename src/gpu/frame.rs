@@ -355,6 +355,14 @@ enum Raster {
 }
 
 impl Raster {
+    /// The stage (WGSL file) the pipeline is built from.
+    fn stage(self) -> &'static str {
+        match self {
+            Raster::Visibility => SplatPass::Visibility.name(),
+            Raster::Attributes | Raster::AttributesBaked => SplatPass::Attributes.name(),
+        }
+    }
+
     fn build(
         self,
         gpu: &Gpu,
@@ -386,7 +394,7 @@ impl Raster {
             // Reversed depth: greater is nearer.
             Raster::Visibility => raster_pipeline_at(
                 gpu,
-                "splat_visibility",
+                self.stage(),
                 "fs_main",
                 Some(depth(wgpu::CompareFunction::Greater, true)),
                 &[Some(wgpu::ColorTargetState {
@@ -398,7 +406,7 @@ impl Raster {
             ),
             Raster::Attributes => raster_pipeline_at(
                 gpu,
-                "splat_attributes",
+                self.stage(),
                 "fs_main",
                 test,
                 &vec![target; TARGETS],
@@ -406,7 +414,7 @@ impl Raster {
             ),
             Raster::AttributesBaked => raster_pipeline_at(
                 gpu,
-                "splat_attributes",
+                self.stage(),
                 "fs_baked",
                 test,
                 &[target.clone(), target],
@@ -690,10 +698,7 @@ impl SplatPipelines {
         // A raster pass's pipeline for the paging of `list`, and its bind group (the attribute
         // passes also read the front target).
         let bound = |which: Raster, list: &[&wgpu::Buffer]| -> Result<_> {
-            let stage = match which {
-                Raster::Visibility => "splat_visibility",
-                _ => "splat_attributes",
-            };
+            let stage = which.stage();
             let paging = gpu.paging(stage, &[list])?;
             let pipeline = self.raster(gpu, which, &paging)?;
             let mut entries = gpu.paged_entries(stage, 0, list, &paging)?;
