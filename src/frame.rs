@@ -354,20 +354,29 @@ pub fn cpu_frame_into(
 ) {
     let tiles = cpu::splat_visibility::bin_tiles(cam, &scene.splats);
     let visible = cpu::splat_visibility::splat_visibility(cam, &scene.splats, &tiles);
-    let baked = cpu::splat_attributes::BakedDirect {
-        lights: &scene.lights,
-        direct: &direct.direct,
-        visibility: &direct.visibility,
+    let shading = cpu::splat_shading::Shading {
+        params,
+        splat_light: &lobes.light,
+        lobes: &lobes.lobes,
+        lobe_norms: crate::convolution::lobe_norms(),
+        baked: cpu::splat_shading::BakedDirect {
+            lights: &scene.lights,
+            direct: &direct.direct,
+            visibility: &direct.visibility,
+        },
+    };
+    let shaded = match params.direct {
+        DIRECT_BAKED => {
+            cpu::splat_shade::splat_shade(cam, &scene.splats, &scene.materials, &shading)
+        }
+        _ => Vec::new(),
     };
     let sums = cpu::splat_attributes::splat_attributes(
         cam,
         &scene.splats,
-        params,
         &scene.materials,
-        &lobes.light,
-        &lobes.lobes,
-        crate::convolution::lobe_norms(),
-        &baked,
+        &shading,
+        &shaded,
         &visible,
         &tiles,
     );

@@ -457,3 +457,49 @@ fn splat_tile_lists_match_the_mirror_and_miss_no_fragment() {
         );
     }
 }
+
+/// `splat_shade` shades only splats `in_view` says may cover a pixel (the others get 0): over a
+/// plane seen from above and at a grazing angle, with the jitter at each corner of the pixel,
+/// no splat it culls covers any pixel centre, and it culls some (the test's check that it bites).
+#[test]
+fn culled_splats_cover_no_pixel() {
+    use glam::{Vec2, Vec3};
+    use lobelight::shared::splat::{covers, faces_camera, in_view, pixel_ray, splat_hit};
+    let mut scene =
+        plane_scene("[[light]]\ntype = \"point\"\nposition = [0.0, 2.0, 0.0]\npower = 10.0");
+    let (w, h) = (40, 30);
+    let mut culled = 0;
+    for (eye, target, up) in [
+        (Vec3::new(0.0, 2.0, 0.0), Vec3::ZERO, [0.0, 0.0, -1.0]),
+        (
+            Vec3::new(1.8, 0.3, 1.5),
+            Vec3::new(-0.5, 0.0, -0.2),
+            [0.0, 1.0, 0.0],
+        ),
+    ] {
+        scene.camera.eye = eye.to_array();
+        scene.camera.target = target.to_array();
+        scene.camera.up = up;
+        let view = View::new(&scene.camera, w, h);
+        for jitter in [[-0.5, -0.5], [0.5, -0.5], [-0.5, 0.5], [0.5, 0.5]] {
+            let cam = lobelight::types::Camera {
+                jitter,
+                ..camera_uniform(&view, scene.bounds(), &FrameConfig::default())
+            };
+            for s in &scene.splats {
+                if !faces_camera(s, Vec3::from(cam.eye)) || in_view(&cam, s) {
+                    continue;
+                }
+                culled += 1;
+                for y in 0..h {
+                    for x in 0..w {
+                        let d = pixel_ray(&cam, Vec2::new(x as f32 + 0.5, y as f32 + 0.5));
+                        let hit = splat_hit(s, Vec3::from(cam.eye), d);
+                        assert!(!covers(&cam, hit, d), "culled {s:?} covers ({x}, {y})");
+                    }
+                }
+            }
+        }
+    }
+    assert!(culled > 1000, "only {culled} splats culled");
+}

@@ -2,10 +2,10 @@
 // tolerance of the visible surface (depth test against pass 1, no depth writes) and facing
 // its way (pass 1's front target) add
 // weight x (what the shade pass needs) into four float targets by additive blending, in
-// draw order. Each fragment is shaded from its own splat's lobes with its own view ray:
-// the indirect light, diffuse from the total irradiance and specular from every lobe, and
-// with baked direct light (params.direct) the direct light from the splat's baked visibility.
-// Twin: src/cpu/splat_attributes.rs.
+// draw order. Each fragment of fs_main is shaded from its own splat's lobes with its own
+// view ray: the indirect light, diffuse from the total irradiance and specular from every
+// lobe. With baked direct light (params.direct), fs_baked blends what splat_shade found per
+// splat instead. Twin: src/cpu/splat_attributes.rs.
 
 // #import splat
 // #import splat_shading
@@ -15,6 +15,9 @@
 @group(0) @binding(1) var<storage, read> splats: array<Splat>;
 // Pass 1's front target: the normal of each pixel's nearest splat.
 @group(0) @binding(10) var front: texture_2d<u32>;
+// With baked direct light, the radiance splat_shade gave each splat towards the eye.
+// #paged
+@group(0) @binding(11) var<storage, read> shaded: array<vec4<f32>>;
 
 // Whether splat s is of the surface the pixel sees (same_surface).
 fn in_front(v: SplatVertex, s: Splat) -> bool {
@@ -52,9 +55,10 @@ struct BakedAttributes {
     @location(1) geometry: vec4<f32>,
 }
 
-// The fragment of the baked-direct variant (params.direct == DIRECT_BAKED): the indirect and
-// the baked direct light into the first two targets; blending two targets, not four, is
-// what a software rasterizer saves most on.
+// The fragment of the baked-direct variant (params.direct == DIRECT_BAKED): the splat's
+// radiance as splat_shade found it (indirect and baked direct light, shaded once per splat)
+// into the first two targets; blending two targets, not four, is what a software rasterizer
+// saves most on.
 @fragment
 fn fs_baked(v: SplatVertex) -> BakedAttributes {
     let s = splats_at(v.splat);
@@ -64,10 +68,8 @@ fn fs_baked(v: SplatVertex) -> BakedAttributes {
         discard;
     }
     let w = splat_weight(h.q);
-    let m = materials[s.material];
-    let radiance = indirect(v.splat, s, m, -d) + baked_direct(v.splat, s, m, cam.eye + h.t * d, -d);
     var out: BakedAttributes;
-    out.radiance = w * vec4<f32>(radiance, 1.0);
+    out.radiance = w * vec4<f32>(shaded_at(v.splat).xyz, 1.0);
     out.geometry = w * vec4<f32>(s.normal, h.t);
     return out;
 }

@@ -17,10 +17,13 @@
 @group(0) @binding(10) var<uniform> tiles: TileParams;
 @group(0) @binding(11) var<storage, read> tile_start: array<u32>;
 @group(0) @binding(12) var<storage, read> tile_splats: array<u32>;
-@group(0) @binding(13) var radiance_sum: texture_storage_2d<rgba32float, write>;
-@group(0) @binding(14) var geometry_sum: texture_storage_2d<rgba32float, write>;
-@group(0) @binding(15) var diffuse_sum: texture_storage_2d<rgba32float, write>;
-@group(0) @binding(16) var specular_sum: texture_storage_2d<rgba32float, write>;
+// splat_shade's radiance of each splat, for frames of baked direct light.
+// #paged
+@group(0) @binding(13) var<storage, read> shaded: array<vec4<f32>>;
+@group(0) @binding(14) var radiance_sum: texture_storage_2d<rgba32float, write>;
+@group(0) @binding(15) var geometry_sum: texture_storage_2d<rgba32float, write>;
+@group(0) @binding(16) var diffuse_sum: texture_storage_2d<rgba32float, write>;
+@group(0) @binding(17) var specular_sum: texture_storage_2d<rgba32float, write>;
 
 const WG: u32 = 64u;
 
@@ -72,10 +75,11 @@ fn main(@builtin(workgroup_id) wg: vec3<u32>, @builtin(num_workgroups) num_wg: v
         }
         let w = splat_weight(h.q);
         let m = materials[s.material];
-        var l = indirect(i, s, m, -d);
+        var l: vec3<f32>;
         if baked {
-            l += baked_direct(i, s, m, cam.eye + h.t * d, -d);
+            l = shaded_at(i).xyz;
         } else {
+            l = indirect(i, s, m, -d);
             let gloss = (m.specular.x + m.specular.y + m.specular.z) * (1.0 / 3.0);
             diffuse += w * vec4<f32>(s.diffuse, gloss * m.roughness);
             specular += w * vec4<f32>(m.specular, gloss);

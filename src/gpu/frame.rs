@@ -36,6 +36,12 @@ const DEPTH: wgpu::TextureFormat = wgpu::TextureFormat::Depth32Float;
 const FRONT: wgpu::TextureFormat = wgpu::TextureFormat::R32Uint;
 /// The attribute pass's binding of the front target.
 const FRONT_BINDING: u32 = 10;
+/// `fs_baked`'s binding of the splats' shaded radiance (`splat_shade`'s output).
+const SHADED_BINDING: u32 = 11;
+/// The bindings of `wgsl/shared/splat_shading.wgsl` that only the direct bake's shading reads
+/// (the lights, the baked light and visibility): `splat_shade` binds them, the fragment
+/// shading of the other passes does not, so their derived layouts lack them.
+const DIRECT_BAKE_BINDINGS: std::ops::Range<u32> = 7..10;
 const TARGETS: usize = 4;
 
 /// What the splat passes read of a baked scene, all on the device.
@@ -53,6 +59,9 @@ pub struct SceneBuffers<'a> {
     pub visibility: &'a wgpu::Buffer,
     /// Bind group 1 of tracing stages (`GpuScene::geometry`).
     pub geometry: [&'a wgpu::Buffer; 5],
+    /// What `splat_shade` writes for frames of baked direct light: per splat, the radiance
+    /// it sends towards the eye.
+    pub shaded: &'a wgpu::Buffer,
 }
 
 impl<'a> SceneBuffers<'a> {
@@ -106,6 +115,8 @@ pub struct FrameScene {
     pub lights: wgpu::Buffer,
     /// The direct bake of `lights` (zeroed until `FrameRenderer::bake_direct`).
     pub direct: Direct<wgpu::Buffer>,
+    /// Per splat, the radiance towards the eye of the frame being drawn (`splat_shade`).
+    pub shaded: wgpu::Buffer,
 }
 
 impl FrameScene {
@@ -121,6 +132,7 @@ impl FrameScene {
                 direct: gpu.storage_zeroed("direct light", splats * 16)?,
                 visibility: gpu.storage_zeroed("light visibility", visibility)?,
             },
+            shaded: gpu.storage_zeroed("shaded splats", splats * 16)?,
         })
     }
 
@@ -137,6 +149,7 @@ impl FrameScene {
             direct: &self.direct.direct,
             visibility: &self.direct.visibility,
             geometry: on_gpu.geometry(),
+            shaded: &self.shaded,
         }
     }
 }
@@ -159,8 +172,8 @@ pub struct SplatPipelines {
     /// The raster passes by the paging of the arrays they bind (`shaders::Paging`): the
     /// unpaged ones, built with the rest, serve every scene whose arrays fit one binding each.
     raster: Mutex<HashMap<(Raster, Paging), wgpu::RenderPipeline>>,
-    /// The shade pass by the paging of the scene's geometry.
-    shade: Mutex<HashMap<Paging, ShadePipeline>>,
+    /// The shade pass by the paging of the scene's geometry and whether it casts shadow rays.
+    shade: Mutex<HashMap<(Paging, bool), ShadePipeline>>,
     /// The device can run the compute splatter's tile pass (`compute_splatter_fits`).
     splat_compute: bool,
 }
@@ -317,7 +330,11 @@ struct ShadePipeline {
 }
 
 impl ShadePipeline {
-    fn new(gpu: &Gpu, paging: &Paging) -> Result<ShadePipeline> {
+    /// `rays`: the pipeline can cast shadow rays (`SHADOW_RAYS` in the WGSL). Frames of baked
+    /// direct light take the one without: llvmpipe paid for the shadow-ray code even where the
+    /// frame's uniform skipped it (the shade pass of the bunny at 512² took 15.8 ms with it,
+    /// 5.1 ms without; docs/measurements.md).
+    fn new(gpu: &Gpu, paging: &Paging, rays: bool) -> Result<ShadePipeline> {
         let layouts = shade_layouts(gpu, paging)?;
         let layout = gpu
             .device
@@ -335,7 +352,7 @@ impl ShadePipeline {
                 module: &module,
                 entry_point: Some("main"),
                 compilation_options: wgpu::PipelineCompilationOptions {
-                    constants: &[],
+                    constants: &[("SHADOW_RAYS", f64::from(u8::from(rays)))],
                     zero_initialize_workgroup_memory: false,
                 },
                 cache: None,
@@ -424,9 +441,9 @@ impl Raster {
     }
 }
 
-/// Storage buffers `splat_compute` binds: the splats, the eight of `splat_shading`, and the
-/// tile lists' starts and entries.
-const SPLAT_COMPUTE_BUFFERS: u32 = 11;
+/// Storage buffers `splat_compute` binds: the splats, the eight of `splat_shading`, the tile
+/// lists' starts and entries, and `splat_shade`'s output.
+const SPLAT_COMPUTE_BUFFERS: u32 = 12;
 
 /// Whether the device can run the compute splatter: it stores f32 targets from a compute pass
 /// and binds its buffers in one stage.
@@ -462,7 +479,10 @@ impl SplatPipelines {
         ] {
             pipelines.raster(gpu, which, &unpaged)?;
         }
-        pipelines.shade_pipeline(gpu, &unpaged)?;
+        for rays in [false, true] {
+            pipelines.shade_pipeline(gpu, &unpaged, rays)?;
+        }
+        gpu.pipeline("splat_shade")?;
         if pipelines.splat_compute {
             gpu.pipeline("splat_compute")?;
         }
@@ -484,14 +504,16 @@ impl SplatPipelines {
         Ok(pipeline)
     }
 
-    /// The shade pass for geometry paged as `paging`, built on first use.
-    fn shade_pipeline(&self, gpu: &Gpu, paging: &Paging) -> Result<ShadePipeline> {
-        if let Some(p) = self.shade.lock().ok().and_then(|m| m.get(paging).cloned()) {
+    /// The shade pass for geometry paged as `paging`, casting shadow rays or not, built on
+    /// first use.
+    fn shade_pipeline(&self, gpu: &Gpu, paging: &Paging, rays: bool) -> Result<ShadePipeline> {
+        let key = (paging.clone(), rays);
+        if let Some(p) = self.shade.lock().ok().and_then(|m| m.get(&key).cloned()) {
             return Ok(p);
         }
-        let pipeline = ShadePipeline::new(gpu, paging)?;
+        let pipeline = ShadePipeline::new(gpu, paging, rays)?;
         if let Ok(mut m) = self.shade.lock() {
-            m.insert(paging.clone(), pipeline.clone());
+            m.insert(key, pipeline.clone());
         }
         Ok(pipeline)
     }
@@ -629,6 +651,36 @@ impl SplatPipelines {
 
     /// The compute splatter in place of the raster passes: the tile binning for
     /// `SplatPass::Visibility`, the tile pass for `SplatPass::Attributes`.
+    /// Records `splat_shade`: the radiance of every splat towards the eye, for the attribute
+    /// pass of a frame of baked direct light.
+    fn record_splat_shade(
+        &self,
+        gpu: &Gpu,
+        encoder: &mut wgpu::CommandEncoder,
+        scene: &SceneBuffers,
+        uniforms: &Uniforms,
+    ) -> Result<()> {
+        let stage = "splat_shade";
+        let mut buffers = scene.shading(&uniforms.cam, &uniforms.params).to_vec();
+        buffers.push(scene.shaded);
+        let paging = gpu.paging(stage, &[&buffers])?;
+        let pipeline = &gpu.variant_paged(stage, &[], &[], &paging)?;
+        let group = gpu.device.create_bind_group(&wgpu::BindGroupDescriptor {
+            label: Some(stage),
+            layout: &pipeline.get_bind_group_layout(0),
+            entries: &gpu.paged_entries(stage, 0, &buffers, &paging)?,
+        });
+        let (x, y) = gpu.dispatch_dims(crate::sequence::groups(stage, scene.splat_count)?)?;
+        let mut pass = encoder.begin_compute_pass(&wgpu::ComputePassDescriptor {
+            label: Some(stage),
+            timestamp_writes: None,
+        });
+        pass.set_pipeline(pipeline);
+        pass.set_bind_group(0, &group, &[]);
+        pass.dispatch_workgroups(x, y, 1);
+        Ok(())
+    }
+
     fn record_compute(
         &self,
         gpu: &Gpu,
@@ -652,10 +704,14 @@ impl SplatPipelines {
         };
         let tile_params = gpu.uniform("tile params", &lists.params);
         let mut buffers = scene.shading(&uniforms.cam, &uniforms.params).to_vec();
-        buffers.extend([&tile_params, &lists.start, &lists.splats]);
+        buffers.extend([&tile_params, &lists.start, &lists.splats, scene.shaded]);
         let paging = gpu.paging("splat_compute", &[&buffers])?;
         let pipeline = &gpu.variant_paged("splat_compute", &[], &[], &paging)?;
-        let mut entries = gpu.paged_entries("splat_compute", 0, &buffers, &paging)?;
+        let bound: Vec<_> = (0u32..)
+            .zip(buffers.iter().copied())
+            .filter(|(b, _)| !DIRECT_BAKE_BINDINGS.contains(b))
+            .collect();
+        let mut entries = gpu.paged_entries_at("splat_compute", 0, &bound, &paging)?;
         entries.extend(
             out.sums
                 .iter()
@@ -692,16 +748,23 @@ impl SplatPipelines {
         pass: SplatPass,
     ) -> Result<()> {
         let (cam_buf, params_buf) = (&uniforms.cam, &uniforms.params);
+        let baked = uniforms.direct == DIRECT_BAKED;
+        if pass == SplatPass::Attributes && baked {
+            self.record_splat_shade(gpu, encoder, scene, uniforms)?;
+        }
         if uniforms.compute && pass != SplatPass::Shade {
             return self.record_compute(gpu, encoder, scene, uniforms, out, pass);
         }
-        // A raster pass's pipeline for the paging of `list`, and its bind group (the attribute
-        // passes also read the front target).
-        let bound = |which: Raster, list: &[&wgpu::Buffer]| -> Result<_> {
+        // A raster pass's pipeline for the paging of `list` (buffers by binding), and its bind
+        // group (the attribute passes also read the front target).
+        let bound = |which: Raster, list: &[(u32, &wgpu::Buffer)]| -> Result<_> {
             let stage = which.stage();
-            let paging = gpu.paging(stage, &[list])?;
+            let paging = gpu.paging_by(stage, |group, binding| {
+                let found = list.iter().find(|(b, _)| *b == binding);
+                found.filter(|_| group == 0).map(|(_, buffer)| *buffer)
+            })?;
             let pipeline = self.raster(gpu, which, &paging)?;
-            let mut entries = gpu.paged_entries(stage, 0, list, &paging)?;
+            let mut entries = gpu.paged_entries_at(stage, 0, list, &paging)?;
             if which != Raster::Visibility {
                 entries.push(wgpu::BindGroupEntry {
                     binding: FRONT_BINDING,
@@ -726,7 +789,8 @@ impl SplatPipelines {
             })
         };
         if pass == SplatPass::Visibility {
-            let (pipeline, vis_group) = bound(Raster::Visibility, &[cam_buf, scene.splats])?;
+            let (pipeline, vis_group) =
+                bound(Raster::Visibility, &[(0, cam_buf), (1, scene.splats)])?;
             let front = Some(wgpu::RenderPassColorAttachment {
                 view: &out.front,
                 depth_slice: None,
@@ -750,21 +814,27 @@ impl SplatPipelines {
             return Ok(());
         }
         if pass == SplatPass::Attributes {
-            let which = match uniforms.direct {
-                DIRECT_BAKED => Raster::AttributesBaked,
-                _ => Raster::Attributes,
-            };
-            let all = scene.shading(cam_buf, params_buf);
             // `fs_main` reads none of the direct bake's bindings (the lights, the bake's two
-            // buffers), so its derived layout has none.
-            let used = if uniforms.direct == DIRECT_BAKED {
-                all.len()
-            } else {
-                all.len() - 3
+            // buffers), so its derived layout has none; `fs_baked` reads the camera, the splats
+            // and what `splat_shade` wrote.
+            let list: Vec<(u32, &wgpu::Buffer)> = match baked {
+                true => vec![
+                    (0, cam_buf),
+                    (1, scene.splats),
+                    (SHADED_BINDING, scene.shaded),
+                ],
+                false => (0u32..)
+                    .zip(scene.shading(cam_buf, params_buf))
+                    .filter(|(b, _)| !DIRECT_BAKE_BINDINGS.contains(b))
+                    .collect(),
             };
-            let (pipeline, attr_group) = bound(which, &all[..used])?;
+            let which = match baked {
+                true => Raster::AttributesBaked,
+                false => Raster::Attributes,
+            };
+            let (pipeline, attr_group) = bound(which, &list)?;
             let mut color = out.cleared_sums();
-            if uniforms.direct == DIRECT_BAKED {
+            if baked {
                 color.truncate(2);
             }
             let mut pass = encoder.begin_render_pass(&wgpu::RenderPassDescriptor {
@@ -808,7 +878,7 @@ impl SplatPipelines {
             resource: out.hdr.as_entire_binding(),
         });
         let paging = gpu.paging("shade", &[&[], &scene.geometry])?;
-        let shade = self.shade_pipeline(gpu, &paging)?;
+        let shade = self.shade_pipeline(gpu, &paging, uniforms.direct != DIRECT_BAKED)?;
         let geometry_entries = gpu.paged_entries("shade", 1, &scene.geometry, &paging)?;
         let groups = [frame_entries, geometry_entries]
             .iter()

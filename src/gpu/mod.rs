@@ -509,12 +509,23 @@ impl Gpu {
     /// binding order): an array larger than one page takes windows of 2^shift elements, the
     /// most that fit a page.
     pub fn paging(&self, stage: &str, bind_groups: &[&[&wgpu::Buffer]]) -> Result<Paging> {
+        self.paging_by(stage, |group, binding| {
+            bind_groups
+                .get(group as usize)?
+                .get(binding as usize)
+                .copied()
+        })
+    }
+
+    /// `paging` of a stage whose buffers `buffer(group, binding)` finds.
+    pub fn paging_by<'b>(
+        &self,
+        stage: &str,
+        buffer: impl Fn(u32, u32) -> Option<&'b wgpu::Buffer>,
+    ) -> Result<Paging> {
         let mut arrays = Vec::new();
         for p in crate::shaders::paged_bindings(stage)? {
-            let Some(buffer) = bind_groups
-                .get(p.group as usize)
-                .and_then(|g| g.get(p.binding as usize))
-            else {
+            let Some(buffer) = buffer(p.group, p.binding) else {
                 continue;
             };
             let size = buffer.size();
@@ -551,10 +562,22 @@ impl Gpu {
         buffers: &[&'a wgpu::Buffer],
         paging: &Paging,
     ) -> Result<Vec<wgpu::BindGroupEntry<'a>>> {
+        let numbered: Vec<_> = (0u32..).zip(buffers.iter().copied()).collect();
+        self.paged_entries_at(stage, group, &numbered, paging)
+    }
+
+    /// `paged_entries` for buffers at the bindings given with them, for an entry point that
+    /// binds some of its module's bindings.
+    pub fn paged_entries_at<'a>(
+        &self,
+        stage: &str,
+        group: u32,
+        buffers: &[(u32, &'a wgpu::Buffer)],
+        paging: &Paging,
+    ) -> Result<Vec<wgpu::BindGroupEntry<'a>>> {
         let paged = crate::shaders::paged_bindings(stage)?;
         let mut entries = Vec::with_capacity(buffers.len());
-        for (b, &buffer) in buffers.iter().enumerate() {
-            let binding = b as u32;
+        for &(binding, buffer) in buffers {
             let name = paged
                 .iter()
                 .find(|p| p.group == group && p.binding == binding)

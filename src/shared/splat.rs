@@ -46,6 +46,18 @@ pub fn faces_camera(s: &Splat, eye: Vec3) -> bool {
     Vec3::from(s.normal).dot(eye - Vec3::from(s.center)) > 0.0
 }
 
+/// Whether splat `s` may cover a pixel of the view (a conservative frustum test; see the WGSL).
+pub fn in_view(cam: &Camera, s: &Splat) -> bool {
+    let v = Vec3::from(s.center) - Vec3::from(cam.eye);
+    let r = 2.0 * s.radius;
+    let z = v.dot(Vec3::from(cam.forward));
+    let x_edge = cam.tan_x * (1.0 + 2.0 / cam.size[0]) * z;
+    let y_edge = cam.tan_y * (1.0 + 2.0 / cam.size[1]) * z;
+    z >= cam.near - r
+        && v.dot(Vec3::from(cam.right)).abs() - x_edge <= r * (1.0 + cam.tan_x * cam.tan_x).sqrt()
+        && v.dot(Vec3::from(cam.up)).abs() - y_edge <= r * (1.0 + cam.tan_y * cam.tan_y).sqrt()
+}
+
 pub fn clip_position(cam: &Camera, p: Vec3) -> Vec4 {
     let v = p - Vec3::from(cam.eye);
     let z = v.dot(Vec3::from(cam.forward));

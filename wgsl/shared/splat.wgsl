@@ -78,6 +78,20 @@ fn faces_camera(s: Splat, eye: vec3<f32>) -> bool {
     return dot(s.normal, eye - s.center) > 0.0;
 }
 
+// Whether splat s may cover a pixel of the view: its disk's bounding sphere (the triangle's,
+// radius 2r, to be safe) reaches past no side of the view frustum widened by a pixel (the
+// jitter moves the image by at most half a pixel) and not wholly behind the near plane.
+fn in_view(cam: Camera, s: Splat) -> bool {
+    let v = s.center - cam.eye;
+    let r = 2.0 * s.radius;
+    let z = dot(v, cam.forward);
+    let x_edge = cam.tan_x * (1.0 + 2.0 / cam.size.x) * z;
+    let y_edge = cam.tan_y * (1.0 + 2.0 / cam.size.y) * z;
+    return z >= cam.near - r
+        && abs(dot(v, cam.right)) - x_edge <= r * sqrt(1.0 + cam.tan_x * cam.tan_x)
+        && abs(dot(v, cam.up)) - y_edge <= r * sqrt(1.0 + cam.tan_y * cam.tan_y);
+}
+
 fn clip_position(cam: Camera, p: vec3<f32>) -> vec4<f32> {
     let v = p - cam.eye;
     let z = dot(v, cam.forward);

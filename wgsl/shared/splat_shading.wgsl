@@ -1,8 +1,8 @@
-// What a splat's fragment is shaded with (docs/design.md sections 7-8), for the attribute
-// pass and the compute splatter alike: the indirect light from the splat's lobes and
+// What a splat is shaded with (docs/design.md sections 7-8), for the attribute pass, the
+// compute splatter and splat_shade alike: the indirect light from the splat's lobes and
 // irradiance, and the baked direct light. The bindings 2-9 of group 0 are declared here, so
-// that both stages bind them at the same numbers; bindings 0 (the camera) and 1 (the splats)
-// are the stage's. Twin: src/cpu/splat_attributes.rs.
+// that all three stages bind them at the same numbers; bindings 0 (the camera) and 1 (the
+// splats) are the stage's. Twin: src/cpu/splat_shading.rs.
 
 // #import splat
 // #import lobe_brdf

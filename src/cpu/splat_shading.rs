@@ -1,0 +1,116 @@
+//! Twin of `wgsl/shared/splat_shading.wgsl`: what a splat is shaded with, for the attribute
+//! pass, the compute splatter and the per-splat shading of baked frames alike: the indirect
+//! light from its lobes and irradiance, and its baked direct light.
+// `!(x < y)` is meant: NaN must fail these tests, as it does in the WGSL twin.
+#![allow(clippy::neg_cmp_op_on_partial_ord)]
+
+use glam::{Vec3, Vec4};
+
+use crate::shared::lights::{LightSample, MIN_ALPHA, area_point, sample_light};
+use crate::shared::lobe_brdf::{lobe_specular, norm_at, norm_lookup};
+use crate::shared::sampling::PI;
+use crate::shared::splat::{
+    SHOW_DIRECT_DIFFUSE, SHOW_DIRECT_SPECULAR, SHOW_INDIRECT_DIFFUSE, SHOW_INDIRECT_SPECULAR,
+    lobe_beta2,
+};
+use crate::shared::ward::ward_specular;
+use crate::types::{Light, Lobe, Material, ShadeParams, Splat, SplatLight, light_kind};
+
+/// The direct bake's results (`DIRECT_BAKED`): bindings 7–9 of the WGSL.
+#[derive(Clone, Copy)]
+pub struct BakedDirect<'a> {
+    pub lights: &'a [Light],
+    pub direct: &'a [[f32; 4]],
+    pub visibility: &'a [f32],
+}
+
+/// Bindings 2–9 of the WGSL but the materials, which the callers index themselves.
+#[derive(Clone, Copy)]
+pub struct Shading<'a> {
+    pub params: &'a ShadeParams,
+    pub splat_light: &'a [SplatLight],
+    pub lobes: &'a [Lobe],
+    /// `lobe_norms::lobe_norms()`.
+    pub lobe_norms: &'a [f32],
+    pub baked: BakedDirect<'a>,
+}
+
+impl Shading<'_> {
+    /// The hemispherical integral of a lobe of width `beta2` about `axis`.
+    fn lobe_norm(&self, n: Vec3, axis: Vec3, beta2: f32) -> f32 {
+        norm_at(self.lobe_norms, norm_lookup(n.dot(axis), beta2))
+    }
+
+    /// Radiance leaving splat `i` towards `wo` by the light its photons brought.
+    pub fn indirect(&self, i: u32, s: &Splat, m: &Material, wo: Vec3) -> Vec3 {
+        let params = self.params;
+        let light = &self.splat_light[i as usize];
+        let mut spec = Vec3::ZERO;
+        let first = light.first_lobe;
+        let shown = if params.show & SHOW_INDIRECT_SPECULAR != 0 {
+            light.lobes
+        } else {
+            0
+        };
+        for k in 0..shown {
+            let lobe = &self.lobes[(first + k) as usize];
+            let beta2 = lobe_beta2(params.family, lobe.sharpness);
+            let (n, axis) = (Vec3::from(s.normal), Vec3::from(lobe.axis));
+            let norm = self.lobe_norm(n, axis, beta2);
+            spec +=
+                Vec3::from(lobe.irradiance) * lobe_specular(n, wo, axis, m.roughness, beta2, norm);
+        }
+        let diffuse = if params.show & SHOW_INDIRECT_DIFFUSE != 0 {
+            Vec3::from(s.diffuse) * (Vec3::from(light.irradiance) / PI)
+        } else {
+            Vec3::ZERO
+        };
+        diffuse + Vec3::from(m.specular) * spec
+    }
+
+    /// Radiance leaving splat `i` at `p` towards `wo` by the baked direct light.
+    pub fn baked_direct(&self, i: u32, s: &Splat, m: &Material, p: Vec3, wo: Vec3) -> Vec3 {
+        let (params, baked) = (self.params, &self.baked);
+        let mut out = Vec3::ZERO;
+        if params.show & SHOW_DIRECT_DIFFUSE != 0 {
+            out = Vec3::from(s.diffuse) * (Vec4::from(baked.direct[i as usize]).truncate() / PI);
+        }
+        let specular = Vec3::from(m.specular);
+        let glossy = m.roughness >= MIN_ALPHA && specular.cmpgt(Vec3::ZERO).any();
+        if params.show & SHOW_DIRECT_SPECULAR == 0 || !glossy {
+            return out;
+        }
+        let normal = Vec3::from(s.normal);
+        let mut spec = Vec3::ZERO;
+        let lc = params.light_count;
+        for (li, l) in baked.lights.iter().enumerate().take(lc as usize) {
+            let vis = baked.visibility[(i * lc) as usize + li];
+            if !(vis > 0.0) {
+                continue;
+            }
+            if l.kind != light_kind::AREA {
+                let ls = sample_light(l, p, 0.0, 0.0);
+                spec += vis * specular_sample(normal, wo, m.roughness, &ls);
+                continue;
+            }
+            let n = params.area_samples;
+            let mut area_sum = Vec3::ZERO;
+            for j in 0..n * n {
+                let uv = area_point(j, n, 0, false);
+                let ls = sample_light(l, p, uv.x, uv.y);
+                area_sum += specular_sample(normal, wo, m.roughness, &ls);
+            }
+            spec += vis * area_sum * (1.0 / (n * n) as f32);
+        }
+        out + specular * spec
+    }
+}
+
+/// The specular light one light sample reflects towards `wo`, unshadowed.
+fn specular_sample(n: Vec3, wo: Vec3, alpha: f32, ls: &LightSample) -> Vec3 {
+    let cos_i = n.dot(ls.wi);
+    if !(cos_i > 0.0) {
+        return Vec3::ZERO;
+    }
+    ward_specular(n, ls.wi, wo, alpha) * ls.e * cos_i
+}
