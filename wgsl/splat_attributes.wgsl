@@ -55,13 +55,21 @@ struct BakedAttributes {
     @location(1) geometry: vec4<f32>,
 }
 
+// The vertex of the baked variant: the splat's radiance comes with it.
+@vertex
+fn vs_baked(@builtin(vertex_index) corner: u32, @builtin(instance_index) i: u32) -> SplatVertex {
+    var out = splat_vertex(cam, splats_at(i), i, corner);
+    out.radiance = shaded_at(i).xyz;
+    return out;
+}
+
 // The fragment of the baked-direct variant (params.direct == DIRECT_BAKED): the splat's
 // radiance as splat_shade found it (indirect and baked direct light, shaded once per splat)
 // into the first two targets; blending two targets, not four, is what a software rasterizer
 // saves most on.
 @fragment
 fn fs_baked(v: SplatVertex) -> BakedAttributes {
-    let s = splats_at(v.splat);
+    let s = vertex_splat(v);
     let d = pixel_ray(cam, v.position.xy);
     let h = splat_hit(s, cam.eye, d);
     if !covers(cam, h, d) || !in_front(v, s) {
@@ -69,7 +77,7 @@ fn fs_baked(v: SplatVertex) -> BakedAttributes {
     }
     let w = splat_weight(h.q);
     var out: BakedAttributes;
-    out.radiance = w * vec4<f32>(shaded_at(v.splat).xyz, 1.0);
+    out.radiance = w * vec4<f32>(v.radiance, 1.0);
     out.geometry = w * vec4<f32>(s.normal, h.t);
     return out;
 }

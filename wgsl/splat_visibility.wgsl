@@ -23,7 +23,7 @@ struct Visible {
 
 @fragment
 fn fs_main(v: SplatVertex) -> Visible {
-    let s = splats_at(v.splat);
+    let s = vertex_splat(v);
     let d = pixel_ray(cam, v.position.xy);
     let h = splat_hit(s, cam.eye, d);
     if !covers(cam, h, d) {

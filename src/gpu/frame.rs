@@ -226,14 +226,15 @@ pub(super) fn raster_pipeline(
     depth: Option<wgpu::DepthStencilState>,
     targets: &[Option<wgpu::ColorTargetState>],
 ) -> Result<wgpu::RenderPipeline> {
-    raster_pipeline_at(gpu, name, "fs_main", depth, targets, &Paging::default())
+    let entries = ["vs_main", "fs_main"];
+    raster_pipeline_at(gpu, name, entries, depth, targets, &Paging::default())
 }
 
-/// `raster_pipeline` with the fragment entry point `fragment`.
+/// `raster_pipeline` with the vertex and fragment entry points `[vertex, fragment]`.
 pub(super) fn raster_pipeline_at(
     gpu: &Gpu,
     name: &'static str,
-    fragment: &'static str,
+    [vertex, fragment]: [&'static str; 2],
     depth: Option<wgpu::DepthStencilState>,
     targets: &[Option<wgpu::ColorTargetState>],
     paging: &Paging,
@@ -246,7 +247,7 @@ pub(super) fn raster_pipeline_at(
             layout: None,
             vertex: wgpu::VertexState {
                 module: &module,
-                entry_point: Some("vs_main"),
+                entry_point: Some(vertex),
                 compilation_options: Default::default(),
                 buffers: &[],
             },
@@ -412,7 +413,7 @@ impl Raster {
             Raster::Visibility => raster_pipeline_at(
                 gpu,
                 self.stage(),
-                "fs_main",
+                ["vs_main", "fs_main"],
                 Some(depth(wgpu::CompareFunction::Greater, true)),
                 &[Some(wgpu::ColorTargetState {
                     format: FRONT,
@@ -424,7 +425,7 @@ impl Raster {
             Raster::Attributes => raster_pipeline_at(
                 gpu,
                 self.stage(),
-                "fs_main",
+                ["vs_main", "fs_main"],
                 test,
                 &vec![target; TARGETS],
                 paging,
@@ -432,7 +433,7 @@ impl Raster {
             Raster::AttributesBaked => raster_pipeline_at(
                 gpu,
                 self.stage(),
-                "fs_baked",
+                ["vs_baked", "fs_baked"],
                 test,
                 &[target.clone(), target],
                 paging,

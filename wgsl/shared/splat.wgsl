@@ -52,9 +52,17 @@ struct Attributes {
     @location(3) specular: vec4<f32>,
 }
 
+// What the raster passes' vertices pass on: the splat's index, and what its fragments test
+// and blend, flat. A fragment then loads nothing: reading its splat from the (paged) splat
+// array cost the baked frames 13 % of their time at 1280x720 (docs/measurements.md).
 struct SplatVertex {
     @builtin(position) position: vec4<f32>,
     @location(0) @interpolate(flat) splat: u32,
+    @location(1) @interpolate(flat) center: vec3<f32>,
+    @location(2) @interpolate(flat) radius: f32,
+    @location(3) @interpolate(flat) normal: vec3<f32>,
+    // The radiance splat_shade gave the splat (the baked attribute pass), else 0.
+    @location(4) @interpolate(flat) radiance: vec3<f32>,
 }
 
 // Corners of the splat's primitive: the equilateral triangle circumscribing its disk
@@ -110,7 +118,20 @@ fn splat_vertex(cam: Camera, s: Splat, i: u32, corner: u32) -> SplatVertex {
     let outside = vec4<f32>(2.0, 2.0, 0.5, 1.0);
     out.position = select(outside, clip_position(cam, splat_corner(s, corner)),
                           faces_camera(s, cam.eye));
+    out.center = s.center;
+    out.normal = s.normal;
+    out.radius = s.radius;
+    out.radiance = vec3<f32>(0.0);
     return out;
+}
+
+// The splat of a fragment, from its vertex's flat values (all a ray-disk hit needs).
+fn vertex_splat(v: SplatVertex) -> Splat {
+    var s: Splat;
+    s.center = v.center;
+    s.radius = v.radius;
+    s.normal = v.normal;
+    return s;
 }
 
 fn view_depth(cam: Camera, z: f32) -> f32 {
