@@ -431,7 +431,8 @@ pub struct FrameTiming {
     /// Medians of the two parts: the splat passes with shading, and tone mapping.
     pub shade_ms: f64,
     pub tonemap_ms: f64,
-    /// GPU: medians of the visibility, attribute and shade passes, each waited for.
+    /// GPU: medians of the visibility, attribute and shade passes, each waited for (with baked
+    /// direct light the attribute pass includes `splat_shade` before it).
     #[serde(skip_serializing_if = "Option::is_none")]
     pub passes_ms: Option<[f64; 3]>,
     /// GPU: median of the present pass (the tone-mapped bytes drawn onto a window-format
