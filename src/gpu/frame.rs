@@ -333,8 +333,8 @@ struct ShadePipeline {
 impl ShadePipeline {
     /// `rays`: the pipeline can cast shadow rays (`SHADOW_RAYS` in the WGSL). Frames of baked
     /// direct light take the one without: llvmpipe paid for the shadow-ray code even where the
-    /// frame's uniform skipped it (the shade pass of the bunny at 512² took 15.8 ms with it,
-    /// 5.1 ms without; docs/measurements.md).
+    /// frame's uniform skipped it (the shade pass of the bunny at 512² took 15.6 ms with it,
+    /// 4.9 ms without; docs/measurements.md).
     fn new(gpu: &Gpu, paging: &Paging, rays: bool) -> Result<ShadePipeline> {
         let layouts = shade_layouts(gpu, paging)?;
         let layout = gpu
@@ -650,8 +650,6 @@ impl SplatPipelines {
         }
     }
 
-    /// The compute splatter in place of the raster passes: the tile binning for
-    /// `SplatPass::Visibility`, the tile pass for `SplatPass::Attributes`.
     /// Records `splat_shade`: the radiance of every splat towards the eye, for the attribute
     /// pass of a frame of baked direct light.
     fn record_splat_shade(
@@ -682,6 +680,8 @@ impl SplatPipelines {
         Ok(())
     }
 
+    /// The compute splatter in place of the raster passes: the tile binning for
+    /// `SplatPass::Visibility`, the tile pass for `SplatPass::Attributes`.
     fn record_compute(
         &self,
         gpu: &Gpu,
