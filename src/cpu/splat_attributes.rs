@@ -32,6 +32,9 @@ pub fn splat_attributes(
     let eye = Vec3::from(cam.eye);
     let forward = Vec3::from(cam.forward);
     let width = tiles.width as usize;
+    // `fs_baked` blends the first two targets only (the shade pass reads no more), and the
+    // radiance `splat_shade` gave the splat.
+    let baked = shading.params.direct == DIRECT_BAKED;
     let blocks = raster(
         tiles,
         || vec![[Vec4::ZERO; 4]; (TILE * TILE) as usize],
@@ -57,9 +60,6 @@ pub fn splat_attributes(
             let w = splat_weight(h.q);
             let m = &materials[s.material as usize];
             let gloss = (m.specular[0] + m.specular[1] + m.specular[2]) * (1.0 / 3.0);
-            // `fs_baked` blends the first two targets only (the shade pass reads no more), and
-            // the radiance `splat_shade` gave the splat.
-            let baked = shading.params.direct == DIRECT_BAKED;
             let radiance = match baked {
                 true => Vec4::from(shaded[i as usize]).truncate(),
                 false => shading.indirect(i, s, m, -d),

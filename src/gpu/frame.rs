@@ -662,22 +662,8 @@ impl SplatPipelines {
         let stage = "splat_shade";
         let mut buffers = scene.shading(&uniforms.cam, &uniforms.params).to_vec();
         buffers.push(scene.shaded);
-        let paging = gpu.paging(stage, &[&buffers])?;
-        let pipeline = &gpu.variant_paged(stage, &[], &[], &paging)?;
-        let group = gpu.device.create_bind_group(&wgpu::BindGroupDescriptor {
-            label: Some(stage),
-            layout: &pipeline.get_bind_group_layout(0),
-            entries: &gpu.paged_entries(stage, 0, &buffers, &paging)?,
-        });
-        let (x, y) = gpu.dispatch_dims(crate::sequence::groups(stage, scene.splat_count)?)?;
-        let mut pass = encoder.begin_compute_pass(&wgpu::ComputePassDescriptor {
-            label: Some(stage),
-            timestamp_writes: None,
-        });
-        pass.set_pipeline(pipeline);
-        pass.set_bind_group(0, &group, &[]);
-        pass.dispatch_workgroups(x, y, 1);
-        Ok(())
+        let groups = crate::sequence::groups(stage, scene.splat_count)?;
+        gpu.dispatch(encoder, stage, &buffers, groups)
     }
 
     /// The compute splatter in place of the raster passes: the tile binning for
