@@ -224,6 +224,10 @@ pub struct EmStats {
     pub photons: u64,
     pub dispatches: u32,
     pub ms: f64,
+    /// `ms` by pass: selection (with its readback), irradiance gather, fit.
+    pub select_ms: f64,
+    pub gather_ms: f64,
+    pub fit_ms: f64,
 }
 
 /// The fit's output: the light of every splat, and the lobes written, packed (splat `i`'s at

@@ -400,6 +400,10 @@ pub struct Fit<B> {
     pub fitted: u32,
     pub max_candidates: u32,
     pub dispatches: u32,
+    /// Wall time of the passes: `em_select` with its readback, `em_gather`, `em_fit`.
+    pub select_ms: f64,
+    pub gather_ms: f64,
+    pub fit_ms: f64,
 }
 
 /// The lobe fit: `em_select` lists the splats with photons near them, in two lists → (split:
@@ -414,6 +418,7 @@ pub fn fit_lobes<E: Executor>(
     shape: FitShape,
 ) -> Result<Fit<E::Buffer>> {
     cfg.validate()?;
+    let t = std::time::Instant::now();
     let splat_count = input.splat_count;
     let n = splat_count as u64;
     let light = ex.zeroed("splat light", n.max(1) * 32)?;
@@ -436,6 +441,7 @@ pub fn fit_lobes<E: Executor>(
         [a, b, c, d] => (a, b, c, d),
         _ => return Err(Error::Gpu("em counters readback was short".into())),
     };
+    let select_ms = ms_since(t);
     let gather = ex.uniform(
         "em gather params",
         &cfg.params(splat_count, gathered, shape),
@@ -451,6 +457,10 @@ pub fn fit_lobes<E: Executor>(
         &light,
     ];
     ex.dispatch("em_gather", &bindings, groups("em_gather", gathered)?)?;
+    // A split point of its own, so that the gather's time and the fit's are told apart (one
+    // more submission, well under a millisecond).
+    ex.read::<u32>(&counters, 1)?;
+    let gather_ms = ms_since(t) - select_ms;
     // Lobes for the fitted splats alone, at the slots em_select gave them.
     let lobes = ex.zeroed("lobes", (fitted as u64 * cfg.lobes as u64).max(1) * 32)?;
     let chunk = iterations_per_dispatch(cfg, max_candidates, shape.loop_limited)?;
@@ -487,6 +497,7 @@ pub fn fit_lobes<E: Executor>(
         ex.dispatch_variant("em_fit", defines, &constants, &bindings, listed)?;
         dispatches += 1;
     }
+    ex.read::<u32>(&counters, 1)?;
     Ok(Fit {
         lobes,
         light,
@@ -495,6 +506,9 @@ pub fn fit_lobes<E: Executor>(
         fitted,
         max_candidates,
         dispatches,
+        select_ms,
+        gather_ms,
+        fit_ms: ms_since(t) - select_ms - gather_ms,
     })
 }
 

@@ -215,6 +215,10 @@ pub struct EmPruning {
 #[derive(Debug, Serialize)]
 pub struct EmSkipping {
     pub em_ms: f64,
+    /// `em_ms` by pass: selection, irradiance gather of the splats not fitted, fit.
+    pub select_ms: f64,
+    pub gather_ms: f64,
+    pub fit_ms: f64,
     pub splats_fitted: u32,
     /// Bytes of lobes the bake keeps, skipping and fitting every splat.
     pub lobe_bytes: u64,
@@ -315,6 +319,9 @@ pub fn em(
         stats: s.clone(),
         skipping: EmSkipping {
             em_ms: skipping.stats.ms,
+            select_ms: skipping.stats.select_ms,
+            gather_ms: skipping.stats.gather_ms,
+            fit_ms: skipping.stats.fit_ms,
             splats_fitted: skipping.stats.fitted,
             lobe_bytes: lobe_bytes(&skipping),
             lobe_bytes_fit_all: lobe_bytes(&map),

@@ -193,6 +193,9 @@ pub fn fit_lobes(
         max_candidates: fit.max_candidates,
         dispatches: fit.dispatches,
         ms: ms_since(t),
+        select_ms: fit.select_ms,
+        gather_ms: fit.gather_ms,
+        fit_ms: fit.fit_ms,
         ..Default::default()
     };
     let mut map = LobeMap::pack(cfg.lobes, &dense, light, stats);

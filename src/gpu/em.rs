@@ -118,6 +118,9 @@ pub fn fit_lobes_shaped(
             photons: 0,
             dispatches: fit.dispatches,
             ms: ms_since(t),
+            select_ms: fit.select_ms,
+            gather_ms: fit.gather_ms,
+            fit_ms: fit.fit_ms,
         },
     })
 }
