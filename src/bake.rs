@@ -228,7 +228,7 @@ pub fn traced_and_binned_gpu(
     let spin = progress.spinner("binning");
     let t = Instant::now();
     let radius = EmConfig::from_scene(scene).radius;
-    let params = bin_params(&on_gpu.grid.params, radius)?;
+    let params = bin_params(&on_gpu.grid.params, radius, stats.stored)?;
     let bins = bin_photons(gpu, &traced, &on_gpu.splats, &params)?;
     let binning_ms = ms_since(t);
     spin.finish_and_clear();
@@ -265,7 +265,7 @@ pub fn bins_cpu(
     let t = Instant::now();
     let radius = EmConfig::from_scene(scene).radius;
     let bins = cpu::bin_photons(
-        &bin_params(&grid.params, radius)?,
+        &bin_params(&grid.params, radius, map.stats.stored)?,
         &map.photons,
         &scene.splats,
     )?;

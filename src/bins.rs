@@ -14,13 +14,21 @@ use crate::types::{BinParams, BinnedPhoton, GridParams};
 
 /// Bin cells per search radius along an axis.
 pub const CELLS_PER_RADIUS: f32 = 2.0;
+/// Most photon lists (cells × sub-cells) the binning splits into: 64 MiB of list starts.
+pub const MAX_BIN_LISTS: u64 = 1 << 24;
+/// Most lists per stored photon: past it, splitting cells would cost the scan over mostly
+/// empty lists more than it saves the ranking.
+pub const LISTS_PER_PHOTON: u64 = 4;
 /// Most bin cells along an axis; larger radii ratios coarsen the cells (still at least R/2).
 pub const MAX_BIN_DIM: u32 = 256;
 /// Bytes of one binned photon across the binned arrays (geometry, power, key).
 pub const BINNED_BYTES: u64 = 16 + 16 + 8;
 
-/// The binning grid over the splat grid's box for search radius `radius`.
-pub fn bin_params(grid: &GridParams, radius: f32) -> Result<BinParams> {
+/// The binning grid over the splat grid's box for search radius `radius`, for `stored`
+/// photons: cells are split into 2³ or 4³ sub-cell lists while there are at most
+/// `LISTS_PER_PHOTON` lists a photon (ranking a list costs the square of its length; a list
+/// that stays empty costs one entry of the scan), up to `MAX_BIN_LISTS`.
+pub fn bin_params(grid: &GridParams, radius: f32, stored: u64) -> Result<BinParams> {
     crate::em::check_radius(radius).map_err(Error::Invalid)?;
     let extent = *grid.dims.iter().max().unwrap_or(&1) as f32 * grid.cell_size;
     // A hair over R/2, so that rounding never stretches a 2R box past 5 cells.
@@ -30,18 +38,28 @@ pub fn bin_params(grid: &GridParams, radius: f32) -> Result<BinParams> {
         .ceil()
         .clamp(Vec3::ONE, Vec3::splat(MAX_BIN_DIM as f32))
         .as_uvec3();
+    let cell_count = dims.x * dims.y * dims.z;
+    let lists = |sub: u64| cell_count as u64 * sub.pow(3);
+    let sub = [4u32, 2]
+        .into_iter()
+        .find(|&s| {
+            let n = lists(s as u64);
+            n <= MAX_BIN_LISTS && n <= stored.saturating_mul(LISTS_PER_PHOTON)
+        })
+        .unwrap_or(1);
     Ok(BinParams {
         origin: grid.origin,
         cell_size: cell,
         dims: dims.into(),
-        cell_count: dims.x * dims.y * dims.z,
+        cell_count,
         inv_cell_size: 1.0 / cell,
+        sub,
         ..Default::default()
     })
 }
 
-/// Binned photons on the host: `cell_start` has `cell_count + 1` offsets into the parallel
-/// arrays, each cell's run sorted by key.
+/// Binned photons on the host: `cell_start` has `list_count + 1` offsets into the parallel
+/// arrays (`shared::bins::list_count`), each list's run sorted by key.
 #[derive(Clone, Debug, Default, PartialEq)]
 pub struct PhotonBins {
     pub params: BinParams,

@@ -18,6 +18,7 @@ use crate::photons::{
     PhotonConfig, PhotonMap, PhotonStats, StoreAction, StorePlanner, first_capacity, ms_since,
 };
 use crate::shaders::stage_shape;
+use crate::shared::bins::list_count;
 use crate::shared::dispatch::groups_for;
 use crate::tone::{ToneConfig, reduce_levels};
 use crate::types::{
@@ -272,7 +273,7 @@ impl<B> Bins<B> {
         let n = self.params.photon_count as usize;
         Ok(PhotonBins {
             params: self.params,
-            cell_start: ex.read(&self.cell_start, self.params.cell_count as usize + 1)?,
+            cell_start: ex.read(&self.cell_start, list_count(&self.params) as usize + 1)?,
             keys: ex.read(&self.keys, n)?,
             geom: ex.read(&self.geom, n)?,
             power: ex.read(&self.power, n)?,
@@ -282,8 +283,8 @@ impl<B> Bins<B> {
 
 /// Photon binning of the stored photons in `pages` (a buffer and its photon count each):
 /// `bin_count` per page → exclusive scan → `bin_scatter` per page → (split: the longest cell
-/// list sets the rank chunks) → `bin_rank` per chunk → `bin_place`. Every cell's list comes
-/// out in key order.
+/// list sets the rank chunks) → `bin_rank` per chunk → `bin_place`. Every list (a cell's
+/// sub-cell, `BinParams::sub`) comes out in key order.
 pub fn bin_photons<E: Executor>(
     ex: &mut E,
     pages: &[(&E::Buffer, u32)],
@@ -300,14 +301,14 @@ pub fn bin_photons<E: Executor>(
         };
         page_params.push(ex.uniform("bin page params", &page)?);
     }
-    let cells = params.cell_count as u64;
+    let cells = list_count(params) as u64;
     let cell_start = ex.zeroed("bin cell start", (cells + 1) * 4)?;
     let chunks = ex.zeroed("bin rank chunks", 4)?;
     for (&(page, count), uniform) in pages.iter().zip(&page_params) {
         let bindings = [uniform, page, &cell_start, &chunks];
         ex.dispatch("bin_count", &bindings, groups("bin_count", count)?)?;
     }
-    exclusive_scan(ex, &cell_start, params.cell_count + 1)?;
+    exclusive_scan(ex, &cell_start, cells as u32 + 1)?;
 
     // Entries to allocate (at least one: empty bindings are invalid).
     let len = total.max(1);

@@ -1,5 +1,6 @@
 //! Photon binning: the GPU's lists equal the CPU mirror's (same cells, same photons in the
-//! same key order), across store pages and across rank chunks of long cell lists.
+//! same key order), across store pages, across rank chunks of long cell lists and with cells
+//! split into sub-cell lists.
 
 mod common;
 
@@ -8,15 +9,16 @@ use std::path::Path;
 use glam::Vec3;
 use lobelight::bins::{PhotonBins, bin_params};
 use lobelight::cpu;
+use lobelight::em::{EmConfig, FitShape};
 use lobelight::gpu::bins::bin_photons;
 use lobelight::gpu::photons::{GpuPhotons, trace_photons};
 use lobelight::gpu::scene::GpuScene;
 use lobelight::grid::grid_params;
 use lobelight::photons::{PhotonConfig, PhotonMap};
 use lobelight::scene::{self, file::StoreRange};
-use lobelight::shared::bins::{RANK_CHUNK, bin_of};
+use lobelight::shared::bins::{RANK_CHUNK, bin_of, list_count};
 use lobelight::shared::octahedral::oct_decode;
-use lobelight::types::Photon;
+use lobelight::types::{BinParams, GridParams, Photon};
 
 /// Lists are identical: cell starts, keys, positions and powers bit for bit; directions
 /// within one snorm16 step per component (the GPU's division may round the other way).
@@ -40,12 +42,13 @@ fn assert_same_bins(gpu: &PhotonBins, cpu: &PhotonBins) {
     }
 }
 
-/// Every photon of `map` is in the list of its own cell, once, in key order.
+/// Every photon of `map` is in the list of its own cell (or sub-cell), once, in key order.
 fn assert_well_formed(bins: &PhotonBins, map: &PhotonMap) {
     assert_eq!(bins.len(), map.photons.len());
+    assert_eq!(bins.cell_start.len(), list_count(&bins.params) as usize + 1);
     let by_key: std::collections::HashMap<(u32, u32), &Photon> =
         map.photons.iter().map(|p| (p.key(), p)).collect();
-    for c in 0..bins.params.cell_count as usize {
+    for c in 0..list_count(&bins.params) as usize {
         let (a, b) = (bins.cell_start[c] as usize, bins.cell_start[c + 1] as usize);
         for i in a..b {
             if i > a {
@@ -77,12 +80,13 @@ fn gpu_bins_equal_cpu_bins_across_pages() {
     let uploaded = GpuScene::upload(&gpu, &scene).unwrap();
     let traced = trace_photons(&gpu, &scene, &uploaded, &cfg, &mut |_, _| {}).unwrap();
     assert!(traced.pages.len() >= 3, "{} pages", traced.pages.len());
-    let params = bin_params(&uploaded.grid.params, scene.search_radius()).unwrap();
+    let map = traced.download(&gpu).unwrap();
+    let stored = map.photons.len() as u64;
+    let params = bin_params(&uploaded.grid.params, scene.search_radius(), stored).unwrap();
     let on_gpu = bin_photons(&gpu, &traced, &uploaded.splats, &params)
         .unwrap()
         .download(&gpu)
         .unwrap();
-    let map = traced.download(&gpu).unwrap();
     let on_cpu = cpu::bin_photons(&params, &map.photons, &scene.splats).unwrap();
     // Each photon carries the surface it landed on.
     let by_key: std::collections::HashMap<_, _> =
@@ -124,7 +128,9 @@ fn long_cell_lists_sort_across_rank_chunks() {
     assert_eq!(keys.len(), n as usize, "keys must be unique");
     let splats = common::random_splats(64, 0.01, 0.05, 3);
     let grid = grid_params(&splats, &Default::default()).unwrap();
-    let params = bin_params(&grid, 0.2).unwrap();
+    // No photons counted: one list a cell.
+    let params = bin_params(&grid, 0.2, 0).unwrap();
+    assert_eq!(params.sub, 1);
     let map = PhotonMap {
         photons,
         stats: Default::default(),
@@ -137,4 +143,103 @@ fn long_cell_lists_sort_across_rank_chunks() {
     let on_gpu = binned.download(&gpu).unwrap();
     assert_well_formed(&on_cpu, &map);
     assert_same_bins(&on_gpu, &on_cpu);
+}
+
+/// Cells split into 2³ and 4³ sub-cell lists: the device's lists equal the mirror's, each
+/// photon is in its sub-cell's list in key order, a cell's lists hold exactly the photons its
+/// one list held, and the lobe fit over them finds the same photons for every splat (counts
+/// equal, irradiance equal but for the order of the sums).
+#[test]
+fn sub_cell_lists_hold_each_cells_photons() {
+    let gpu = common::gpu();
+    let scene = scene::load(Path::new("scenes/cornell.toml")).unwrap();
+    let cfg = PhotonConfig {
+        photons: 60_000,
+        ..PhotonConfig::from_scene(&scene)
+    };
+    let uploaded = GpuScene::upload(&gpu, &scene).unwrap();
+    let traced = trace_photons(&gpu, &scene, &uploaded, &cfg, &mut |_, _| {}).unwrap();
+    let map = traced.download(&gpu).unwrap();
+    // Twice the scene's radius: 4³ sub-cells of its 64 k cells stay within a storage binding.
+    let radius = 2.0 * scene.search_radius();
+    let whole = bin_params(&uploaded.grid.params, radius, 0).unwrap();
+    assert_eq!(whole.sub, 1);
+    let one = cpu::bin_photons(&whole, &map.photons, &scene.splats).unwrap();
+    let em = EmConfig {
+        radius,
+        ..EmConfig::from_scene(&scene)
+    };
+    let fit_one = cpu::fit_lobes(
+        &em,
+        &one,
+        &scene.splats,
+        &scene.materials,
+        FitShape::default(),
+    )
+    .unwrap();
+    for sub in [2, 4] {
+        let params = BinParams { sub, ..whole };
+        let on_cpu = cpu::bin_photons(&params, &map.photons, &scene.splats).unwrap();
+        let on_gpu = bin_photons(&gpu, &traced, &uploaded.splats, &params)
+            .unwrap()
+            .download(&gpu)
+            .unwrap();
+        assert_well_formed(&on_cpu, &map);
+        assert_same_bins(&on_gpu, &on_cpu);
+        let per_cell = (sub * sub * sub) as usize;
+        for c in 0..whole.cell_count as usize {
+            let mut split = on_cpu.keys[on_cpu.cell_start[c * per_cell] as usize
+                ..on_cpu.cell_start[(c + 1) * per_cell] as usize]
+                .to_vec();
+            split.sort();
+            let listed = &one.keys[one.cell_start[c] as usize..one.cell_start[c + 1] as usize];
+            assert_eq!(split, listed, "sub {sub}: cell {c}");
+        }
+        let fit = cpu::fit_lobes(
+            &em,
+            &on_cpu,
+            &scene.splats,
+            &scene.materials,
+            FitShape::default(),
+        )
+        .unwrap();
+        for (i, (a, b)) in fit_one.light.iter().zip(&fit.light).enumerate() {
+            assert_eq!(a.photons, b.photons, "sub {sub}: splat {i}");
+            for k in 0..3 {
+                let (x, y) = (a.irradiance[k], b.irradiance[k]);
+                assert!(
+                    (x - y).abs() <= 1e-5 * x.abs().max(1e-20),
+                    "sub {sub}: splat {i} irradiance {x} vs {y}"
+                );
+            }
+        }
+    }
+}
+
+/// Cells are split only while there are photons enough to fill the lists, and never past
+/// the cap on lists.
+#[test]
+fn cells_split_with_the_photon_count() {
+    let scene = scene::load(Path::new("scenes/cornell.toml")).unwrap();
+    let grid = grid_params(&scene.splats, &Default::default()).unwrap();
+    let r = 2.0 * scene.search_radius();
+    let cells = bin_params(&grid, r, 0).unwrap().cell_count as u64;
+    assert!(cells * 64 <= lobelight::bins::MAX_BIN_LISTS);
+    let sub_for = |stored: u64| bin_params(&grid, r, stored).unwrap().sub;
+    assert_eq!(sub_for(0), 1);
+    let per = lobelight::bins::LISTS_PER_PHOTON;
+    assert_eq!(sub_for(cells * 8 / per - 1), 1);
+    assert_eq!(sub_for(cells * 8 / per), 2);
+    assert_eq!(sub_for(cells * 64 / per), 4);
+    assert_eq!(sub_for(u64::MAX), 4);
+    let huge = GridParams {
+        dims: [1024, 1024, 1024],
+        cell_count: 1 << 30,
+        ..grid
+    };
+    let p = bin_params(&huge, 1e-6, u64::MAX).unwrap();
+    assert!(
+        list_count(&p) as u64 <= lobelight::bins::MAX_BIN_LISTS,
+        "{p:?}"
+    );
 }

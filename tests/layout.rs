@@ -135,7 +135,7 @@ fn rust_layouts() -> Vec<RustLayout> {
             inv_cell_size,
             photon_count,
             rank_chunk,
-            _pad0
+            sub
         }),
         layout!(EmParams {
             lobes,

@@ -250,7 +250,7 @@ pub fn em(
             let on_gpu = GpuScene::upload(gpu, scene)?;
             let traced = trace_photons(gpu, scene, &on_gpu, photons, &mut |_, _| {})?;
             let traced_stats = traced.stats.clone();
-            let params = bin_params(&on_gpu.grid.params, cfg.radius)?;
+            let params = bin_params(&on_gpu.grid.params, cfg.radius, traced.stats.stored)?;
             let t = Instant::now();
             let bins = gpu_bins::bin_photons(gpu, &traced, &on_gpu.splats, &params)?;
             let binning_ms = ms_since(t);
@@ -278,7 +278,7 @@ pub fn em(
         }
         None => {
             let (traced, grid, _) = cpu::trace_scene(scene, photons, &mut |_, _| {})?;
-            let params = bin_params(&grid.params, cfg.radius)?;
+            let params = bin_params(&grid.params, cfg.radius, traced.stats.stored)?;
             let t = Instant::now();
             let bins = cpu::bin_photons(&params, &traced.photons, &scene.splats)?;
             let binning_ms = ms_since(t);

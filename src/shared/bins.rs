@@ -32,8 +32,23 @@ pub fn bin_index(c: UVec3, b: &BinParams) -> u32 {
     c.x + b.dims[0] * (c.y + b.dims[1] * c.z)
 }
 
+/// The list of point `p`: its cell's `sub³` lists, then its sub-cell within the cell (x
+/// fastest). The cell is `bin_coord`'s, so a photon lies in the cell the boxes count it in.
 pub fn bin_of(p: Vec3, b: &BinParams) -> u32 {
-    bin_index(bin_coord(p, b), b)
+    let c = bin_coord(p, b);
+    let s = b.sub.max(1);
+    let within = (p - Vec3::from(b.origin)) * b.inv_cell_size - c.as_vec3();
+    let q = (within * s as f32)
+        .floor()
+        .clamp(Vec3::ZERO, Vec3::splat((s - 1) as f32))
+        .as_uvec3();
+    bin_index(c, b) * s * s * s + q.x + s * (q.y + s * q.z)
+}
+
+/// Lists of the binned photons: `sub³` per cell.
+pub fn list_count(b: &BinParams) -> u32 {
+    let s = b.sub.max(1);
+    b.cell_count * s * s * s
 }
 
 /// Relative margin on a box's reach (`BIN_REACH_MARGIN` in WGSL): a cell a rounding error
@@ -80,7 +95,7 @@ pub fn bin_axis_gap(i: u32, q: f32, dim: u32) -> f32 {
     below.max(above).max(0.0)
 }
 
-/// Row `row` of the box: cells [x, y) of the binned grid, trimmed at both ends to the cells
+/// Row `row` of the box: the lists [x, y) of its cells, trimmed at both ends to the cells
 /// within reach (the rest is contiguous: the ball is convex); possibly empty.
 pub fn bin_row(bx: &BinBox, row: u32, b: &BinParams) -> UVec2 {
     let y = bx.lo.y + row % bx.size.y;
@@ -101,5 +116,9 @@ pub fn bin_row(bx: &BinBox, row: u32, b: &BinParams) -> UVec2 {
         x1 -= 1;
     }
     let first = bin_index(UVec3::new(bx.lo.x, y, z), b);
-    UVec2::new(first + x0 - bx.lo.x, first + x1 - bx.lo.x)
+    let per_cell = b.sub.max(1).pow(3);
+    UVec2::new(
+        (first + x0 - bx.lo.x) * per_cell,
+        (first + x1 - bx.lo.x) * per_cell,
+    )
 }

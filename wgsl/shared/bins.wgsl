@@ -27,8 +27,14 @@ fn bin_index(c: vec3<u32>, b: BinParams) -> u32 {
     return c.x + b.dims.x * (c.y + b.dims.y * c.z);
 }
 
+// The list of point `p`: its cell's sub^3 lists, then its sub-cell within the cell (x
+// fastest). The cell is bin_coord's, so a photon lies in the cell the boxes count it in.
 fn bin_of(p: vec3<f32>, b: BinParams) -> u32 {
-    return bin_index(bin_coord(p, b), b);
+    let c = bin_coord(p, b);
+    let s = max(b.sub, 1u);
+    let within = (p - b.origin) * b.inv_cell_size - vec3<f32>(c);
+    let q = vec3<u32>(clamp(floor(within * f32(s)), vec3<f32>(0.0), vec3<f32>(f32(s - 1u))));
+    return bin_index(c, b) * s * s * s + q.x + s * (q.y + s * q.z);
 }
 
 // Most cells a box spans per axis, less one. The host makes cells a little larger than R/2,
@@ -37,8 +43,8 @@ const BIN_SPAN: u32 = 4u;
 
 // The cells within `r` of `c`: the box of cells around it, whose rows along x are contiguous
 // runs of the binned list, each trimmed to the cells that reach within `r` of `c` (a sphere
-// fills half its box, so this halves the photons tested). Row k covers cells
-// [bin_row(box, k).x, bin_row(box, k).y), possibly none.
+// fills half its box, so this halves the photons tested). Row k covers the lists
+// [bin_row(box, k).x, bin_row(box, k).y) of its cells (sub^3 each), possibly none.
 struct BinBox {
     lo: vec3<u32>,
     size: vec3<u32>,
@@ -96,5 +102,7 @@ fn bin_row(box: BinBox, row: u32, b: BinParams) -> vec2<u32> {
         }
     }
     let first = bin_index(vec3<u32>(box.lo.x, y, z), b);
-    return vec2<u32>(first + x0 - box.lo.x, first + x1 - box.lo.x);
+    let s = max(b.sub, 1u);
+    let per_cell = s * s * s;
+    return vec2<u32>((first + x0 - box.lo.x) * per_cell, (first + x1 - box.lo.x) * per_cell);
 }

@@ -137,7 +137,7 @@ struct BinParams {
     inv_cell_size: f32,
     photon_count: u32,
     rank_chunk: u32,
-    _pad0: u32,
+    sub: u32,
 }
 
 struct EmParams {
