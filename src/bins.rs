@@ -25,7 +25,7 @@ pub const MAX_BIN_DIM: u32 = 256;
 pub const BINNED_BYTES: u64 = 16 + 16 + 8;
 
 /// The binning grid over the splat grid's box for search radius `radius`, for `stored`
-/// photons: cells are split into 2³ or 4³ sub-cell lists while there are at most
+/// photons: cells are split into 2³, 3³ or 4³ sub-cell lists while there are at most
 /// `LISTS_PER_PHOTON` lists a photon (ranking a list costs the square of its length; a list
 /// that stays empty costs one entry of the scan), up to `MAX_BIN_LISTS`.
 pub fn bin_params(grid: &GridParams, radius: f32, stored: u64) -> Result<BinParams> {
@@ -40,7 +40,7 @@ pub fn bin_params(grid: &GridParams, radius: f32, stored: u64) -> Result<BinPara
         .as_uvec3();
     let cell_count = dims.x * dims.y * dims.z;
     let lists = |sub: u64| cell_count as u64 * sub.pow(3);
-    let sub = [4u32, 2]
+    let sub = [4u32, 3, 2]
         .into_iter()
         .find(|&s| {
             let n = lists(s as u64);

@@ -245,7 +245,7 @@ pub struct BinParams {
     pub photon_count: u32,
     /// `bin_rank`: the chunk of every cell list this dispatch compares against.
     pub rank_chunk: u32,
-    /// Sub-cells per cell along an axis (1, 2 or 4): each cell's photons are listed by
+    /// Sub-cells per cell along an axis (1 to 4): each cell's photons are listed by
     /// sub-cell, so that ranking a list (quadratic in its length) stays cheap when cells hold
     /// many photons; a cell's sub-cell lists are contiguous, so a cell is still one run.
     pub sub: u32,

@@ -145,7 +145,7 @@ fn long_cell_lists_sort_across_rank_chunks() {
     assert_same_bins(&on_gpu, &on_cpu);
 }
 
-/// Cells split into 2³ and 4³ sub-cell lists: the device's lists equal the mirror's, each
+/// Cells split into 2³, 3³ and 4³ sub-cell lists: the device's lists equal the mirror's, each
 /// photon is in its sub-cell's list in key order, a cell's lists hold exactly the photons its
 /// one list held, and the lobe fit over them finds the same photons for every splat (counts
 /// equal, irradiance equal but for the order of the sums).
@@ -177,7 +177,7 @@ fn sub_cell_lists_hold_each_cells_photons() {
         FitShape::default(),
     )
     .unwrap();
-    for sub in [2, 4] {
+    for sub in [2, 3, 4] {
         let params = BinParams { sub, ..whole };
         let on_cpu = cpu::bin_photons(&params, &map.photons, &scene.splats).unwrap();
         let on_gpu = bin_photons(&gpu, &traced, &uploaded.splats, &params)
@@ -228,9 +228,13 @@ fn cells_split_with_the_photon_count() {
     let sub_for = |stored: u64| bin_params(&grid, r, stored).unwrap().sub;
     assert_eq!(sub_for(0), 1);
     let per = lobelight::bins::LISTS_PER_PHOTON;
-    assert_eq!(sub_for(cells * 8 / per - 1), 1);
-    assert_eq!(sub_for(cells * 8 / per), 2);
-    assert_eq!(sub_for(cells * 64 / per), 4);
+    // The least photon count for s³ lists a cell.
+    let least = |s: u64| (cells * s * s * s).div_ceil(per);
+    assert_eq!(sub_for(least(2) - 1), 1);
+    assert_eq!(sub_for(least(2)), 2);
+    assert_eq!(sub_for(least(3) - 1), 2);
+    assert_eq!(sub_for(least(3)), 3);
+    assert_eq!(sub_for(least(4)), 4);
     assert_eq!(sub_for(u64::MAX), 4);
     let huge = GridParams {
         dims: [1024, 1024, 1024],
