@@ -212,12 +212,7 @@ impl FrameTargets {
 
 fn module(gpu: &Gpu, name: &'static str, paging: &Paging) -> Result<wgpu::ShaderModule> {
     let source = crate::shaders::resolve_stage_paged(name, &[], paging)?;
-    Ok(gpu
-        .device
-        .create_shader_module(wgpu::ShaderModuleDescriptor {
-            label: Some(name),
-            source: wgpu::ShaderSource::Wgsl(source.into()),
-        }))
+    Ok(gpu.shader_module(name, source))
 }
 
 pub(super) fn raster_pipeline(
