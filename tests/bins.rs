@@ -16,7 +16,7 @@ use lobelight::gpu::scene::GpuScene;
 use lobelight::grid::grid_params;
 use lobelight::photons::{PhotonConfig, PhotonMap};
 use lobelight::scene::{self, file::StoreRange};
-use lobelight::shared::bins::{RANK_CHUNK, bin_of, list_count};
+use lobelight::shared::bins::{RANK_CHUNK, bin_of, list_count, lists_per_cell};
 use lobelight::shared::octahedral::oct_decode;
 use lobelight::types::{BinParams, GridParams, Photon};
 
@@ -186,7 +186,7 @@ fn sub_cell_lists_hold_each_cells_photons() {
             .unwrap();
         assert_well_formed(&on_cpu, &map);
         assert_same_bins(&on_gpu, &on_cpu);
-        let per_cell = (sub * sub * sub) as usize;
+        let per_cell = lists_per_cell(&params) as usize;
         for c in 0..whole.cell_count as usize {
             let mut split = on_cpu.keys[on_cpu.cell_start[c * per_cell] as usize
                 ..on_cpu.cell_start[(c + 1) * per_cell] as usize]

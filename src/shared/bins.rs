@@ -42,13 +42,17 @@ pub fn bin_of(p: Vec3, b: &BinParams) -> u32 {
         .floor()
         .clamp(Vec3::ZERO, Vec3::splat((s - 1) as f32))
         .as_uvec3();
-    bin_index(c, b) * s * s * s + q.x + s * (q.y + s * q.z)
+    bin_index(c, b) * lists_per_cell(b) + q.x + s * (q.y + s * q.z)
 }
 
-/// Lists of the binned photons: `sub³` per cell.
+/// The lists of one cell: `sub³`.
+pub fn lists_per_cell(b: &BinParams) -> u32 {
+    b.sub.max(1).pow(3)
+}
+
+/// Lists of the binned photons.
 pub fn list_count(b: &BinParams) -> u32 {
-    let s = b.sub.max(1);
-    b.cell_count * s * s * s
+    b.cell_count * lists_per_cell(b)
 }
 
 /// Relative margin on a box's reach (`BIN_REACH_MARGIN` in WGSL): a cell a rounding error
@@ -116,7 +120,7 @@ pub fn bin_row(bx: &BinBox, row: u32, b: &BinParams) -> UVec2 {
         x1 -= 1;
     }
     let first = bin_index(UVec3::new(bx.lo.x, y, z), b);
-    let per_cell = b.sub.max(1).pow(3);
+    let per_cell = lists_per_cell(b);
     UVec2::new(
         (first + x0 - bx.lo.x) * per_cell,
         (first + x1 - bx.lo.x) * per_cell,

@@ -34,7 +34,13 @@ fn bin_of(p: vec3<f32>, b: BinParams) -> u32 {
     let s = max(b.sub, 1u);
     let within = (p - b.origin) * b.inv_cell_size - vec3<f32>(c);
     let q = vec3<u32>(clamp(floor(within * f32(s)), vec3<f32>(0.0), vec3<f32>(f32(s - 1u))));
-    return bin_index(c, b) * s * s * s + q.x + s * (q.y + s * q.z);
+    return bin_index(c, b) * lists_per_cell(b) + q.x + s * (q.y + s * q.z);
+}
+
+// The lists of one cell: sub^3.
+fn lists_per_cell(b: BinParams) -> u32 {
+    let s = max(b.sub, 1u);
+    return s * s * s;
 }
 
 // Most cells a box spans per axis, less one. The host makes cells a little larger than R/2,
@@ -102,7 +108,6 @@ fn bin_row(box: BinBox, row: u32, b: BinParams) -> vec2<u32> {
         }
     }
     let first = bin_index(vec3<u32>(box.lo.x, y, z), b);
-    let s = max(b.sub, 1u);
-    let per_cell = s * s * s;
+    let per_cell = lists_per_cell(b);
     return vec2<u32>((first + x0 - box.lo.x) * per_cell, (first + x1 - box.lo.x) * per_cell);
 }
