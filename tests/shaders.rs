@@ -295,3 +295,36 @@ fn paged_needs_a_storage_array_declaration() {
         "{err}"
     );
 }
+
+/// The value of `const NAME: u32 = Nu;` in a WGSL source.
+fn wgsl_const_u32(source: &str, name: &str) -> u32 {
+    let decl = format!("const {name}: u32 = ");
+    let line = source
+        .lines()
+        .find_map(|l| l.trim().strip_prefix(decl.as_str()))
+        .unwrap_or_else(|| panic!("no `{decl}` in the WGSL"));
+    line.trim_end_matches(';')
+        .trim_end_matches('u')
+        .parse()
+        .unwrap()
+}
+
+/// The host draws the splats' triangles by instances of several splats, and the vertex
+/// shaders take a vertex's splat and corner from its vertex and instance index: both sides
+/// must split a draw alike, or splats are drawn twice or not at all.
+#[test]
+fn splat_draw_constants_match_the_wgsl() {
+    use lobelight::shared::splat::{SPLAT_CORNERS, SPLATS_PER_INSTANCE, instances};
+    for stage in ["splat_visibility", "splat_attributes"] {
+        let source = shaders::resolve_stage(stage).unwrap();
+        assert_eq!(wgsl_const_u32(&source, "SPLAT_CORNERS"), SPLAT_CORNERS);
+        assert_eq!(
+            wgsl_const_u32(&source, "SPLATS_PER_INSTANCE"),
+            SPLATS_PER_INSTANCE
+        );
+    }
+    assert_eq!(instances(0), 0);
+    assert_eq!(instances(1), 1);
+    assert_eq!(instances(SPLATS_PER_INSTANCE), 1);
+    assert_eq!(instances(SPLATS_PER_INSTANCE + 1), 2);
+}

@@ -25,8 +25,12 @@ fn in_front(v: SplatVertex, s: Splat) -> bool {
 }
 
 @vertex
-fn vs_main(@builtin(vertex_index) corner: u32, @builtin(instance_index) i: u32) -> SplatVertex {
-    return splat_vertex(cam, splats_at(i), i, corner);
+fn vs_main(@builtin(vertex_index) k: u32, @builtin(instance_index) b: u32) -> SplatVertex {
+    let i = instance_splat(k, b);
+    if i >= splats_len() {
+        return surplus_vertex(i);
+    }
+    return splat_vertex(cam, splats_at(i), i, instance_corner(k));
 }
 
 @fragment
@@ -57,8 +61,12 @@ struct BakedAttributes {
 
 // The vertex of the baked variant: the splat's radiance comes with it.
 @vertex
-fn vs_baked(@builtin(vertex_index) corner: u32, @builtin(instance_index) i: u32) -> SplatVertex {
-    var out = splat_vertex(cam, splats_at(i), i, corner);
+fn vs_baked(@builtin(vertex_index) k: u32, @builtin(instance_index) b: u32) -> SplatVertex {
+    let i = instance_splat(k, b);
+    if i >= splats_len() {
+        return surplus_vertex(i);
+    }
+    var out = splat_vertex(cam, splats_at(i), i, instance_corner(k));
     out.radiance = shaded_at(i).xyz;
     return out;
 }

@@ -12,8 +12,12 @@
 @group(0) @binding(1) var<storage, read> splats: array<Splat>;
 
 @vertex
-fn vs_main(@builtin(vertex_index) corner: u32, @builtin(instance_index) i: u32) -> SplatVertex {
-    return splat_vertex(cam, splats_at(i), i, corner);
+fn vs_main(@builtin(vertex_index) k: u32, @builtin(instance_index) b: u32) -> SplatVertex {
+    let i = instance_splat(k, b);
+    if i >= splats_len() {
+        return surplus_vertex(i);
+    }
+    return splat_vertex(cam, splats_at(i), i, instance_corner(k));
 }
 
 struct Visible {

@@ -15,7 +15,7 @@ use crate::frame::Splatter;
 use crate::scene::Scene;
 use crate::sequence::{Direct, TileLists, bin_splat_tiles};
 use crate::shaders::{PAGE_BINDING_STEP, Paging};
-use crate::shared::splat::SPLAT_CORNERS;
+use crate::shared::splat::{SPLAT_CORNERS, SPLATS_PER_INSTANCE, instances};
 use crate::types::{Camera, DIRECT_BAKED, ShadeParams};
 
 /// The format of the blended targets: f32 where the device can blend it, else f16.
@@ -43,6 +43,8 @@ const SHADED_BINDING: u32 = 11;
 /// shading of the other passes does not, so their derived layouts lack them.
 const DIRECT_BAKE_BINDINGS: std::ops::Range<u32> = 7..10;
 const TARGETS: usize = 4;
+/// The vertices of one instance of the raster passes' draw (a triangle list).
+const SPLAT_VERTICES: std::ops::Range<u32> = 0..SPLAT_CORNERS * SPLATS_PER_INSTANCE;
 
 /// What the splat passes read of a baked scene, all on the device.
 pub struct SceneBuffers<'a> {
@@ -247,7 +249,7 @@ pub(super) fn raster_pipeline_at(
                 buffers: &[],
             },
             primitive: wgpu::PrimitiveState {
-                topology: wgpu::PrimitiveTopology::TriangleStrip,
+                topology: wgpu::PrimitiveTopology::TriangleList,
                 ..Default::default()
             },
             depth_stencil: depth,
@@ -792,7 +794,7 @@ impl SplatPipelines {
             });
             pass.set_pipeline(&pipeline);
             pass.set_bind_group(0, &vis_group, &[]);
-            pass.draw(0..SPLAT_CORNERS, 0..scene.splat_count);
+            pass.draw(SPLAT_VERTICES, 0..instances(scene.splat_count));
             return Ok(());
         }
         if pass == SplatPass::Attributes {
@@ -829,7 +831,7 @@ impl SplatPipelines {
             });
             pass.set_pipeline(&pipeline);
             pass.set_bind_group(0, &attr_group, &[]);
-            pass.draw(0..SPLAT_CORNERS, 0..scene.splat_count);
+            pass.draw(SPLAT_VERTICES, 0..instances(scene.splat_count));
             return Ok(());
         }
         let mut frame_entries = vec![
