@@ -30,6 +30,8 @@ pub const SHOW_INDIRECT_SPECULAR: u32 = 8;
 pub const SHOW_ALL: u32 = 15;
 
 pub const SPLAT_CORNERS: u32 = 3;
+const SQRT_3: f32 = 1.732_050_8;
+
 /// Splats one instance of the raster passes' draw holds (see the WGSL): the draw is
 /// `SPLAT_CORNERS × SPLATS_PER_INSTANCE` vertices times `instances(count)`.
 pub const SPLATS_PER_INSTANCE: u32 = 32;
@@ -38,7 +40,6 @@ pub const SPLATS_PER_INSTANCE: u32 = 32;
 pub fn instances(count: u32) -> u32 {
     count.div_ceil(SPLATS_PER_INSTANCE)
 }
-const SQRT_3: f32 = 1.732_050_8;
 
 pub fn splat_corner(s: &Splat, i: u32) -> Vec3 {
     let f = frame_of(Vec3::from(s.normal));

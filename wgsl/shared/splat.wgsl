@@ -73,11 +73,11 @@ const SPLAT_CORNERS: u32 = 3u;
 const SQRT_3: f32 = 1.7320508;
 
 // Splats drawn by one instance of the raster passes' draw: SPLATS_PER_INSTANCE triangles of
-// SPLAT_CORNERS vertices each, the last instance's surplus hidden (splat_vertex_at). llvmpipe
+// SPLAT_CORNERS vertices each, the last instance's surplus hidden (surplus_vertex). llvmpipe
 // shades the vertices of an instance together and pays a fixed cost per instance, so one
 // triangle an instance left most of its SIMD lanes idle: batches of 32 made the bunny's
-// 512^2 frame 15 % faster (89 -> 76 ms) and the full dragon's 19 % (306 -> 249 ms); batches
-// above a few hundred were slower again (docs/measurements.md).
+// 512^2 frame 15 % faster (89 -> 76 ms) and the full dragon's 17 % (306-318 -> 258 ms);
+// batches above a few hundred were slower again (docs/measurements.md).
 const SPLATS_PER_INSTANCE: u32 = 32u;
 
 // Corner `i` (0..2) of the triangle in the splat's plane that bounds its disk: its
