@@ -61,6 +61,7 @@ pub const STAGES: &[WgslFile] = &[
     stage!("tonemap_reduce"),
     stage!("tonemap_apply"),
     stage!("splat_visibility"),
+    stage!("splat_select"),
     stage!("splat_shade"),
     stage!("splat_attributes"),
     stage!("splat_tile_count"),

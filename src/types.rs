@@ -310,6 +310,13 @@ pub struct Camera {
     /// Sub-pixel offset of every view ray (pixels, within ±0.5): successive jittered frames
     /// average into an anti-aliased image (`frame::jitter`).
     pub jitter: [f32; 2],
+    /// Level of detail (`shared::splat::drawn_radius`): splats whose projected radius is below
+    /// this many pixels are thinned out and the rest grown to cover for them; 0 draws every
+    /// splat as it is (refinement frames, shadow rays, the compute splatter).
+    pub lod: f32,
+    pub _pad0: f32,
+    pub _pad1: f32,
+    pub _pad2: f32,
 }
 
 /// Uniform of the shading passes (`splat_attributes`, `shade`).

@@ -165,7 +165,11 @@ fn rust_layouts() -> Vec<RustLayout> {
             up,
             tan_y,
             size,
-            jitter
+            jitter,
+            lod,
+            _pad0,
+            _pad1,
+            _pad2
         }),
         layout!(ShadeParams {
             lobes_per_splat,

@@ -28,6 +28,15 @@ fn cpu_bake(scene: &Scene, grid: &SplatGrid) -> LobeMap {
         .lobes
 }
 
+/// The default scene with 100 k photons, baked on the CPU.
+fn glossy_cornell() -> (Scene, SplatGrid, LobeMap) {
+    let mut scene = scene::load(Path::new("scenes/cornell.toml")).unwrap();
+    scene.bake.photons = 100_000;
+    let grid = common::host_grid(&scene);
+    let lobes = cpu_bake(&scene, &grid);
+    (scene, grid, lobes)
+}
+
 fn views(scene: &Scene, size: u32) -> Vec<View> {
     let mut desc = scene.camera.clone();
     let front = View::new(&desc, size, size);
@@ -61,16 +70,48 @@ fn cpu_hdr(
     cpu_frame(scene, grid, lobes, &cam, &shade_params(scene, lobes, cfg)).unwrap()
 }
 
+/// The level of detail of moving frames (`--lod`): the device thins and grows the same splats as
+/// the mirror (the frames agree within the parity tolerances), and at 96 pixels, where the
+/// box's far splats are about half a pixel, it does thin them: a thousand or more splats are
+/// left out in each view, the frame changes, and its light stays within 5 % of the full
+/// frame's.
+#[test]
+fn level_of_detail_matches_the_mirror_and_thins() {
+    use lobelight::shared::splat::drawn_radius;
+    let gpu = common::gpu();
+    let (scene, grid, lobes) = glossy_cornell();
+    let cfg = FrameConfig {
+        splatter: Splatter::Raster,
+        lod: 1.0,
+        ..FrameConfig::default()
+    };
+    for view in views(&scene, 96) {
+        let cam = camera_uniform(&view, scene.bounds(), &cfg);
+        let left_out = (0..scene.splats.len())
+            .filter(|&i| drawn_radius(&cam, &scene.splats[i], i as u32) == 0.0)
+            .count();
+        assert!(left_out >= 1000, "{left_out} left out");
+        let a = gpu_frame(&gpu, &scene, &lobes, &view, &cfg);
+        let b = cpu_hdr(&scene, &grid, &lobes, &view, &cfg);
+        let d = difference(&a, &b).unwrap();
+        eprintln!("lod {}x{}: {d:?}", view.width, view.height);
+        assert!(d.mean_relative <= MEAN_RELATIVE, "{d:?}");
+        assert!(d.within_5_percent >= WITHIN_5_PERCENT, "{d:?}");
+        let full = FrameConfig { lod: 0.0, ..cfg };
+        let e = difference(&b, &cpu_hdr(&scene, &grid, &lobes, &view, &full)).unwrap();
+        eprintln!("against every splat: {e:?}");
+        assert!(e.within_5_percent < 1.0, "{e:?}");
+        assert!(e.energy.abs() <= 0.05, "{e:?}");
+    }
+}
+
 /// The glossy Cornell box, baked once on the CPU and drawn from two views by both paths, with
 /// baked and ray-traced direct light, by the raster passes and by the compute splatter (whose
 /// mirror is the raster passes' own: the same fragments summed per pixel in the same order).
 #[test]
 fn splat_passes_match_the_cpu_mirror() {
     let gpu = common::gpu();
-    let mut scene = scene::load(Path::new("scenes/cornell.toml")).unwrap();
-    scene.bake.photons = 100_000;
-    let grid = common::host_grid(&scene);
-    let lobes = cpu_bake(&scene, &grid);
+    let (scene, grid, lobes) = glossy_cornell();
     assert!(lobes.stats.fitted > 500, "the glossy block has lobes");
     let modes =
         [Direct::Baked, Direct::Rays].map(|d| [(d, Splatter::Raster), (d, Splatter::Compute)]);

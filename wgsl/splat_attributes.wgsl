@@ -35,7 +35,8 @@ fn vs_main(@builtin(vertex_index) k: u32, @builtin(instance_index) b: u32) -> Sp
 
 @fragment
 fn fs_main(v: SplatVertex) -> Attributes {
-    let s = splats_at(v.splat);
+    var s = splats_at(v.splat);
+    s.radius = v.radius;
     let d = pixel_ray(cam, v.position.xy);
     let h = splat_hit(s, cam.eye, d);
     if !covers(cam, h, d) || !in_front(v, s) {

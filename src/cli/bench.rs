@@ -412,6 +412,8 @@ pub struct FrameBench {
     /// "compute" (the compute splatter; `passes_ms` are then its tile binning, its tile pass
     /// and shade).
     pub splatter: &'static str,
+    /// The moving frames' level of detail, in pixels (`--lod`; 0: every splat drawn).
+    pub lod: f32,
     /// Baked direct light: the direct bake of the lights, once before the frames (what a moved
     /// light costs before its indirect bake).
     #[serde(skip_serializing_if = "Option::is_none")]
@@ -475,6 +477,7 @@ pub fn frame(
     cfg: &FrameConfig,
     tone: &ToneConfig,
 ) -> Result<FrameBench> {
+    cfg.validate()?;
     let progress = Progress::new(false);
     let mut sizes = Vec::new();
     let mut direct_bake_ms = None;
@@ -581,6 +584,7 @@ pub fn frame(
         area_samples: cfg.area_samples,
         direct: cfg.direct.name(),
         splatter,
+        lod: cfg.lod,
         direct_bake_ms,
         frame_ms: sizes[0].frame_ms,
         sizes,
@@ -647,8 +651,8 @@ impl std::fmt::Display for FrameBench {
         )?;
         write!(
             f,
-            "direct       {}, {} splatter",
-            self.direct, self.splatter
+            "direct       {}, {} splatter, level of detail {} px",
+            self.direct, self.splatter, self.lod
         )?;
         if let Some(ms) = self.direct_bake_ms {
             write!(f, "; direct bake {ms:.1} ms")?;

@@ -173,6 +173,10 @@ struct LookArgs {
     /// or whichever is faster on this kind of device.
     #[arg(long, value_enum, default_value_t = Splatter::Auto)]
     splatter: Splatter,
+    /// Level of detail of a moving frame, in pixels: where splats project smaller, only some
+    /// are drawn, grown to cover for the rest (0: every splat). Still images draw them all.
+    #[arg(long, default_value_t = crate::frame::DEFAULT_LOD)]
+    lod: f32,
 }
 
 impl LookArgs {
@@ -182,6 +186,7 @@ impl LookArgs {
             show: self.show.mask(),
             direct: self.direct,
             splatter: self.splatter,
+            lod: self.lod,
             ..FrameConfig::default()
         }
     }

@@ -26,6 +26,7 @@ pub mod scan_apply;
 pub mod scan_reduce;
 pub mod shade;
 pub mod splat_attributes;
+pub mod splat_select;
 pub mod splat_shade;
 pub mod splat_shading;
 pub mod splat_tiles;

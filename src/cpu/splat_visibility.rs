@@ -39,9 +39,10 @@ pub struct Rect {
 
 /// The pixels a splat's triangle may cover: the bounds of its projected corners, or the whole
 /// image when a corner lies behind the near plane (the GPU clips such a triangle there; the
-/// per-pixel disk test decides either way). `None` for a back-facing splat.
+/// per-pixel disk test decides either way). `None` for a back-facing splat, and for one of
+/// radius 0 (left out by the level of detail, `drawn_splats`).
 pub fn splat_bounds(cam: &Camera, s: &Splat) -> Option<Rect> {
-    if !faces_camera(s, Vec3::from(cam.eye)) {
+    if !faces_camera(s, Vec3::from(cam.eye)) || !(s.radius > 0.0) {
         return None;
     }
     let size = Vec2::from(cam.size);

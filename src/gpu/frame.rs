@@ -64,6 +64,9 @@ pub struct SceneBuffers<'a> {
     /// What `splat_shade` writes for frames of baked direct light: per splat, the radiance
     /// it sends towards the eye.
     pub shaded: &'a wgpu::Buffer,
+    /// `splat_select`'s list of the splats a frame shades: its length, and the indices.
+    pub selected_count: &'a wgpu::Buffer,
+    pub selected: &'a wgpu::Buffer,
 }
 
 impl<'a> SceneBuffers<'a> {
@@ -119,6 +122,9 @@ pub struct FrameScene {
     pub direct: Direct<wgpu::Buffer>,
     /// Per splat, the radiance towards the eye of the frame being drawn (`splat_shade`).
     pub shaded: wgpu::Buffer,
+    /// The splats `splat_shade` shades (`splat_select`): how many, and which.
+    pub selected_count: wgpu::Buffer,
+    pub selected: wgpu::Buffer,
 }
 
 impl FrameScene {
@@ -135,6 +141,8 @@ impl FrameScene {
                 visibility: gpu.storage_zeroed("light visibility", visibility)?,
             },
             shaded: gpu.storage_zeroed("shaded splats", splats * 16)?,
+            selected_count: gpu.storage_zeroed("selected splat count", 4)?,
+            selected: gpu.storage_zeroed("selected splats", splats * 4)?,
         })
     }
 
@@ -152,6 +160,8 @@ impl FrameScene {
             visibility: &self.direct.visibility,
             geometry: on_gpu.geometry(),
             shaded: &self.shaded,
+            selected_count: &self.selected_count,
+            selected: &self.selected,
         }
     }
 }
@@ -480,6 +490,7 @@ impl SplatPipelines {
         for rays in [false, true] {
             pipelines.shade_pipeline(gpu, &unpaged, rays)?;
         }
+        gpu.pipeline("splat_select")?;
         gpu.pipeline("splat_shade")?;
         if pipelines.splat_compute {
             gpu.pipeline("splat_compute")?;
@@ -567,7 +578,7 @@ impl SplatPipelines {
         params: &ShadeParams,
         out: &FrameTargets,
     ) -> Result<()> {
-        let uniforms = self.uniforms(gpu, cam, params);
+        let uniforms = self.uniforms(gpu, cam, params, false);
         self.record(gpu, encoder, scene, &uniforms, out, SplatPass::Shade)
     }
 
@@ -583,10 +594,7 @@ impl SplatPipelines {
         compute: bool,
         out: &FrameTargets,
     ) -> Result<()> {
-        let uniforms = Uniforms {
-            compute,
-            ..self.uniforms(gpu, cam, params)
-        };
+        let uniforms = self.uniforms(gpu, cam, params, compute);
         for pass in SplatPass::ALL {
             self.record(gpu, encoder, scene, &uniforms, out, pass)?;
         }
@@ -604,10 +612,7 @@ impl SplatPipelines {
         compute: bool,
         out: &FrameTargets,
     ) -> Result<[f64; 3]> {
-        let uniforms = Uniforms {
-            compute,
-            ..self.uniforms(gpu, cam, params)
-        };
+        let uniforms = self.uniforms(gpu, cam, params, compute);
         let mut ms = [0.0; 3];
         for (pass, slot) in SplatPass::ALL.into_iter().zip(&mut ms) {
             let t = std::time::Instant::now();
@@ -619,13 +624,16 @@ impl SplatPipelines {
         Ok(ms)
     }
 
-    fn uniforms(&self, gpu: &Gpu, cam: &Camera, params: &ShadeParams) -> Uniforms {
+    /// The frame's uniforms; the camera as `frame::frame_camera` gives it to the passes (the
+    /// level of detail in moving frames of the raster passes only).
+    fn uniforms(&self, gpu: &Gpu, cam: &Camera, params: &ShadeParams, compute: bool) -> Uniforms {
+        let cam = &crate::frame::frame_camera(cam, params, compute);
         Uniforms {
             camera: *cam,
             cam: gpu.uniform("camera", cam),
             params: gpu.uniform("shade params", params),
             direct: params.direct,
-            compute: false,
+            compute,
             tiles: Default::default(),
         }
     }
@@ -647,8 +655,8 @@ impl SplatPipelines {
         }
     }
 
-    /// Records `splat_shade`: the radiance of every splat towards the eye, for the attribute
-    /// pass of a frame of baked direct light.
+    /// Records `splat_select` and `splat_shade`: the radiance towards the eye of every splat
+    /// the frame draws, for the attribute pass of a frame of baked direct light.
     fn record_splat_shade(
         &self,
         gpu: &Gpu,
@@ -656,9 +664,18 @@ impl SplatPipelines {
         scene: &SceneBuffers,
         uniforms: &Uniforms,
     ) -> Result<()> {
+        encoder.clear_buffer(scene.selected_count, 0, None);
+        let select = [
+            &uniforms.cam,
+            scene.splats,
+            scene.selected_count,
+            scene.selected,
+        ];
+        let groups = crate::sequence::groups("splat_select", scene.splat_count)?;
+        gpu.dispatch(encoder, "splat_select", &select, groups)?;
         let stage = "splat_shade";
         let mut buffers = scene.shading(&uniforms.cam, &uniforms.params).to_vec();
-        buffers.push(scene.shaded);
+        buffers.extend([scene.shaded, scene.selected_count, scene.selected]);
         let groups = crate::sequence::groups(stage, scene.splat_count)?;
         gpu.dispatch(encoder, stage, &buffers, groups)
     }

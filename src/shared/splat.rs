@@ -6,6 +6,7 @@
 use glam::{Vec2, Vec3, Vec4};
 
 use super::lobes::FAMILY_WARD;
+use super::rng::pcg_hash;
 use super::sampling::frame_of;
 use crate::types::{Camera, Splat};
 
@@ -39,6 +40,47 @@ pub const SPLATS_PER_INSTANCE: u32 = 32;
 /// The instances that draw `count` splats.
 pub fn instances(count: u32) -> u32 {
     count.div_ceil(SPLATS_PER_INSTANCE)
+}
+
+/// Level of detail of moving frames (`Camera::lod`): see `wgsl/shared/splat.wgsl`.
+pub const LOD_MAX_LEVEL: u32 = 3;
+pub const LOD_GROWTH: f32 = 1.5;
+const LOD_SALT: u32 = 0x2545_f491;
+
+/// L of splat `s`: the largest L ≤ `LOD_MAX_LEVEL` with 2^L r_px² ≤ lod², 0 with the level of
+/// detail off.
+pub fn lod_level(cam: &Camera, s: &Splat) -> u32 {
+    let z = (Vec3::from(s.center) - Vec3::from(cam.eye)).dot(Vec3::from(cam.forward));
+    if !(cam.lod > 0.0) || !(z > cam.near) {
+        return 0;
+    }
+    let view = cam.lod * 2.0 * cam.tan_y * z;
+    let splat = s.radius * cam.size[1];
+    let mut level = 0;
+    for k in 1..=LOD_MAX_LEVEL {
+        if (1u32 << k) as f32 * splat * splat <= view * view {
+            level = k;
+        }
+    }
+    level
+}
+
+/// The radius splat `i` is drawn with this frame: its own, 0 where the level of detail leaves
+/// it out (1 in 2^L is kept, by a hash of its index), or grown by `LOD_GROWTH` × 2^(L/2).
+pub fn drawn_radius(cam: &Camera, s: &Splat, i: u32) -> f32 {
+    let level = lod_level(cam, s);
+    if level == 0 {
+        return s.radius;
+    }
+    if pcg_hash(i ^ LOD_SALT) >> (32 - level) != 0 {
+        return 0.0;
+    }
+    let odd = if level & 1 == 1 {
+        std::f32::consts::SQRT_2
+    } else {
+        1.0
+    };
+    s.radius * LOD_GROWTH * ((1u32 << (level / 2)) as f32 * odd)
 }
 
 pub fn splat_corner(s: &Splat, i: u32) -> Vec3 {

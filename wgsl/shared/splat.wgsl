@@ -12,6 +12,7 @@
 // #import ward
 // #import lobes
 // #import octahedral
+// #import rng
 
 // The radial kernel exp(-KERNEL_SHARPNESS q) of q = d^2 / r^2: 1 at the centre, e^-2 at
 // the rim, so a pixel that only rims cover still gets a well-defined normalised value.
@@ -80,6 +81,49 @@ const SQRT_3: f32 = 1.7320508;
 // batches above a few hundred were slower again (docs/measurements.md).
 const SPLATS_PER_INSTANCE: u32 = 32u;
 
+// Level of detail of moving frames (Camera.lod, in pixels): where splats project smaller than
+// that, 1 in 2^L of them is drawn (L = lod_level, chosen by a hash of the index, so the same
+// splats in every pass and frame), each grown by LOD_GROWTH x 2^(L/2) to cover the surface
+// its neighbours left. The grown disks keep the density of cover the whole set had, and the
+// margin fills the gaps a random subset leaves. Twin: src/shared/splat.rs.
+const LOD_MAX_LEVEL: u32 = 3u;
+const LOD_GROWTH: f32 = 1.5;
+const LOD_SALT: u32 = 0x2545f491u;
+const SQRT_2: f32 = 1.4142135;
+
+// L of splat s: the largest L <= LOD_MAX_LEVEL with 2^L r_px^2 <= lod^2 (r_px the splat's radius
+// in pixels at its centre's depth), 0 with the level of detail off. Products, no quotient, so
+// that the device and the mirror decide alike.
+fn lod_level(cam: Camera, s: Splat) -> u32 {
+    let z = dot(s.center - cam.eye, cam.forward);
+    if !(cam.lod > 0.0) || !(z > cam.near) {
+        return 0u;
+    }
+    let view = cam.lod * 2.0 * cam.tan_y * z;
+    let splat = s.radius * cam.size.y;
+    var level = 0u;
+    for (var k = 1u; k <= LOD_MAX_LEVEL; k++) {
+        if f32(1u << k) * splat * splat <= view * view {
+            level = k;
+        }
+    }
+    return level;
+}
+
+// The radius splat i is drawn with this frame: its own, or 0 where the level of detail leaves
+// it out, or grown where it thins its neighbours out.
+fn drawn_radius(cam: Camera, s: Splat, i: u32) -> f32 {
+    let level = lod_level(cam, s);
+    if level == 0u {
+        return s.radius;
+    }
+    if (pcg_hash(i ^ LOD_SALT) >> (32u - level)) != 0u {
+        return 0.0;
+    }
+    let root = f32(1u << (level / 2u)) * select(1.0, SQRT_2, (level & 1u) == 1u);
+    return s.radius * LOD_GROWTH * root;
+}
+
 // Corner `i` (0..2) of the triangle in the splat's plane that bounds its disk: its
 // projection bounds the projected disk, even where clipping cuts it.
 fn splat_corner(s: Splat, i: u32) -> vec3<f32> {
@@ -121,13 +165,16 @@ fn clip_position(cam: Camera, p: vec3<f32>) -> vec4<f32> {
 // A vertex outside the view: a triangle of three of them costs no fragments.
 const OUTSIDE: vec4<f32> = vec4<f32>(2.0, 2.0, 0.5, 1.0);
 
-// The vertex of both raster passes: corner `corner` of splat `i`'s triangle; a back-facing
-// splat puts all its corners on one point outside the view, so it costs no fragments.
-fn splat_vertex(cam: Camera, s: Splat, i: u32, corner: u32) -> SplatVertex {
+// The vertex of both raster passes: corner `corner` of splat `i`'s triangle at its drawn
+// radius; a back-facing splat, or one the level of detail leaves out, puts all its corners on
+// one point outside the view, so it costs no fragments.
+fn splat_vertex(cam: Camera, splat: Splat, i: u32, corner: u32) -> SplatVertex {
+    var s = splat;
+    s.radius = drawn_radius(cam, splat, i);
     var out: SplatVertex;
     out.splat = i;
     out.position = select(OUTSIDE, clip_position(cam, splat_corner(s, corner)),
-                          faces_camera(s, cam.eye));
+                          faces_camera(s, cam.eye) && s.radius > 0.0);
     out.center = s.center;
     out.normal = s.normal;
     out.radius = s.radius;

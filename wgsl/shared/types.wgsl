@@ -170,6 +170,10 @@ struct Camera {
     tan_y: f32,
     size: vec2<f32>,
     jitter: vec2<f32>,
+    lod: f32,
+    _pad0: f32,
+    _pad1: f32,
+    _pad2: f32,
 }
 
 struct ShadeParams {
