@@ -183,7 +183,7 @@ pub struct SplatPipelines {
     format: wgpu::TextureFormat,
     /// The raster passes by the paging of the arrays they bind (`shaders::Paging`): the
     /// unpaged ones, built with the rest, serve every scene whose arrays fit one binding each.
-    raster: Mutex<HashMap<(Raster, Paging), wgpu::RenderPipeline>>,
+    raster: Mutex<HashMap<(Raster, Paging, bool), wgpu::RenderPipeline>>,
     /// The shade pass by the paging of the scene's geometry and whether it casts shadow rays.
     shade: Mutex<HashMap<(Paging, bool), ShadePipeline>>,
     /// The device can run the compute splatter's tile pass (`compute_splatter_fits`).
@@ -234,10 +234,11 @@ pub(super) fn raster_pipeline(
     targets: &[Option<wgpu::ColorTargetState>],
 ) -> Result<wgpu::RenderPipeline> {
     let entries = ["vs_main", "fs_main"];
-    raster_pipeline_at(gpu, name, entries, depth, targets, &Paging::default())
+    raster_pipeline_at(gpu, name, entries, depth, targets, &Paging::default(), &[])
 }
 
-/// `raster_pipeline` with the vertex and fragment entry points `[vertex, fragment]`.
+/// `raster_pipeline` with the vertex and fragment entry points `[vertex, fragment]` and the
+/// shader's pipeline constants (`override`s) set to `constants`.
 pub(super) fn raster_pipeline_at(
     gpu: &Gpu,
     name: &'static str,
@@ -245,8 +246,13 @@ pub(super) fn raster_pipeline_at(
     depth: Option<wgpu::DepthStencilState>,
     targets: &[Option<wgpu::ColorTargetState>],
     paging: &Paging,
+    constants: &[(&str, f64)],
 ) -> Result<wgpu::RenderPipeline> {
     let module = module(gpu, name, paging)?;
+    let compilation_options = wgpu::PipelineCompilationOptions {
+        constants,
+        ..Default::default()
+    };
     Ok(gpu
         .device
         .create_render_pipeline(&wgpu::RenderPipelineDescriptor {
@@ -255,7 +261,7 @@ pub(super) fn raster_pipeline_at(
             vertex: wgpu::VertexState {
                 module: &module,
                 entry_point: Some(vertex),
-                compilation_options: Default::default(),
+                compilation_options: compilation_options.clone(),
                 buffers: &[],
             },
             primitive: wgpu::PrimitiveState {
@@ -267,7 +273,7 @@ pub(super) fn raster_pipeline_at(
             fragment: Some(wgpu::FragmentState {
                 module: &module,
                 entry_point: Some(fragment),
-                compilation_options: Default::default(),
+                compilation_options,
                 targets,
             }),
             multiview_mask: None,
@@ -388,12 +394,16 @@ impl Raster {
         }
     }
 
+    /// `lod`: the pipeline draws splats at their level of detail's radius (`LOD` in the WGSL);
+    /// without, the vertex shader has none of its code.
     fn build(
         self,
         gpu: &Gpu,
         format: wgpu::TextureFormat,
         paging: &Paging,
+        lod: bool,
     ) -> Result<wgpu::RenderPipeline> {
+        let constants = [("LOD", f64::from(u8::from(lod)))];
         let depth = |compare, write| wgpu::DepthStencilState {
             format: DEPTH,
             depth_write_enabled: Some(write),
@@ -428,6 +438,7 @@ impl Raster {
                     write_mask: wgpu::ColorWrites::ALL,
                 })],
                 paging,
+                &constants,
             ),
             Raster::Attributes => raster_pipeline_at(
                 gpu,
@@ -436,6 +447,7 @@ impl Raster {
                 test,
                 &vec![target; TARGETS],
                 paging,
+                &constants,
             ),
             Raster::AttributesBaked => raster_pipeline_at(
                 gpu,
@@ -444,6 +456,7 @@ impl Raster {
                 test,
                 &[target.clone(), target],
                 paging,
+                &constants,
             ),
         }
     }
@@ -485,7 +498,7 @@ impl SplatPipelines {
             Raster::Attributes,
             Raster::AttributesBaked,
         ] {
-            pipelines.raster(gpu, which, &unpaged)?;
+            pipelines.raster(gpu, which, &unpaged, false)?;
         }
         for rays in [false, true] {
             pipelines.shade_pipeline(gpu, &unpaged, rays)?;
@@ -499,13 +512,20 @@ impl SplatPipelines {
         Ok(pipelines)
     }
 
-    /// The raster pipeline `which` for arrays paged as `paging`, built on first use.
-    fn raster(&self, gpu: &Gpu, which: Raster, paging: &Paging) -> Result<wgpu::RenderPipeline> {
-        let key = (which, paging.clone());
+    /// The raster pipeline `which` for arrays paged as `paging`, with the level of detail or
+    /// not, built on first use.
+    fn raster(
+        &self,
+        gpu: &Gpu,
+        which: Raster,
+        paging: &Paging,
+        lod: bool,
+    ) -> Result<wgpu::RenderPipeline> {
+        let key = (which, paging.clone(), lod);
         if let Some(p) = self.raster.lock().ok().and_then(|m| m.get(&key).cloned()) {
             return Ok(p);
         }
-        let pipeline = which.build(gpu, self.format, paging)?;
+        let pipeline = which.build(gpu, self.format, paging, lod)?;
         gpu.check()?;
         if let Ok(mut m) = self.raster.lock() {
             m.insert(key, pipeline.clone());
@@ -764,7 +784,7 @@ impl SplatPipelines {
                 let found = list.iter().find(|(b, _)| *b == binding);
                 found.filter(|_| group == 0).map(|(_, buffer)| *buffer)
             })?;
-            let pipeline = self.raster(gpu, which, &paging)?;
+            let pipeline = self.raster(gpu, which, &paging, uniforms.camera.lod > 0.0)?;
             let mut entries = gpu.paged_entries_at(stage, 0, list, &paging)?;
             if which != Raster::Visibility {
                 entries.push(wgpu::BindGroupEntry {
