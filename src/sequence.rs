@@ -301,18 +301,18 @@ pub fn bin_photons<E: Executor>(
         };
         page_params.push(ex.uniform("bin page params", &page)?);
     }
-    let cells = list_count(params) as u64;
-    let cell_start = ex.zeroed("bin cell start", (cells + 1) * 4)?;
+    let lists = list_count(params) as u64;
+    let cell_start = ex.zeroed("bin cell start", (lists + 1) * 4)?;
     let chunks = ex.zeroed("bin rank chunks", 4)?;
     for (&(page, count), uniform) in pages.iter().zip(&page_params) {
         let bindings = [uniform, page, &cell_start, &chunks];
         ex.dispatch("bin_count", &bindings, groups("bin_count", count)?)?;
     }
-    exclusive_scan(ex, &cell_start, cells as u32 + 1)?;
+    exclusive_scan(ex, &cell_start, lists as u32 + 1)?;
 
     // Entries to allocate (at least one: empty bindings are invalid).
     let len = total.max(1);
-    let cursor = ex.zeroed("bin cursor", cells * 4)?;
+    let cursor = ex.zeroed("bin cursor", lists * 4)?;
     let scratch_keys = ex.zeroed("bin scratch keys", len * 8)?;
     let scratch_cells = ex.zeroed("bin scratch cells", len * 4)?;
     let scratch_geom = ex.zeroed("bin scratch geometry", len * 16)?;

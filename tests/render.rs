@@ -499,7 +499,7 @@ fn splat_tile_lists_match_the_mirror_and_miss_no_fragment() {
     }
 }
 
-/// `splat_shade` shades only splats `in_view` says may cover a pixel (the others get 0): over a
+/// `splat_select` lists for shading only splats `in_view` says may cover a pixel: over a
 /// plane seen from above and at a grazing angle, with the jitter at each corner of the pixel,
 /// no splat it culls covers any pixel centre, and it culls some (the test's check that it bites).
 #[test]
