@@ -14,6 +14,7 @@ use crate::sequence::Executor;
 use crate::shared::trace::Geometry;
 use crate::types::{
     Camera, DIRECT_BAKED, DIRECT_RAYS, DirectParams, EmParams, PathParams, ShadeParams, Splat,
+    SplatLod,
 };
 
 /// Which light a frame shows: everything, or one part of it (the viewer's keys 1–5).
@@ -169,10 +170,10 @@ impl FrameConfig {
     }
 }
 
-/// The level of detail is off unless asked for (`--lod`): its random thinning leaves holes in
-/// about 1 % of the pixels it touches (docs/measurements.md, "A level of detail for moving
-/// frames").
-pub const DEFAULT_LOD: f32 = 0.0;
+/// Moving frames merge splats into disks of up to 1.5 pixels: the full dragon's 512² frame
+/// 253 → 186 ms on lavapipe, its relMSE against the still image 0.0066 → 0.0134, and no hole
+/// (docs/measurements.md, "Merged splats for moving frames").
+pub const DEFAULT_LOD: f32 = 1.5;
 
 /// The camera uniform of `view`. The near plane sits at 1e-4 of the scene's size: with
 /// reversed depth that costs no precision further away.
@@ -379,9 +380,21 @@ pub fn cpu_frame_into(
     hdr: &mut [[f32; 4]],
 ) {
     let cam = &frame_camera(cam, params, false);
-    let drawn = match cam.lod > 0.0 {
-        true => std::borrow::Cow::Owned(cpu::splat_select::drawn_splats(cam, &scene.splats)),
-        false => std::borrow::Cow::Borrowed(&scene.splats[..]),
+    let selection = match params.direct {
+        DIRECT_BAKED => {
+            let lods = match cam.lod > 0.0 {
+                true => crate::lod::splat_lods(&scene.splats),
+                false => vec![SplatLod::default(); scene.splats.len()],
+            };
+            Some(cpu::splat_select::splat_select(cam, &scene.splats, &lods))
+        }
+        _ => None,
+    };
+    let drawn = match (&selection, cam.lod > 0.0) {
+        (Some(sel), true) => {
+            std::borrow::Cow::Owned(cpu::splat_select::drawn_splats(&scene.splats, &sel.drawn))
+        }
+        _ => std::borrow::Cow::Borrowed(&scene.splats[..]),
     };
     let tiles = cpu::splat_visibility::bin_tiles(cam, &drawn);
     let visible = cpu::splat_visibility::splat_visibility(cam, &drawn, &tiles);
@@ -396,13 +409,12 @@ pub fn cpu_frame_into(
             visibility: &direct.visibility,
         },
     };
-    let shaded = match params.direct {
-        DIRECT_BAKED => {
-            let selected = cpu::splat_select::splat_select(cam, &scene.splats);
+    let shaded = match &selection {
+        Some(sel) => {
             let (splats, materials) = (&scene.splats, &scene.materials);
-            cpu::splat_shade::splat_shade(cam, splats, materials, &shading, &selected)
+            cpu::splat_shade::splat_shade(cam, splats, materials, &shading, &sel.selected)
         }
-        _ => Vec::new(),
+        None => Vec::new(),
     };
     let sums = cpu::splat_attributes::splat_attributes(
         cam,

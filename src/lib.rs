@@ -8,7 +8,7 @@
 //!   the mirrors and the host), `shaders` (the WGSL sources, the stage table and what naga
 //!   reads of them);
 //! - `grid`, `photons`, `bins`, `em`, `tone`, `convolution` (each stage's settings, limits and
-//!   host-side data);
+//!   host-side data), `lod` (the level of detail's merge tree);
 //! - `scene` (the scene file, procedural shapes and model files) and `camera`;
 //! - `sequence` (each multi-dispatch stage's dispatches, written once), run by `cpu` (the
 //!   mirrors) and `gpu` (the device host); `frame` (what a frame draws); `objects` (which
@@ -41,6 +41,7 @@ pub mod error;
 pub mod frame;
 pub mod gpu;
 pub mod grid;
+pub mod lod;
 pub mod objects;
 pub mod photons;
 pub mod renderer;

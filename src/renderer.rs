@@ -14,8 +14,8 @@ use crate::camera::View;
 use crate::em::LobeMap;
 use crate::error::{Error, Result};
 use crate::frame::{
-    Direct, DirectMap, FrameConfig, Splatter, camera_uniform, direct_params, jitter, path_params,
-    refinement, shade_params_for,
+    Direct, DirectMap, FrameConfig, Splatter, camera_uniform, direct_params, frame_camera, jitter,
+    path_params, refinement, shade_params_for,
 };
 use crate::gpu::Gpu;
 use crate::gpu::bins::GpuBins;
@@ -175,6 +175,10 @@ impl FrameRenderer {
         cfg: &FrameConfig,
     ) -> Result<&wgpu::Buffer> {
         let params = shade_params_for(scene, self.lobes_per_splat, cfg);
+        let compute = self.pipelines.uses_compute(cfg.splatter)?;
+        if frame_camera(cam, &params, compute).lod > 0.0 {
+            self.frame_scene.ensure_lods(gpu, scene)?;
+        }
         self.record_params(gpu, encoder, cam, &params, cfg.splatter)
     }
 

@@ -19,6 +19,26 @@ pub struct Splat {
     pub object: u32,
 }
 
+/// A splat's place in the level of detail's merge tree (`lod`, docs/design.md §8). Level L's
+/// splats are a subset of level L − 1's; each splat of level L − 1 is merged into one of them,
+/// whose disk at level L is grown to cover every splat merged into it, at every level below.
+/// A frame draws each splat at the coarsest of its levels whose disk projects within the level
+/// of detail (`Camera::lod`), unless its parent's disk does too (`shared::splat::lod_radius`).
+#[repr(C)]
+#[derive(Clone, Copy, Debug, Default, PartialEq, Pod, Zeroable)]
+pub struct SplatLod {
+    /// The radius of the splat's disk at levels 1, 2 and 3 (up to `top`).
+    pub extent: [f32; 3],
+    /// The highest level the splat belongs to (0 to `LOD_MAX_LEVEL`).
+    pub top: u32,
+    /// The radius of its parent's disk at level `top + 1` (the splat its top level merges
+    /// into), and the distance between their centres; 0 when `top` is the tree's last level.
+    pub parent_extent: f32,
+    pub parent_gap: f32,
+    pub _pad0: u32,
+    pub _pad1: u32,
+}
+
 /// Isotropic Ward material (docs/design.md §3): the specular part; the diffuse albedo lives per splat.
 #[repr(C)]
 #[derive(Clone, Copy, Debug, Default, PartialEq, Pod, Zeroable)]
@@ -310,9 +330,10 @@ pub struct Camera {
     /// Sub-pixel offset of every view ray (pixels, within ±0.5): successive jittered frames
     /// average into an anti-aliased image (`frame::jitter`).
     pub jitter: [f32; 2],
-    /// Level of detail (`shared::splat::drawn_radius`): splats whose projected radius is below
-    /// this many pixels are thinned out and the rest grown to cover for them; 0 draws every
-    /// splat as it is (refinement frames, shadow rays, the compute splatter).
+    /// Level of detail (`shared::splat::lod_radius`), in pixels: neighbouring splats are drawn
+    /// merged into one disk (`SplatLod`) wherever that disk projects at most this many pixels
+    /// in radius; 0 draws every splat as it is (refinement frames, shadow rays, the compute
+    /// splatter).
     pub lod: f32,
     pub _pad0: f32,
     pub _pad1: f32,

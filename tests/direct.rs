@@ -29,10 +29,13 @@ fn cpu_bake(scene: &Scene) -> LobeMap {
         .lobes
 }
 
+/// Every splat drawn as it is (`lod: 0`), so that baked and ray-traced frames differ by the
+/// direct light alone.
 fn with(direct: Direct, show: Show) -> FrameConfig {
     FrameConfig {
         direct,
         show: show.mask(),
+        lod: 0.0,
         ..FrameConfig::default()
     }
 }

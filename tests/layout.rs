@@ -32,6 +32,14 @@ fn rust_layouts() -> Vec<RustLayout> {
             diffuse,
             object
         }),
+        layout!(SplatLod {
+            extent,
+            top,
+            parent_extent,
+            parent_gap,
+            _pad0,
+            _pad1
+        }),
         layout!(Material {
             specular,
             roughness

@@ -70,25 +70,25 @@ fn cpu_hdr(
     cpu_frame(scene, grid, lobes, &cam, &shade_params(scene, lobes, cfg)).unwrap()
 }
 
-/// The level of detail of moving frames (`--lod`): the device thins and grows the same splats as
-/// the mirror (the frames agree within the parity tolerances), and at 96 pixels, where the
-/// box's far splats are about half a pixel, it does thin them: a thousand or more splats are
-/// left out in each view, the frame changes, and its light stays within 5 % of the full
-/// frame's.
+/// The level of detail of moving frames (`--lod`): the device merges the same splats as the
+/// mirror (the frames agree within the parity tolerances), and at 96 pixels, where the box's
+/// far splats are about half a pixel, it does merge them: a thousand or more splats are left
+/// out in each view, the frame changes, and its light stays within 5 % of the full frame's.
 #[test]
 fn level_of_detail_matches_the_mirror_and_thins() {
-    use lobelight::shared::splat::drawn_radius;
+    use lobelight::shared::splat::lod_radius;
     let gpu = common::gpu();
     let (scene, grid, lobes) = glossy_cornell();
+    let lods = lobelight::lod::splat_lods(&scene.splats);
     let cfg = FrameConfig {
         splatter: Splatter::Raster,
-        lod: 1.0,
+        lod: 2.0,
         ..FrameConfig::default()
     };
     for view in views(&scene, 96) {
         let cam = camera_uniform(&view, scene.bounds(), &cfg);
         let left_out = (0..scene.splats.len())
-            .filter(|&i| drawn_radius(&cam, &scene.splats[i], i as u32) == 0.0)
+            .filter(|&i| lod_radius(&cam, &scene.splats[i], &lods[i]) == 0.0)
             .count();
         assert!(left_out >= 1000, "{left_out} left out");
         let a = gpu_frame(&gpu, &scene, &lobes, &view, &cfg);
@@ -105,6 +105,47 @@ fn level_of_detail_matches_the_mirror_and_thins() {
     }
 }
 
+/// The level of detail's merged disks leave no hole: in both views of the box, from 24 to 96
+/// pixels and with merged disks of up to 1 to 4 pixels, every pixel that the full set of splats
+/// covers is covered by the splats drawn with the level of detail (the visibility pass's
+/// mirror), while a third or more of the splats are left out.
+#[test]
+fn level_of_detail_leaves_no_hole() {
+    use lobelight::cpu::splat_select::{drawn_splats, splat_select};
+    use lobelight::cpu::splat_visibility::{bin_tiles, splat_visibility};
+    let scene = scene::load(Path::new("scenes/cornell.toml")).unwrap();
+    let lods = lobelight::lod::splat_lods(&scene.splats);
+    let covered = |cam: &lobelight::types::Camera, splats: &[lobelight::types::Splat]| {
+        let visible = splat_visibility(cam, splats, &bin_tiles(cam, splats));
+        visible.iter().map(|v| v.depth > 0.0).collect::<Vec<bool>>()
+    };
+    for size in [24, 48, 96] {
+        for lod in [1.0, 2.0, 4.0] {
+            let cfg = FrameConfig {
+                lod,
+                ..FrameConfig::default()
+            };
+            for view in views(&scene, size) {
+                let cam = camera_uniform(&view, scene.bounds(), &cfg);
+                let selection = splat_select(&cam, &scene.splats, &lods);
+                let full = covered(&cam, &scene.splats);
+                let merged = covered(&cam, &drawn_splats(&scene.splats, &selection.drawn));
+                let holes = full
+                    .iter()
+                    .zip(&merged)
+                    .filter(|(f, m)| **f && !**m)
+                    .count();
+                let drawn = selection.selected.len();
+                eprintln!("{size} px, lod {lod}: {drawn} splats drawn, {holes} holes");
+                assert_eq!(holes, 0, "{size} px, lod {lod}");
+                if size == 24 {
+                    assert!(3 * drawn <= 2 * scene.splats.len(), "{drawn} drawn");
+                }
+            }
+        }
+    }
+}
+
 /// The glossy Cornell box, baked once on the CPU and drawn from two views by both paths, with
 /// baked and ray-traced direct light, by the raster passes and by the compute splatter (whose
 /// mirror is the raster passes' own: the same fragments summed per pixel in the same order).
@@ -116,9 +157,16 @@ fn splat_passes_match_the_cpu_mirror() {
     let modes =
         [Direct::Baked, Direct::Rays].map(|d| [(d, Splatter::Raster), (d, Splatter::Compute)]);
     for (direct, splatter) in modes.into_iter().flatten() {
+        // The compute splatter draws every splat as it is, whatever the level of detail
+        // (`frame_camera`); its mirror, the raster passes', then does too.
+        let lod = match splatter {
+            Splatter::Compute => 0.0,
+            _ => FrameConfig::default().lod,
+        };
         let cfg = FrameConfig {
             direct,
             splatter,
+            lod,
             ..FrameConfig::default()
         };
         for view in views(&scene, 96) {

@@ -18,6 +18,10 @@
 // With baked direct light, the radiance splat_shade gave each splat towards the eye.
 // #paged
 @group(0) @binding(11) var<storage, read> shaded: array<vec4<f32>>;
+// With the level of detail (LOD, frames of baked direct light), the radius splat_select chose
+// for each splat.
+// #paged
+@group(0) @binding(12) var<storage, read> drawn: array<f32>;
 
 // Whether splat s is of the surface the pixel sees (same_surface).
 fn in_front(v: SplatVertex, s: Splat) -> bool {
@@ -67,7 +71,11 @@ fn vs_baked(@builtin(vertex_index) k: u32, @builtin(instance_index) b: u32) -> S
     if i >= splats_len() {
         return surplus_vertex(i);
     }
-    var out = splat_vertex(cam, splats_at(i), i, instance_corner(k));
+    var s = splats_at(i);
+    if LOD {
+        s.radius = drawn_at(i);
+    }
+    var out = splat_vertex(cam, s, i, instance_corner(k));
     out.radiance = shaded_at(i).xyz;
     return out;
 }

@@ -1,6 +1,7 @@
-// Splat pass 2a, the splats a frame of baked direct light draws (docs/design.md section 8):
-// those facing the eye, inside the view and kept by the level of detail (drawn_radius), listed
-// for splat_shade, which then shades them and no others. Culled in splat_shade itself, they
+// Splat pass 0, the splats a frame of baked direct light draws (docs/design.md section 8):
+// those facing the eye, inside the view and drawn at their level of detail (lod_radius), listed
+// for splat_shade, which then shades them and no others; and for the raster passes, the radius
+// each splat is drawn with (0: not drawn). Culled in splat_shade itself, they
 // cost as much as the rest: a SIMD group runs the shading while any of its lanes needs it. The
 // list's order is the atomic counter's and may vary between runs; each splat's shading goes to
 // its own slot, so the image does not. Twin: src/cpu/splat_select.rs.
@@ -15,6 +16,11 @@
 @group(0) @binding(2) var<storage, read_write> selected_count: array<atomic<u32>>;
 // #paged
 @group(0) @binding(3) var<storage, read_write> selected: array<u32>;
+// The level of detail's merge tree (read only with it on; a stand-in before it is built).
+// #paged
+@group(0) @binding(4) var<storage, read> lods: array<SplatLod>;
+// #paged
+@group(0) @binding(5) var<storage, read_write> drawn: array<f32>;
 
 const WG: u32 = 64u;
 const NOT_LISTED: u32 = 0xffffffffu;
@@ -35,10 +41,13 @@ fn main(@builtin(workgroup_id) wg: vec3<u32>, @builtin(num_workgroups) num_wg: v
     var slot = NOT_LISTED;
     if i < splats_len() {
         var s = splats_at(i);
-        s.radius = drawn_radius(cam, s, i);
+        if cam.lod > 0.0 {
+            s.radius = lod_radius(cam, s, lods_at(i));
+        }
         if faces_camera(s, cam.eye) && s.radius > 0.0 && in_view(cam, s) {
             slot = atomicAdd(&group_count, 1u);
         }
+        drawn_put(i, select(0.0, s.radius, slot != NOT_LISTED));
     }
     workgroupBarrier();
     if lid == 0u {

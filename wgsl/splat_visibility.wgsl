@@ -10,6 +10,9 @@
 @group(0) @binding(0) var<uniform> cam: Camera;
 // #paged
 @group(0) @binding(1) var<storage, read> splats: array<Splat>;
+// With the level of detail (LOD), the radius splat_select chose for each splat.
+// #paged
+@group(0) @binding(2) var<storage, read> drawn: array<f32>;
 
 @vertex
 fn vs_main(@builtin(vertex_index) k: u32, @builtin(instance_index) b: u32) -> SplatVertex {
@@ -17,7 +20,11 @@ fn vs_main(@builtin(vertex_index) k: u32, @builtin(instance_index) b: u32) -> Sp
     if i >= splats_len() {
         return surplus_vertex(i);
     }
-    return splat_vertex(cam, splats_at(i), i, instance_corner(k));
+    var s = splats_at(i);
+    if LOD {
+        s.radius = drawn_at(i);
+    }
+    return splat_vertex(cam, s, i, instance_corner(k));
 }
 
 struct Visible {

@@ -173,8 +173,9 @@ struct LookArgs {
     /// or whichever is faster on this kind of device.
     #[arg(long, value_enum, default_value_t = Splatter::Auto)]
     splatter: Splatter,
-    /// Level of detail of a moving frame, in pixels: where splats project smaller, only some
-    /// are drawn, grown to cover for the rest (0: every splat). Still images draw them all.
+    /// Level of detail of a moving frame, in pixels: neighbouring splats are drawn merged into
+    /// one larger disk wherever that disk projects at most this many pixels in radius (0: every
+    /// splat as it is). Still images draw them all.
     #[arg(long, default_value_t = crate::frame::DEFAULT_LOD)]
     lod: f32,
 }

@@ -6,7 +6,7 @@
 use super::exec::GpuExecutor;
 use super::scene::GpuScene;
 use std::collections::HashMap;
-use std::sync::Mutex;
+use std::sync::{Mutex, OnceLock};
 
 use super::Gpu;
 use crate::em::LobeMap;
@@ -16,7 +16,7 @@ use crate::scene::Scene;
 use crate::sequence::{Direct, TileLists, bin_splat_tiles};
 use crate::shaders::{PAGE_BINDING_STEP, Paging};
 use crate::shared::splat::{SPLAT_CORNERS, SPLATS_PER_INSTANCE, instances};
-use crate::types::{Camera, DIRECT_BAKED, ShadeParams};
+use crate::types::{Camera, DIRECT_BAKED, ShadeParams, SplatLod};
 
 /// The format of the blended targets: f32 where the device can blend it, else f16.
 pub fn accumulation_format(gpu: &Gpu) -> wgpu::TextureFormat {
@@ -38,6 +38,8 @@ const FRONT: wgpu::TextureFormat = wgpu::TextureFormat::R32Uint;
 const FRONT_BINDING: u32 = 10;
 /// `fs_baked`'s binding of the splats' shaded radiance (`splat_shade`'s output).
 const SHADED_BINDING: u32 = 11;
+/// `vs_baked`'s binding of the radius `splat_select` chose for each splat.
+const DRAWN_BINDING: u32 = 12;
 /// The bindings of `wgsl/shared/splat_shading.wgsl` that only the direct bake's shading reads
 /// (the lights, the baked light and visibility): `splat_shade` binds them, the fragment
 /// shading of the other passes does not, so their derived layouts lack them.
@@ -67,6 +69,10 @@ pub struct SceneBuffers<'a> {
     /// `splat_select`'s list of the splats a frame shades: its length, and the indices.
     pub selected_count: &'a wgpu::Buffer,
     pub selected: &'a wgpu::Buffer,
+    /// The level of detail's merge tree (`lod`), and the radius `splat_select` chose for each
+    /// splat this frame.
+    pub lods: &'a wgpu::Buffer,
+    pub drawn: &'a wgpu::Buffer,
 }
 
 impl<'a> SceneBuffers<'a> {
@@ -125,6 +131,14 @@ pub struct FrameScene {
     /// The splats `splat_shade` shades (`splat_select`): how many, and which.
     pub selected_count: wgpu::Buffer,
     pub selected: wgpu::Buffer,
+    /// The level of detail's merge tree (`lod::splat_lods`), built for the first frame that
+    /// draws with it (`ensure_lods`), and per splat the radius `splat_select` chose for the
+    /// frame being drawn.
+    pub lods: OnceLock<wgpu::Buffer>,
+    pub drawn: wgpu::Buffer,
+    /// What `splat_select` binds in place of the tree before it is built (it reads it only
+    /// with the level of detail on).
+    no_lods: wgpu::Buffer,
 }
 
 impl FrameScene {
@@ -143,7 +157,20 @@ impl FrameScene {
             shaded: gpu.storage_zeroed("shaded splats", splats * 16)?,
             selected_count: gpu.storage_zeroed("selected splat count", 4)?,
             selected: gpu.storage_zeroed("selected splats", splats * 4)?,
+            lods: OnceLock::new(),
+            drawn: gpu.storage_zeroed("drawn radii", splats * 4)?,
+            no_lods: gpu.storage("no level of detail", &[SplatLod::default()])?,
         })
+    }
+
+    /// Builds the level of detail's merge tree of `scene` and uploads it, once.
+    pub fn ensure_lods(&self, gpu: &Gpu, scene: &Scene) -> Result<()> {
+        if self.lods.get().is_none() {
+            let tree = crate::lod::splat_lods(&scene.splats);
+            // Set once: a second caller's tree would be the same.
+            let _ = self.lods.set(gpu.storage("level of detail", &tree)?);
+        }
+        Ok(())
     }
 
     /// What the passes bind, with the scene's splats, materials and grid.
@@ -162,6 +189,8 @@ impl FrameScene {
             shaded: &self.shaded,
             selected_count: &self.selected_count,
             selected: &self.selected,
+            lods: self.lods.get().unwrap_or(&self.no_lods),
+            drawn: &self.drawn,
         }
     }
 }
@@ -675,9 +704,9 @@ impl SplatPipelines {
         }
     }
 
-    /// Records `splat_select` and `splat_shade`: the radiance towards the eye of every splat
-    /// the frame draws, for the attribute pass of a frame of baked direct light.
-    fn record_splat_shade(
+    /// Records `splat_select`, before the visibility pass of a frame of baked direct light:
+    /// the splats it draws, and the radius each is drawn with.
+    fn record_splat_select(
         &self,
         gpu: &Gpu,
         encoder: &mut wgpu::CommandEncoder,
@@ -690,9 +719,22 @@ impl SplatPipelines {
             scene.splats,
             scene.selected_count,
             scene.selected,
+            scene.lods,
+            scene.drawn,
         ];
         let groups = crate::sequence::groups("splat_select", scene.splat_count)?;
-        gpu.dispatch(encoder, "splat_select", &select, groups)?;
+        gpu.dispatch(encoder, "splat_select", &select, groups)
+    }
+
+    /// Records `splat_shade`: the radiance towards the eye of every splat `splat_select`
+    /// listed, for the attribute pass of a frame of baked direct light.
+    fn record_splat_shade(
+        &self,
+        gpu: &Gpu,
+        encoder: &mut wgpu::CommandEncoder,
+        scene: &SceneBuffers,
+        uniforms: &Uniforms,
+    ) -> Result<()> {
         let stage = "splat_shade";
         let mut buffers = scene.shading(&uniforms.cam, &uniforms.params).to_vec();
         buffers.extend([scene.shaded, scene.selected_count, scene.selected]);
@@ -770,8 +812,14 @@ impl SplatPipelines {
     ) -> Result<()> {
         let (cam_buf, params_buf) = (&uniforms.cam, &uniforms.params);
         let baked = uniforms.direct == DIRECT_BAKED;
-        if pass == SplatPass::Attributes && baked {
-            self.record_splat_shade(gpu, encoder, scene, uniforms)?;
+        match pass {
+            SplatPass::Visibility if baked => {
+                self.record_splat_select(gpu, encoder, scene, uniforms)?
+            }
+            SplatPass::Attributes if baked => {
+                self.record_splat_shade(gpu, encoder, scene, uniforms)?
+            }
+            _ => {}
         }
         if uniforms.compute && pass != SplatPass::Shade {
             return self.record_compute(gpu, encoder, scene, uniforms, out, pass);
@@ -810,8 +858,10 @@ impl SplatPipelines {
             })
         };
         if pass == SplatPass::Visibility {
-            let (pipeline, vis_group) =
-                bound(Raster::Visibility, &[(0, cam_buf), (1, scene.splats)])?;
+            let (pipeline, vis_group) = bound(
+                Raster::Visibility,
+                &[(0, cam_buf), (1, scene.splats), (2, scene.drawn)],
+            )?;
             let front = Some(wgpu::RenderPassColorAttachment {
                 view: &out.front,
                 depth_slice: None,
@@ -843,6 +893,7 @@ impl SplatPipelines {
                     (0, cam_buf),
                     (1, scene.splats),
                     (SHADED_BINDING, scene.shaded),
+                    (DRAWN_BINDING, scene.drawn),
                 ],
                 false => (0u32..)
                     .zip(scene.shading(cam_buf, params_buf))

@@ -6,9 +6,8 @@
 use glam::{Vec2, Vec3, Vec4};
 
 use super::lobes::FAMILY_WARD;
-use super::rng::pcg_hash;
 use super::sampling::frame_of;
-use crate::types::{Camera, Splat};
+use crate::types::{Camera, Splat, SplatLod};
 
 pub const KERNEL_SHARPNESS: f32 = 2.0;
 
@@ -42,45 +41,32 @@ pub fn instances(count: u32) -> u32 {
     count.div_ceil(SPLATS_PER_INSTANCE)
 }
 
-/// Level of detail of moving frames (`Camera::lod`): see `wgsl/shared/splat.wgsl`.
+/// Level of detail of moving frames (`Camera::lod`): the merge tree's levels above the splats
+/// themselves (`lod`); see `wgsl/shared/splat.wgsl`.
 pub const LOD_MAX_LEVEL: u32 = 3;
-pub const LOD_GROWTH: f32 = 1.5;
-const LOD_SALT: u32 = 0x2545_f491;
 
-/// L of splat `s`: the largest L ≤ `LOD_MAX_LEVEL` with 2^L r_px² ≤ lod², 0 with the level of
-/// detail off.
-pub fn lod_level(cam: &Camera, s: &Splat) -> u32 {
-    let z = (Vec3::from(s.center) - Vec3::from(cam.eye)).dot(Vec3::from(cam.forward));
-    if !(cam.lod > 0.0) || !(z > cam.near) {
-        return 0;
-    }
-    let view = cam.lod * 2.0 * cam.tan_y * z;
-    let splat = s.radius * cam.size[1];
-    let mut level = 0;
-    for k in 1..=LOD_MAX_LEVEL {
-        if (1u32 << k) as f32 * splat * splat <= view * view {
-            level = k;
-        }
-    }
-    level
-}
-
-/// The radius splat `i` is drawn with this frame: its own, 0 where the level of detail leaves
-/// it out (1 in 2^L is kept, by a hash of its index), or grown by `LOD_GROWTH` × 2^(L/2).
-pub fn drawn_radius(cam: &Camera, s: &Splat, i: u32) -> f32 {
-    let level = lod_level(cam, s);
-    if level == 0 {
+/// The radius splat `s` is drawn with this frame: its disk at the coarsest of its levels
+/// (`lod`) that projects within `cam.lod` pixels, its own radius with the level of detail off,
+/// or 0 where its parent's disk may project within it too (and then covers it). Products, no
+/// quotient, so that the device and the mirror decide alike.
+pub fn lod_radius(cam: &Camera, s: &Splat, lod: &SplatLod) -> f32 {
+    if !(cam.lod > 0.0) {
         return s.radius;
     }
-    if pcg_hash(i ^ LOD_SALT) >> (32 - level) != 0 {
+    let z = (Vec3::from(s.center) - Vec3::from(cam.eye)).dot(Vec3::from(cam.forward));
+    let view = cam.lod * 2.0 * cam.tan_y;
+    let fits = |extent: f32, depth: f32| depth > cam.near && extent * cam.size[1] <= view * depth;
+    let (mut radius, mut level) = (s.radius, 0);
+    for k in 1..=lod.top.min(LOD_MAX_LEVEL) {
+        if fits(lod.extent[k as usize - 1], z) {
+            (radius, level) = (lod.extent[k as usize - 1], k);
+        }
+    }
+    // The parent lies at least `parent_gap` nearer: if its disk fits even there, it fits.
+    if level == lod.top && lod.parent_extent > 0.0 && fits(lod.parent_extent, z - lod.parent_gap) {
         return 0.0;
     }
-    let odd = if level & 1 == 1 {
-        std::f32::consts::SQRT_2
-    } else {
-        1.0
-    };
-    s.radius * LOD_GROWTH * ((1u32 << (level / 2)) as f32 * odd)
+    radius
 }
 
 pub fn splat_corner(s: &Splat, i: u32) -> Vec3 {

@@ -81,51 +81,44 @@ const SQRT_3: f32 = 1.7320508;
 // batches above a few hundred were slower again (docs/measurements.md).
 const SPLATS_PER_INSTANCE: u32 = 32u;
 
-// Level of detail of moving frames (Camera.lod, in pixels): where splats project smaller than
-// that, 1 in 2^L of them is drawn (L = lod_level, chosen by a hash of the index, so the same
-// splats in every pass and frame), each grown by LOD_GROWTH x 2^(L/2) to cover the surface
-// its neighbours left. The grown disks keep the density of cover the whole set had, and the
-// margin fills the gaps a random subset leaves. Twin: src/shared/splat.rs.
+// Level of detail of moving frames (Camera.lod, in pixels): neighbouring splats are drawn
+// merged into one disk wherever that disk projects within so many pixels in radius. The merge
+// tree (SplatLod, src/lod.rs) has LOD_MAX_LEVEL levels above the splats; splat_select draws each
+// splat at the coarsest of its levels that fits, or not at all where its parent's may fit, and
+// writes the radius for the raster passes. Twin: src/shared/splat.rs.
 const LOD_MAX_LEVEL: u32 = 3u;
-// Whether a raster pipeline draws splats at their drawn radius: the host builds one without
-// for frames with the level of detail off, whose vertices then pay nothing for it (llvmpipe
-// runs both sides of a branch on a uniform).
+// Whether a raster pipeline draws splats at the radius splat_select chose: the host builds one
+// without for frames with the level of detail off, whose vertices then read nothing for it
+// (llvmpipe runs both sides of a branch on a uniform).
 override LOD: bool = true;
-const LOD_GROWTH: f32 = 1.5;
-const LOD_SALT: u32 = 0x2545f491u;
-const SQRT_2: f32 = 1.4142135;
 
-// L of splat s: the largest L <= LOD_MAX_LEVEL with 2^L r_px^2 <= lod^2 (r_px the splat's radius
-// in pixels at its centre's depth), 0 with the level of detail off. Products, no quotient, so
+// The radius splat s is drawn with this frame: its disk at the coarsest of its levels that
+// projects within cam.lod pixels, its own radius with the level of detail off, or 0 where its
+// parent's disk may project within it too (and then covers it). Products, no quotient, so
 // that the device and the mirror decide alike.
-fn lod_level(cam: Camera, s: Splat) -> u32 {
-    let z = dot(s.center - cam.eye, cam.forward);
-    if !(cam.lod > 0.0) || !(z > cam.near) {
-        return 0u;
+fn lod_fits(cam: Camera, extent: f32, depth: f32) -> bool {
+    return depth > cam.near && extent * cam.size.y <= cam.lod * 2.0 * cam.tan_y * depth;
+}
+
+fn lod_radius(cam: Camera, s: Splat, lod: SplatLod) -> f32 {
+    if !(cam.lod > 0.0) {
+        return s.radius;
     }
-    let view = cam.lod * 2.0 * cam.tan_y * z;
-    let splat = s.radius * cam.size.y;
+    let z = dot(s.center - cam.eye, cam.forward);
+    var radius = s.radius;
     var level = 0u;
-    for (var k = 1u; k <= LOD_MAX_LEVEL; k++) {
-        if f32(1u << k) * splat * splat <= view * view {
+    for (var k = 1u; k <= min(lod.top, LOD_MAX_LEVEL); k++) {
+        if lod_fits(cam, lod.extent[k - 1u], z) {
+            radius = lod.extent[k - 1u];
             level = k;
         }
     }
-    return level;
-}
-
-// The radius splat i is drawn with this frame: its own, or 0 where the level of detail leaves
-// it out, or grown where it thins its neighbours out.
-fn drawn_radius(cam: Camera, s: Splat, i: u32) -> f32 {
-    let level = lod_level(cam, s);
-    if level == 0u {
-        return s.radius;
-    }
-    if (pcg_hash(i ^ LOD_SALT) >> (32u - level)) != 0u {
+    // The parent lies at least parent_gap nearer: if its disk fits even there, it fits.
+    if level == lod.top && lod.parent_extent > 0.0
+        && lod_fits(cam, lod.parent_extent, z - lod.parent_gap) {
         return 0.0;
     }
-    let root = f32(1u << (level / 2u)) * select(1.0, SQRT_2, (level & 1u) == 1u);
-    return s.radius * LOD_GROWTH * root;
+    return radius;
 }
 
 // Corner `i` (0..2) of the triangle in the splat's plane that bounds its disk: its
@@ -169,14 +162,10 @@ fn clip_position(cam: Camera, p: vec3<f32>) -> vec4<f32> {
 // A vertex outside the view: a triangle of three of them costs no fragments.
 const OUTSIDE: vec4<f32> = vec4<f32>(2.0, 2.0, 0.5, 1.0);
 
-// The vertex of both raster passes: corner `corner` of splat `i`'s triangle at its drawn
-// radius; a back-facing splat, or one the level of detail leaves out, puts all its corners on
-// one point outside the view, so it costs no fragments.
-fn splat_vertex(cam: Camera, splat: Splat, i: u32, corner: u32) -> SplatVertex {
-    var s = splat;
-    if LOD {
-        s.radius = drawn_radius(cam, splat, i);
-    }
+// The vertex of both raster passes: corner `corner` of splat `i`'s triangle (s at the radius
+// it is drawn with); a back-facing splat, or one the level of detail leaves out (radius 0),
+// puts all its corners on one point outside the view, so it costs no fragments.
+fn splat_vertex(cam: Camera, s: Splat, i: u32, corner: u32) -> SplatVertex {
     var out: SplatVertex;
     out.splat = i;
     out.position = select(OUTSIDE, clip_position(cam, splat_corner(s, corner)),

@@ -10,6 +10,16 @@ struct Splat {
     object: u32,
 }
 
+// A splat's place in the level of detail's merge tree (src/types.rs).
+struct SplatLod {
+    extent: array<f32, 3>,
+    top: u32,
+    parent_extent: f32,
+    parent_gap: f32,
+    _pad0: u32,
+    _pad1: u32,
+}
+
 struct Material {
     specular: vec3<f32>,
     roughness: f32,
