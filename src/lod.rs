@@ -102,45 +102,74 @@ fn merge(splats: &[Splat], members: &[u32]) -> Option<Vec<u32>> {
     let mergeable = |a: usize, b: usize| normal(a).dot(normal(b)) >= MERGE_COS_MIN;
     let tree = ImmutableKdTree::<f32, 3>::new_from_slice(&points).ok()?;
     let k = NonZeroUsize::new(MERGE_K + 1)?;
-    let reach: Vec<f32> = points
-        .par_iter()
-        .map(|q| {
-            let nearest = tree
-                .query(q)
-                .nearest_n::<SquaredEuclidean<f32>>(k)
-                .execute();
-            nearest.last().map_or(0.0, |r| r.distance.sqrt()) * MERGE_FACTOR
+    // Each splat's neighbours within its reach that may stand in for it, with their squared
+    // distances. The reach lies inside the k-th neighbour's distance, so the k nearest hold
+    // them all.
+    let near: Vec<Vec<(u32, f32)>> = (0..members.len())
+        .into_par_iter()
+        .map(|m| {
+            let found = tree.query(&points[m]).nearest_n::<SquaredEuclidean<f32>>(k);
+            let found = found.execute();
+            let reach = found.last().map_or(0.0, |r| r.distance.sqrt()) * MERGE_FACTOR;
+            found
+                .iter()
+                .filter(|r| r.distance <= reach * reach)
+                .filter(|r| r.item as usize != m && mergeable(m, r.item as usize))
+                .map(|r| (r.item, r.distance))
+                .collect()
         })
         .collect();
-    let near = |m: usize| {
-        let r2 = reach[m] * reach[m];
-        tree.query(&points[m])
-            .within::<SquaredEuclidean<f32>>(r2)
-            .unsorted()
-            .execute()
-    };
-    // Kept unless a splat kept before it lies within its reach and may stand in for it.
-    let mut kept = vec![false; members.len()];
-    for m in 0..members.len() {
-        let taken = near(m)
-            .iter()
-            .any(|r| kept[r.item as usize] && mergeable(m, r.item as usize));
-        kept[m] = !taken;
-    }
-    // The rest merge into the nearest such splat (the lower position where two are as near).
+    let kept = greedy_packing(&near);
+    // The rest merge into the nearest kept splat within their reach (the lower position where
+    // two are as near).
     let into = (0..members.len())
         .into_par_iter()
         .map(|m| {
             if kept[m] {
                 return m as u32;
             }
-            let candidates = near(m);
-            let best = candidates
+            let best = near[m]
                 .iter()
-                .filter(|r| kept[r.item as usize] && mergeable(m, r.item as usize))
-                .min_by(|a, b| a.distance.total_cmp(&b.distance).then(a.item.cmp(&b.item)));
-            best.map_or(m as u32, |r| r.item)
+                .filter(|&&(k, _)| kept[k as usize])
+                .min_by(|a, b| a.1.total_cmp(&b.1).then(a.0.cmp(&b.0)));
+            best.map_or(m as u32, |&(k, _)| k)
         })
         .collect();
     Some(into)
+}
+
+/// Which splats the greedy packing keeps: in priority order (their positions), a splat is kept
+/// unless one kept before it is among its `near` ones. Computed in rounds, in parallel, with
+/// the sequential result: a splat is settled once one of its earlier neighbours is kept (then
+/// it is not) or all are settled and not kept (then it is). The first open splat settles in
+/// every round, and with priorities in random order the chains of waiting splats are short.
+fn greedy_packing(near: &[Vec<(u32, f32)>]) -> Vec<bool> {
+    const OPEN: u8 = 0;
+    const KEPT: u8 = 1;
+    const MERGED: u8 = 2;
+    let mut state = vec![OPEN; near.len()];
+    loop {
+        let next: Vec<u8> = (0..near.len())
+            .into_par_iter()
+            .map(|m| {
+                if state[m] != OPEN {
+                    return state[m];
+                }
+                let mut earlier = near[m].iter().filter(|&&(k, _)| (k as usize) < m);
+                if earlier.clone().any(|&(k, _)| state[k as usize] == KEPT) {
+                    MERGED
+                } else if earlier.all(|&(k, _)| state[k as usize] == MERGED) {
+                    KEPT
+                } else {
+                    OPEN
+                }
+            })
+            .collect();
+        let settled = !next.contains(&OPEN);
+        state = next;
+        if settled {
+            break;
+        }
+    }
+    state.into_iter().map(|s| s == KEPT).collect()
 }

@@ -69,9 +69,10 @@ pub struct SceneBuffers<'a> {
     /// `splat_select`'s list of the splats a frame shades: its length, and the indices.
     pub selected_count: &'a wgpu::Buffer,
     pub selected: &'a wgpu::Buffer,
-    /// The level of detail's merge tree (`lod`), and the radius `splat_select` chose for each
-    /// splat this frame.
-    pub lods: &'a wgpu::Buffer,
+    /// The level of detail's merge tree (`lod`) once built, a stand-in to bind before, and
+    /// the radius `splat_select` chose for each splat this frame.
+    pub lods: Option<&'a wgpu::Buffer>,
+    pub no_lods: &'a wgpu::Buffer,
     pub drawn: &'a wgpu::Buffer,
 }
 
@@ -189,7 +190,8 @@ impl FrameScene {
             shaded: &self.shaded,
             selected_count: &self.selected_count,
             selected: &self.selected,
-            lods: self.lods.get().unwrap_or(&self.no_lods),
+            lods: self.lods.get(),
+            no_lods: &self.no_lods,
             drawn: &self.drawn,
         }
     }
@@ -713,13 +715,24 @@ impl SplatPipelines {
         scene: &SceneBuffers,
         uniforms: &Uniforms,
     ) -> Result<()> {
+        let lods = match (scene.lods, uniforms.camera.lod > 0.0) {
+            (Some(lods), _) => lods,
+            (None, false) => scene.no_lods,
+            (None, true) => {
+                return Err(Error::Invalid(
+                    "a frame with the level of detail was drawn before its merge tree was built \
+                     (FrameScene::ensure_lods)"
+                        .into(),
+                ));
+            }
+        };
         encoder.clear_buffer(scene.selected_count, 0, None);
         let select = [
             &uniforms.cam,
             scene.splats,
             scene.selected_count,
             scene.selected,
-            scene.lods,
+            lods,
             scene.drawn,
         ];
         let groups = crate::sequence::groups("splat_select", scene.splat_count)?;
