@@ -20,7 +20,7 @@ use crate::frame::{
 use crate::gpu::Gpu;
 use crate::gpu::bins::GpuBins;
 use crate::gpu::exec::GpuExecutor;
-use crate::gpu::frame::{FrameScene, FrameTargets, SplatPipelines};
+use crate::gpu::frame::{FrameScene, FrameTargets, SceneBuffers, SplatPipelines};
 use crate::gpu::reference::ReferencePipeline;
 use crate::gpu::scene::GpuScene;
 use crate::gpu::tone::{GpuToned, tone_map};
@@ -175,11 +175,7 @@ impl FrameRenderer {
         cfg: &FrameConfig,
     ) -> Result<&wgpu::Buffer> {
         let params = shade_params_for(scene, self.lobes_per_splat, cfg);
-        let compute = self.pipelines.uses_compute(cfg.splatter)?;
-        if frame_camera(cam, &params, compute).lod > 0.0 {
-            self.frame_scene.ensure_lods(gpu, scene)?;
-        }
-        self.record_params(gpu, encoder, cam, &params, cfg.splatter)
+        self.record_params(gpu, encoder, scene, cam, &params, cfg.splatter)
     }
 
     /// Records refinement frame `k` of `spp` of `cam` (`frame::refinement`): jittered, with
@@ -202,13 +198,14 @@ impl FrameRenderer {
             ..*cam
         };
         let params = refinement(&base, k, spp);
-        self.record_params(gpu, encoder, &cam, &params, cfg.splatter)
+        self.record_params(gpu, encoder, scene, &cam, &params, cfg.splatter)
     }
 
     fn record_params(
         &self,
         gpu: &Gpu,
         encoder: &mut wgpu::CommandEncoder,
+        scene: &Scene,
         cam: &Camera,
         params: &ShadeParams,
         splatter: Splatter,
@@ -219,11 +216,27 @@ impl FrameRenderer {
             ));
         }
         let targets = self.targets()?;
-        let buffers = self.frame_scene.buffers(&self.on_gpu);
         let compute = self.pipelines.uses_compute(splatter)?;
+        let buffers = self.frame_buffers(gpu, scene, cam, params, compute)?;
         self.pipelines
             .draw(gpu, encoder, &buffers, cam, params, compute, targets)?;
         Ok(&targets.hdr)
+    }
+
+    /// What the splat passes bind for a frame of `cam`, the level of detail's merge tree built
+    /// first where the frame draws with it (`frame_camera`).
+    fn frame_buffers(
+        &self,
+        gpu: &Gpu,
+        scene: &Scene,
+        cam: &Camera,
+        params: &ShadeParams,
+        compute: bool,
+    ) -> Result<SceneBuffers<'_>> {
+        if frame_camera(cam, params, compute).lod > 0.0 {
+            self.frame_scene.ensure_lods(gpu, scene)?;
+        }
+        Ok(self.frame_scene.buffers(&self.on_gpu))
     }
 
     /// Records the reference image of `cam` from binned photons (`bins`, with the binning's
@@ -376,8 +389,8 @@ impl FrameRenderer {
         }
         let cam = camera_uniform(view, scene.bounds(), cfg);
         let params = shade_params_for(scene, self.lobes_per_splat, cfg);
-        let buffers = self.frame_scene.buffers(&self.on_gpu);
         let compute = self.pipelines.uses_compute(cfg.splatter)?;
+        let buffers = self.frame_buffers(gpu, scene, &cam, &params, compute)?;
         self.pipelines
             .draw_timed(gpu, &buffers, &cam, &params, compute, self.targets()?)
     }

@@ -97,6 +97,45 @@ fn errors_are_one_line_with_non_zero_exit() {
     assert!(lines[0].contains("scenes/does_not_exist.toml"), "{err}");
 }
 
+/// `bench frame`: its keys, timed with the passes apart and with the level of detail that
+/// moving frames draw with by default (whose merge tree must be built for those frames too).
+#[test]
+fn bench_frame_json_has_the_documented_keys() {
+    let v = json(&[
+        "bench",
+        "frame",
+        "scenes/cornell.toml",
+        "--photons",
+        "20000",
+        "--json",
+    ]);
+    for key in [
+        "adapter",
+        "backend",
+        "direct",
+        "splatter",
+        "lod",
+        "frame_ms",
+        "sizes",
+        "refinement",
+    ] {
+        assert!(v.get(key).is_some(), "missing key {key}: {v}");
+    }
+    assert_eq!(v["lod"], 1.5);
+    for size in v["sizes"].as_array().unwrap() {
+        assert_eq!(
+            size["passes_ms"].as_array().map(Vec::len),
+            Some(3),
+            "{size}"
+        );
+        assert!(size["frame_ms"].as_f64().unwrap() > 0.0, "{size}");
+    }
+    assert!(
+        v["refinement"]["moving_rel_mse"].as_f64().unwrap() > 0.0,
+        "{v}"
+    );
+}
+
 #[test]
 fn bench_em_json_has_the_documented_keys() {
     let args = [
