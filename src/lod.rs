@@ -91,6 +91,11 @@ pub fn splat_lods(splats: &[Splat]) -> Vec<SplatLod> {
         .collect()
 }
 
+/// A splat's neighbours in the packing (positions among the level's splats), `NONE` after the
+/// last.
+type Near = [u32; MERGE_K];
+const NONE: u32 = u32::MAX;
+
 /// One level of the tree: for each of `members` (in priority order), the position among them
 /// of the kept splat it merges into (its own where kept); None where too few are left.
 fn merge(splats: &[Splat], members: &[u32]) -> Option<Vec<u32>> {
@@ -102,21 +107,24 @@ fn merge(splats: &[Splat], members: &[u32]) -> Option<Vec<u32>> {
     let mergeable = |a: usize, b: usize| normal(a).dot(normal(b)) >= MERGE_COS_MIN;
     let tree = ImmutableKdTree::<f32, 3>::new_from_slice(&points).ok()?;
     let k = NonZeroUsize::new(MERGE_K + 1)?;
-    // Each splat's neighbours within its reach that may stand in for it, with their squared
-    // distances. The reach lies inside the k-th neighbour's distance, so the k nearest hold
-    // them all.
-    let near: Vec<Vec<(u32, f32)>> = (0..members.len())
+    // Each splat's neighbours within its reach that may stand in for it, nearest first (the
+    // lower position where two are as near), `NONE` after the last; a fixed array, so that ten
+    // million splats take 240 MB here, not twice that and an allocation each. The reach lies
+    // inside the k-th neighbour's distance, so the k nearest hold them all.
+    let near: Vec<Near> = (0..members.len())
         .into_par_iter()
         .map(|m| {
             let found = tree.query(&points[m]).nearest_n::<SquaredEuclidean<f32>>(k);
-            let found = found.execute();
+            let mut found = found.execute();
             let reach = found.last().map_or(0.0, |r| r.distance.sqrt()) * MERGE_FACTOR;
-            found
-                .iter()
-                .filter(|r| r.distance <= reach * reach)
-                .filter(|r| r.item as usize != m && mergeable(m, r.item as usize))
-                .map(|r| (r.item, r.distance))
-                .collect()
+            found.retain(|r| r.distance <= reach * reach);
+            found.retain(|r| r.item as usize != m && mergeable(m, r.item as usize));
+            found.sort_by(|a, b| a.distance.total_cmp(&b.distance).then(a.item.cmp(&b.item)));
+            let mut out = [NONE; MERGE_K];
+            for (slot, r) in out.iter_mut().zip(&found) {
+                *slot = r.item;
+            }
+            out
         })
         .collect();
     let kept = greedy_packing(&near);
@@ -128,11 +136,10 @@ fn merge(splats: &[Splat], members: &[u32]) -> Option<Vec<u32>> {
             if kept[m] {
                 return m as u32;
             }
-            let best = near[m]
-                .iter()
-                .filter(|&&(k, _)| kept[k as usize])
-                .min_by(|a, b| a.1.total_cmp(&b.1).then(a.0.cmp(&b.0)));
-            best.map_or(m as u32, |&(k, _)| k)
+            let mut candidates = near[m].iter().take_while(|&&k| k != NONE);
+            candidates
+                .find(|&&k| kept[k as usize])
+                .map_or(m as u32, |&k| k)
         })
         .collect();
     Some(into)
@@ -143,7 +150,7 @@ fn merge(splats: &[Splat], members: &[u32]) -> Option<Vec<u32>> {
 /// the sequential result: a splat is settled once one of its earlier neighbours is kept (then
 /// it is not) or all are settled and not kept (then it is). The first open splat settles in
 /// every round, and with priorities in random order the chains of waiting splats are short.
-fn greedy_packing(near: &[Vec<(u32, f32)>]) -> Vec<bool> {
+fn greedy_packing(near: &[Near]) -> Vec<bool> {
     const OPEN: u8 = 0;
     const KEPT: u8 = 1;
     const MERGED: u8 = 2;
@@ -155,10 +162,10 @@ fn greedy_packing(near: &[Vec<(u32, f32)>]) -> Vec<bool> {
                 if state[m] != OPEN {
                     return state[m];
                 }
-                let mut earlier = near[m].iter().filter(|&&(k, _)| (k as usize) < m);
-                if earlier.clone().any(|&(k, _)| state[k as usize] == KEPT) {
+                let earlier = near[m].iter().filter(|&&k| k != NONE && (k as usize) < m);
+                if earlier.clone().any(|&k| state[k as usize] == KEPT) {
                     MERGED
-                } else if earlier.all(|&(k, _)| state[k as usize] == MERGED) {
+                } else if earlier.clone().all(|&k| state[k as usize] == MERGED) {
                     KEPT
                 } else {
                     OPEN
