@@ -40,7 +40,7 @@ pub fn splat_lods(splats: &[Splat]) -> Vec<SplatLod> {
     // extent[i][L]: splat i's disk at level L, for L up to top[i].
     let mut extent: Vec<[f32; 4]> = splats.iter().map(|s| [s.radius; 4]).collect();
     let mut top = vec![0u32; n];
-    let mut parent = vec![u32::MAX; n];
+    let mut parent = vec![NONE; n];
     // Each splat's ancestor at the level last built.
     let mut ancestor: Vec<u32> = (0..n as u32).collect();
     // The splats of the level last built, in priority order.
@@ -82,7 +82,7 @@ pub fn splat_lods(splats: &[Splat]) -> Vec<SplatLod> {
                 top: t as u32,
                 ..SplatLod::default()
             };
-            if let Some(&p) = parent.get(i).filter(|&&p| p != u32::MAX) {
+            if let Some(&p) = parent.get(i).filter(|&&p| p != NONE) {
                 lod.parent_extent = extent[p as usize][t + 1];
                 lod.parent_gap = (Vec3::from(splats[i].center) - centre(p)).length();
             }

@@ -167,7 +167,13 @@ impl FrameScene {
     /// Builds the level of detail's merge tree of `scene` and uploads it, once.
     pub fn ensure_lods(&self, gpu: &Gpu, scene: &Scene) -> Result<()> {
         if self.lods.get().is_none() {
+            let start = std::time::Instant::now();
             let tree = crate::lod::splat_lods(&scene.splats);
+            let ms = crate::photons::ms_since(start);
+            log::info!(
+                "level of detail: merge tree of {} splats in {ms:.0} ms",
+                tree.len()
+            );
             // Set once: a second caller's tree would be the same.
             let _ = self.lods.set(gpu.storage("level of detail", &tree)?);
         }
