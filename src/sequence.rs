@@ -22,8 +22,8 @@ use crate::shared::bins::list_count;
 use crate::shared::dispatch::groups_for;
 use crate::tone::{ToneConfig, reduce_levels};
 use crate::types::{
-    BinParams, Camera, DirectParams, DistanceParams, EmParams, Emitter, GridParams, PathParams,
-    Photon, PhotonViewParams, ScanParams, TileParams, TraceCounters,
+    BinParams, Camera, DirectParams, DistanceParams, EmParams, Emitter, GatherParams, GridParams,
+    PathParams, Photon, PhotonViewParams, ScanParams, TileParams, TraceCounters,
 };
 
 /// Where a sequence runs: buffers, uniforms, dispatches by stage name, copies and readbacks.
@@ -744,6 +744,30 @@ pub fn bake_direct<E: Executor>(
     let groups = groups("direct_bake", params.splat_count)?;
     ex.dispatch_traced("direct_bake", &bindings, groups)?;
     Ok(Direct { direct, visibility })
+}
+
+/// Final gathering (`final_gather.wgsl`): `samples²` rays from each splat of `list`
+/// (`params.splat_count` of them) over its hemisphere, with the radiance each brings back from
+/// the surfaces' baked light (`light`: their photon irradiance; `direct`: the direct bake). The
+/// samples, `[radiance, direction bits]`, `samples²` a splat in the list's order.
+pub fn final_gather<E: Executor>(
+    ex: &mut E,
+    params: &GatherParams,
+    list: &E::Buffer,
+    light: &E::Buffer,
+    direct: &E::Buffer,
+) -> Result<E::Buffer> {
+    let rays = params.splat_count as u64 * (params.samples * params.samples) as u64;
+    let count = u32::try_from(rays).map_err(|_| {
+        Error::Invalid(format!(
+            "final gathering: {rays} rays are more than one dispatch holds"
+        ))
+    })?;
+    let samples = ex.zeroed("gather samples", rays.max(1) * 16)?;
+    let uniform = ex.uniform("gather params", params)?;
+    let bindings = [&uniform, list, light, direct, &samples];
+    ex.dispatch_traced("final_gather", &bindings, groups("final_gather", count)?)?;
+    Ok(samples)
 }
 
 pub use crate::shared::splat::TILE;

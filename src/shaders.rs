@@ -68,6 +68,7 @@ pub const STAGES: &[WgslFile] = &[
     stage!("splat_tile_scatter"),
     stage!("splat_compute"),
     stage!("direct_bake"),
+    stage!("final_gather"),
     stage!("shade"),
     stage!("reference_gather"),
     stage!("path_trace"),

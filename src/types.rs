@@ -402,6 +402,20 @@ pub struct PathParams {
     pub _pad1: u32,
 }
 
+/// Uniform of `final_gather`: rays from each listed splat over its hemisphere, and the light
+/// each brings back from the surface it meets.
+#[repr(C)]
+#[derive(Clone, Copy, Debug, Default, PartialEq, Pod, Zeroable)]
+pub struct GatherParams {
+    /// How many splats the list holds.
+    pub splat_count: u32,
+    /// Rays a splat: a `samples` × `samples` stratified grid over its cosine-weighted hemisphere.
+    pub samples: u32,
+    pub seed: u32,
+    /// How far off the splat's plane the rays start (`frame::shadow_bias`).
+    pub shadow_bias: f32,
+}
+
 /// Uniform of `direct_bake`: every splat's direct light from every light, shadowed.
 #[repr(C)]
 #[derive(Clone, Copy, Debug, Default, PartialEq, Pod, Zeroable)]

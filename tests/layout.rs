@@ -163,6 +163,12 @@ fn rust_layouts() -> Vec<RustLayout> {
             fit_candidates,
             _pad2
         }),
+        layout!(GatherParams {
+            splat_count,
+            samples,
+            seed,
+            shadow_bias
+        }),
         layout!(Camera {
             eye,
             near,

@@ -8,8 +8,8 @@ use bytemuck::Pod;
 
 use super::{bin_count, bin_place, bin_rank, bin_scatter, em_fit, em_gather, em_select};
 use super::{
-    direct_bake, path_trace, photon_resolve, photon_trace, photon_view, scan_apply, scan_reduce,
-    tonemap_apply, tonemap_reduce,
+    direct_bake, final_gather, path_trace, photon_resolve, photon_trace, photon_view, scan_apply,
+    scan_reduce, tonemap_apply, tonemap_reduce,
 };
 use super::{grid_count, grid_distance, grid_rank, grid_scatter, splat_tiles};
 use crate::error::{Error, Result};
@@ -444,6 +444,15 @@ fn run_traced(stage: &str, b: &[&CpuBuffer], geo: &Geometry, groups: u32) -> Res
             let mut visibility = get_mut(stage, b, 3)?;
             let (direct, visibility) = (view_mut(&mut direct), view_mut(&mut visibility));
             direct_bake::direct_bake(&p, view(&lights), direct, visibility, geo);
+        }
+        "final_gather" => {
+            let p = param(stage, b, 0)?;
+            let list = get(stage, b, 1)?;
+            let light = get(stage, b, 2)?;
+            let direct = get(stage, b, 3)?;
+            let mut samples = get_mut(stage, b, 4)?;
+            let (list, light, direct) = (view(&list), view(&light), view(&direct));
+            final_gather::final_gather(&p, list, light, direct, view_mut(&mut samples), geo);
         }
         "photon_trace" => {
             let p = param(stage, b, 0)?;

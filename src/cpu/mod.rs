@@ -12,6 +12,7 @@ pub mod em_fit;
 pub mod em_gather;
 pub mod em_select;
 pub mod exec;
+pub mod final_gather;
 pub mod grid_count;
 pub mod grid_distance;
 pub mod grid_rank;

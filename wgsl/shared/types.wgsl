@@ -222,6 +222,13 @@ struct PathParams {
     _pad1: u32,
 }
 
+struct GatherParams {
+    splat_count: u32,
+    samples: u32,
+    seed: u32,
+    shadow_bias: f32,
+}
+
 struct DirectParams {
     splat_count: u32,
     light_count: u32,

@@ -1,0 +1,57 @@
+// Final gathering (docs/design.md section 6): the light arriving at a splat, sampled by rays
+// from its centre rather than estimated from the photons within the gather radius, so that it
+// is resolved at the splat's own position. Per listed splat, samples^2 rays over its
+// cosine-weighted hemisphere (one stratum each, jittered); each brings back the radiance of the
+// surface it meets, as the bake already knows it: a diffuse splat's albedo / pi times its
+// irradiance, direct (the direct bake) and indirect (the photons). Rays that miss, or meet a
+// disk's back, bring none. Sample j of list entry k is at k * samples^2 + j: (radiance,
+// direction as an octahedral u32's bits). One invocation per ray. CPU mirror:
+// src/cpu/final_gather.rs.
+
+// #import types
+// #import dispatch
+// #import rng
+// #import sampling
+// #import octahedral
+// #import splat
+// #import trace
+// #import lights
+
+@group(0) @binding(0) var<uniform> params: GatherParams;
+@group(0) @binding(1) var<storage, read> list: array<u32>;
+// #paged
+@group(0) @binding(2) var<storage, read> light: array<SplatLight>;
+// #paged
+@group(0) @binding(3) var<storage, read> direct: array<vec4<f32>>;
+// #paged
+@group(0) @binding(4) var<storage, read_write> samples: array<vec4<f32>>;
+
+const WG: u32 = 64u;
+
+@compute @workgroup_size(64)
+fn main(@builtin(workgroup_id) wg: vec3<u32>, @builtin(num_workgroups) num_wg: vec3<u32>,
+        @builtin(local_invocation_index) lid: u32) {
+    let g = linear_workgroup(wg, num_wg) * WG + lid;
+    let rays = params.samples * params.samples;
+    if g >= params.splat_count * rays {
+        return;
+    }
+    let i = list[g / rays];
+    let j = g % rays;
+    let s = splats_at(i);
+    let key = pcg_hash(pcg_hash(params.seed) + i) + 2u * j;
+    let uv = area_point(j, params.samples, key, true);
+    let d = to_world(frame_of(s.normal), sample_cosine(uv.x, uv.y));
+    let o = s.center + params.shadow_bias * s.normal;
+    var budget = SHADOW_RAY_BUDGET;
+    let hit = trace_ray(o, d, i, FAR, &budget);
+    var radiance = vec3<f32>(0.0);
+    if hit.splat != NO_SPLAT {
+        let h = splats_at(hit.splat);
+        if dot(h.normal, d) < 0.0 {
+            let e = direct_at(hit.splat).xyz + light_at(hit.splat).irradiance;
+            radiance = h.diffuse * e * (1.0 / PI);
+        }
+    }
+    samples_put(g, vec4<f32>(radiance, bitcast<f32>(oct_encode(d))));
+}
