@@ -386,7 +386,7 @@ pub fn cpu_frame_into(
                 true => crate::lod::splat_lods(&scene.splats),
                 false => vec![SplatLod::default(); scene.splats.len()],
             };
-            Some(cpu::splat_select::splat_select(cam, &scene.splats, &lods))
+            Some(cpu::splat_select::selection(cam, &scene.splats, &lods))
         }
         _ => None,
     };

@@ -62,6 +62,7 @@ pub const STAGES: &[WgslFile] = &[
     stage!("tonemap_apply"),
     stage!("splat_visibility"),
     stage!("splat_select"),
+    stage!("splat_list"),
     stage!("splat_shade"),
     stage!("splat_attributes"),
     stage!("splat_tile_count"),

@@ -111,7 +111,7 @@ fn level_of_detail_matches_the_mirror_and_thins() {
 /// mirror), while a third or more of the splats are left out.
 #[test]
 fn level_of_detail_leaves_no_hole() {
-    use lobelight::cpu::splat_select::{drawn_splats, splat_select};
+    use lobelight::cpu::splat_select::{drawn_splats, selection};
     use lobelight::cpu::splat_visibility::{bin_tiles, splat_visibility};
     let scene = scene::load(Path::new("scenes/cornell.toml")).unwrap();
     let lods = lobelight::lod::splat_lods(&scene.splats);
@@ -127,15 +127,15 @@ fn level_of_detail_leaves_no_hole() {
             };
             for view in views(&scene, size) {
                 let cam = camera_uniform(&view, scene.bounds(), &cfg);
-                let selection = splat_select(&cam, &scene.splats, &lods);
+                let chosen = selection(&cam, &scene.splats, &lods);
                 let full = covered(&cam, &scene.splats);
-                let merged = covered(&cam, &drawn_splats(&scene.splats, &selection.drawn));
+                let merged = covered(&cam, &drawn_splats(&scene.splats, &chosen.drawn));
                 let holes = full
                     .iter()
                     .zip(&merged)
                     .filter(|(f, m)| **f && !**m)
                     .count();
-                let drawn = selection.selected.len();
+                let drawn = chosen.selected.len();
                 eprintln!("{size} px, lod {lod}: {drawn} splats drawn, {holes} holes");
                 assert_eq!(holes, 0, "{size} px, lod {lod}");
                 if size == 24 {

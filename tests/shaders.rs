@@ -161,6 +161,7 @@ fn mirror_workgroup_shapes_match_the_wgsl() {
         ("splat_tile_scatter", splat_tiles::WG, 1),
         ("splat_compute", splat_tiles::WG, 1),
         ("splat_select", splat_select::WG, 1),
+        ("splat_list", splat_list::WG, 1),
         ("splat_shade", splat_shade::WG, 1),
         ("bin_count", bin_count::WG, 1),
         ("bin_scatter", bin_scatter::WG, 1),

@@ -18,10 +18,13 @@
 // With baked direct light, the radiance splat_shade gave each splat towards the eye.
 // #paged
 @group(0) @binding(11) var<storage, read> shaded: array<vec4<f32>>;
-// With the level of detail (LOD, frames of baked direct light), the radius splat_select chose
-// for each splat.
+// Frames of baked direct light draw splat_list's list alone (LISTED), each splat at the radius
+// splat_select chose for it.
 // #paged
 @group(0) @binding(12) var<storage, read> drawn: array<f32>;
+@group(0) @binding(13) var<storage, read> selected_count: array<u32>;
+// #paged
+@group(0) @binding(14) var<storage, read> selected: array<u32>;
 
 // Whether splat s is of the surface the pixel sees (same_surface).
 fn in_front(v: SplatVertex, s: Splat) -> bool {
@@ -68,15 +71,13 @@ struct BakedAttributes {
 @vertex
 fn vs_baked(@builtin(vertex_index) k: u32, @builtin(instance_index) b: u32) -> SplatVertex {
     let i = instance_splat(k, b);
-    if i >= splats_len() {
+    if i >= selected_count[0] {
         return surplus_vertex(i);
     }
-    var s = splats_at(i);
-    if LOD {
-        s.radius = drawn_at(i);
-    }
-    var out = splat_vertex(cam, s, i, instance_corner(k));
-    out.radiance = shaded_at(i).xyz;
+    let listed = selected_at(i);
+    let s = drawn_splat(splats_at(listed), drawn_at(listed));
+    var out = splat_vertex(cam, s, listed, instance_corner(k));
+    out.radiance = shaded_at(listed).xyz;
     return out;
 }
 

@@ -1,5 +1,5 @@
 // Splat pass 2b, per-splat shading of frames with baked direct light (docs/design.md section 8):
-// one invocation per splat splat_select listed, the radiance it sends towards the eye from its
+// one invocation per splat splat_list listed, the radiance it sends towards the eye from its
 // centre, by its lobes and irradiance (indirect) and its baked direct light; the attribute
 // pass then blends that value over the splat's pixels. Shading every fragment with its own
 // view ray took 86 of the attribute pass's 127 ms on the bunny at 512^2; once per splat it

@@ -10,21 +10,29 @@
 @group(0) @binding(0) var<uniform> cam: Camera;
 // #paged
 @group(0) @binding(1) var<storage, read> splats: array<Splat>;
-// With the level of detail (LOD), the radius splat_select chose for each splat.
+// Frames of baked direct light (LISTED) draw splat_list's list alone, each splat at the radius
+// splat_select chose for it.
 // #paged
 @group(0) @binding(2) var<storage, read> drawn: array<f32>;
+@group(0) @binding(3) var<storage, read> selected_count: array<u32>;
+// #paged
+@group(0) @binding(4) var<storage, read> selected: array<u32>;
 
 @vertex
 fn vs_main(@builtin(vertex_index) k: u32, @builtin(instance_index) b: u32) -> SplatVertex {
     let i = instance_splat(k, b);
+    if LISTED {
+        if i >= selected_count[0] {
+            return surplus_vertex(i);
+        }
+        let listed = selected_at(i);
+        return splat_vertex(cam, drawn_splat(splats_at(listed), drawn_at(listed)), listed,
+                            instance_corner(k));
+    }
     if i >= splats_len() {
         return surplus_vertex(i);
     }
-    var s = splats_at(i);
-    if LOD {
-        s.radius = drawn_at(i);
-    }
-    return splat_vertex(cam, s, i, instance_corner(k));
+    return splat_vertex(cam, splats_at(i), i, instance_corner(k));
 }
 
 struct Visible {

@@ -27,6 +27,7 @@ pub mod scan_apply;
 pub mod scan_reduce;
 pub mod shade;
 pub mod splat_attributes;
+pub mod splat_list;
 pub mod splat_select;
 pub mod splat_shade;
 pub mod splat_shading;

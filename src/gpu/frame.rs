@@ -38,7 +38,8 @@ const FRONT: wgpu::TextureFormat = wgpu::TextureFormat::R32Uint;
 const FRONT_BINDING: u32 = 10;
 /// `fs_baked`'s binding of the splats' shaded radiance (`splat_shade`'s output).
 const SHADED_BINDING: u32 = 11;
-/// `vs_baked`'s binding of the radius `splat_select` chose for each splat.
+/// `vs_baked`'s binding of the radius `splat_select` chose for each splat; the list's length
+/// and entries follow it.
 const DRAWN_BINDING: u32 = 12;
 /// The bindings of `wgsl/shared/splat_shading.wgsl` that only the direct bake's shading reads
 /// (the lights, the baked light and visibility): `splat_shade` binds them, the fragment
@@ -66,9 +67,14 @@ pub struct SceneBuffers<'a> {
     /// What `splat_shade` writes for frames of baked direct light: per splat, the radiance
     /// it sends towards the eye.
     pub shaded: &'a wgpu::Buffer,
-    /// `splat_select`'s list of the splats a frame shades: its length, and the indices.
+    /// `splat_list`'s list of the splats a frame draws and shades: its length, and the
+    /// indices, in index order.
     pub selected_count: &'a wgpu::Buffer,
     pub selected: &'a wgpu::Buffer,
+    /// `splat_select`'s count per workgroup (scanned into `splat_list`'s offsets), and the
+    /// raster passes' indirect draw of the list.
+    pub group_counts: &'a wgpu::Buffer,
+    pub draw_args: &'a wgpu::Buffer,
     /// The level of detail's merge tree (`lod`) once built, a stand-in to bind before, and
     /// the radius `splat_select` chose for each splat this frame.
     pub lods: Option<&'a wgpu::Buffer>,
@@ -129,9 +135,14 @@ pub struct FrameScene {
     pub direct: Direct<wgpu::Buffer>,
     /// Per splat, the radiance towards the eye of the frame being drawn (`splat_shade`).
     pub shaded: wgpu::Buffer,
-    /// The splats `splat_shade` shades (`splat_select`): how many, and which.
+    /// The splats a frame of baked direct light draws and shades (`splat_list`): how many, and
+    /// which, in index order.
     pub selected_count: wgpu::Buffer,
     pub selected: wgpu::Buffer,
+    /// `splat_select`'s count per workgroup of splats, scanned in place into `splat_list`'s
+    /// offsets, and the raster passes' indirect draw of the list (`splat_list` writes it).
+    pub group_counts: wgpu::Buffer,
+    pub draw_args: wgpu::Buffer,
     /// The level of detail's merge tree (`lod::splat_lods`), built for the first frame that
     /// draws with it (`ensure_lods`), and per splat the radius `splat_select` chose for the
     /// frame being drawn.
@@ -158,6 +169,13 @@ impl FrameScene {
             shaded: gpu.storage_zeroed("shaded splats", splats * 16)?,
             selected_count: gpu.storage_zeroed("selected splat count", 4)?,
             selected: gpu.storage_zeroed("selected splats", splats * 4)?,
+            group_counts: gpu.storage_zeroed("selected per workgroup", splats.div_ceil(64) * 4)?,
+            draw_args: gpu.device.create_buffer(&wgpu::BufferDescriptor {
+                label: Some("listed splats' draw"),
+                size: 16,
+                usage: wgpu::BufferUsages::STORAGE | wgpu::BufferUsages::INDIRECT,
+                mapped_at_creation: false,
+            }),
             lods: OnceLock::new(),
             drawn: gpu.storage_zeroed("drawn radii", splats * 4)?,
             no_lods: gpu.storage("no level of detail", &[SplatLod::default()])?,
@@ -196,6 +214,8 @@ impl FrameScene {
             shaded: &self.shaded,
             selected_count: &self.selected_count,
             selected: &self.selected,
+            group_counts: &self.group_counts,
+            draw_args: &self.draw_args,
             lods: self.lods.get(),
             no_lods: &self.no_lods,
             drawn: &self.drawn,
@@ -431,16 +451,17 @@ impl Raster {
         }
     }
 
-    /// `lod`: the pipeline draws splats at their level of detail's radius (`LOD` in the WGSL);
-    /// without, the vertex shader has none of its code.
+    /// `listed`: the visibility pass draws `splat_list`'s list (`LISTED` in the WGSL, frames
+    /// of baked direct light); without, every splat, and the vertex shader has none of the
+    /// list's code.
     fn build(
         self,
         gpu: &Gpu,
         format: wgpu::TextureFormat,
         paging: &Paging,
-        lod: bool,
+        listed: bool,
     ) -> Result<wgpu::RenderPipeline> {
-        let constants = [("LOD", f64::from(u8::from(lod)))];
+        let constants = [("LISTED", f64::from(u8::from(listed)))];
         let depth = |compare, write| wgpu::DepthStencilState {
             format: DEPTH,
             depth_write_enabled: Some(write),
@@ -541,6 +562,7 @@ impl SplatPipelines {
             pipelines.shade_pipeline(gpu, &unpaged, rays)?;
         }
         gpu.pipeline("splat_select")?;
+        gpu.pipeline("splat_list")?;
         gpu.pipeline("splat_shade")?;
         if pipelines.splat_compute {
             gpu.pipeline("splat_compute")?;
@@ -549,20 +571,20 @@ impl SplatPipelines {
         Ok(pipelines)
     }
 
-    /// The raster pipeline `which` for arrays paged as `paging`, with the level of detail or
-    /// not, built on first use.
+    /// The raster pipeline `which` for arrays paged as `paging`, drawing the list or every
+    /// splat, built on first use.
     fn raster(
         &self,
         gpu: &Gpu,
         which: Raster,
         paging: &Paging,
-        lod: bool,
+        listed: bool,
     ) -> Result<wgpu::RenderPipeline> {
-        let key = (which, paging.clone(), lod);
+        let key = (which, paging.clone(), listed);
         if let Some(p) = self.raster.lock().ok().and_then(|m| m.get(&key).cloned()) {
             return Ok(p);
         }
-        let pipeline = which.build(gpu, self.format, paging, lod)?;
+        let pipeline = which.build(gpu, self.format, paging, listed)?;
         gpu.check()?;
         if let Ok(mut m) = self.raster.lock() {
             m.insert(key, pipeline.clone());
@@ -712,8 +734,9 @@ impl SplatPipelines {
         }
     }
 
-    /// Records `splat_select`, before the visibility pass of a frame of baked direct light:
-    /// the splats it draws, and the radius each is drawn with.
+    /// Records `splat_select`, the scan of its counts and `splat_list`, before the visibility
+    /// pass of a frame of baked direct light: the radius each splat is drawn with, the list of
+    /// those drawn in index order, and the raster passes' indirect draw of it.
     fn record_splat_select(
         &self,
         gpu: &Gpu,
@@ -732,17 +755,26 @@ impl SplatPipelines {
                 ));
             }
         };
-        encoder.clear_buffer(scene.selected_count, 0, None);
         let select = [
             &uniforms.cam,
             scene.splats,
-            scene.selected_count,
-            scene.selected,
+            scene.group_counts,
             lods,
             scene.drawn,
         ];
         let groups = crate::sequence::groups("splat_select", scene.splat_count)?;
-        gpu.dispatch(encoder, "splat_select", &select, groups)
+        gpu.dispatch(encoder, "splat_select", &select, groups)?;
+        // One count a workgroup: `groups` is their number.
+        super::scan::exclusive_scan(gpu, encoder, scene.group_counts, groups)?;
+        let list = [
+            scene.group_counts,
+            scene.drawn,
+            scene.selected_count,
+            scene.selected,
+            scene.draw_args,
+        ];
+        let groups = crate::sequence::groups("splat_list", scene.splat_count)?;
+        gpu.dispatch(encoder, "splat_list", &list, groups)
     }
 
     /// Records `splat_shade`: the radiance towards the eye of every splat `splat_select`
@@ -851,7 +883,7 @@ impl SplatPipelines {
                 let found = list.iter().find(|(b, _)| *b == binding);
                 found.filter(|_| group == 0).map(|(_, buffer)| *buffer)
             })?;
-            let pipeline = self.raster(gpu, which, &paging, uniforms.camera.lod > 0.0)?;
+            let pipeline = self.raster(gpu, which, &paging, baked)?;
             let mut entries = gpu.paged_entries_at(stage, 0, list, &paging)?;
             if which != Raster::Visibility {
                 entries.push(wgpu::BindGroupEntry {
@@ -877,10 +909,14 @@ impl SplatPipelines {
             })
         };
         if pass == SplatPass::Visibility {
-            let (pipeline, vis_group) = bound(
-                Raster::Visibility,
-                &[(0, cam_buf), (1, scene.splats), (2, scene.drawn)],
-            )?;
+            let list = [
+                (0, cam_buf),
+                (1, scene.splats),
+                (2, scene.drawn),
+                (3, scene.selected_count),
+                (4, scene.selected),
+            ];
+            let (pipeline, vis_group) = bound(Raster::Visibility, &list)?;
             let front = Some(wgpu::RenderPassColorAttachment {
                 view: &out.front,
                 depth_slice: None,
@@ -900,7 +936,10 @@ impl SplatPipelines {
             });
             pass.set_pipeline(&pipeline);
             pass.set_bind_group(0, &vis_group, &[]);
-            pass.draw(SPLAT_VERTICES, 0..instances(scene.splat_count));
+            match baked {
+                true => pass.draw_indirect(scene.draw_args, 0),
+                false => pass.draw(SPLAT_VERTICES, 0..instances(scene.splat_count)),
+            }
             return Ok(());
         }
         if pass == SplatPass::Attributes {
@@ -913,6 +952,8 @@ impl SplatPipelines {
                     (1, scene.splats),
                     (SHADED_BINDING, scene.shaded),
                     (DRAWN_BINDING, scene.drawn),
+                    (DRAWN_BINDING + 1, scene.selected_count),
+                    (DRAWN_BINDING + 2, scene.selected),
                 ],
                 false => (0u32..)
                     .zip(scene.shading(cam_buf, params_buf))
@@ -938,7 +979,10 @@ impl SplatPipelines {
             });
             pass.set_pipeline(&pipeline);
             pass.set_bind_group(0, &attr_group, &[]);
-            pass.draw(SPLAT_VERTICES, 0..instances(scene.splat_count));
+            match baked {
+                true => pass.draw_indirect(scene.draw_args, 0),
+                false => pass.draw(SPLAT_VERTICES, 0..instances(scene.splat_count)),
+            }
             return Ok(());
         }
         let mut frame_entries = vec![

@@ -87,10 +87,17 @@ const SPLATS_PER_INSTANCE: u32 = 32u;
 // splat at the coarsest of its levels that fits, or not at all where its parent's may fit, and
 // writes the radius for the raster passes. Twin: src/shared/splat.rs.
 const LOD_MAX_LEVEL: u32 = 3u;
-// Whether a raster pipeline draws splats at the radius splat_select chose: the host builds one
-// without for frames with the level of detail off, whose vertices then read nothing for it
-// (llvmpipe runs both sides of a branch on a uniform).
-override LOD: bool = true;
+// Whether the visibility pass draws splat_list's list (frames of baked direct light) or every
+// splat (frames of shadow rays); the host builds a pipeline of each, so that neither runs the
+// other's branch (llvmpipe runs both sides of a branch on a uniform).
+override LISTED: bool = true;
+
+// Splat s at the radius splat_select chose for it (its own, or its merged disk's).
+fn drawn_splat(s: Splat, radius: f32) -> Splat {
+    var out = s;
+    out.radius = radius;
+    return out;
+}
 
 // The radius splat s is drawn with this frame: its disk at the coarsest of its levels that
 // projects within cam.lod pixels, its own radius with the level of detail off, or 0 where its
