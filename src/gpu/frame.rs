@@ -245,6 +245,10 @@ pub struct SplatPipelines {
     shade: Mutex<HashMap<(Paging, bool), ShadePipeline>>,
     /// The device can run the compute splatter's tile pass (`compute_splatter_fits`).
     splat_compute: bool,
+    /// The device draws from a buffer's arguments (`draw_indirect`). Without, the raster
+    /// passes draw as many instances as every splat needs, and those past the list's length
+    /// draw nothing: the same image, slower.
+    indirect: bool,
 }
 
 /// The targets of one image size, and the HDR image the frame ends in.
@@ -548,6 +552,11 @@ impl SplatPipelines {
             raster: Default::default(),
             shade: Default::default(),
             splat_compute: compute_splatter_fits(gpu, format),
+            indirect: gpu
+                .adapter
+                .get_downlevel_capabilities()
+                .flags
+                .contains(wgpu::DownlevelFlags::INDIRECT_EXECUTION),
         };
         // Compiled now, so that a device that cannot run them says so before any work.
         let unpaged = Paging::default();
@@ -936,7 +945,7 @@ impl SplatPipelines {
             });
             pass.set_pipeline(&pipeline);
             pass.set_bind_group(0, &vis_group, &[]);
-            match baked {
+            match baked && self.indirect {
                 true => pass.draw_indirect(scene.draw_args, 0),
                 false => pass.draw(SPLAT_VERTICES, 0..instances(scene.splat_count)),
             }
@@ -979,7 +988,7 @@ impl SplatPipelines {
             });
             pass.set_pipeline(&pipeline);
             pass.set_bind_group(0, &attr_group, &[]);
-            match baked {
+            match baked && self.indirect {
                 true => pass.draw_indirect(scene.draw_args, 0),
                 false => pass.draw(SPLAT_VERTICES, 0..instances(scene.splat_count)),
             }
