@@ -46,7 +46,7 @@ pub fn splat_lods(splats: &[Splat]) -> Vec<SplatLod> {
     // The splats of the level last built, in priority order.
     let mut members: Vec<u32> = (0..n as u32).collect();
     members.sort_by_key(|&i| (pcg_hash(i ^ PRIORITY_SALT), i));
-    let mut position = vec![u32::MAX; n];
+    let mut position = vec![NONE; n];
     for level in 1..=LOD_MAX_LEVEL {
         let Some(into) = merge(splats, &members) else {
             break;

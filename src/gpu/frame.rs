@@ -169,7 +169,10 @@ impl FrameScene {
             shaded: gpu.storage_zeroed("shaded splats", splats * 16)?,
             selected_count: gpu.storage_zeroed("selected splat count", 4)?,
             selected: gpu.storage_zeroed("selected splats", splats * 4)?,
-            group_counts: gpu.storage_zeroed("selected per workgroup", splats.div_ceil(64) * 4)?,
+            group_counts: gpu.storage_zeroed(
+                "selected per workgroup",
+                crate::sequence::groups("splat_select", splats as u32)? as u64 * 4,
+            )?,
             draw_args: gpu.device.create_buffer(&wgpu::BufferDescriptor {
                 label: Some("listed splats' draw"),
                 size: 16,

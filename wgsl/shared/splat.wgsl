@@ -12,7 +12,6 @@
 // #import ward
 // #import lobes
 // #import octahedral
-// #import rng
 
 // The radial kernel exp(-KERNEL_SHARPNESS q) of q = d^2 / r^2: 1 at the centre, e^-2 at
 // the rim, so a pixel that only rims cover still gets a well-defined normalised value.
