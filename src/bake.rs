@@ -8,11 +8,12 @@ use std::time::Instant;
 
 use crate::bins::{PhotonBins, bin_params};
 use crate::cpu;
-use crate::em::{EmConfig, FitShape, LobeMap};
+use crate::em::{EmConfig, FitShape, GatherSetup, LobeMap};
 use crate::error::Result;
+use crate::frame::{direct_params, shadow_bias};
 use crate::gpu::Gpu;
 use crate::gpu::bins::{GpuBins, bin_photons};
-use crate::gpu::em::fit_lobes;
+use crate::gpu::em::fit_lobes_gathering;
 use crate::gpu::photons::{GpuPhotons, trace_photons};
 use crate::gpu::scene::GpuScene;
 use crate::grid::SplatGrid;
@@ -286,17 +287,22 @@ pub fn fit_gpu(
     let spin = progress.spinner("em");
     let n = scene.splats.len() as u32;
     let em_cfg = EmConfig::from_scene(scene);
-    let fitted = fit_lobes(
-        gpu,
-        &on_gpu.splats,
-        &on_gpu.materials,
-        n,
-        &binned.bins,
-        &em_cfg,
-    )?;
+    let setup = gather_setup(scene);
+    let fitted = fit_lobes_gathering(gpu, on_gpu, n, &binned.bins, &em_cfg, &setup)?;
     let lobes = fitted.download(gpu)?;
     spin.finish_and_clear();
     Ok(lobes)
+}
+
+/// What final gathering reads of `scene` (`EmConfig::gather`): its lights, baked as frames
+/// bake them, and rays that start where shadow rays do.
+pub fn gather_setup(scene: &Scene) -> GatherSetup<'_> {
+    GatherSetup {
+        lights: &scene.lights,
+        direct: direct_params(scene),
+        seed: scene.bake.seed,
+        shadow_bias: shadow_bias(&scene.splats),
+    }
 }
 
 /// Traces, bins and fits; the lobes come back to the host (a few bytes per splat), from
@@ -312,12 +318,13 @@ pub fn bake(scene: &Scene, device: BakeDevice, progress: &Progress) -> Result<Ba
         BakeDevice::Cpu(grid) => {
             let b = bins_cpu(scene, grid, progress)?;
             let spin = progress.spinner("em");
-            let lobes = cpu::fit_lobes(
+            let lobes = cpu::fit_lobes_gathering(
                 &em_cfg,
                 &b.bins,
                 &scene.splats,
                 &scene.materials,
                 FitShape::default(),
+                Some((grid, &gather_setup(scene))),
             )?;
             spin.finish_and_clear();
             (lobes, b.photons, b.binning)

@@ -8,7 +8,7 @@ use crate::error::{Error, Result};
 use crate::shared::lobes::{
     EM_FIT_ALL, EM_PRIORS, EM_SPARSE, EM_SUBGROUP_REDUCE, FAMILY_VMF, FAMILY_WARD,
 };
-use crate::types::{EmParams, Lobe, SplatLight};
+use crate::types::{DirectParams, EmParams, Light, Lobe, SplatLight};
 
 /// The lobe family fitted to each splat's photon directions.
 #[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Deserialize, Serialize)]
@@ -57,6 +57,9 @@ pub struct EmConfig {
     /// subset, reweighted, so the fit's time is bounded by splats, not photons; the splat's
     /// irradiance still sums every photon (`em_fit.wgsl`, "Bounded cost").
     pub fit_candidates: u32,
+    /// Final gathering: fitted splats fit their lobes to `gather`² rays from their centres
+    /// (`sequence::fit_lobes`), not to the photons (0).
+    pub gather: u32,
 }
 
 impl EmConfig {
@@ -70,7 +73,8 @@ impl EmConfig {
                 ));
             }
             check_radius(self.radius)?;
-            check_slab(self.slab)
+            check_slab(self.slab)?;
+            check_gather(self.gather)
         };
         check().map_err(Error::Invalid)
     }
@@ -137,6 +141,18 @@ pub fn check_slab(slab: f32) -> std::result::Result<(), String> {
     }
     Ok(())
 }
+
+pub fn check_gather(gather: u32) -> std::result::Result<(), String> {
+    if gather > MAX_GATHER {
+        return Err(format!(
+            "gather must be within 0..={MAX_GATHER} rays a side, got {gather}"
+        ));
+    }
+    Ok(())
+}
+
+/// Most rays a side of final gathering: 64² = 4,096 rays a splat.
+pub const MAX_GATHER: u32 = 64;
 
 /// `EmConfig::fit_candidates` unless a scene or the command line says otherwise.
 pub const DEFAULT_FIT_CANDIDATES: u32 = 1024;
@@ -228,6 +244,19 @@ pub struct EmStats {
     pub select_ms: f64,
     pub gather_ms: f64,
     pub fit_ms: f64,
+    /// With final gathering: the direct bake and the rays (`final_gather`).
+    pub final_gather_ms: f64,
+}
+
+/// What final gathering reads of the scene besides the photons and the splats
+/// (`EmConfig::gather`): the lights of the direct bake, whose light the rays' hits read with
+/// the photons', and where the rays start.
+pub struct GatherSetup<'a> {
+    pub lights: &'a [Light],
+    pub direct: DirectParams,
+    pub seed: u32,
+    /// How far off a splat's plane its rays start.
+    pub shadow_bias: f32,
 }
 
 /// The fit's output: the light of every splat, and the lobes written, packed (splat `i`'s at

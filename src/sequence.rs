@@ -20,6 +20,7 @@ use crate::photons::{
 use crate::shaders::stage_shape;
 use crate::shared::bins::list_count;
 use crate::shared::dispatch::groups_for;
+use crate::shared::lobes::EM_DEFER_FIT;
 use crate::tone::{ToneConfig, reduce_levels};
 use crate::types::{
     BinParams, Camera, DirectParams, DistanceParams, EmParams, Emitter, GatherParams, GridParams,
@@ -386,6 +387,19 @@ pub struct FitInput<'a, B> {
     pub splats: &'a B,
     pub materials: &'a B,
     pub splat_count: u32,
+    /// Final gathering for the fitted splats' lobes, with `EmConfig::gather` rays a side; the
+    /// executor then traces the scene's splats.
+    pub gathering: Option<Gathering<'a, B>>,
+}
+
+/// What final gathering needs besides the photons: the lights of the direct bake, whose light
+/// the rays' hits read with the photons', and where the rays start.
+pub struct Gathering<'a, B> {
+    pub lights: &'a B,
+    pub direct: DirectParams,
+    pub seed: u32,
+    /// How far off a splat's plane its rays start (`frame::shadow_bias`).
+    pub shadow_bias: f32,
 }
 
 /// The lobe fit where it ran: `cfg.lobes` slots a splat (dense, unpacked) and each splat's
@@ -401,17 +415,21 @@ pub struct Fit<B> {
     pub fitted: u32,
     pub max_candidates: u32,
     pub dispatches: u32,
-    /// Wall time of the passes: `em_select` with its readback, `em_gather`, `em_fit`.
+    /// Wall time of the passes: `em_select` with its readback, `em_gather`, `em_fit`, and
+    /// with final gathering the direct bake and `final_gather` (their `em_fit` in `fit_ms`).
     pub select_ms: f64,
     pub gather_ms: f64,
     pub fit_ms: f64,
+    pub final_gather_ms: f64,
 }
 
 /// The lobe fit: `em_select` lists the splats with photons near them, in two lists → (split:
 /// the lists' lengths and the most candidates a fit-list splat has, which sizes the
 /// dispatches on a loop-limited device) → `em_gather`, one invocation per splat of the gather
 /// list (irradiance alone) → `em_fit`, one workgroup per splat of the fit list, in one
-/// dispatch or in several that hand the mixture over through the lobe buffer.
+/// dispatch or in several that hand the mixture over through the lobe buffer. With final
+/// gathering (`cfg.gather` > 0), that `em_fit` gives the fitted splats only their irradiance,
+/// then `direct_bake` → `final_gather` from each fitted splat → `em_fit` over those samples.
 pub fn fit_lobes<E: Executor>(
     ex: &mut E,
     input: &FitInput<E::Buffer>,
@@ -464,6 +482,94 @@ pub fn fit_lobes<E: Executor>(
     let gather_ms = ms_since(t) - select_ms;
     // Lobes for the fitted splats alone, at the slots em_select gave them.
     let lobes = ex.zeroed("lobes", (fitted as u64 * cfg.lobes as u64).max(1) * 32)?;
+    let gathering = match (&input.gathering, cfg.gather) {
+        (_, 0) => None,
+        (Some(g), _) if fitted > 0 => Some(g),
+        (Some(_), _) => None,
+        (None, _) => {
+            return Err(Error::Invalid(
+                "final gathering needs the scene's lights and geometry".into(),
+            ));
+        }
+    };
+    let mut params = cfg.params(splat_count, listed, shape);
+    if gathering.is_some() {
+        params.flags |= EM_DEFER_FIT;
+    }
+    let fit_input = EmFitInput {
+        input,
+        fit_list: &fit_list,
+        candidates: [input.geom, input.power],
+        lobes: &lobes,
+        light: &light,
+    };
+    let mut dispatches = em_fit(ex, cfg, shape, &params, max_candidates, &fit_input)?;
+    ex.read::<u32>(&counters, 1)?;
+    let mut fit_ms = ms_since(t) - select_ms - gather_ms;
+    let mut final_gather_ms = 0.0;
+    if let Some(g) = gathering {
+        let t = std::time::Instant::now();
+        let direct = bake_direct(ex, g.lights, &g.direct)?;
+        let gather = GatherParams {
+            splat_count: listed,
+            samples: cfg.gather,
+            seed: g.seed,
+            shadow_bias: g.shadow_bias,
+        };
+        let samples = final_gather(ex, &gather, &fit_list, &light, &direct.direct, fitted)?;
+        ex.read::<u32>(&counters, 1)?;
+        final_gather_ms = ms_since(t);
+        let t = std::time::Instant::now();
+        let rays = cfg.gather * cfg.gather;
+        let params = EmParams {
+            gathered: rays,
+            inv_area: std::f32::consts::PI / rays as f32,
+            ..cfg.params(splat_count, listed, shape)
+        };
+        // The samples stand in for both the photons' geometry (not read) and their power.
+        let fit_input = EmFitInput {
+            candidates: [&samples, &samples],
+            ..fit_input
+        };
+        dispatches += em_fit(ex, cfg, shape, &params, rays, &fit_input)?;
+        ex.read::<u32>(&counters, 1)?;
+        fit_ms += ms_since(t);
+    }
+    Ok(Fit {
+        lobes,
+        light,
+        listed,
+        gathered,
+        fitted,
+        max_candidates,
+        dispatches,
+        select_ms,
+        gather_ms,
+        fit_ms,
+        final_gather_ms,
+    })
+}
+
+/// The buffers of `em_fit`'s dispatches.
+struct EmFitInput<'a, B> {
+    input: &'a FitInput<'a, B>,
+    fit_list: &'a B,
+    /// Bound as the binned photons' geometry and power.
+    candidates: [&'a B; 2],
+    lobes: &'a B,
+    light: &'a B,
+}
+
+/// `em_fit` over the fit list with the uniform `params`, its iterations split over as many
+/// dispatches as `max_candidates` a splat need on this device; returns how many.
+fn em_fit<E: Executor>(
+    ex: &mut E,
+    cfg: &EmConfig,
+    shape: FitShape,
+    params: &EmParams,
+    max_candidates: u32,
+    b: &EmFitInput<E::Buffer>,
+) -> Result<u32> {
     let chunk = iterations_per_dispatch(cfg, max_candidates, shape.loop_limited)?;
     let constants = [
         ("LOBES", cfg.lobes as f64),
@@ -481,36 +587,30 @@ pub fn fit_lobes<E: Executor>(
         let params = EmParams {
             iteration_begin: begin,
             iteration_end: end,
-            ..cfg.params(splat_count, listed, shape)
+            ..*params
         };
         let uniform = ex.uniform("em params", &params)?;
         let bindings = [
             &uniform,
-            input.bin_params,
-            input.splats,
-            &fit_list,
-            input.cell_start,
-            input.geom,
-            input.power,
-            &lobes,
-            &light,
+            b.input.bin_params,
+            b.input.splats,
+            b.fit_list,
+            b.input.cell_start,
+            b.candidates[0],
+            b.candidates[1],
+            b.lobes,
+            b.light,
         ];
-        ex.dispatch_variant("em_fit", defines, &constants, &bindings, listed)?;
+        ex.dispatch_variant(
+            "em_fit",
+            defines,
+            &constants,
+            &bindings,
+            params.active_count,
+        )?;
         dispatches += 1;
     }
-    ex.read::<u32>(&counters, 1)?;
-    Ok(Fit {
-        lobes,
-        light,
-        listed,
-        gathered,
-        fitted,
-        max_candidates,
-        dispatches,
-        select_ms,
-        gather_ms,
-        fit_ms: ms_since(t) - select_ms - gather_ms,
-    })
+    Ok(dispatches)
 }
 
 /// The photon view of `cam` (`width × height` from `cam.size`): `photon_view` once per photon
@@ -746,24 +846,27 @@ pub fn bake_direct<E: Executor>(
     Ok(Direct { direct, visibility })
 }
 
-/// Final gathering (`final_gather.wgsl`): `samples²` rays from each splat of `list`
-/// (`params.splat_count` of them) over its hemisphere, with the radiance each brings back from
-/// the surfaces' baked light (`light`: their photon irradiance; `direct`: the direct bake). The
-/// samples, `[radiance, direction bits]`, `samples²` a splat in the list's order.
+/// Final gathering (`final_gather.wgsl`): `samples²` rays from each fitted splat of the fit
+/// list `list` (`params.splat_count` entries, `fitted` of them fitted) over its hemisphere,
+/// with the radiance each brings back from the surfaces' baked light (`light`: their photon
+/// irradiance; `direct`: the direct bake). The samples, `[radiance, direction bits]`,
+/// `samples²` a fitted splat at its lobe slot.
 pub fn final_gather<E: Executor>(
     ex: &mut E,
     params: &GatherParams,
     list: &E::Buffer,
     light: &E::Buffer,
     direct: &E::Buffer,
+    fitted: u32,
 ) -> Result<E::Buffer> {
-    let rays = params.splat_count as u64 * (params.samples * params.samples) as u64;
+    let per_splat = (params.samples * params.samples) as u64;
+    let rays = params.splat_count as u64 * per_splat;
     let count = u32::try_from(rays).map_err(|_| {
         Error::Invalid(format!(
             "final gathering: {rays} rays are more than one dispatch holds"
         ))
     })?;
-    let samples = ex.zeroed("gather samples", rays.max(1) * 16)?;
+    let samples = ex.zeroed("gather samples", (fitted as u64 * per_splat).max(1) * 16)?;
     let uniform = ex.uniform("gather params", params)?;
     let bindings = [&uniform, list, light, direct, &samples];
     ex.dispatch_traced("final_gather", &bindings, groups("final_gather", count)?)?;

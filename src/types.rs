@@ -304,7 +304,9 @@ pub struct EmParams {
     /// Most candidate photons a fitted splat's EM visits; past it an even subset, reweighted
     /// (0: all); see `em_fit.wgsl`, "Bounded cost".
     pub fit_candidates: u32,
-    pub _pad2: u32,
+    /// Rays a splat of final gathering's samples, the candidates of this dispatch's fitted
+    /// splats (0: the binned photons); see `em_fit.wgsl`, "Gathered samples".
+    pub gathered: u32,
 }
 
 /// Per-frame camera uniform of the splat passes: a pinhole at `eye` looking along `forward`,
@@ -402,12 +404,12 @@ pub struct PathParams {
     pub _pad1: u32,
 }
 
-/// Uniform of `final_gather`: rays from each listed splat over its hemisphere, and the light
-/// each brings back from the surface it meets.
+/// Uniform of `final_gather`: rays from each fitted splat of the fit list over its hemisphere,
+/// and the light each brings back from the surface it meets.
 #[repr(C)]
 #[derive(Clone, Copy, Debug, Default, PartialEq, Pod, Zeroable)]
 pub struct GatherParams {
-    /// How many splats the list holds.
+    /// How many entries the fit list holds.
     pub splat_count: u32,
     /// Rays a splat: a `samples` × `samples` stratified grid over its cosine-weighted hemisphere.
     pub samples: u32,

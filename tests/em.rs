@@ -96,6 +96,7 @@ fn config(family: LobeFamily, lobes: u32, iterations: u32) -> EmConfig {
         radius: R,
         slab: 2.0,
         fit_candidates: 0,
+        gather: 0,
     }
 }
 

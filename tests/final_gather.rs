@@ -5,9 +5,14 @@ mod common;
 
 use std::path::Path;
 
-use lobelight::bake::{BakeDevice, Progress, bake};
+use lobelight::bake::{BakeDevice, Progress, bake, bins_cpu, gather_setup};
+use lobelight::cpu;
 use lobelight::cpu::CpuExecutor;
+use lobelight::cpu::em_select::FIT_BIT;
+use lobelight::em::{EmConfig, LobeMap};
 use lobelight::frame::{cpu_direct, shadow_bias};
+use lobelight::gpu::bins::GpuBins;
+use lobelight::gpu::em::{fit_lobes_gathering, fit_shape};
 use lobelight::gpu::exec::GpuExecutor;
 use lobelight::gpu::scene::GpuScene;
 use lobelight::sequence::{Executor, final_gather};
@@ -34,10 +39,13 @@ fn gather<E: Executor>(
     direct: &[[f32; 4]],
 ) -> Vec<[f32; 4]> {
     let count = list.len() * (params.samples * params.samples) as usize;
-    let list = ex.upload("list", list).unwrap();
+    // A fit list: each splat fitted, in lobe slot k.
+    let entries: Vec<[u32; 2]> = (0..).zip(list).map(|(k, &i)| [i | FIT_BIT, k]).collect();
+    let list = ex.upload("list", &entries).unwrap();
     let light = ex.upload("light", light).unwrap();
     let direct = ex.upload("direct", direct).unwrap();
-    let samples = final_gather(ex, params, &list, &light, &direct).unwrap();
+    let fitted = entries.len() as u32;
+    let samples = final_gather(ex, params, &list, &light, &direct, fitted).unwrap();
     ex.read(&samples, count).unwrap()
 }
 
@@ -117,4 +125,82 @@ fn final_gather_matches_the_mirror_and_the_photons() {
         (gathered / photon - 1.0).abs() <= 0.05,
         "{gathered} against {photon}"
     );
+}
+
+/// Lobes fitted to final gathering's samples (`gather`): device against mirror from the same
+/// photons, and the energy the fit hands its lobes. The default scene at 100 k photons, 8 × 8
+/// rays a glossy splat. Every fitted splat's lobes carry its irradiance (their sum within
+/// 1e-4 of it), which is the samples' estimate, π / N Σ L, above the photons' by as much as
+/// the test above finds (within 5 %); device and mirror agree within 1e-3 on 99 % of the
+/// splats, and within 1e-3 on the mean.
+#[test]
+fn lobes_fitted_to_gathered_samples_match_the_mirror() {
+    let gpu = common::gpu();
+    let mut scene = lobelight::scene::load(Path::new("scenes/cornell.toml")).unwrap();
+    scene.bake.photons = 100_000;
+    scene.bake.gather = 8;
+    let grid = common::host_grid(&scene);
+    let bins = bins_cpu(&scene, &grid, &Progress::new(false)).unwrap().bins;
+    let cfg = EmConfig::from_scene(&scene);
+    let setup = gather_setup(&scene);
+    let shape = fit_shape(&gpu);
+    let on_gpu = {
+        let on_gpu = GpuScene::upload(&gpu, &scene).unwrap();
+        let uploaded = GpuBins::upload(&gpu, &bins).unwrap();
+        let n = scene.splats.len() as u32;
+        fit_lobes_gathering(&gpu, &on_gpu, n, &uploaded, &cfg, &setup)
+            .unwrap()
+            .download(&gpu)
+            .unwrap()
+    };
+    let (splats, materials) = (&scene.splats, &scene.materials);
+    let gathering = Some((&grid, &setup));
+    let on_cpu =
+        cpu::fit_lobes_gathering(&cfg, &bins, splats, materials, shape, gathering).unwrap();
+    let by_photons = EmConfig { gather: 0, ..cfg };
+    let photons = cpu::fit_lobes(&by_photons, &bins, splats, materials, shape).unwrap();
+    let grey = |e: [f32; 3]| (e[0] + e[1] + e[2]) / 3.0;
+    let fitted: Vec<usize> = (0..splats.len())
+        .filter(|&i| on_cpu.light[i].lobes > 0)
+        .collect();
+    assert!(fitted.len() > 1000, "{} splats fitted", fitted.len());
+    for map in [&on_gpu, &on_cpu] {
+        for &i in &fitted {
+            let l = map.light[i];
+            let lobes = &map.lobes[l.first_lobe as usize..(l.first_lobe + l.lobes) as usize];
+            let sum: f32 = lobes.iter().map(|b| grey(b.irradiance)).sum();
+            let e = grey(l.irradiance);
+            assert!(
+                (sum - e).abs() <= 1e-4 * e.max(1e-3),
+                "splat {i}: {sum} against {e}"
+            );
+        }
+    }
+    let irradiance = |map: &LobeMap| -> Vec<f32> {
+        fitted
+            .iter()
+            .map(|&i| grey(map.light[i].irradiance))
+            .collect()
+    };
+    let (a, b, p) = (
+        irradiance(&on_gpu),
+        irradiance(&on_cpu),
+        irradiance(&photons),
+    );
+    let close = a
+        .iter()
+        .zip(&b)
+        .filter(|(x, y)| (*x - *y).abs() <= 1e-3 * y.abs().max(1e-3))
+        .count();
+    let mean = |v: &[f32]| v.iter().map(|&x| x as f64).sum::<f64>() / v.len() as f64;
+    eprintln!(
+        "{close} of {} within 1e-3; means {:.5} {:.5}, photons {:.5}",
+        a.len(),
+        mean(&a),
+        mean(&b),
+        mean(&p)
+    );
+    assert!(close as f64 >= 0.99 * a.len() as f64);
+    assert!((mean(&a) - mean(&b)).abs() <= 1e-3 * mean(&b));
+    assert!((mean(&b) / mean(&p) - 1.0).abs() <= 0.05);
 }

@@ -161,7 +161,7 @@ fn rust_layouts() -> Vec<RustLayout> {
             workgroup_size,
             prune,
             fit_candidates,
-            _pad2
+            gathered
         }),
         layout!(GatherParams {
             splat_count,

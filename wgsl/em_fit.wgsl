@@ -39,6 +39,13 @@
 // need it, though a cluster fitted by two lobes side by side may keep both. Dropped lobes get
 // responsibility 0 and hand over between dispatches with sharpness 0; the lobes kept are
 // written first, in order, so `light.lobes` counts them.
+// Gathered samples (em.gathered > 0, docs/design.md section 6): the candidates of a fitted splat
+// are then the em.gathered samples final gathering cast from its centre, at lobe slot * gathered
+// in the buffer bound as bin_power (radiance, the direction's octahedral bits), in one row; none
+// is tested for position, each weighs its radiance, and em.inv_area is pi / em.gathered, so that
+// the sums estimate irradiance as the photons' do. Splats not fitted take no part: the photon
+// dispatch before it (with EM_DEFER_FIT, which gave the fitted splats only their irradiance)
+// left their light. bin_geom and cell_start are not read.
 // The host may split the iterations over several dispatches (see EmParams) to keep each
 // invocation's loops under llvmpipe's limit; the mixture waits in the lobe buffer between.
 // CPU mirror: src/cpu/em_fit.rs.
@@ -142,6 +149,22 @@ var<private> resume_offset: u32;
 // This splat's candidate stride s (see "Bounded cost") and WG * s, an invocation's step.
 var<private> stride: u32;
 var<private> step: u32;
+// With gathered samples, this splat's first.
+var<private> sample_first: u32;
+
+// The splat's candidate rows: its bin rows, or the one row of its gathered samples.
+fn row_count(box: BinBox) -> u32 {
+    return select(bin_row_count(box), 1u, em.gathered > 0u);
+}
+
+// Candidates [x, y) of row r.
+fn row_span(box: BinBox, r: u32) -> vec2<u32> {
+    if em.gathered > 0u {
+        return vec2<u32>(sample_first, sample_first + em.gathered);
+    }
+    let row = bin_row(box, r, bins);
+    return vec2<u32>(cell_start[row.x], cell_start[row.y]);
+}
 
 // First candidate of row [begin, ..) for invocation `lid`, whose candidates are those with
 // (offset + position in row) = lid * stride mod WG * stride (every stride-th, dealt round).
@@ -157,6 +180,13 @@ struct Candidate {
 
 fn accept(j: u32) -> Candidate {
     var c: Candidate;
+    if em.gathered > 0u {
+        let sample = bin_power_at(j);
+        c.dir = oct_decode(bitcast<u32>(sample.w));
+        c.weight = photon_weight(sample.xyz) * f32(stride);
+        c.ok = c.weight > 0.0;
+        return c;
+    }
     let g = bin_geom_at(j);
     let d = g.position - center;
     // Most candidates fail on position: the direction and the power only load for the rest.
@@ -278,10 +308,10 @@ fn gather(lid: u32, box: BinBox) {
     cached = 0u;
     streaming = false;
     var offset = 0u;
-    for (var r = 0u; r < bin_row_count(box); r++) {
-        let row = bin_row(box, r, bins);
-        let begin = cell_start[row.x];
-        let end = cell_start[row.y];
+    for (var r = 0u; r < row_count(box); r++) {
+        let span = row_span(box, r);
+        let begin = span.x;
+        let end = span.y;
         for (var j = first_in_row(begin, offset, lid); j < end; j += step) {
             let c = accept(j);
             if !c.ok {
@@ -315,10 +345,10 @@ fn photon_pass(lid: u32, box: BinBox, kind: u32, sparse: bool, full: bool, losse
         return;
     }
     var offset = resume_offset;
-    for (var r = resume_row; r < bin_row_count(box); r++) {
-        let row = bin_row(box, r, bins);
-        let begin = cell_start[row.x];
-        let end = cell_start[row.y];
+    for (var r = resume_row; r < row_count(box); r++) {
+        let span = row_span(box, r);
+        let begin = span.x;
+        let end = span.y;
         var j = select(first_in_row(begin, offset, lid), resume_j, r == resume_row);
         for (; j < end; j += step) {
             let c = accept(j);
@@ -334,10 +364,10 @@ fn photon_pass(lid: u32, box: BinBox, kind: u32, sparse: bool, full: bool, losse
 // count and RGB sums: a subset's final pass (see "Bounded cost").
 fn irradiance_pass(lid: u32, box: BinBox) {
     var offset = 0u;
-    for (var r = 0u; r < bin_row_count(box); r++) {
-        let row = bin_row(box, r, bins);
-        let begin = cell_start[row.x];
-        let end = cell_start[row.y];
+    for (var r = 0u; r < row_count(box); r++) {
+        let span = row_span(box, r);
+        let begin = span.x;
+        let end = span.y;
         for (var j = begin + (lid + WG - offset % WG) % WG; j < end; j += WG) {
             if accept(j).ok {
                 let power = bin_power_at(j).xyz;
@@ -351,12 +381,12 @@ fn irradiance_pass(lid: u32, box: BinBox) {
     }
 }
 
-// The candidates of the splat's bin rows (em_select counts the same).
+// The candidates of the splat's rows (em_select counts the same bin rows).
 fn candidate_count(box: BinBox) -> u32 {
     var n = 0u;
-    for (var r = 0u; r < bin_row_count(box); r++) {
-        let row = bin_row(box, r, bins);
-        n += cell_start[row.y] - cell_start[row.x];
+    for (var r = 0u; r < row_count(box); r++) {
+        let span = row_span(box, r);
+        n += span.y - span.x;
     }
     return n;
 }
@@ -471,7 +501,11 @@ fn main(@builtin(workgroup_id) wg: vec3<u32>, @builtin(num_workgroups) num_wg: v
     let listed = workgroupUniformLoad(&shared_entry);
     let entry = listed.x;
     let splat_index = entry & ~FIT_BIT;
-    let fit = (entry & FIT_BIT) != 0u;
+    let fit = (entry & FIT_BIT) != 0u && (em.flags & EM_DEFER_FIT) == 0u;
+    if em.gathered > 0u && !fit {
+        return;
+    }
+    sample_first = listed.y * em.gathered;
     // The splat's lobes in the lobe buffer, which holds the fitted splats' alone.
     let first = listed.y * em.lobes;
     let s = splats_at(splat_index);

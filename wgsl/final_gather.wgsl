@@ -1,11 +1,12 @@
 // Final gathering (docs/design.md section 6): the light arriving at a splat, sampled by rays
 // from its centre rather than estimated from the photons within the gather radius, so that it
-// is resolved at the splat's own position. Per listed splat, samples^2 rays over its
+// is resolved at the splat's own position. Per fitted splat of the fit list (em_select's: the
+// splat with FIT_BIT, its lobe slot), samples^2 rays over its
 // cosine-weighted hemisphere (one stratum each, jittered); each brings back the radiance of the
 // surface it meets, as the bake already knows it: a diffuse splat's albedo / pi times its
 // irradiance, direct (the direct bake) and indirect (the photons). Rays that miss, or meet a
-// disk's back, bring none. Sample j of list entry k is at k * samples^2 + j: (radiance,
-// direction as an octahedral u32's bits). One invocation per ray. CPU mirror:
+// disk's back, bring none. Sample j of the splat in lobe slot k is at k * samples^2 + j:
+// (radiance, direction as an octahedral u32's bits), where em_fit's gathered dispatch finds it. One invocation per ray. CPU mirror:
 // src/cpu/final_gather.rs.
 
 // #import types
@@ -16,9 +17,10 @@
 // #import splat
 // #import trace
 // #import lights
+// #import lobes
 
 @group(0) @binding(0) var<uniform> params: GatherParams;
-@group(0) @binding(1) var<storage, read> list: array<u32>;
+@group(0) @binding(1) var<storage, read> list: array<vec2<u32>>;
 // #paged
 @group(0) @binding(2) var<storage, read> light: array<SplatLight>;
 // #paged
@@ -36,7 +38,11 @@ fn main(@builtin(workgroup_id) wg: vec3<u32>, @builtin(num_workgroups) num_wg: v
     if g >= params.splat_count * rays {
         return;
     }
-    let i = list[g / rays];
+    let entry = list[g / rays];
+    if (entry.x & FIT_BIT) == 0u {
+        return;
+    }
+    let i = entry.x & ~FIT_BIT;
     let j = g % rays;
     let s = splats_at(i);
     let key = pcg_hash(pcg_hash(params.seed) + i) + 2u * j;
@@ -53,5 +59,5 @@ fn main(@builtin(workgroup_id) wg: vec3<u32>, @builtin(num_workgroups) num_wg: v
             radiance = h.diffuse * e * (1.0 / PI);
         }
     }
-    samples_put(g, vec4<f32>(radiance, bitcast<f32>(oct_encode(d))));
+    samples_put(entry.y * rays + j, vec4<f32>(radiance, bitcast<f32>(oct_encode(d))));
 }

@@ -67,7 +67,8 @@ fn main(@builtin(workgroup_id) wg: vec3<u32>, @builtin(num_workgroups) num_wg: v
     if i >= params.width * params.height {
         return;
     }
-    let key = path_key(pcg_hash(params.seed + params.sample), i);
+    // The seed hashed before the sample is added: seeds s and s + 1 share no sample.
+    let key = path_key(pcg_hash(pcg_hash(params.seed) + params.sample), i);
     let px = vec2<f32>(f32(i % params.width), f32(i / params.width));
     let jitter = vec2<f32>(rand(key, 0u, RNG_EMIT_POS_U), rand(key, 0u, RNG_EMIT_POS_V));
     var o = cam.eye;

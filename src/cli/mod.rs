@@ -112,6 +112,11 @@ struct BakeArgs {
     /// subset, reweighted (irradiance still sums every photon).
     #[arg(long, value_name = "N")]
     fit_candidates: Option<u32>,
+    /// Final gathering: glossy splats fit their lobes to N × N rays cast from their centres
+    /// (each bringing back the baked light of the diffuse surface it meets) instead of to the
+    /// photons within the search radius (0: the photons).
+    #[arg(long, value_name = "N")]
+    gather: Option<u32>,
 }
 
 impl BakeArgs {
@@ -139,6 +144,9 @@ impl BakeArgs {
         }
         if let Some(n) = self.fit_candidates {
             scene.bake.fit_candidates = n;
+        }
+        if let Some(n) = self.gather {
+            scene.bake.gather = n;
         }
         scene.bake.sparse |= self.sparse;
         scene.bake.prune &= !self.fixed_lobes;

@@ -65,6 +65,8 @@ struct Splat1 {
     alive: u32,
     /// The candidate stride s (`em_fit.wgsl`, "Bounded cost"); 1 visits every candidate.
     stride: u32,
+    /// With gathered samples, the splat's first.
+    sample_first: u32,
 }
 
 /// The workgroup's photon cache (workgroup memory in WGSL): slot c of invocation t at
@@ -121,7 +123,37 @@ struct Candidate {
     weight: f32,
 }
 
+/// The splat's candidate rows: its bin rows, or the one row of its gathered samples.
+fn row_count(inp: &Inputs, bx: &BinBox) -> u32 {
+    if inp.em.gathered > 0 {
+        1
+    } else {
+        bin_row_count(bx)
+    }
+}
+
+/// Candidates `[begin, end)` of row `r`.
+fn row_span(inp: &Inputs, sp: &Splat1, bx: &BinBox, r: u32) -> (u32, u32) {
+    if inp.em.gathered > 0 {
+        return (sp.sample_first, sp.sample_first + inp.em.gathered);
+    }
+    let row = bin_row(bx, r, inp.bins);
+    (
+        inp.cell_start[row.x as usize],
+        inp.cell_start[row.y as usize],
+    )
+}
+
 fn accept(inp: &Inputs, sp: &Splat1, j: u32) -> Candidate {
+    if inp.em.gathered > 0 {
+        let sample = inp.bin_power[j as usize];
+        let weight = photon_weight(sample) * sp.stride as f32;
+        return Candidate {
+            ok: weight > 0.0,
+            dir: oct_decode(sample[3].to_bits()),
+            weight,
+        };
+    }
     let g = inp.bin_geom[j as usize];
     let d = Vec3::from(g.position) - sp.center;
     let mut c = Candidate {
@@ -265,10 +297,8 @@ fn gather(inp: &Inputs, sp: &Splat1, v: &mut Invocation, cache: &mut Cache, lid:
     v.cached = 0;
     v.streaming = false;
     let mut offset = 0;
-    for r in 0..bin_row_count(bx) {
-        let row = bin_row(bx, r, inp.bins);
-        let begin = inp.cell_start[row.x as usize];
-        let end = inp.cell_start[row.y as usize];
+    for r in 0..row_count(inp, bx) {
+        let (begin, end) = row_span(inp, sp, bx, r);
         let mut j = first_in_row(inp.em.workgroup_size, sp.stride, begin, offset, lid);
         while j < end {
             let c = accept(inp, sp, j);
@@ -327,10 +357,8 @@ fn photon_pass(
         return;
     }
     let mut offset = v.resume_offset;
-    for r in v.resume_row..bin_row_count(bx) {
-        let row = bin_row(bx, r, inp.bins);
-        let begin = inp.cell_start[row.x as usize];
-        let end = inp.cell_start[row.y as usize];
+    for r in v.resume_row..row_count(inp, bx) {
+        let (begin, end) = row_span(inp, sp, bx, r);
         let mut j = if r == v.resume_row {
             v.resume_j
         } else {
@@ -353,10 +381,8 @@ fn photon_pass(
 fn irradiance_pass(inp: &Inputs, sp: &Splat1, v: &mut Invocation, lid: u32, bx: &BinBox) {
     let wg = inp.em.workgroup_size;
     let mut offset = 0;
-    for r in 0..bin_row_count(bx) {
-        let row = bin_row(bx, r, inp.bins);
-        let begin = inp.cell_start[row.x as usize];
-        let end = inp.cell_start[row.y as usize];
+    for r in 0..row_count(inp, bx) {
+        let (begin, end) = row_span(inp, sp, bx, r);
         let mut j = begin + (lid + wg - offset % wg) % wg;
         while j < end {
             if accept(inp, sp, j).ok {
@@ -373,11 +399,11 @@ fn irradiance_pass(inp: &Inputs, sp: &Splat1, v: &mut Invocation, lid: u32, bx: 
 }
 
 /// The candidates of a splat's bin rows.
-fn candidate_count(inp: &Inputs, bx: &BinBox) -> u32 {
-    (0..bin_row_count(bx))
+fn candidate_count(inp: &Inputs, sp: &Splat1, bx: &BinBox) -> u32 {
+    (0..row_count(inp, bx))
         .map(|r| {
-            let row = bin_row(bx, r, inp.bins);
-            inp.cell_start[row.y as usize] - inp.cell_start[row.x as usize]
+            let (begin, end) = row_span(inp, sp, bx, r);
+            end - begin
         })
         .sum()
 }
@@ -491,7 +517,7 @@ pub fn em_fit(
                 0 => &[][..],
                 _ => &lobes[first as usize..first as usize + k],
             };
-            fit_splat(&inp, splats, entry, first, resume)
+            fit_splat(&inp, splats, [entry, lobe_slot], resume)
         })
         .collect();
     for (splat_index, first, written, out) in results {
@@ -521,19 +547,24 @@ type Written = (u32, u32, Vec<Lobe>, Option<SplatLight>);
 fn fit_splat(
     inp: &Inputs,
     splats: &[Splat],
-    entry: u32,
-    first: u32,
+    [entry, lobe_slot]: [u32; 2],
     resume: &[Lobe],
 ) -> Option<Written> {
     let em = inp.em;
+    // The splat's lobes in the lobe buffer, which holds the fitted splats' alone.
+    let first = lobe_slot * em.lobes;
     let splat_index = entry & !FIT_BIT;
-    let fit = entry & FIT_BIT != 0;
+    let fit = entry & FIT_BIT != 0 && em.flags & EM_DEFER_FIT == 0;
+    if em.gathered > 0 && !fit {
+        return None;
+    }
     let s = &splats[splat_index as usize];
     let mut sp = Splat1 {
         center: Vec3::from(s.center),
         normal: Vec3::from(s.normal),
         slab: em.slab * s.radius,
         lobe_count: if fit { em.lobes } else { 0 },
+        sample_first: lobe_slot * em.gathered,
         ..Default::default()
     };
     let begin = if fit {
@@ -569,7 +600,9 @@ fn fit_splat(
     let bx = bin_box(sp.center, em.radius, inp.bins);
     sp.stride = 1;
     if fit && em.fit_candidates > 0 {
-        sp.stride = candidate_count(inp, &bx).div_ceil(em.fit_candidates).max(1);
+        sp.stride = candidate_count(inp, &sp, &bx)
+            .div_ceil(em.fit_candidates)
+            .max(1);
     }
     let mut cache = Cache {
         dir: vec![[0.0; 4]; CACHE_SLOTS as usize],

@@ -1,9 +1,10 @@
-//! Mirror of `wgsl/final_gather.wgsl`: rays over each listed splat's cosine-weighted
+//! Mirror of `wgsl/final_gather.wgsl`: rays over each fitted splat's cosine-weighted
 //! hemisphere, and the radiance of the diffuse surface each meets, as the bake knows it.
 
 use glam::{Vec3, Vec4};
 use rayon::prelude::*;
 
+use super::em_select::FIT_BIT;
 use crate::shared::lights::area_point;
 use crate::shared::octahedral::oct_encode;
 use crate::shared::rng::pcg_hash;
@@ -14,41 +15,60 @@ use crate::types::{GatherParams, NO_SPLAT, SplatLight};
 
 pub const WG: u32 = 64;
 
-/// Fills `samples` (`splat_count × samples²`, each `[radiance, direction bits]`).
+/// Fills `samples` (`samples²` a fitted splat, at its lobe slot, each `[radiance, direction
+/// bits]`) for the fit list's first `params.splat_count` entries.
 pub fn final_gather(
     params: &GatherParams,
-    list: &[u32],
+    list: &[[u32; 2]],
     light: &[SplatLight],
     direct: &[[f32; 4]],
     samples: &mut [[f32; 4]],
     geo: &Geometry,
 ) {
     let rays = params.samples * params.samples;
-    let count = (params.splat_count * rays) as usize;
-    samples[..count]
-        .par_iter_mut()
-        .enumerate()
-        .for_each(|(g, out)| {
-            let g = g as u32;
-            let i = list[(g / rays) as usize];
-            let j = g % rays;
-            let s = &geo.splats[i as usize];
-            let (centre, normal) = (Vec3::from(s.center), Vec3::from(s.normal));
-            let key = pcg_hash(pcg_hash(params.seed).wrapping_add(i)).wrapping_add(2 * j);
-            let uv = area_point(j, params.samples, key, true);
-            let d = to_world(&frame_of(normal), sample_cosine(uv.x, uv.y));
-            let o = centre + params.shadow_bias * normal;
-            let mut budget = SHADOW_RAY_BUDGET;
-            let hit = trace_ray(geo, o, d, i, FAR, &mut budget);
-            let mut radiance = Vec3::ZERO;
-            if hit.splat != NO_SPLAT {
-                let h = &geo.splats[hit.splat as usize];
-                if Vec3::from(h.normal).dot(d) < 0.0 {
-                    let e = Vec4::from(direct[hit.splat as usize]).truncate()
-                        + Vec3::from(light[hit.splat as usize].irradiance);
-                    radiance = Vec3::from(h.diffuse) * e * std::f32::consts::FRAC_1_PI;
-                }
-            }
-            *out = radiance.extend(f32::from_bits(oct_encode(d))).to_array();
-        });
+    let entries = &list[..params.splat_count as usize];
+    let gathered: Vec<(u32, Vec<[f32; 4]>)> = entries
+        .par_iter()
+        .filter(|[entry, _]| entry & FIT_BIT != 0)
+        .map(|&[entry, slot]| {
+            let i = entry & !FIT_BIT;
+            let rays = (0..rays)
+                .map(|j| ray(params, i, j, light, direct, geo))
+                .collect();
+            (slot, rays)
+        })
+        .collect();
+    for (slot, rays) in gathered {
+        let first = slot as usize * rays.len();
+        samples[first..first + rays.len()].copy_from_slice(&rays);
+    }
+}
+
+/// Ray `j` of splat `i`: the radiance it brings back, and its direction's bits.
+fn ray(
+    params: &GatherParams,
+    i: u32,
+    j: u32,
+    light: &[SplatLight],
+    direct: &[[f32; 4]],
+    geo: &Geometry,
+) -> [f32; 4] {
+    let s = &geo.splats[i as usize];
+    let (centre, normal) = (Vec3::from(s.center), Vec3::from(s.normal));
+    let key = pcg_hash(pcg_hash(params.seed).wrapping_add(i)).wrapping_add(2 * j);
+    let uv = area_point(j, params.samples, key, true);
+    let d = to_world(&frame_of(normal), sample_cosine(uv.x, uv.y));
+    let o = centre + params.shadow_bias * normal;
+    let mut budget = SHADOW_RAY_BUDGET;
+    let hit = trace_ray(geo, o, d, i, FAR, &mut budget);
+    let mut radiance = Vec3::ZERO;
+    if hit.splat != NO_SPLAT {
+        let h = &geo.splats[hit.splat as usize];
+        if Vec3::from(h.normal).dot(d) < 0.0 {
+            let e = Vec4::from(direct[hit.splat as usize]).truncate()
+                + Vec3::from(light[hit.splat as usize].irradiance);
+            radiance = Vec3::from(h.diffuse) * e * std::f32::consts::FRAC_1_PI;
+        }
+    }
+    radiance.extend(f32::from_bits(oct_encode(d))).to_array()
 }

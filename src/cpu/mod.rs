@@ -40,7 +40,7 @@ pub mod trace_rays;
 use std::time::Instant;
 
 use crate::bins::PhotonBins;
-use crate::em::{EmConfig, EmStats, FitShape, LobeMap};
+use crate::em::{EmConfig, EmStats, FitShape, GatherSetup, LobeMap};
 use crate::error::{Error, Result};
 use crate::grid::SplatGrid;
 use crate::photons::{PhotonConfig, PhotonMap, emitters, ms_since};
@@ -51,7 +51,7 @@ use crate::types::{Light, Material, Photon};
 pub use crate::shared::dispatch::groups_for;
 pub use exec::{CpuBuffer, CpuExecutor};
 
-use crate::sequence::{self, Executor, FitInput};
+use crate::sequence::{self, Executor, FitInput, Gathering};
 
 /// Tone mapping on the CPU mirror (`sequence::tone_map`); returns RGBA8 pixels and
 /// (Σ log(ε + Y), count).
@@ -167,10 +167,29 @@ pub fn fit_lobes(
     materials: &[Material],
     shape: FitShape,
 ) -> Result<LobeMap> {
+    fit_lobes_gathering(cfg, bins, splats, materials, shape, None)
+}
+
+/// `fit_lobes`, with final gathering through `grid` where `cfg.gather` asks for it.
+pub fn fit_lobes_gathering(
+    cfg: &EmConfig,
+    bins: &PhotonBins,
+    splats: &[Splat],
+    materials: &[Material],
+    shape: FitShape,
+    gathering: Option<(&SplatGrid, &GatherSetup)>,
+) -> Result<LobeMap> {
     let t = Instant::now();
     let splat_count = u32::try_from(splats.len())
         .map_err(|_| Error::Invalid("too many splats for the lobe fit".into()))?;
-    let mut ex = CpuExecutor::default();
+    let mut ex = match gathering {
+        Some((grid, _)) => CpuExecutor::tracing(Geometry { grid, splats }),
+        None => CpuExecutor::default(),
+    };
+    let lights = match gathering {
+        Some((_, g)) => Some(ex.upload("lights", g.lights)?),
+        None => None,
+    };
     let bin_params = ex.uniform("bin params", &bins.params)?;
     let cell_start = ex.upload("bin cell start", &bins.cell_start)?;
     let geom = ex.upload("binned geometry", &bins.geom)?;
@@ -185,6 +204,14 @@ pub fn fit_lobes(
         splats: &splat_buf,
         materials: &material_buf,
         splat_count,
+        gathering: gathering
+            .zip(lights.as_ref())
+            .map(|((_, g), lights)| Gathering {
+                lights,
+                direct: g.direct,
+                seed: g.seed,
+                shadow_bias: g.shadow_bias,
+            }),
     };
     let fit = sequence::fit_lobes(&mut ex, &input, cfg, shape)?;
     let n = splats.len();
@@ -199,6 +226,7 @@ pub fn fit_lobes(
         select_ms: fit.select_ms,
         gather_ms: fit.gather_ms,
         fit_ms: fit.fit_ms,
+        final_gather_ms: fit.final_gather_ms,
         ..Default::default()
     };
     let mut map = LobeMap::pack(cfg.lobes, &dense, light, stats);

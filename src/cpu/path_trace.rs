@@ -57,7 +57,11 @@ fn sample(
     geo: &Geometry,
     i: u32,
 ) -> Vec3 {
-    let key = path_key(pcg_hash(params.seed.wrapping_add(params.sample)), i);
+    // The seed hashed before the sample is added: seeds s and s + 1 share no sample.
+    let key = path_key(
+        pcg_hash(pcg_hash(params.seed).wrapping_add(params.sample)),
+        i,
+    );
     let px = Vec2::new((i % params.width) as f32, (i / params.width) as f32);
     let jitter = Vec2::new(rand(key, 0, RNG_EMIT_POS_U), rand(key, 0, RNG_EMIT_POS_V));
     let mut o = Vec3::from(cam.eye);

@@ -6,10 +6,11 @@ use std::time::Instant;
 use super::Gpu;
 use super::bins::GpuBins;
 use super::exec::GpuExecutor;
-use crate::em::{EmConfig, EmStats, FitShape, LobeMap, workgroup_size};
+use super::scene::GpuScene;
+use crate::em::{EmConfig, EmStats, FitShape, GatherSetup, LobeMap, workgroup_size};
 use crate::error::{Error, Result};
 use crate::photons::ms_since;
-use crate::sequence::{self, FitInput};
+use crate::sequence::{self, FitInput, Gathering};
 use crate::types::{Lobe, SplatLight};
 
 /// The fit's output on the device.
@@ -77,6 +78,27 @@ pub fn fit_lobes(
     )
 }
 
+/// `fit_lobes` over the scene on the device, with final gathering where `cfg.gather` asks for
+/// it.
+pub fn fit_lobes_gathering(
+    gpu: &Gpu,
+    on_gpu: &GpuScene,
+    splat_count: u32,
+    bins: &GpuBins,
+    cfg: &EmConfig,
+    setup: &GatherSetup,
+) -> Result<GpuLobes> {
+    let splats = (&on_gpu.splats, &on_gpu.materials, splat_count);
+    fit_on_device(
+        gpu,
+        splats,
+        bins,
+        cfg,
+        fit_shape(gpu),
+        Some((on_gpu, setup)),
+    )
+}
+
 /// `fit_lobes` in a given shape (tests run both reductions on one device).
 pub fn fit_lobes_shaped(
     gpu: &Gpu,
@@ -87,6 +109,26 @@ pub fn fit_lobes_shaped(
     cfg: &EmConfig,
     shape: FitShape,
 ) -> Result<GpuLobes> {
+    fit_on_device(
+        gpu,
+        (splats, materials, splat_count),
+        bins,
+        cfg,
+        shape,
+        None,
+    )
+}
+
+/// The fit of `splats` (their buffer, their materials', their count), with final gathering
+/// through the scene where `gathering` is given.
+fn fit_on_device(
+    gpu: &Gpu,
+    (splats, materials, splat_count): (&wgpu::Buffer, &wgpu::Buffer, u32),
+    bins: &GpuBins,
+    cfg: &EmConfig,
+    shape: FitShape,
+    gathering: Option<(&GpuScene, &GatherSetup)>,
+) -> Result<GpuLobes> {
     cfg.validate()?;
     if shape.subgroup_reduce && !fit_shape(gpu).subgroup_reduce {
         return Err(Error::Invalid(
@@ -94,6 +136,10 @@ pub fn fit_lobes_shaped(
         ));
     }
     let t = Instant::now();
+    let lights = match gathering {
+        Some((_, g)) => Some(gpu.storage("lights", g.lights)?),
+        None => None,
+    };
     let input = FitInput {
         bin_params: &bins.params_buf,
         cell_start: &bins.cell_start,
@@ -102,9 +148,21 @@ pub fn fit_lobes_shaped(
         splats,
         materials,
         splat_count,
+        gathering: gathering
+            .zip(lights.as_ref())
+            .map(|((_, g), lights)| Gathering {
+                lights,
+                direct: g.direct,
+                seed: g.seed,
+                shadow_bias: g.shadow_bias,
+            }),
     };
     let mut encoder = gpu.encoder("lobe fit");
-    let fit = sequence::fit_lobes(&mut GpuExecutor::new(gpu, &mut encoder), &input, cfg, shape)?;
+    let mut ex = GpuExecutor::new(gpu, &mut encoder);
+    if let Some((on_gpu, _)) = gathering {
+        ex = ex.tracing(on_gpu);
+    }
+    let fit = sequence::fit_lobes(&mut ex, &input, cfg, shape)?;
     gpu.submit_and_wait(encoder)?;
     Ok(GpuLobes {
         lobes_per_splat: cfg.lobes,
@@ -121,6 +179,7 @@ pub fn fit_lobes_shaped(
             select_ms: fit.select_ms,
             gather_ms: fit.gather_ms,
             fit_ms: fit.fit_ms,
+            final_gather_ms: fit.final_gather_ms,
         },
     })
 }

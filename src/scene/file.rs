@@ -121,6 +121,10 @@ pub struct BakeDesc {
     /// subset, reweighted, bounds the fit's time by splats, not photons; irradiance still
     /// sums every photon.
     pub fit_candidates: u32,
+    /// Final gathering: glossy splats fit their lobes to `gather`² rays cast from their
+    /// centres, each bringing back the baked light of the diffuse surface it meets, instead
+    /// of to the photons within the search radius (0: the photons, the thesis's fit).
+    pub gather: u32,
 }
 
 impl Default for BakeDesc {
@@ -138,6 +142,7 @@ impl Default for BakeDesc {
             slab: 2.0,
             prune: true,
             fit_candidates: crate::em::DEFAULT_FIT_CANDIDATES,
+            gather: 0,
         }
     }
 }

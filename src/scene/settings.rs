@@ -34,6 +34,7 @@ impl EmConfig {
             radius: scene.search_radius(),
             slab: b.slab,
             fit_candidates: b.fit_candidates,
+            gather: b.gather,
         }
     }
 }

@@ -15,6 +15,9 @@ pub const EM_FIT_ALL: u32 = 4;
 /// The invocations' sums combine by a subgroup butterfly (the `subgroups` variant of
 /// `em_fit`); the CPU mirror then adds in that order.
 pub const EM_SUBGROUP_REDUCE: u32 = 8;
+/// Fitted splats take only their irradiance from the photons; a dispatch over final
+/// gathering's samples fits their lobes after (`em_fit.wgsl`, "Gathered samples").
+pub const EM_DEFER_FIT: u32 = 16;
 /// Most candidate photons of a splat `em_gather` sums in one invocation.
 pub const GATHER_MAX: u32 = 16384;
 

@@ -23,6 +23,9 @@ const EM_SPARSE: u32 = 1u;
 const EM_PRIORS: u32 = 2u;
 const EM_FIT_ALL: u32 = 4u;
 const EM_SUBGROUP_REDUCE: u32 = 8u;
+// Fitted splats take only their irradiance from the photons: a dispatch over final gathering's
+// samples fits their lobes after (em_fit.wgsl, "Gathered samples").
+const EM_DEFER_FIT: u32 = 16u;
 
 // A fit-list entry is a splat index with this bit set when the splat's lobes are fitted.
 const FIT_BIT: u32 = 0x80000000u;

@@ -166,7 +166,7 @@ struct EmParams {
     workgroup_size: u32,
     prune: u32,
     fit_candidates: u32,
-    _pad2: u32,
+    gathered: u32,
 }
 
 struct Camera {
