@@ -151,6 +151,10 @@ pub fn check_gather(gather: u32) -> std::result::Result<(), String> {
     Ok(())
 }
 
+/// `EmConfig::gather` unless a scene or the command line says otherwise: 16² rays a glossy
+/// splat (docs/measurements.md, "Final gathering").
+pub const DEFAULT_GATHER: u32 = 16;
+
 /// Most rays a side of final gathering: 64² = 4,096 rays a splat.
 pub const MAX_GATHER: u32 = 64;
 

@@ -130,6 +130,9 @@ pub struct FrameConfig {
     pub show: u32,
     /// Level of detail of moving frames, in pixels (`Camera::lod`; 0: off).
     pub lod: f32,
+    /// Rays a pixel and refinement frame tracing the glossy surfaces' indirect light
+    /// (`ShadeParams::glossy_rays`; 0: their lobes give it, as in moving frames).
+    pub glossy_rays: u32,
 }
 
 impl Default for FrameConfig {
@@ -142,11 +145,24 @@ impl Default for FrameConfig {
             seed: 1,
             show: crate::shared::splat::SHOW_ALL,
             lod: DEFAULT_LOD,
+            glossy_rays: DEFAULT_GLOSSY_RAYS,
         }
     }
 }
 
+/// Most glossy rays a pixel and frame.
+pub const MAX_GLOSSY_RAYS: u32 = 64;
+
+/// `FrameConfig::glossy_rays` unless the command line says otherwise.
+pub const DEFAULT_GLOSSY_RAYS: u32 = 4;
+
 impl FrameConfig {
+    /// Whether its frames read the direct bake: for baked direct light, or at glossy rays'
+    /// hits.
+    pub fn needs_direct_bake(&self) -> bool {
+        self.direct == Direct::Baked || self.glossy_rays > 0
+    }
+
     pub fn validate(&self) -> Result<()> {
         if !(1..=16).contains(&self.area_samples) {
             return Err(Error::Invalid(format!(
@@ -164,6 +180,12 @@ impl FrameConfig {
             return Err(Error::Invalid(format!(
                 "the level of detail must be a non-negative number of pixels, got {}",
                 self.lod
+            )));
+        }
+        if self.glossy_rays > MAX_GLOSSY_RAYS {
+            return Err(Error::Invalid(format!(
+                "glossy rays must be within 0..={MAX_GLOSSY_RAYS} a pixel and frame, got {}",
+                self.glossy_rays
             )));
         }
         Ok(())
@@ -347,7 +369,7 @@ pub fn shade_params_for(scene: &Scene, lobes_per_splat: u32, cfg: &FrameConfig) 
         area_first: 0,
         area_count: cfg.area_samples * cfg.area_samples,
         sample: 0,
-        ..Default::default()
+        glossy_rays: cfg.glossy_rays,
     }
 }
 
@@ -360,9 +382,9 @@ pub fn cpu_frame(
     cam: &Camera,
     params: &ShadeParams,
 ) -> Result<Vec<[f32; 4]>> {
-    let direct = match params.direct {
-        DIRECT_BAKED => cpu_direct(scene, grid)?,
-        _ => DirectMap::default(),
+    let direct = match params.direct == DIRECT_BAKED || params.glossy_rays > 0 {
+        true => cpu_direct(scene, grid)?,
+        false => DirectMap::default(),
     };
     let mut hdr = vec![[0.0; 4]; (cam.size[0] * cam.size[1]) as usize];
     cpu_frame_into(scene, grid, lobes, &direct, cam, params, &mut hdr);
@@ -429,7 +451,11 @@ pub fn cpu_frame_into(
         grid,
         splats: &scene.splats,
     };
-    cpu::shade::shade(cam, params, &sums, &scene.lights, &geo, hdr);
+    let hit_light = cpu::shade::HitLight {
+        splat_light: &lobes.light,
+        direct_light: &direct.direct,
+    };
+    cpu::shade::shade(cam, params, &sums, &scene.lights, &hit_light, &geo, hdr);
 }
 
 /// The still image of `cam` on the CPU: `spp` refinement frames, each jittered and with its
@@ -441,7 +467,12 @@ pub fn cpu_refined(
     cam: &Camera,
     params: &ShadeParams,
     spp: u32,
-) -> Vec<[f32; 4]> {
+) -> Result<Vec<[f32; 4]>> {
+    // Glossy rays read the direct bake at their hits.
+    let direct = match params.glossy_rays > 0 {
+        true => cpu_direct(scene, grid)?,
+        false => DirectMap::default(),
+    };
     let mut hdr = vec![[0.0; 4]; (cam.size[0] * cam.size[1]) as usize];
     for k in 0..spp.max(1) {
         let cam = Camera {
@@ -449,17 +480,9 @@ pub fn cpu_refined(
             ..*cam
         };
         let params = refinement(params, k, spp);
-        cpu_frame_into(
-            scene,
-            grid,
-            lobes,
-            &DirectMap::default(),
-            &cam,
-            &params,
-            &mut hdr,
-        );
+        cpu_frame_into(scene, grid, lobes, &direct, &cam, &params, &mut hdr);
     }
-    hdr
+    Ok(hdr)
 }
 
 /// The reference on the CPU: the gather pass in place of visibility and attributes, then the
@@ -473,8 +496,10 @@ pub fn cpu_reference(
     cam: &Camera,
     cfg: &FrameConfig,
 ) -> Vec<[f32; 4]> {
+    // The photons give the glossy light too, with the exact BRDF: no glossy rays.
     let cfg = FrameConfig {
         direct: Direct::Rays,
+        glossy_rays: 0,
         ..cfg.clone()
     };
     let params = shade_params(scene, &LobeMap::default(), &cfg);
@@ -484,6 +509,10 @@ pub fn cpu_reference(
     };
     let sums = cpu::reference_gather::reference_gather(cam, em, &scene.materials, bins, &geo);
     let mut hdr = vec![[0.0; 4]; (cam.size[0] * cam.size[1]) as usize];
-    cpu::shade::shade(cam, &params, &sums, &scene.lights, &geo, &mut hdr);
+    let no_hits = cpu::shade::HitLight {
+        splat_light: &[],
+        direct_light: &[],
+    };
+    cpu::shade::shade(cam, &params, &sums, &scene.lights, &no_hits, &geo, &mut hdr);
     hdr
 }

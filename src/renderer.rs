@@ -262,9 +262,11 @@ impl FrameRenderer {
             ));
         };
         // The shade pass reads no lobes here: none per splat gives it its other settings, and
-        // the gather has no baked direct light to add: shadow rays.
+        // the gather has no baked direct light to add: shadow rays. Its photons give the
+        // glossy light too, with the exact BRDF: no glossy rays.
         let cfg = FrameConfig {
             direct: Direct::Rays,
+            glossy_rays: 0,
             ..cfg.clone()
         };
         let params = shade_params_for(scene, 0, &cfg);
@@ -292,7 +294,7 @@ impl FrameRenderer {
         cfg: &FrameConfig,
     ) -> Result<&FrameTargets> {
         self.resize(gpu, view.width, view.height)?;
-        if cfg.direct == Direct::Baked {
+        if cfg.needs_direct_bake() {
             self.ensure_direct(gpu, scene)?;
         }
         let cam = camera_uniform(view, scene.bounds(), cfg);
@@ -314,6 +316,9 @@ impl FrameRenderer {
         mut each: impl FnMut(u32),
     ) -> Result<&FrameTargets> {
         self.resize(gpu, view.width, view.height)?;
+        if cfg.needs_direct_bake() {
+            self.ensure_direct(gpu, scene)?;
+        }
         let cam = camera_uniform(view, scene.bounds(), cfg);
         for k in 0..spp.max(1) {
             let mut encoder = gpu.encoder("refinement frame");
@@ -384,7 +389,7 @@ impl FrameRenderer {
         cfg: &FrameConfig,
     ) -> Result<[f64; 3]> {
         self.resize(gpu, view.width, view.height)?;
-        if cfg.direct == Direct::Baked {
+        if cfg.needs_direct_bake() {
             self.ensure_direct(gpu, scene)?;
         }
         let cam = camera_uniform(view, scene.bounds(), cfg);

@@ -400,6 +400,9 @@ pub struct Gathering<'a, B> {
     pub seed: u32,
     /// How far off a splat's plane its rays start (`frame::shadow_bias`).
     pub shadow_bias: f32,
+    /// The most bytes of samples one batch of splats holds (the rays of the fit list are
+    /// cast and fitted a batch at a time).
+    pub batch_bytes: u64,
 }
 
 /// The lobe fit where it ran: `cfg.lobes` slots a splat (dense, unpacked) and each splat's
@@ -510,30 +513,55 @@ pub fn fit_lobes<E: Executor>(
     if let Some(g) = gathering {
         let t = std::time::Instant::now();
         let direct = bake_direct(ex, g.lights, &g.direct)?;
-        let gather = GatherParams {
-            splat_count: listed,
-            samples: cfg.gather,
-            seed: g.seed,
-            shadow_bias: g.shadow_bias,
-        };
-        let samples = final_gather(ex, &gather, &fit_list, &light, &direct.direct, fitted)?;
+        // The rays read the photons' irradiance where they meet a splat, also a glossy one that
+        // an earlier batch has refitted: a copy keeps the result the same for any batch size.
+        let photon_light = ex.zeroed("photon light", n.max(1) * 32)?;
+        ex.copy(&light, 0, &photon_light, 0, n * 32)?;
+        let rays = cfg.gather * cfg.gather;
+        let per_entry = rays as u64 * 16;
+        let batch = (g.batch_bytes / per_entry).clamp(1, listed.max(1) as u64) as u32;
+        let samples = ex.zeroed("gather samples", batch as u64 * per_entry)?;
         ex.read::<u32>(&counters, 1)?;
         final_gather_ms = ms_since(t);
-        let t = std::time::Instant::now();
-        let rays = cfg.gather * cfg.gather;
-        let params = EmParams {
-            gathered: rays,
-            inv_area: std::f32::consts::PI / rays as f32,
-            ..cfg.params(splat_count, listed, shape)
-        };
-        // The samples stand in for both the photons' geometry (not read) and their power.
+        // The samples stand in for the photons' power; their geometry is not read, and one
+        // record stands in for it (no pages to bind).
+        let no_geometry = ex.zeroed("no photon geometry", 64)?;
         let fit_input = EmFitInput {
-            candidates: [&samples, &samples],
+            candidates: [&no_geometry, &samples],
             ..fit_input
         };
-        dispatches += em_fit(ex, cfg, shape, &params, rays, &fit_input)?;
-        ex.read::<u32>(&counters, 1)?;
-        fit_ms += ms_since(t);
+        for first in (0..listed).step_by(batch as usize) {
+            let t = std::time::Instant::now();
+            let count = batch.min(listed - first);
+            let gather = GatherParams {
+                splat_count: count,
+                samples: cfg.gather,
+                seed: g.seed,
+                shadow_bias: g.shadow_bias,
+                first,
+                ..Default::default()
+            };
+            final_gather(
+                ex,
+                &gather,
+                &fit_list,
+                &photon_light,
+                &direct.direct,
+                &samples,
+            )?;
+            ex.read::<u32>(&counters, 1)?;
+            final_gather_ms += ms_since(t);
+            let t = std::time::Instant::now();
+            let params = EmParams {
+                gathered: rays,
+                inv_area: std::f32::consts::PI / rays as f32,
+                list_first: first,
+                ..cfg.params(splat_count, first + count, shape)
+            };
+            dispatches += em_fit(ex, cfg, shape, &params, rays, &fit_input)?;
+            ex.read::<u32>(&counters, 1)?;
+            fit_ms += ms_since(t);
+        }
     }
     Ok(Fit {
         lobes,
@@ -847,18 +875,18 @@ pub fn bake_direct<E: Executor>(
 }
 
 /// Final gathering (`final_gather.wgsl`): `samples²` rays from each fitted splat of the fit
-/// list `list` (`params.splat_count` entries, `fitted` of them fitted) over its hemisphere,
-/// with the radiance each brings back from the surfaces' baked light (`light`: their photon
-/// irradiance; `direct`: the direct bake). The samples, `[radiance, direction bits]`,
-/// `samples²` a fitted splat at its lobe slot.
+/// list `list`'s entries `first..first + splat_count` (`params`) over its hemisphere, with the
+/// radiance each brings back from the surfaces' baked light (`light`: their photon irradiance;
+/// `direct`: the direct bake), into `samples`: `[radiance, direction bits]`, `samples²` an
+/// entry from the batch's first.
 pub fn final_gather<E: Executor>(
     ex: &mut E,
     params: &GatherParams,
     list: &E::Buffer,
     light: &E::Buffer,
     direct: &E::Buffer,
-    fitted: u32,
-) -> Result<E::Buffer> {
+    samples: &E::Buffer,
+) -> Result<()> {
     let per_splat = (params.samples * params.samples) as u64;
     let rays = params.splat_count as u64 * per_splat;
     let count = u32::try_from(rays).map_err(|_| {
@@ -866,11 +894,9 @@ pub fn final_gather<E: Executor>(
             "final gathering: {rays} rays are more than one dispatch holds"
         ))
     })?;
-    let samples = ex.zeroed("gather samples", (fitted as u64 * per_splat).max(1) * 16)?;
     let uniform = ex.uniform("gather params", params)?;
-    let bindings = [&uniform, list, light, direct, &samples];
-    ex.dispatch_traced("final_gather", &bindings, groups("final_gather", count)?)?;
-    Ok(samples)
+    let bindings = [&uniform, list, light, direct, samples];
+    ex.dispatch_traced("final_gather", &bindings, groups("final_gather", count)?)
 }
 
 pub use crate::shared::splat::TILE;

@@ -307,6 +307,12 @@ pub struct EmParams {
     /// Rays a splat of final gathering's samples, the candidates of this dispatch's fitted
     /// splats (0: the binned photons); see `em_fit.wgsl`, "Gathered samples".
     pub gathered: u32,
+    /// The fit-list entry of this dispatch's first workgroup (batches of gathered samples:
+    /// the samples of entry `list_first + k` begin at k · gathered).
+    pub list_first: u32,
+    pub _pad0: u32,
+    pub _pad1: u32,
+    pub _pad2: u32,
 }
 
 /// Per-frame camera uniform of the splat passes: a pinhole at `eye` looking along `forward`,
@@ -367,7 +373,9 @@ pub struct ShadeParams {
     /// The refinement sample this frame is: 0 writes the HDR image, k > 0 adds to the running
     /// mean of the k frames before it.
     pub sample: u32,
-    pub _pad0: u32,
+    /// Rays a pixel and frame that trace the glossy surfaces' indirect light (`shade.wgsl`,
+    /// "Glossy rays"); the lobes then give only the diffuse part (0: the lobes give both).
+    pub glossy_rays: u32,
 }
 
 /// `ShadeParams::direct`: shadow rays per pixel.
@@ -409,13 +417,18 @@ pub struct PathParams {
 #[repr(C)]
 #[derive(Clone, Copy, Debug, Default, PartialEq, Pod, Zeroable)]
 pub struct GatherParams {
-    /// How many entries the fit list holds.
+    /// How many entries of the fit list this batch takes, from `first`.
     pub splat_count: u32,
     /// Rays a splat: a `samples` × `samples` stratified grid over its cosine-weighted hemisphere.
     pub samples: u32,
     pub seed: u32,
     /// How far off the splat's plane the rays start (`frame::shadow_bias`).
     pub shadow_bias: f32,
+    /// The batch's first fit-list entry: sample j of entry `first + k` is at k · samples² + j.
+    pub first: u32,
+    pub _pad0: u32,
+    pub _pad1: u32,
+    pub _pad2: u32,
 }
 
 /// Uniform of `direct_bake`: every splat's direct light from every light, shadowed.

@@ -167,6 +167,8 @@ fn sub_cell_lists_hold_each_cells_photons() {
     let one = cpu::bin_photons(&whole, &map.photons, &scene.splats).unwrap();
     let em = EmConfig {
         radius,
+        // The photon fit itself.
+        gather: 0,
         ..EmConfig::from_scene(&scene)
     };
     let fit_one = cpu::fit_lobes(

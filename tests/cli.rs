@@ -115,6 +115,7 @@ fn bench_frame_json_has_the_documented_keys() {
         "direct",
         "splatter",
         "lod",
+        "glossy_rays",
         "frame_ms",
         "sizes",
         "refinement",
@@ -122,6 +123,7 @@ fn bench_frame_json_has_the_documented_keys() {
         assert!(v.get(key).is_some(), "missing key {key}: {v}");
     }
     assert_eq!(v["lod"], 1.5);
+    assert_eq!(v["glossy_rays"], 4);
     for size in v["sizes"].as_array().unwrap() {
         assert_eq!(
             size["passes_ms"].as_array().map(Vec::len),

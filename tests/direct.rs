@@ -142,7 +142,8 @@ fn a_one_sample_still_is_the_exact_frame() {
 /// A still image of 8 jittered frames, on the device and on the mirror: the same image within
 /// the splat passes' parity tolerances. Also the glossy direct light alone of the box of
 /// spheres, where the near-mirror sphere's lobe is narrower than the light, so that its
-/// direct light also takes a sample of the lobe (multiple importance sampling).
+/// direct light also takes a sample of the lobe (multiple importance sampling), and its
+/// glossy indirect light alone, which the glossy rays trace (the default).
 #[test]
 fn refined_still_matches_the_cpu_mirror() {
     let gpu = common::gpu();
@@ -155,6 +156,11 @@ fn refined_still_matches_the_cpu_mirror() {
         ..Default::default()
     };
     refined_parity(&gpu, &spheres, &specular, "spheres, glossy direct light");
+    let traced = FrameConfig {
+        show: lobelight::shared::splat::SHOW_INDIRECT_SPECULAR,
+        ..Default::default()
+    };
+    refined_parity(&gpu, &spheres, &traced, "spheres, glossy rays");
 }
 
 fn refined_parity(gpu: &lobelight::gpu::Gpu, scene: &Scene, cfg: &FrameConfig, what: &str) {
@@ -171,7 +177,7 @@ fn refined_parity(gpu: &lobelight::gpu::Gpu, scene: &Scene, cfg: &FrameConfig, w
     let still = renderer.read_hdr(gpu).unwrap();
     let cam = camera_uniform(&view, scene.bounds(), cfg);
     let params = shade_params(scene, &lobes, cfg);
-    let mirror = cpu_refined(scene, &grid, &lobes, &cam, &params, 8);
+    let mirror = cpu_refined(scene, &grid, &lobes, &cam, &params, 8).unwrap();
     let d = difference(&still, &mirror).unwrap();
     eprintln!("{what}: device against mirror: {d:?}");
     assert!(d.mean_relative <= 0.01, "{what}: {d:?}");

@@ -452,6 +452,8 @@ fn gpu_fit_equals_cpu_fit_on_the_same_photons() {
             fit_all: true,
             iterations: 5,
             lobes,
+            // The photon fit itself.
+            gather: 0,
             ..EmConfig::from_scene(&scene)
         };
         // Eight lobes compete for a cluster more often than five, and there the growth of
@@ -848,6 +850,8 @@ fn gathered_irradiance_equals_the_fit_pass() {
     let em = EmConfig {
         iterations: 3,
         fit_candidates: 0,
+        // The photon fit itself.
+        gather: 0,
         ..EmConfig::from_scene(&scene)
     };
     let all = EmConfig {

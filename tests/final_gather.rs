@@ -44,8 +44,8 @@ fn gather<E: Executor>(
     let list = ex.upload("list", &entries).unwrap();
     let light = ex.upload("light", light).unwrap();
     let direct = ex.upload("direct", direct).unwrap();
-    let fitted = entries.len() as u32;
-    let samples = final_gather(ex, params, &list, &light, &direct, fitted).unwrap();
+    let samples = ex.zeroed("samples", count as u64 * 16).unwrap();
+    final_gather(ex, params, &list, &light, &direct, &samples).unwrap();
     ex.read(&samples, count).unwrap()
 }
 
@@ -79,6 +79,7 @@ fn final_gather_matches_the_mirror_and_the_photons() {
         samples: 8,
         seed: 7,
         shadow_bias: shadow_bias(&scene.splats),
+        ..Default::default()
     };
     let rays = 64;
     let on_gpu = {

@@ -161,13 +161,21 @@ fn rust_layouts() -> Vec<RustLayout> {
             workgroup_size,
             prune,
             fit_candidates,
-            gathered
+            gathered,
+            list_first,
+            _pad0,
+            _pad1,
+            _pad2
         }),
         layout!(GatherParams {
             splat_count,
             samples,
             seed,
-            shadow_bias
+            shadow_bias,
+            first,
+            _pad0,
+            _pad1,
+            _pad2
         }),
         layout!(Camera {
             eye,
@@ -197,7 +205,7 @@ fn rust_layouts() -> Vec<RustLayout> {
             area_first,
             area_count,
             sample,
-            _pad0
+            glossy_rays
         }),
         layout!(TileParams {
             tiles_x,

@@ -85,7 +85,11 @@ fn reference_and_lobes_agree_where_nothing_is_glossy() {
     let (scene, grid) = load("scenes/diffuse.toml", 300_000);
     let progress = Progress::new(false);
     let binned = bins_cpu(&scene, &grid, &progress).unwrap();
-    let em = lobelight::em::EmConfig::from_scene(&scene);
+    // The photon fit: the reference gathers the same photons.
+    let em = lobelight::em::EmConfig {
+        gather: 0,
+        ..lobelight::em::EmConfig::from_scene(&scene)
+    };
     let lobes = cpu::fit_lobes(
         &em,
         &binned.bins,

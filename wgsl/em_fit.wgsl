@@ -40,8 +40,8 @@
 // responsibility 0 and hand over between dispatches with sharpness 0; the lobes kept are
 // written first, in order, so `light.lobes` counts them.
 // Gathered samples (em.gathered > 0, docs/design.md section 6): the candidates of a fitted splat
-// are then the em.gathered samples final gathering cast from its centre, at lobe slot * gathered
-// in the buffer bound as bin_power (radiance, the direction's octahedral bits), in one row; none
+// are then the em.gathered samples final gathering cast from its centre, at (index -
+// em.list_first) * gathered for fit-list entry index, in the buffer bound as bin_power (radiance, the direction's octahedral bits), in one row; none
 // is tested for position, each weighs its radiance, and em.inv_area is pi / em.gathered, so that
 // the sums estimate irradiance as the photons' do. Splats not fitted take no part: the photon
 // dispatch before it (with EM_DEFER_FIT, which gave the fitted splats only their irradiance)
@@ -491,7 +491,7 @@ fn sum(q: u32) -> f32 {
 @compute @workgroup_size(WG)
 fn main(@builtin(workgroup_id) wg: vec3<u32>, @builtin(num_workgroups) num_wg: vec3<u32>,
         @builtin(local_invocation_index) lid: u32) {
-    let index = linear_workgroup(wg, num_wg);
+    let index = em.list_first + linear_workgroup(wg, num_wg);
     if index >= em.active_count {
         return;
     }
@@ -505,7 +505,7 @@ fn main(@builtin(workgroup_id) wg: vec3<u32>, @builtin(num_workgroups) num_wg: v
     if em.gathered > 0u && !fit {
         return;
     }
-    sample_first = listed.y * em.gathered;
+    sample_first = (index - em.list_first) * em.gathered;
     // The splat's lobes in the lobe buffer, which holds the fitted splats' alone.
     let first = listed.y * em.lobes;
     let s = splats_at(splat_index);

@@ -1,12 +1,13 @@
 // Final gathering (docs/design.md section 6): the light arriving at a splat, sampled by rays
 // from its centre rather than estimated from the photons within the gather radius, so that it
-// is resolved at the splat's own position. Per fitted splat of the fit list (em_select's: the
-// splat with FIT_BIT, its lobe slot), samples^2 rays over its
+// is resolved at the splat's own position. Per fitted splat of the fit list (em_select's
+// entries with FIT_BIT), samples^2 rays over its
 // cosine-weighted hemisphere (one stratum each, jittered); each brings back the radiance of the
 // surface it meets, as the bake already knows it: a diffuse splat's albedo / pi times its
 // irradiance, direct (the direct bake) and indirect (the photons). Rays that miss, or meet a
-// disk's back, bring none. Sample j of the splat in lobe slot k is at k * samples^2 + j:
-// (radiance, direction as an octahedral u32's bits), where em_fit's gathered dispatch finds it. One invocation per ray. CPU mirror:
+// disk's back, bring none. Sample j of fit-list entry params.first + k is at k * samples^2 + j:
+// (radiance, direction as an octahedral u32's bits), where em_fit's gathered dispatch finds it;
+// the host takes the list in batches that bound the samples' memory. One invocation per ray. CPU mirror:
 // src/cpu/final_gather.rs.
 
 // #import types
@@ -25,7 +26,8 @@
 @group(0) @binding(2) var<storage, read> light: array<SplatLight>;
 // #paged
 @group(0) @binding(3) var<storage, read> direct: array<vec4<f32>>;
-// #paged
+// One binding: the host sizes its batches to fit (one page fewer keeps the stage within the
+// bindings a device allows beside the paged geometry).
 @group(0) @binding(4) var<storage, read_write> samples: array<vec4<f32>>;
 
 const WG: u32 = 64u;
@@ -38,7 +40,7 @@ fn main(@builtin(workgroup_id) wg: vec3<u32>, @builtin(num_workgroups) num_wg: v
     if g >= params.splat_count * rays {
         return;
     }
-    let entry = list[g / rays];
+    let entry = list[params.first + g / rays];
     if (entry.x & FIT_BIT) == 0u {
         return;
     }
@@ -59,5 +61,5 @@ fn main(@builtin(workgroup_id) wg: vec3<u32>, @builtin(num_workgroups) num_wg: v
             radiance = h.diffuse * e * (1.0 / PI);
         }
     }
-    samples_put(entry.y * rays + j, vec4<f32>(radiance, bitcast<f32>(oct_encode(d))));
+    samples[g] = vec4<f32>(radiance, bitcast<f32>(oct_encode(d)));
 }

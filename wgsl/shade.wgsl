@@ -3,6 +3,12 @@
 // (area lights on a jittered area_samples^2 grid, or this refinement frame's strata of it)
 // unless it was baked, and show area lights the view ray meets before the surface. Writes
 // linear HDR radiance for tone mapping, or adds a refinement frame to the running mean.
+//
+// Glossy rays (params.glossy_rays > 0, still images): the glossy surfaces' indirect light is
+// traced here instead of read from their lobes, which blur it over their width: each ray
+// samples the Ward lobe at the pixel and brings back the baked light of the surface it meets,
+// albedo / pi times its direct (the direct bake) and photon irradiance, as final gathering
+// does. A ray that meets a light first brings none: direct light is the shadow rays' part.
 // Twin: src/cpu/shade.rs.
 
 // #import types
@@ -20,8 +26,12 @@
 @group(0) @binding(5) var specular_sum: texture_2d<f32>;
 @group(0) @binding(6) var<storage, read> lights: array<Light>;
 @group(0) @binding(7) var<storage, read_write> hdr: array<vec4<f32>>;
+@group(0) @binding(8) var<storage, read> splat_light: array<SplatLight>;
+@group(0) @binding(9) var<storage, read> direct_light: array<vec4<f32>>;
 
 const WG: u32 = 64u;
+// Keeps the glossy rays' random numbers apart from the shadow rays'.
+const GLOSSY_SALT: u32 = 0x9e3779b9u;
 
 // Whether this pipeline casts shadow rays: frames of baked direct light take one without, so
 // that no shadow-ray code is compiled into it (llvmpipe paid for that code even where
@@ -145,6 +155,38 @@ fn direct(sf: Surface, pixel: u32) -> vec3<f32> {
     return sum;
 }
 
+// The glossy part of the indirect light at sf (its unshown terms zeroed) by the frame's glossy
+// rays, each a sample of the Ward lobe (random numbers from r on).
+fn glossy_indirect(sf: Surface, r: u32) -> vec3<f32> {
+    var sum = vec3<f32>(0.0);
+    let o = sf.p + params.shadow_bias * sf.n;
+    for (var k = 0u; k < params.glossy_rays; k++) {
+        let u = r + 2u * k;
+        let s = ward_sample(frame_of(sf.n), sf.wo, unit_float(pcg_hash(u)),
+                            unit_float(pcg_hash(u + 1u)), sf.alpha);
+        if !(s.weight > 0.0) || !(dot(sf.n, s.wo) > 0.0) {
+            continue;
+        }
+        var budget = SHADOW_RAY_BUDGET;
+        let hit = trace_ray(o, s.wo, NO_SPLAT, FAR, &budget);
+        if hit.splat == NO_SPLAT {
+            continue;
+        }
+        var lit = false;
+        for (var li = 0u; li < params.light_count; li++) {
+            let t = area_light_hit(lights[li], o, s.wo);
+            lit = lit || (t > 0.0 && t < hit.t);
+        }
+        let h = splats_at(hit.splat);
+        if lit || dot(h.normal, s.wo) >= 0.0 {
+            continue;
+        }
+        let e = direct_light[hit.splat].xyz + splat_light[hit.splat].irradiance;
+        sum += s.weight * h.diffuse * e * (1.0 / PI);
+    }
+    return sf.rho_s * sum * (1.0 / f32(params.glossy_rays));
+}
+
 // The radiance of the nearest area light the view ray meets before t_surface, or -1.
 fn emitted(d: vec3<f32>, t_surface: f32) -> vec3<f32> {
     var out = vec3<f32>(-1.0);
@@ -192,6 +234,14 @@ fn main(@builtin(workgroup_id) wg: vec3<u32>, @builtin(num_workgroups) num_wg: v
         let rays = SHADOW_RAYS && params.direct == DIRECT_RAYS;
         if rays && (params.show & (SHOW_DIRECT_DIFFUSE | SHOW_DIRECT_SPECULAR)) != 0u {
             color += direct(sf, i);
+        }
+        let glossy = params.glossy_rays > 0u && sf.alpha >= MIN_ALPHA;
+        if rays && glossy && (params.show & SHOW_INDIRECT_SPECULAR) != 0u {
+            var g = sf;
+            g.rho_s = spec.xyz * inv_w;
+            // Random numbers apart from the shadow rays' (those use the key itself, plus).
+            let r = pcg_hash(pcg_hash(params.seed ^ GLOSSY_SALT) + i) + 2u * params.glossy_rays * params.sample;
+            color += glossy_indirect(g, r);
         }
     }
     // A light seen directly hides what lies behind it; its radiance counts with the direct

@@ -4,7 +4,7 @@ use std::time::Instant;
 
 use serde::Serialize;
 
-use crate::bake::{BakeDevice, Progress, bake};
+use crate::bake::{BakeDevice, Progress, bake, gather_setup};
 use crate::bins::bin_params;
 use crate::camera::View;
 use crate::cli::compare::difference;
@@ -15,7 +15,7 @@ use crate::cpu;
 use crate::em::{EmConfig, EmStats, FitShape, LobeFamily, LobeMap};
 use crate::error::Result;
 use crate::frame::{
-    Direct, DirectMap, FrameConfig, camera_uniform, cpu_direct, cpu_frame_into, shade_params,
+    DirectMap, FrameConfig, camera_uniform, cpu_direct, cpu_frame_into, shade_params,
 };
 use crate::gpu::bins as gpu_bins;
 use crate::gpu::em as gpu_em;
@@ -219,6 +219,8 @@ pub struct EmSkipping {
     pub select_ms: f64,
     pub gather_ms: f64,
     pub fit_ms: f64,
+    /// With final gathering: the direct bake and the rays (their fit is in `fit_ms`).
+    pub final_gather_ms: f64,
     pub splats_fitted: u32,
     /// Bytes of lobes the bake keeps, skipping and fitting every splat.
     pub lobe_bytes: u64,
@@ -256,9 +258,8 @@ pub fn em(
             let binning_ms = ms_since(t);
             drop(traced);
             let n = scene.splats.len() as u32;
-            let fit = |c: &EmConfig| {
-                gpu_em::fit_lobes(gpu, &on_gpu.splats, &on_gpu.materials, n, &bins, c)
-            };
+            let setup = gather_setup(scene);
+            let fit = |c: &EmConfig| gpu_em::fit_lobes_gathering(gpu, &on_gpu, n, &bins, c, &setup);
             fit(&EmConfig {
                 iterations: 1,
                 ..cfg.clone()
@@ -282,13 +283,15 @@ pub fn em(
             let t = Instant::now();
             let bins = cpu::bin_photons(&params, &traced.photons, &scene.splats)?;
             let binning_ms = ms_since(t);
+            let setup = gather_setup(scene);
             let fit = |c: &EmConfig| {
-                cpu::fit_lobes(
+                cpu::fit_lobes_gathering(
                     c,
                     &bins,
                     &scene.splats,
                     &scene.materials,
                     FitShape::default(),
+                    Some((&grid, &setup)),
                 )
             };
             let fits = [fit(&cfg)?, fit(&skip_cfg)?, fit(&fixed_cfg)?];
@@ -322,6 +325,7 @@ pub fn em(
             select_ms: skipping.stats.select_ms,
             gather_ms: skipping.stats.gather_ms,
             fit_ms: skipping.stats.fit_ms,
+            final_gather_ms: skipping.stats.final_gather_ms,
             splats_fitted: skipping.stats.fitted,
             lobe_bytes: lobe_bytes(&skipping),
             lobe_bytes_fit_all: lobe_bytes(&map),
@@ -414,6 +418,8 @@ pub struct FrameBench {
     pub splatter: &'static str,
     /// The moving frames' level of detail, in pixels (`--lod`; 0: every splat drawn).
     pub lod: f32,
+    /// Glossy rays a pixel and refinement frame (`--glossy-rays`; 0: the lobes).
+    pub glossy_rays: u32,
     /// Baked direct light: the direct bake of the lights, once before the frames (what a moved
     /// light costs before its indirect bake).
     #[serde(skip_serializing_if = "Option::is_none")]
@@ -487,7 +493,7 @@ pub fn frame(
         Some(gpu) => {
             let mut renderer = FrameRenderer::new(gpu, scene)?;
             let lobes = renderer.bake(gpu, scene, &progress)?.lobes;
-            if cfg.direct == Direct::Baked {
+            if cfg.needs_direct_bake() {
                 direct_bake_ms = Some(renderer.bake_direct(gpu, scene)?);
             }
             if renderer.pipelines.uses_compute(cfg.splatter)? {
@@ -547,11 +553,11 @@ pub fn frame(
             let params = shade_params(scene, &lobes, cfg);
             // Made once, as the device's: the timed frames are what a moving camera costs.
             let t = Instant::now();
-            let direct = match cfg.direct {
-                Direct::Baked => cpu_direct(scene, &grid)?,
-                Direct::Rays => DirectMap::default(),
+            let direct = match cfg.needs_direct_bake() {
+                true => cpu_direct(scene, &grid)?,
+                false => DirectMap::default(),
             };
-            if cfg.direct == Direct::Baked {
+            if cfg.needs_direct_bake() {
                 direct_bake_ms = Some(ms_since(t));
             }
             for (w, h) in FRAME_SIZES {
@@ -585,6 +591,7 @@ pub fn frame(
         direct: cfg.direct.name(),
         splatter,
         lod: cfg.lod,
+        glossy_rays: cfg.glossy_rays,
         direct_bake_ms,
         frame_ms: sizes[0].frame_ms,
         sizes,
@@ -651,8 +658,8 @@ impl std::fmt::Display for FrameBench {
         )?;
         write!(
             f,
-            "direct       {}, {} splatter, level of detail {} px",
-            self.direct, self.splatter, self.lod
+            "direct       {}, {} splatter, level of detail {} px, {} glossy rays",
+            self.direct, self.splatter, self.lod, self.glossy_rays
         )?;
         if let Some(ms) = self.direct_bake_ms {
             write!(f, "; direct bake {ms:.1} ms")?;

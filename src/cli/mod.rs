@@ -186,6 +186,11 @@ struct LookArgs {
     /// splat as it is). Still images draw them all.
     #[arg(long, default_value_t = crate::frame::DEFAULT_LOD)]
     lod: f32,
+    /// Rays a pixel and refinement frame that trace glossy surfaces' indirect light, each
+    /// bringing back the baked light of the surface it meets (0: their lobes give it, as in a
+    /// moving frame). Still images only.
+    #[arg(long, value_name = "N", default_value_t = crate::frame::DEFAULT_GLOSSY_RAYS)]
+    glossy_rays: u32,
 }
 
 impl LookArgs {
@@ -196,6 +201,7 @@ impl LookArgs {
             direct: self.direct,
             splatter: self.splatter,
             lod: self.lod,
+            glossy_rays: self.glossy_rays,
             ..FrameConfig::default()
         }
     }

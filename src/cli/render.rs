@@ -533,7 +533,7 @@ fn render_lobes(
                 let cam = camera_uniform(&shot.view, scene.bounds(), &opts.frame);
                 let hdr = match opts.spp {
                     0 => cpu_frame(scene, &host_grid, &baked.lobes, &cam, &params)?,
-                    spp => cpu_refined(scene, &host_grid, &baked.lobes, &cam, &params, spp),
+                    spp => cpu_refined(scene, &host_grid, &baked.lobes, &cam, &params, spp)?,
                 };
                 let shade = refined(ms_since(t), opts.spp);
                 record(drawn_on_cpu(hdr, format, &opts.tone, shade)?, shot, t)?;

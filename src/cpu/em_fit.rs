@@ -508,6 +508,7 @@ pub fn em_fit(
     let k = em.lobes as usize;
     let results: Vec<Written> = (0..groups)
         .into_par_iter()
+        .map(|group| em.list_first + group)
         .filter(|&index| index < em.active_count)
         .filter_map(|index| {
             let [entry, lobe_slot] = fit_list[index as usize];
@@ -517,7 +518,8 @@ pub fn em_fit(
                 0 => &[][..],
                 _ => &lobes[first as usize..first as usize + k],
             };
-            fit_splat(&inp, splats, [entry, lobe_slot], resume)
+            let sample_first = (index - em.list_first) * em.gathered;
+            fit_splat(&inp, splats, [entry, lobe_slot], sample_first, resume)
         })
         .collect();
     for (splat_index, first, written, out) in results {
@@ -548,6 +550,7 @@ fn fit_splat(
     inp: &Inputs,
     splats: &[Splat],
     [entry, lobe_slot]: [u32; 2],
+    sample_first: u32,
     resume: &[Lobe],
 ) -> Option<Written> {
     let em = inp.em;
@@ -564,7 +567,7 @@ fn fit_splat(
         normal: Vec3::from(s.normal),
         slab: em.slab * s.radius,
         lobe_count: if fit { em.lobes } else { 0 },
-        sample_first: lobe_slot * em.gathered,
+        sample_first,
         ..Default::default()
     };
     let begin = if fit {

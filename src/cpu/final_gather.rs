@@ -15,8 +15,8 @@ use crate::types::{GatherParams, NO_SPLAT, SplatLight};
 
 pub const WG: u32 = 64;
 
-/// Fills `samples` (`samples²` a fitted splat, at its lobe slot, each `[radiance, direction
-/// bits]`) for the fit list's first `params.splat_count` entries.
+/// Fills `samples` (`samples²` for each fitted splat of the fit list's entries `first..first
+/// + splat_count`, entry `first + k` at `k · samples²`, each `[radiance, direction bits]`).
 pub fn final_gather(
     params: &GatherParams,
     list: &[[u32; 2]],
@@ -25,23 +25,19 @@ pub fn final_gather(
     samples: &mut [[f32; 4]],
     geo: &Geometry,
 ) {
-    let rays = params.samples * params.samples;
-    let entries = &list[..params.splat_count as usize];
-    let gathered: Vec<(u32, Vec<[f32; 4]>)> = entries
-        .par_iter()
-        .filter(|[entry, _]| entry & FIT_BIT != 0)
-        .map(|&[entry, slot]| {
+    let rays = (params.samples * params.samples) as usize;
+    let first = params.first as usize;
+    let entries = &list[first..first + params.splat_count as usize];
+    samples[..entries.len() * rays]
+        .par_chunks_mut(rays)
+        .zip(entries)
+        .filter(|(_, [entry, _])| entry & FIT_BIT != 0)
+        .for_each(|(out, [entry, _])| {
             let i = entry & !FIT_BIT;
-            let rays = (0..rays)
-                .map(|j| ray(params, i, j, light, direct, geo))
-                .collect();
-            (slot, rays)
-        })
-        .collect();
-    for (slot, rays) in gathered {
-        let first = slot as usize * rays.len();
-        samples[first..first + rays.len()].copy_from_slice(&rays);
-    }
+            for (j, sample) in (0u32..).zip(out) {
+                *sample = ray(params, i, j, light, direct, geo);
+            }
+        });
 }
 
 /// Ray `j` of splat `i`: the radiance it brings back, and its direction's bits.

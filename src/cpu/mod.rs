@@ -158,6 +158,10 @@ pub fn bin_photons(params: &BinParams, photons: &[Photon], splats: &[Splat]) -> 
     sequence::bin_photons(&mut ex, &[(&page, n)], &splats, params)?.read_back(&mut ex)
 }
 
+/// The most bytes of final gathering's samples a batch holds, on the CPU and at most on a
+/// device.
+pub const GATHER_BATCH_BYTES: u64 = 64 << 20;
+
 /// The lobe fit on the CPU: `em_select`, then `em_fit` over the same dispatch ranges and
 /// with the same sum order as the GPU path on a device of the given shape.
 pub fn fit_lobes(
@@ -211,6 +215,7 @@ pub fn fit_lobes_gathering(
                 direct: g.direct,
                 seed: g.seed,
                 shadow_bias: g.shadow_bias,
+                batch_bytes: GATHER_BATCH_BYTES,
             }),
     };
     let fit = sequence::fit_lobes(&mut ex, &input, cfg, shape)?;

@@ -11,11 +11,11 @@ use crate::shared::lights::{LightSample, MIN_ALPHA, area_light_hit, area_point, 
 use crate::shared::rng::{pcg_hash, unit_float};
 use crate::shared::sampling::{PI, frame_of, power_heuristic};
 use crate::shared::splat::{
-    SHADOW_RAY_BUDGET, SHOW_DIRECT_DIFFUSE, SHOW_DIRECT_SPECULAR, pixel_ray,
+    SHADOW_RAY_BUDGET, SHOW_DIRECT_DIFFUSE, SHOW_DIRECT_SPECULAR, SHOW_INDIRECT_SPECULAR, pixel_ray,
 };
 use crate::shared::trace::{FAR, Geometry, trace_ray};
 use crate::shared::ward::{ward_pdf, ward_sample, ward_specular};
-use crate::types::{Camera, DIRECT_RAYS, Light, NO_SPLAT, ShadeParams, light_kind};
+use crate::types::{Camera, DIRECT_RAYS, Light, NO_SPLAT, ShadeParams, SplatLight, light_kind};
 
 use super::splat_attributes::Attributes;
 
@@ -158,6 +158,58 @@ fn direct(
     sum
 }
 
+/// Keeps the glossy rays' random numbers apart from the shadow rays'.
+const GLOSSY_SALT: u32 = 0x9e37_79b9;
+
+/// The baked light the glossy rays read at their hits: each splat's photon irradiance and its
+/// direct bake (`direct_light`, xyz).
+pub struct HitLight<'a> {
+    pub splat_light: &'a [SplatLight],
+    pub direct_light: &'a [[f32; 4]],
+}
+
+/// `glossy_indirect` in WGSL: the glossy part of the indirect light at `sf` by the frame's
+/// glossy rays, random numbers from `r` on.
+fn glossy_indirect(
+    params: &ShadeParams,
+    geo: &Geometry,
+    lights: &[Light],
+    baked: &HitLight,
+    sf: &Surface,
+    r: u32,
+) -> Vec3 {
+    let mut sum = Vec3::ZERO;
+    let o = sf.p + params.shadow_bias * sf.n;
+    for k in 0..params.glossy_rays {
+        let u = r.wrapping_add(2 * k);
+        let (u1, u2) = (
+            unit_float(pcg_hash(u)),
+            unit_float(pcg_hash(u.wrapping_add(1))),
+        );
+        let s = ward_sample(&frame_of(sf.n), sf.wo, u1, u2, sf.alpha);
+        if !(s.weight > 0.0) || !(sf.n.dot(s.wo) > 0.0) {
+            continue;
+        }
+        let mut budget = SHADOW_RAY_BUDGET;
+        let hit = trace_ray(geo, o, s.wo, NO_SPLAT, FAR, &mut budget);
+        if hit.splat == NO_SPLAT {
+            continue;
+        }
+        let lit = lights.iter().take(params.light_count as usize).any(|l| {
+            let t = area_light_hit(l, o, s.wo);
+            t > 0.0 && t < hit.t
+        });
+        let h = &geo.splats[hit.splat as usize];
+        if lit || Vec3::from(h.normal).dot(s.wo) >= 0.0 {
+            continue;
+        }
+        let e = Vec4::from(baked.direct_light[hit.splat as usize]).truncate()
+            + Vec3::from(baked.splat_light[hit.splat as usize].irradiance);
+        sum += s.weight * Vec3::from(h.diffuse) * e * (1.0 / PI);
+    }
+    sf.rho_s * sum * (1.0 / params.glossy_rays as f32)
+}
+
 fn emitted(
     cam: &Camera,
     params: &ShadeParams,
@@ -185,6 +237,7 @@ pub fn shade(
     params: &ShadeParams,
     sums: &Attributes,
     lights: &[Light],
+    baked: &HitLight,
     geo: &Geometry,
     hdr: &mut [[f32; 4]],
 ) {
@@ -225,6 +278,16 @@ pub fn shade(
             let rays = params.direct == DIRECT_RAYS;
             if rays && params.show & (SHOW_DIRECT_DIFFUSE | SHOW_DIRECT_SPECULAR) != 0 {
                 color += direct(params, geo, lights, &sf, i);
+            }
+            let glossy = params.glossy_rays > 0 && sf.alpha >= MIN_ALPHA;
+            if rays && glossy && params.show & SHOW_INDIRECT_SPECULAR != 0 {
+                let g = Surface {
+                    rho_s: spec.truncate() * inv_w,
+                    ..sf
+                };
+                let r = pcg_hash(pcg_hash(params.seed ^ GLOSSY_SALT).wrapping_add(i))
+                    .wrapping_add(2 * params.glossy_rays * params.sample);
+                color += glossy_indirect(params, geo, lights, baked, &g, r);
             }
         }
         // A light seen directly hides what lies behind it; its radiance counts with the

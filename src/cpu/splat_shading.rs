@@ -14,7 +14,9 @@ use crate::shared::splat::{
     lobe_beta2,
 };
 use crate::shared::ward::ward_specular;
-use crate::types::{Light, Lobe, Material, ShadeParams, Splat, SplatLight, light_kind};
+use crate::types::{
+    DIRECT_RAYS, Light, Lobe, Material, ShadeParams, Splat, SplatLight, light_kind,
+};
 
 /// The direct bake's results (`DIRECT_BAKED`): bindings 7–9 of the WGSL.
 #[derive(Clone, Copy)]
@@ -47,7 +49,10 @@ impl Shading<'_> {
         let light = &self.splat_light[i as usize];
         let mut spec = Vec3::ZERO;
         let first = light.first_lobe;
-        let shown = if params.show & SHOW_INDIRECT_SPECULAR != 0 {
+        // With glossy rays the shade pass traces this part instead, where the BRDF can be sampled.
+        let traced =
+            params.glossy_rays > 0 && params.direct == DIRECT_RAYS && m.roughness >= MIN_ALPHA;
+        let shown = if params.show & SHOW_INDIRECT_SPECULAR != 0 && !traced {
             light.lobes
         } else {
             0

@@ -155,6 +155,8 @@ fn fit_on_device(
                 direct: g.direct,
                 seed: g.seed,
                 shadow_bias: g.shadow_bias,
+                // One binding, one page: a stage that binds them has bindings to spare.
+                batch_bytes: gpu.page_bytes().min(crate::cpu::GATHER_BATCH_BYTES),
             }),
     };
     let mut encoder = gpu.encoder("lobe fit");

@@ -510,6 +510,11 @@ impl Gpu {
         (page * MAX_PAGES as u64).min(self.limits.max_buffer_size)
     }
 
+    /// Bytes of the largest array that binds as one page (arrays of 16-byte records).
+    pub fn page_bytes(&self) -> u64 {
+        self.page_bytes
+    }
+
     /// Makes arrays of more than `bytes` bytes page (tests of paging on small scenes); at most
     /// the largest storage binding, at least 64 KiB (pages of records up to 64 bytes then start
     /// at multiples of 4 KiB, aligned for any device's binding offsets).

@@ -142,7 +142,7 @@ impl Default for BakeDesc {
             slab: 2.0,
             prune: true,
             fit_candidates: crate::em::DEFAULT_FIT_CANDIDATES,
-            gather: 0,
+            gather: crate::em::DEFAULT_GATHER,
         }
     }
 }

@@ -38,7 +38,10 @@ fn indirect(i: u32, s: Splat, m: Material, wo: vec3<f32>) -> vec3<f32> {
     let light = splat_light_at(i);
     var spec = vec3<f32>(0.0);
     let first = light.first_lobe;
-    let shown = select(0u, light.lobes, (params.show & SHOW_INDIRECT_SPECULAR) != 0u);
+    // With glossy rays the shade pass traces this part instead, where the BRDF can be sampled.
+    let traced = params.glossy_rays > 0u && params.direct == DIRECT_RAYS && m.roughness >= MIN_ALPHA;
+    let lobes_shown = (params.show & SHOW_INDIRECT_SPECULAR) != 0u && !traced;
+    let shown = select(0u, light.lobes, lobes_shown);
     for (var k = 0u; k < shown; k++) {
         let lobe = lobes_at(first + k);
         let beta2 = lobe_beta2(params.family, lobe.sharpness);

@@ -167,6 +167,10 @@ struct EmParams {
     prune: u32,
     fit_candidates: u32,
     gathered: u32,
+    list_first: u32,
+    _pad0: u32,
+    _pad1: u32,
+    _pad2: u32,
 }
 
 struct Camera {
@@ -198,7 +202,7 @@ struct ShadeParams {
     area_first: u32,
     area_count: u32,
     sample: u32,
-    _pad0: u32,
+    glossy_rays: u32,
 }
 
 const DIRECT_RAYS: u32 = 0u;
@@ -227,6 +231,10 @@ struct GatherParams {
     samples: u32,
     seed: u32,
     shadow_bias: f32,
+    first: u32,
+    _pad0: u32,
+    _pad1: u32,
+    _pad2: u32,
 }
 
 struct DirectParams {

@@ -26,7 +26,7 @@ use crate::camera::View;
 use crate::cli::render::Method;
 use crate::cpu::photon_view::scene_scale;
 use crate::error::{Error, Result};
-use crate::frame::{Direct, FrameConfig, Show, camera_uniform};
+use crate::frame::{FrameConfig, Show, camera_uniform};
 use crate::gpu::photon_view::photon_image;
 use crate::gpu::present::PresentPipeline;
 use crate::gpu::tone::tone_map;
@@ -341,7 +341,7 @@ impl State {
                 if self.still != key || self.spp == 0 {
                     self.still = key;
                     self.samples = 0;
-                    if frame.direct == Direct::Baked && !self.renderer.direct_is_baked() {
+                    if frame.needs_direct_bake() && !self.renderer.direct_is_baked() {
                         let ms = self.renderer.bake_direct(gpu, scene)?;
                         eprintln!("direct bake: {ms:.0} ms");
                     }
