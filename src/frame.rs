@@ -454,6 +454,7 @@ pub fn cpu_frame_into(
     let hit_light = cpu::shade::HitLight {
         splat_light: &lobes.light,
         direct_light: &direct.direct,
+        materials: &scene.materials,
     };
     cpu::shade::shade(cam, params, &sums, &scene.lights, &hit_light, &geo, hdr);
 }
@@ -512,6 +513,7 @@ pub fn cpu_reference(
     let no_hits = cpu::shade::HitLight {
         splat_light: &[],
         direct_light: &[],
+        materials: &scene.materials,
     };
     cpu::shade::shade(cam, &params, &sums, &scene.lights, &no_hits, &geo, &mut hdr);
     hdr

@@ -541,14 +541,8 @@ pub fn fit_lobes<E: Executor>(
                 first,
                 ..Default::default()
             };
-            final_gather(
-                ex,
-                &gather,
-                &fit_list,
-                &photon_light,
-                &direct.direct,
-                &samples,
-            )?;
+            let baked = (&photon_light, &direct.direct);
+            final_gather(ex, &gather, &fit_list, baked, &samples, input.materials)?;
             ex.read::<u32>(&counters, 1)?;
             final_gather_ms += ms_since(t);
             let t = std::time::Instant::now();
@@ -877,15 +871,15 @@ pub fn bake_direct<E: Executor>(
 /// Final gathering (`final_gather.wgsl`): `samples²` rays from each fitted splat of the fit
 /// list `list`'s entries `first..first + splat_count` (`params`) over its hemisphere, with the
 /// radiance each brings back from the surfaces' baked light (`light`: their photon irradiance;
-/// `direct`: the direct bake), into `samples`: `[radiance, direction bits]`, `samples²` an
+/// `direct`: the direct bake) and `materials`, into `samples`: `[radiance, direction bits]`, `samples²` an
 /// entry from the batch's first.
 pub fn final_gather<E: Executor>(
     ex: &mut E,
     params: &GatherParams,
     list: &E::Buffer,
-    light: &E::Buffer,
-    direct: &E::Buffer,
+    (light, direct): (&E::Buffer, &E::Buffer),
     samples: &E::Buffer,
+    materials: &E::Buffer,
 ) -> Result<()> {
     let per_splat = (params.samples * params.samples) as u64;
     let rays = params.splat_count as u64 * per_splat;
@@ -895,7 +889,7 @@ pub fn final_gather<E: Executor>(
         ))
     })?;
     let uniform = ex.uniform("gather params", params)?;
-    let bindings = [&uniform, list, light, direct, samples];
+    let bindings = [&uniform, list, light, direct, samples, materials];
     ex.dispatch_traced("final_gather", &bindings, groups("final_gather", count)?)
 }
 

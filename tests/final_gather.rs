@@ -17,7 +17,7 @@ use lobelight::gpu::exec::GpuExecutor;
 use lobelight::gpu::scene::GpuScene;
 use lobelight::sequence::{Executor, final_gather};
 use lobelight::shared::trace::Geometry;
-use lobelight::types::{GatherParams, SplatLight};
+use lobelight::types::{GatherParams, Material, SplatLight};
 
 /// Per listed splat, the irradiance its samples estimate: π / N Σ L (cosine-weighted rays).
 fn irradiance(samples: &[[f32; 4]], rays: usize) -> Vec<f32> {
@@ -37,6 +37,7 @@ fn gather<E: Executor>(
     list: &[u32],
     light: &[SplatLight],
     direct: &[[f32; 4]],
+    materials: &[Material],
 ) -> Vec<[f32; 4]> {
     let count = list.len() * (params.samples * params.samples) as usize;
     // A fit list: each splat fitted, in lobe slot k.
@@ -45,7 +46,8 @@ fn gather<E: Executor>(
     let light = ex.upload("light", light).unwrap();
     let direct = ex.upload("direct", direct).unwrap();
     let samples = ex.zeroed("samples", count as u64 * 16).unwrap();
-    final_gather(ex, params, &list, &light, &direct, &samples).unwrap();
+    let materials = ex.upload("materials", materials).unwrap();
+    final_gather(ex, params, &list, (&light, &direct), &samples, &materials).unwrap();
     ex.read(&samples, count).unwrap()
 }
 
@@ -86,7 +88,14 @@ fn final_gather_matches_the_mirror_and_the_photons() {
         let on_gpu = GpuScene::upload(&gpu, &scene).unwrap();
         let mut encoder = gpu.encoder("final gather");
         let mut ex = GpuExecutor::new(&gpu, &mut encoder).tracing(&on_gpu);
-        gather(&mut ex, &params, &glossy, &lobes.light, &direct)
+        gather(
+            &mut ex,
+            &params,
+            &glossy,
+            &lobes.light,
+            &direct,
+            &scene.materials,
+        )
     };
     let geometry = Geometry {
         grid: &grid,
@@ -98,6 +107,7 @@ fn final_gather_matches_the_mirror_and_the_photons() {
         &glossy,
         &lobes.light,
         &direct,
+        &scene.materials,
     );
     let (a, b) = (irradiance(&on_gpu, rays), irradiance(&on_cpu, rays));
     let close = a

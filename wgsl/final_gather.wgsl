@@ -1,14 +1,13 @@
 // Final gathering (docs/design.md section 6): the light arriving at a splat, sampled by rays
 // from its centre rather than estimated from the photons within the gather radius, so that it
 // is resolved at the splat's own position. Per fitted splat of the fit list (em_select's
-// entries with FIT_BIT), samples^2 rays over its
-// cosine-weighted hemisphere (one stratum each, jittered); each brings back the radiance of the
-// surface it meets, as the bake already knows it: a diffuse splat's albedo / pi times its
-// irradiance, direct (the direct bake) and indirect (the photons). Rays that miss, or meet a
-// disk's back, bring none. Sample j of fit-list entry params.first + k is at k * samples^2 + j:
-// (radiance, direction as an octahedral u32's bits), where em_fit's gathered dispatch finds it;
-// the host takes the list in batches that bound the samples' memory. One invocation per ray. CPU mirror:
-// src/cpu/final_gather.rs.
+// entries with FIT_BIT), samples^2 rays over its cosine-weighted hemisphere (one stratum each,
+// jittered); each brings back the radiance of the surface it meets, as the bake already knows
+// it: hit_albedo / pi times its irradiance, direct (the direct bake) and indirect (the
+// photons). Rays that miss, or meet a disk's back, bring none. Sample j of fit-list entry
+// params.first + k is at k * samples^2 + j: (radiance, direction as an octahedral u32's bits),
+// where em_fit's gathered dispatch finds it; the host takes the list in batches that bound the
+// samples' memory. One invocation per ray. CPU mirror: src/cpu/final_gather.rs.
 
 // #import types
 // #import dispatch
@@ -29,6 +28,7 @@
 // One binding: the host sizes its batches to fit (one page fewer keeps the stage within the
 // bindings a device allows beside the paged geometry).
 @group(0) @binding(4) var<storage, read_write> samples: array<vec4<f32>>;
+@group(0) @binding(5) var<storage, read> materials: array<Material>;
 
 const WG: u32 = 64u;
 
@@ -58,7 +58,7 @@ fn main(@builtin(workgroup_id) wg: vec3<u32>, @builtin(num_workgroups) num_wg: v
         let h = splats_at(hit.splat);
         if dot(h.normal, d) < 0.0 {
             let e = direct_at(hit.splat).xyz + light_at(hit.splat).irradiance;
-            radiance = h.diffuse * e * (1.0 / PI);
+            radiance = hit_albedo(h, materials[h.material]) * e * (1.0 / PI);
         }
     }
     samples[g] = vec4<f32>(radiance, bitcast<f32>(oct_encode(d)));

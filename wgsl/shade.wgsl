@@ -8,7 +8,9 @@
 // traced here instead of read from their lobes, which blur it over their width: each ray
 // samples the Ward lobe at the pixel and brings back the baked light of the surface it meets,
 // albedo / pi times its direct (the direct bake) and photon irradiance, as final gathering
-// does. A ray that meets a light first brings none: direct light is the shadow rays' part.
+// does (hit_albedo: a glossy disk counts its specular albedo too, as if it spread that light
+// evenly; its lobes are not read here). A ray that meets a light first brings none: direct
+// light is the shadow rays' part.
 // Twin: src/cpu/shade.rs.
 
 // #import types
@@ -28,6 +30,7 @@
 @group(0) @binding(7) var<storage, read_write> hdr: array<vec4<f32>>;
 @group(0) @binding(8) var<storage, read> splat_light: array<SplatLight>;
 @group(0) @binding(9) var<storage, read> direct_light: array<vec4<f32>>;
+@group(0) @binding(10) var<storage, read> materials: array<Material>;
 
 const WG: u32 = 64u;
 // Keeps the glossy rays' random numbers apart from the shadow rays'.
@@ -182,7 +185,7 @@ fn glossy_indirect(sf: Surface, r: u32) -> vec3<f32> {
             continue;
         }
         let e = direct_light[hit.splat].xyz + splat_light[hit.splat].irradiance;
-        sum += s.weight * h.diffuse * e * (1.0 / PI);
+        sum += s.weight * hit_albedo(h, materials[h.material]) * e * (1.0 / PI);
     }
     return sf.rho_s * sum * (1.0 / f32(params.glossy_rays));
 }

@@ -451,8 +451,10 @@ fn run_traced(stage: &str, b: &[&CpuBuffer], geo: &Geometry, groups: u32) -> Res
             let light = get(stage, b, 2)?;
             let direct = get(stage, b, 3)?;
             let mut samples = get_mut(stage, b, 4)?;
+            let materials = get(stage, b, 5)?;
             let (list, light, direct) = (view(&list), view(&light), view(&direct));
-            final_gather::final_gather(&p, list, light, direct, view_mut(&mut samples), geo);
+            let (samples, materials) = (view_mut(&mut samples), view(&materials));
+            final_gather::final_gather(&p, list, light, direct, samples, materials, geo);
         }
         "photon_trace" => {
             let p = param(stage, b, 0)?;

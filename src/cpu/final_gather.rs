@@ -9,9 +9,9 @@ use crate::shared::lights::area_point;
 use crate::shared::octahedral::oct_encode;
 use crate::shared::rng::pcg_hash;
 use crate::shared::sampling::{frame_of, sample_cosine, to_world};
-use crate::shared::splat::SHADOW_RAY_BUDGET;
+use crate::shared::splat::{SHADOW_RAY_BUDGET, hit_albedo};
 use crate::shared::trace::{FAR, Geometry, trace_ray};
-use crate::types::{GatherParams, NO_SPLAT, SplatLight};
+use crate::types::{GatherParams, Material, NO_SPLAT, SplatLight};
 
 pub const WG: u32 = 64;
 
@@ -23,6 +23,7 @@ pub fn final_gather(
     light: &[SplatLight],
     direct: &[[f32; 4]],
     samples: &mut [[f32; 4]],
+    materials: &[Material],
     geo: &Geometry,
 ) {
     let rays = (params.samples * params.samples) as usize;
@@ -35,7 +36,7 @@ pub fn final_gather(
         .for_each(|(out, [entry, _])| {
             let i = entry & !FIT_BIT;
             for (j, sample) in (0u32..).zip(out) {
-                *sample = ray(params, i, j, light, direct, geo);
+                *sample = ray(params, i, j, light, direct, materials, geo);
             }
         });
 }
@@ -47,6 +48,7 @@ fn ray(
     j: u32,
     light: &[SplatLight],
     direct: &[[f32; 4]],
+    materials: &[Material],
     geo: &Geometry,
 ) -> [f32; 4] {
     let s = &geo.splats[i as usize];
@@ -63,7 +65,8 @@ fn ray(
         if Vec3::from(h.normal).dot(d) < 0.0 {
             let e = Vec4::from(direct[hit.splat as usize]).truncate()
                 + Vec3::from(light[hit.splat as usize].irradiance);
-            radiance = Vec3::from(h.diffuse) * e * std::f32::consts::FRAC_1_PI;
+            let m = &materials[h.material as usize];
+            radiance = hit_albedo(h, m) * e * std::f32::consts::FRAC_1_PI;
         }
     }
     radiance.extend(f32::from_bits(oct_encode(d))).to_array()

@@ -11,11 +11,14 @@ use crate::shared::lights::{LightSample, MIN_ALPHA, area_light_hit, area_point, 
 use crate::shared::rng::{pcg_hash, unit_float};
 use crate::shared::sampling::{PI, frame_of, power_heuristic};
 use crate::shared::splat::{
-    SHADOW_RAY_BUDGET, SHOW_DIRECT_DIFFUSE, SHOW_DIRECT_SPECULAR, SHOW_INDIRECT_SPECULAR, pixel_ray,
+    SHADOW_RAY_BUDGET, SHOW_DIRECT_DIFFUSE, SHOW_DIRECT_SPECULAR, SHOW_INDIRECT_SPECULAR,
+    hit_albedo, pixel_ray,
 };
 use crate::shared::trace::{FAR, Geometry, trace_ray};
 use crate::shared::ward::{ward_pdf, ward_sample, ward_specular};
-use crate::types::{Camera, DIRECT_RAYS, Light, NO_SPLAT, ShadeParams, SplatLight, light_kind};
+use crate::types::{
+    Camera, DIRECT_RAYS, Light, Material, NO_SPLAT, ShadeParams, SplatLight, light_kind,
+};
 
 use super::splat_attributes::Attributes;
 
@@ -166,6 +169,7 @@ const GLOSSY_SALT: u32 = 0x9e37_79b9;
 pub struct HitLight<'a> {
     pub splat_light: &'a [SplatLight],
     pub direct_light: &'a [[f32; 4]],
+    pub materials: &'a [Material],
 }
 
 /// `glossy_indirect` in WGSL: the glossy part of the indirect light at `sf` by the frame's
@@ -205,7 +209,8 @@ fn glossy_indirect(
         }
         let e = Vec4::from(baked.direct_light[hit.splat as usize]).truncate()
             + Vec3::from(baked.splat_light[hit.splat as usize].irradiance);
-        sum += s.weight * Vec3::from(h.diffuse) * e * (1.0 / PI);
+        let m = &baked.materials[h.material as usize];
+        sum += s.weight * hit_albedo(h, m) * e * (1.0 / PI);
     }
     sf.rho_s * sum * (1.0 / params.glossy_rays as f32)
 }

@@ -385,7 +385,7 @@ fn shade_layouts(gpu: &Gpu, paging: &Paging) -> Result<[wgpu::BindGroupLayout; 2
     let mut frame = vec![buffer_entry(0, UNIFORM), buffer_entry(1, UNIFORM)];
     frame.extend((2..6).map(texture));
     frame.extend([buffer_entry(6, READ), buffer_entry(7, READ_WRITE)]);
-    frame.extend([buffer_entry(8, READ), buffer_entry(9, READ)]);
+    frame.extend([8, 9, 10].map(|binding| buffer_entry(binding, READ)));
     let mut geometry = vec![buffer_entry(0, UNIFORM)];
     for p in crate::shaders::paged_bindings("shade")? {
         let pages = paging.of(&p.name).map_or(1, |l| l.pages);
@@ -1025,13 +1025,16 @@ impl SplatPipelines {
             binding: 7,
             resource: out.hdr.as_entire_binding(),
         });
-        // The baked light at the glossy rays' hits.
-        frame_entries.extend(
-            [(8, scene.splat_light), (9, scene.direct)].map(|(binding, b)| wgpu::BindGroupEntry {
-                binding,
-                resource: b.as_entire_binding(),
-            }),
-        );
+        // The baked light at the glossy rays' hits, and the hit disks' materials.
+        let hits = [
+            (8, scene.splat_light),
+            (9, scene.direct),
+            (10, scene.materials),
+        ];
+        frame_entries.extend(hits.map(|(binding, b)| wgpu::BindGroupEntry {
+            binding,
+            resource: b.as_entire_binding(),
+        }));
         let paging = gpu.paging("shade", &[&[], &scene.geometry])?;
         let shade = self.shade_pipeline(gpu, &paging, uniforms.direct != DIRECT_BAKED)?;
         let geometry_entries = gpu.paged_entries("shade", 1, &scene.geometry, &paging)?;

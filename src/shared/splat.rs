@@ -7,7 +7,7 @@ use glam::{Vec2, Vec3, Vec4};
 
 use super::lobes::FAMILY_WARD;
 use super::sampling::frame_of;
-use crate::types::{Camera, Splat, SplatLod};
+use crate::types::{Camera, Material, Splat, SplatLod};
 
 pub const KERNEL_SHARPNESS: f32 = 2.0;
 
@@ -198,4 +198,11 @@ pub fn tile_rect(cam: &Camera, s: &Splat, tiles_x: u32, tiles_y: u32) -> [u32; 4
         end.x as u32 / TILE,
         end.y as u32 / TILE,
     ]
+}
+
+/// `hit_albedo` in WGSL: what a ray that meets splat `s` brings back per unit of its
+/// irradiance, times π: its diffuse albedo, and a glossy disk's specular albedo as if it spread
+/// that light evenly.
+pub fn hit_albedo(s: &Splat, m: &Material) -> Vec3 {
+    Vec3::from(s.diffuse) + Vec3::from(m.specular)
 }

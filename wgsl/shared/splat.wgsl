@@ -91,6 +91,13 @@ const LOD_MAX_LEVEL: u32 = 3u;
 // other's branch (llvmpipe runs both sides of a branch on a uniform).
 override LISTED: bool = true;
 
+// What a ray that meets splat s brings back per unit of its irradiance, times pi (final
+// gathering, glossy rays): its diffuse albedo, and a glossy disk's specular albedo as if it
+// spread that light evenly (its lobes, which would say where, are not at hand there).
+fn hit_albedo(s: Splat, m: Material) -> vec3<f32> {
+    return s.diffuse + m.specular;
+}
+
 // Splat s at the radius splat_select chose for it (its own, or its merged disk's).
 fn drawn_splat(s: Splat, radius: f32) -> Splat {
     var out = s;
