@@ -10,7 +10,9 @@
 use bytemuck::Pod;
 
 use crate::bins::PhotonBins;
-use crate::em::{EmConfig, FitShape, dispatch_ranges, iterations_per_dispatch, workgroup_size};
+use crate::em::{
+    EmConfig, FitShape, GatherSetup, dispatch_ranges, iterations_per_dispatch, workgroup_size,
+};
 use crate::error::{Error, Result};
 use crate::grid::SplatGrid;
 use crate::grid::check_cell_len;
@@ -403,6 +405,19 @@ pub struct Gathering<'a, B> {
     /// The most bytes of samples one batch of splats holds (the rays of the fit list are
     /// cast and fitted a batch at a time).
     pub batch_bytes: u64,
+}
+
+impl<'a, B> Gathering<'a, B> {
+    /// `setup` with its lights uploaded as `lights`, in batches of at most `batch_bytes`.
+    pub fn of(setup: &GatherSetup, lights: &'a B, batch_bytes: u64) -> Gathering<'a, B> {
+        Gathering {
+            lights,
+            direct: setup.direct,
+            seed: setup.seed,
+            shadow_bias: setup.shadow_bias,
+            batch_bytes,
+        }
+    }
 }
 
 /// The lobe fit where it ran: `cfg.lobes` slots a splat (dense, unpacked) and each splat's

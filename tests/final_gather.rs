@@ -30,6 +30,18 @@ fn irradiance(samples: &[[f32; 4]], rays: usize) -> Vec<f32> {
         .collect()
 }
 
+/// How many of `a` lie within 1e-3 of `b`'s, relatively (1e-6 near zero).
+fn agreeing(a: &[f32], b: &[f32]) -> usize {
+    a.iter()
+        .zip(b)
+        .filter(|(x, y)| (*x - *y).abs() <= 1e-3 * y.abs().max(1e-3))
+        .count()
+}
+
+fn mean(v: &[f32]) -> f64 {
+    v.iter().map(|&x| x as f64).sum::<f64>() / v.len() as f64
+}
+
 /// `final_gather` on executor `ex`, its samples read back.
 fn gather<E: Executor>(
     ex: &mut E,
@@ -110,12 +122,7 @@ fn final_gather_matches_the_mirror_and_the_photons() {
         &scene.materials,
     );
     let (a, b) = (irradiance(&on_gpu, rays), irradiance(&on_cpu, rays));
-    let close = a
-        .iter()
-        .zip(&b)
-        .filter(|(x, y)| (*x - *y).abs() <= 1e-3 * y.abs().max(1e-3))
-        .count();
-    let mean = |v: &[f32]| v.iter().map(|&x| x as f64).sum::<f64>() / v.len() as f64;
+    let close = agreeing(&a, &b);
     let photons: Vec<f32> = glossy
         .iter()
         .map(|&i| {
@@ -198,12 +205,7 @@ fn lobes_fitted_to_gathered_samples_match_the_mirror() {
         irradiance(&on_cpu),
         irradiance(&photons),
     );
-    let close = a
-        .iter()
-        .zip(&b)
-        .filter(|(x, y)| (*x - *y).abs() <= 1e-3 * y.abs().max(1e-3))
-        .count();
-    let mean = |v: &[f32]| v.iter().map(|&x| x as f64).sum::<f64>() / v.len() as f64;
+    let close = agreeing(&a, &b);
     eprintln!(
         "{close} of {} within 1e-3; means {:.5} {:.5}, photons {:.5}",
         a.len(),

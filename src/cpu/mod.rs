@@ -210,13 +210,7 @@ pub fn fit_lobes_gathering(
         splat_count,
         gathering: gathering
             .zip(lights.as_ref())
-            .map(|((_, g), lights)| Gathering {
-                lights,
-                direct: g.direct,
-                seed: g.seed,
-                shadow_bias: g.shadow_bias,
-                batch_bytes: GATHER_BATCH_BYTES,
-            }),
+            .map(|((_, g), lights)| Gathering::of(g, lights, GATHER_BATCH_BYTES)),
     };
     let fit = sequence::fit_lobes(&mut ex, &input, cfg, shape)?;
     let n = splats.len();

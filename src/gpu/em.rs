@@ -7,6 +7,7 @@ use super::Gpu;
 use super::bins::GpuBins;
 use super::exec::GpuExecutor;
 use super::scene::GpuScene;
+use crate::cpu::GATHER_BATCH_BYTES;
 use crate::em::{EmConfig, EmStats, FitShape, GatherSetup, LobeMap, workgroup_size};
 use crate::error::{Error, Result};
 use crate::photons::ms_since;
@@ -58,7 +59,8 @@ pub fn fit_shape(gpu: &Gpu) -> FitShape {
 }
 
 /// Fits lobes to the binned photons around each of the `splat_count` splats in `splats`
-/// (with their `materials`), in the device's shape.
+/// (with their `materials`), in the device's shape: the photon fit (`cfg.gather` 0; final
+/// gathering needs the scene, `fit_lobes_gathering`).
 pub fn fit_lobes(
     gpu: &Gpu,
     splats: &wgpu::Buffer,
@@ -148,16 +150,10 @@ fn fit_on_device(
         splats,
         materials,
         splat_count,
-        gathering: gathering
-            .zip(lights.as_ref())
-            .map(|((_, g), lights)| Gathering {
-                lights,
-                direct: g.direct,
-                seed: g.seed,
-                shadow_bias: g.shadow_bias,
-                // One binding, one page: a stage that binds them has bindings to spare.
-                batch_bytes: gpu.page_bytes().min(crate::cpu::GATHER_BATCH_BYTES),
-            }),
+        // Batches of one binding, one page: a stage that binds them has bindings to spare.
+        gathering: gathering.zip(lights.as_ref()).map(|((_, g), lights)| {
+            Gathering::of(g, lights, gpu.page_bytes().min(GATHER_BATCH_BYTES))
+        }),
     };
     let mut encoder = gpu.encoder("lobe fit");
     let mut ex = GpuExecutor::new(gpu, &mut encoder);
