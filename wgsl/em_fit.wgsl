@@ -40,12 +40,13 @@
 // responsibility 0 and hand over between dispatches with sharpness 0; the lobes kept are
 // written first, in order, so `light.lobes` counts them.
 // Gathered samples (em.gathered > 0, docs/design.md section 6): the candidates of a fitted splat
-// are then the em.gathered samples final gathering cast from its centre, at (index -
-// em.list_first) * gathered for fit-list entry index, in the buffer bound as bin_power (radiance, the direction's octahedral bits), in one row; none
-// is tested for position, each weighs its radiance, and em.inv_area is pi / em.gathered, so that
-// the sums estimate irradiance as the photons' do. Splats not fitted take no part: the photon
-// dispatch before it (with EM_DEFER_FIT, which gave the fitted splats only their irradiance)
-// left their light. bin_geom and cell_start are not read.
+// are then the em.gathered samples final gathering cast from its centre, in one row at
+// (index - em.list_first) * gathered for fit-list entry index (the host dispatches the list a
+// batch at a time), in the buffer bound as bin_power: radiance, and the direction's octahedral
+// bits. None is tested for position, each weighs its radiance, and em.inv_area is
+// pi / em.gathered, so that the sums estimate irradiance as the photons' do. Splats not fitted
+// take no part: the photon dispatch before (with EM_DEFER_FIT, which gave the fitted splats
+// only their irradiance) left their light. bin_geom and cell_start are not read.
 // The host may split the iterations over several dispatches (see EmParams) to keep each
 // invocation's loops under llvmpipe's limit; the mixture waits in the lobe buffer between.
 // CPU mirror: src/cpu/em_fit.rs.

@@ -8,8 +8,10 @@
 //! and against frame time; a path row's image costs its whole time, as bake and as frame) and
 //! the references (`reference_<scene>.exr`).
 //!
-//! The lobe renders cast shadow rays for direct light at the pixel centres (one frame), so
-//! their error is the indirect light's and the anti-aliasing the reference's jitter adds.
+//! The lobe renders are the still image `render` writes: its refinement frames, jittered, with
+//! shadow rays for direct light and glossy rays for the glossy surfaces' indirect light, so
+//! that the lobes' knobs show in the diffuse light they carry (still images trace the glossy
+//! part; moving frames draw the lobes).
 
 use std::fmt::Write as _;
 use std::path::Path;
@@ -25,7 +27,7 @@ use crate::cli::plot::{Chart, Series};
 use crate::cpu;
 use crate::em::LobeFamily;
 use crate::error::{Error, Result};
-use crate::frame::{Direct, FrameConfig, camera_uniform, cpu_frame, cpu_path, shade_params};
+use crate::frame::{Direct, FrameConfig, camera_uniform, cpu_path, cpu_refined, shade_params};
 use crate::gpu::Gpu;
 use crate::objects::{SAMPLES, object_ids};
 use crate::photons::ms_since;
@@ -316,11 +318,13 @@ fn renderer_on<'r>(
 impl Runner<'_> {
     fn lobes(&mut self, scene: &Scene, view: &View, frames: u32) -> Result<LobeRun> {
         let quiet = Progress::new(false);
-        // Direct light by shadow rays, as the reference's: the sweep measures the bake's knobs.
+        // The still image `render` writes (its default refinement frames, with shadow rays and
+        // glossy rays), as the user gets it from the bake's knobs.
         let cfg = FrameConfig {
             direct: Direct::Rays,
             ..FrameConfig::default()
         };
+        let spp = super::render::DEFAULT_SPP;
         let mut times = Vec::new();
         let (hdr, baked) = match self {
             Runner::Gpu(gpu, slot) => {
@@ -328,7 +332,7 @@ impl Runner<'_> {
                 let baked = renderer.bake(gpu, scene, &quiet)?;
                 for i in 0..=frames {
                     let t = Instant::now();
-                    renderer.draw(gpu, scene, view, &cfg)?;
+                    renderer.draw_refined(gpu, scene, view, &cfg, spp, |_| {})?;
                     if i > 0 {
                         times.push(ms_since(t));
                     }
@@ -343,7 +347,7 @@ impl Runner<'_> {
                 let mut hdr = Vec::new();
                 for _ in 0..frames.max(1) {
                     let t = Instant::now();
-                    hdr = cpu_frame(scene, &grid, &baked.lobes, &cam, &params)?;
+                    hdr = cpu_refined(scene, &grid, &baked.lobes, &cam, &params, spp)?;
                     times.push(ms_since(t));
                 }
                 (hdr, baked)
