@@ -526,51 +526,15 @@ pub fn fit_lobes<E: Executor>(
     let mut fit_ms = ms_since(t) - select_ms - gather_ms;
     let mut final_gather_ms = 0.0;
     if let Some(g) = gathering {
-        let t = std::time::Instant::now();
-        let direct = bake_direct(ex, g.lights, &g.direct)?;
-        // The rays read the photons' irradiance where they meet a splat, also a glossy one that
-        // an earlier batch has refitted: a copy keeps the result the same for any batch size.
-        let photon_light = ex.zeroed("photon light", n.max(1) * 32)?;
-        ex.copy(&light, 0, &photon_light, 0, n * 32)?;
-        let rays = cfg.gather * cfg.gather;
-        let per_entry = rays as u64 * 16;
-        let batch = (g.batch_bytes / per_entry).clamp(1, listed.max(1) as u64) as u32;
-        let samples = ex.zeroed("gather samples", batch as u64 * per_entry)?;
-        ex.read::<u32>(&counters, 1)?;
-        final_gather_ms = ms_since(t);
-        // The samples stand in for the photons' power; their geometry is not read, and one
-        // record stands in for it (no pages to bind).
-        let no_geometry = ex.zeroed("no photon geometry", 64)?;
-        let fit_input = EmFitInput {
-            candidates: [&no_geometry, &samples],
-            ..fit_input
+        let refit = Refit {
+            fit_input,
+            counters: &counters,
+            listed,
         };
-        for first in (0..listed).step_by(batch as usize) {
-            let t = std::time::Instant::now();
-            let count = batch.min(listed - first);
-            let gather = GatherParams {
-                splat_count: count,
-                samples: cfg.gather,
-                seed: g.seed,
-                shadow_bias: g.shadow_bias,
-                first,
-                ..Default::default()
-            };
-            let baked = (&photon_light, &direct.direct);
-            final_gather(ex, &gather, &fit_list, baked, &samples, input.materials)?;
-            ex.read::<u32>(&counters, 1)?;
-            final_gather_ms += ms_since(t);
-            let t = std::time::Instant::now();
-            let params = EmParams {
-                gathered: rays,
-                inv_area: std::f32::consts::PI / rays as f32,
-                list_first: first,
-                ..cfg.params(splat_count, first + count, shape)
-            };
-            dispatches += em_fit(ex, cfg, shape, &params, rays, &fit_input)?;
-            ex.read::<u32>(&counters, 1)?;
-            fit_ms += ms_since(t);
-        }
+        let (more, gather_rays_ms, refit_ms) = fit_to_rays(ex, cfg, shape, g, &refit)?;
+        dispatches += more;
+        final_gather_ms = gather_rays_ms;
+        fit_ms += refit_ms;
     }
     Ok(Fit {
         lobes,
@@ -585,6 +549,89 @@ pub fn fit_lobes<E: Executor>(
         fit_ms,
         final_gather_ms,
     })
+}
+
+/// What `fit_to_rays` takes of the photon fit: its `em_fit` buffers, its counters (read back
+/// to split the passes' times) and the fit list's length.
+struct Refit<'a, B> {
+    fit_input: EmFitInput<'a, B>,
+    counters: &'a B,
+    listed: u32,
+}
+
+/// Final gathering and the fit to it (design §6), after the photon fit gave every splat its
+/// irradiance: the direct bake, then per batch of the fit list `final_gather` and `em_fit` over
+/// its samples. Returns the `em_fit` dispatches, and the milliseconds of the rays (with the
+/// direct bake) and of their fit.
+fn fit_to_rays<E: Executor>(
+    ex: &mut E,
+    cfg: &EmConfig,
+    shape: FitShape,
+    g: &Gathering<E::Buffer>,
+    refit: &Refit<E::Buffer>,
+) -> Result<(u32, f64, f64)> {
+    let (input, light, counters, listed) = (
+        refit.fit_input.input,
+        refit.fit_input.light,
+        refit.counters,
+        refit.listed,
+    );
+    let n = input.splat_count as u64;
+    let t = std::time::Instant::now();
+    let direct = bake_direct(ex, g.lights, &g.direct)?;
+    // The rays read the photons' irradiance where they meet a splat, also a glossy one that
+    // an earlier batch has refitted: a copy keeps the result the same for any batch size.
+    let photon_light = ex.zeroed("photon light", n.max(1) * 32)?;
+    ex.copy(light, 0, &photon_light, 0, n * 32)?;
+    let rays = cfg.gather * cfg.gather;
+    let per_entry = rays as u64 * 16;
+    let batch = (g.batch_bytes / per_entry).clamp(1, listed.max(1) as u64) as u32;
+    let samples = ex.zeroed("gather samples", batch as u64 * per_entry)?;
+    ex.read::<u32>(counters, 1)?;
+    let mut rays_ms = ms_since(t);
+    let mut fit_ms = 0.0;
+    let mut dispatches = 0;
+    // The samples stand in for the photons' power; their geometry is not read, and one
+    // record stands in for it (no pages to bind).
+    let no_geometry = ex.zeroed("no photon geometry", 64)?;
+    let fit_input = EmFitInput {
+        candidates: [&no_geometry, &samples],
+        ..refit.fit_input
+    };
+    for first in (0..listed).step_by(batch as usize) {
+        let t = std::time::Instant::now();
+        let count = batch.min(listed - first);
+        let gather = GatherParams {
+            splat_count: count,
+            samples: cfg.gather,
+            seed: g.seed,
+            shadow_bias: g.shadow_bias,
+            first,
+            ..Default::default()
+        };
+        let baked = (&photon_light, &direct.direct);
+        final_gather(
+            ex,
+            &gather,
+            fit_input.fit_list,
+            baked,
+            &samples,
+            input.materials,
+        )?;
+        ex.read::<u32>(counters, 1)?;
+        rays_ms += ms_since(t);
+        let t = std::time::Instant::now();
+        let params = EmParams {
+            gathered: rays,
+            inv_area: std::f32::consts::PI / rays as f32,
+            list_first: first,
+            ..cfg.params(input.splat_count, first + count, shape)
+        };
+        dispatches += em_fit(ex, cfg, shape, &params, rays, &fit_input)?;
+        ex.read::<u32>(counters, 1)?;
+        fit_ms += ms_since(t);
+    }
+    Ok((dispatches, rays_ms, fit_ms))
 }
 
 /// The buffers of `em_fit`'s dispatches.
