@@ -394,30 +394,14 @@ pub struct FitInput<'a, B> {
     pub gathering: Option<Gathering<'a, B>>,
 }
 
-/// What final gathering needs besides the photons: the lights of the direct bake, whose light
-/// the rays' hits read with the photons', and where the rays start.
+/// What final gathering needs besides the photons: its setup (`em::GatherSetup`), with the
+/// setup's lights where the executor holds them.
 pub struct Gathering<'a, B> {
+    pub setup: &'a GatherSetup<'a>,
     pub lights: &'a B,
-    pub direct: DirectParams,
-    pub seed: u32,
-    /// How far off a splat's plane its rays start (`frame::shadow_bias`).
-    pub shadow_bias: f32,
     /// The most bytes of samples one batch of splats holds (the rays of the fit list are
     /// cast and fitted a batch at a time).
     pub batch_bytes: u64,
-}
-
-impl<'a, B> Gathering<'a, B> {
-    /// `setup` with its lights uploaded as `lights`, in batches of at most `batch_bytes`.
-    pub fn of(setup: &GatherSetup, lights: &'a B, batch_bytes: u64) -> Gathering<'a, B> {
-        Gathering {
-            lights,
-            direct: setup.direct,
-            seed: setup.seed,
-            shadow_bias: setup.shadow_bias,
-            batch_bytes,
-        }
-    }
 }
 
 /// The lobe fit where it ran: `cfg.lobes` slots a splat (dense, unpacked) and each splat's
@@ -578,7 +562,7 @@ fn fit_to_rays<E: Executor>(
     );
     let n = input.splat_count as u64;
     let t = std::time::Instant::now();
-    let direct = bake_direct(ex, g.lights, &g.direct)?;
+    let direct = bake_direct(ex, g.lights, &g.setup.direct)?;
     // The rays read the photons' irradiance where they meet a splat, also a glossy one that
     // an earlier batch has refitted: a copy keeps the result the same for any batch size.
     let photon_light = ex.zeroed("photon light", n.max(1) * 32)?;
@@ -604,8 +588,8 @@ fn fit_to_rays<E: Executor>(
         let gather = GatherParams {
             splat_count: count,
             samples: cfg.gather,
-            seed: g.seed,
-            shadow_bias: g.shadow_bias,
+            seed: g.setup.seed,
+            shadow_bias: g.setup.shadow_bias,
             first,
             ..Default::default()
         };

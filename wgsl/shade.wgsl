@@ -163,9 +163,10 @@ fn direct(sf: Surface, pixel: u32) -> vec3<f32> {
 fn glossy_indirect(sf: Surface, r: u32) -> vec3<f32> {
     var sum = vec3<f32>(0.0);
     let o = sf.p + params.shadow_bias * sf.n;
+    let f = frame_of(sf.n);
     for (var k = 0u; k < params.glossy_rays; k++) {
         let u = r + 2u * k;
-        let s = ward_sample(frame_of(sf.n), sf.wo, unit_float(pcg_hash(u)),
+        let s = ward_sample(f, sf.wo, unit_float(pcg_hash(u)),
                             unit_float(pcg_hash(u + 1u)), sf.alpha);
         if !(s.weight > 0.0) || !(dot(sf.n, s.wo) > 0.0) {
             continue;

@@ -247,6 +247,7 @@ pub fn em(
         prune: false,
         ..skip_cfg.clone()
     };
+    let setup = gather_setup(scene);
     let ([map, skipping, fixed], traced_stats, binning_ms, adapter, backend) = match gpu {
         Some(gpu) => {
             let on_gpu = GpuScene::upload(gpu, scene)?;
@@ -258,7 +259,6 @@ pub fn em(
             let binning_ms = ms_since(t);
             drop(traced);
             let n = scene.splats.len() as u32;
-            let setup = gather_setup(scene);
             let fit = |c: &EmConfig| gpu_em::fit_lobes_gathering(gpu, &on_gpu, n, &bins, c, &setup);
             fit(&EmConfig {
                 iterations: 1,
@@ -283,7 +283,6 @@ pub fn em(
             let t = Instant::now();
             let bins = cpu::bin_photons(&params, &traced.photons, &scene.splats)?;
             let binning_ms = ms_since(t);
-            let setup = gather_setup(scene);
             let fit = |c: &EmConfig| {
                 cpu::fit_lobes_gathering(
                     c,

@@ -1,5 +1,6 @@
 //! Mirror of `wgsl/final_gather.wgsl`: rays over each fitted splat's cosine-weighted
-//! hemisphere, and the radiance of the diffuse surface each meets, as the bake knows it.
+//! hemisphere, and the radiance of the surface each meets, as the bake knows it
+//! (`hit_albedo`).
 
 use glam::{Vec3, Vec4};
 use rayon::prelude::*;

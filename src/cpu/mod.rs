@@ -210,7 +210,11 @@ pub fn fit_lobes_gathering(
         splat_count,
         gathering: gathering
             .zip(lights.as_ref())
-            .map(|((_, g), lights)| Gathering::of(g, lights, GATHER_BATCH_BYTES)),
+            .map(|((_, setup), lights)| Gathering {
+                setup,
+                lights,
+                batch_bytes: GATHER_BATCH_BYTES,
+            }),
     };
     let fit = sequence::fit_lobes(&mut ex, &input, cfg, shape)?;
     let n = splats.len();

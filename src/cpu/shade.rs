@@ -184,13 +184,14 @@ fn glossy_indirect(
 ) -> Vec3 {
     let mut sum = Vec3::ZERO;
     let o = sf.p + params.shadow_bias * sf.n;
+    let f = frame_of(sf.n);
     for k in 0..params.glossy_rays {
         let u = r.wrapping_add(2 * k);
         let (u1, u2) = (
             unit_float(pcg_hash(u)),
             unit_float(pcg_hash(u.wrapping_add(1))),
         );
-        let s = ward_sample(&frame_of(sf.n), sf.wo, u1, u2, sf.alpha);
+        let s = ward_sample(&f, sf.wo, u1, u2, sf.alpha);
         if !(s.weight > 0.0) || !(sf.n.dot(s.wo) > 0.0) {
             continue;
         }

@@ -151,9 +151,13 @@ fn fit_on_device(
         materials,
         splat_count,
         // Batches of one binding, one page: a stage that binds them has bindings to spare.
-        gathering: gathering.zip(lights.as_ref()).map(|((_, g), lights)| {
-            Gathering::of(g, lights, gpu.page_bytes().min(GATHER_BATCH_BYTES))
-        }),
+        gathering: gathering
+            .zip(lights.as_ref())
+            .map(|((_, setup), lights)| Gathering {
+                setup,
+                lights,
+                batch_bytes: gpu.page_bytes().min(GATHER_BATCH_BYTES),
+            }),
     };
     let mut encoder = gpu.encoder("lobe fit");
     let mut ex = GpuExecutor::new(gpu, &mut encoder);
