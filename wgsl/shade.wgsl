@@ -92,12 +92,10 @@ fn narrow_lobe(sf: Surface, l: Light) -> bool {
     return 4.0 * PI * sf.alpha * sf.alpha * d2 < l.area * max(cos_l, 0.0);
 }
 
-// The glossy part of area light l's direct light by one sample of the Ward lobe (random
-// numbers at r and r + 1), weighted by the power heuristic against the frame's `count` light
-// samples.
-fn specular_by_brdf(sf: Surface, l: Light, r: u32, count: f32) -> vec3<f32> {
-    let s = ward_sample(frame_of(sf.n), sf.wo, unit_float(pcg_hash(r)),
-                        unit_float(pcg_hash(r + 1u)), sf.alpha);
+// The glossy part of area light l's direct light by one sample of the Ward lobe (at the unit
+// square's point u), weighted by the power heuristic against the frame's `count` light samples.
+fn specular_by_brdf(sf: Surface, l: Light, u: vec2<f32>, count: f32) -> vec3<f32> {
+    let s = ward_sample(frame_of(sf.n), sf.wo, u.x, u.y, sf.alpha);
     let wi = s.wo;
     let cos_i = dot(sf.n, wi);
     if !(s.weight > 0.0) || !(cos_i > 0.0) {
@@ -149,25 +147,25 @@ fn direct(sf: Surface, pixel: u32) -> vec3<f32> {
         }
         sum += area_sum * (1.0 / count);
         if glossy {
-            // Random numbers past every stratum's, fresh in every refinement frame (the
-            // strata's change by stratum; the key only by round).
-            let r = pcg_hash(key + params.sample) + (params.light_count * n * n + li) * 2u;
-            sum += specular_by_brdf(sf, l, r, count);
+            // One point a refinement frame of the pixel's R2 sequence, its shift from random
+            // numbers past every stratum's.
+            let shift = r2_shift(key + (params.light_count * n * n + li) * 2u);
+            sum += specular_by_brdf(sf, l, r2_point(params.sample, shift), count);
         }
     }
     return sum;
 }
 
 // The glossy part of the indirect light at sf (its unshown terms zeroed) by the frame's glossy
-// rays, each a sample of the Ward lobe (random numbers from r on).
-fn glossy_indirect(sf: Surface, r: u32) -> vec3<f32> {
+// rays, each a sample of the Ward lobe at the next points of the pixel's R2 sequence (shifted
+// by `shift`): numbered on across refinement frames, a still image's rays stratify the lobe.
+fn glossy_indirect(sf: Surface, shift: vec2<u32>) -> vec3<f32> {
     var sum = vec3<f32>(0.0);
     let o = sf.p + params.shadow_bias * sf.n;
     let f = frame_of(sf.n);
     for (var k = 0u; k < params.glossy_rays; k++) {
-        let u = r + 2u * k;
-        let s = ward_sample(f, sf.wo, unit_float(pcg_hash(u)),
-                            unit_float(pcg_hash(u + 1u)), sf.alpha);
+        let u = r2_point(params.sample * params.glossy_rays + k, shift);
+        let s = ward_sample(f, sf.wo, u.x, u.y, sf.alpha);
         if !(s.weight > 0.0) || !(dot(sf.n, s.wo) > 0.0) {
             continue;
         }
@@ -244,8 +242,7 @@ fn main(@builtin(workgroup_id) wg: vec3<u32>, @builtin(num_workgroups) num_wg: v
             var g = sf;
             g.rho_s = spec.xyz * inv_w;
             // Random numbers apart from the shadow rays' (those use the key itself, plus).
-            let r = pcg_hash(pcg_hash(params.seed ^ GLOSSY_SALT) + i) + 2u * params.glossy_rays * params.sample;
-            color += glossy_indirect(g, r);
+            color += glossy_indirect(g, r2_shift(pcg_hash(pcg_hash(params.seed ^ GLOSSY_SALT) + i)));
         }
     }
     // A light seen directly hides what lies behind it; its radiance counts with the direct

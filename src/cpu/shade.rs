@@ -8,7 +8,7 @@ use glam::{Vec2, Vec3, Vec4};
 use rayon::prelude::*;
 
 use crate::shared::lights::{LightSample, MIN_ALPHA, area_light_hit, area_point, sample_light};
-use crate::shared::rng::{pcg_hash, unit_float};
+use crate::shared::rng::{pcg_hash, r2_point, r2_shift};
 use crate::shared::sampling::{PI, frame_of, power_heuristic};
 use crate::shared::splat::{
     SHADOW_RAY_BUDGET, SHOW_DIRECT_DIFFUSE, SHOW_DIRECT_SPECULAR, SHOW_INDIRECT_SPECULAR,
@@ -88,13 +88,9 @@ fn specular_by_brdf(
     geo: &Geometry,
     sf: &Surface,
     l: &Light,
-    r: u32,
+    (u1, u2): (f32, f32),
     count: f32,
 ) -> Vec3 {
-    let (u1, u2) = (
-        unit_float(pcg_hash(r)),
-        unit_float(pcg_hash(r.wrapping_add(1))),
-    );
     let s = ward_sample(&frame_of(sf.n), sf.wo, u1, u2, sf.alpha);
     let wi = s.wo;
     let cos_i = sf.n.dot(wi);
@@ -153,9 +149,12 @@ fn direct(
         }
         sum += area_sum * (1.0 / count);
         if glossy {
-            let r = pcg_hash(key.wrapping_add(params.sample))
-                .wrapping_add((params.light_count * n * n + li as u32).wrapping_mul(2));
-            sum += specular_by_brdf(params, geo, sf, l, r, count);
+            // One point a refinement frame of the pixel's R2 sequence.
+            let shift = r2_shift(
+                key.wrapping_add((params.light_count * n * n + li as u32).wrapping_mul(2)),
+            );
+            let u = r2_point(params.sample, shift);
+            sum += specular_by_brdf(params, geo, sf, l, u, count);
         }
     }
     sum
@@ -173,24 +172,20 @@ pub struct HitLight<'a> {
 }
 
 /// `glossy_indirect` in WGSL: the glossy part of the indirect light at `sf` by the frame's
-/// glossy rays, random numbers from `r` on.
+/// glossy rays, at the next points of the pixel's R2 sequence (shifted by `shift`).
 fn glossy_indirect(
     params: &ShadeParams,
     geo: &Geometry,
     lights: &[Light],
     baked: &HitLight,
     sf: &Surface,
-    r: u32,
+    shift: [u32; 2],
 ) -> Vec3 {
     let mut sum = Vec3::ZERO;
     let o = sf.p + params.shadow_bias * sf.n;
     let f = frame_of(sf.n);
     for k in 0..params.glossy_rays {
-        let u = r.wrapping_add(2 * k);
-        let (u1, u2) = (
-            unit_float(pcg_hash(u)),
-            unit_float(pcg_hash(u.wrapping_add(1))),
-        );
+        let (u1, u2) = r2_point(params.sample * params.glossy_rays + k, shift);
         let s = ward_sample(&f, sf.wo, u1, u2, sf.alpha);
         if !(s.weight > 0.0) || !(sf.n.dot(s.wo) > 0.0) {
             continue;
@@ -291,9 +286,10 @@ pub fn shade(
                     rho_s: spec.truncate() * inv_w,
                     ..sf
                 };
-                let r = pcg_hash(pcg_hash(params.seed ^ GLOSSY_SALT).wrapping_add(i))
-                    .wrapping_add(2 * params.glossy_rays * params.sample);
-                color += glossy_indirect(params, geo, lights, baked, &g, r);
+                let shift = r2_shift(pcg_hash(
+                    pcg_hash(params.seed ^ GLOSSY_SALT).wrapping_add(i),
+                ));
+                color += glossy_indirect(params, geo, lights, baked, &g, shift);
             }
         }
         // A light seen directly hides what lies behind it; its radiance counts with the

@@ -31,3 +31,21 @@ pub fn rand(key: u32, bounce: u32, purpose: u32) -> f32 {
             .wrapping_add(purpose),
     ))
 }
+
+/// The R2 sequence's step in 32-bit fixed point: 2³² times 1/φ₂ and 1/φ₂², φ₂ the plastic
+/// number.
+pub const R2_STEP: [u32; 2] = [3_242_174_889, 2_447_445_414];
+
+/// Point `j` of the R2 sequence (Roberts 2018) shifted modulo 1 by `shift`: twin of
+/// `r2_point` in `wgsl/shared/rng.wgsl`, which says why.
+pub fn r2_point(j: u32, shift: [u32; 2]) -> (f32, f32) {
+    (
+        unit_float(j.wrapping_mul(R2_STEP[0]).wrapping_add(shift[0])),
+        unit_float(j.wrapping_mul(R2_STEP[1]).wrapping_add(shift[1])),
+    )
+}
+
+/// A random shift for `r2_point` from `key`.
+pub fn r2_shift(key: u32) -> [u32; 2] {
+    [pcg_hash(key), pcg_hash(key.wrapping_add(1))]
+}

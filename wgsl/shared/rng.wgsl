@@ -31,3 +31,20 @@ const RNG_PURPOSES: u32 = 16u;
 fn rand(key: u32, bounce: u32, purpose: u32) -> f32 {
     return unit_float(pcg_hash(key + bounce * RNG_PURPOSES + purpose));
 }
+
+// Point j of the R2 sequence (Roberts 2018) shifted modulo 1 by `shift` (a Cranley-Patterson
+// rotation), in 32-bit fixed point so that the mirror draws the same bits. Every prefix of the
+// sequence spreads evenly over the unit square: a pixel's samples numbered across refinement
+// frames stratify what they sample, where independent ones would clump. A uniformly random
+// shift keeps each point uniform, so an estimate from them stays unbiased.
+const R2_STEP: vec2<u32> = vec2<u32>(3242174889u, 2447445414u);
+
+fn r2_point(j: u32, shift: vec2<u32>) -> vec2<f32> {
+    let x = j * R2_STEP + shift;
+    return vec2<f32>(unit_float(x.x), unit_float(x.y));
+}
+
+// A random shift for r2_point from key.
+fn r2_shift(key: u32) -> vec2<u32> {
+    return vec2<u32>(pcg_hash(key), pcg_hash(key + 1u));
+}
