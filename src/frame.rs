@@ -267,18 +267,19 @@ pub fn cpu_direct(scene: &Scene, grid: &SplatGrid) -> Result<DirectMap> {
     baked.read_back(&mut ex, &params)
 }
 
-/// The path tracer's uniform for sample `sample` of an image `cam.size`, with the bake's path
-/// length and seed, showing the light terms `show` (`FrameConfig::show`).
-pub fn path_params(scene: &Scene, cam: &Camera, sample: u32, show: u32) -> PathParams {
+/// The path tracer's uniform for the first sample of an image `cam.size` (set `sample` for the
+/// others), with the bake's path length and seed, showing the light terms `show`
+/// (`FrameConfig::show`).
+pub fn path_params(scene: &Scene, cam: &Camera, show: u32) -> PathParams {
     PathParams {
         width: cam.size[0] as u32,
         height: cam.size[1] as u32,
-        sample,
+        sample: 0,
         seed: scene.bake.seed,
         max_depth: scene.bake.max_depth,
         light_count: scene.lights.len() as u32,
         show,
-        ..Default::default()
+        shadow_bias: shadow_bias(&scene.splats),
     }
 }
 
@@ -301,8 +302,9 @@ pub fn cpu_path(
     let materials = ex.upload("materials", &scene.materials)?;
     let lights = ex.upload("lights", &scene.lights)?;
     let hdr = ex.zeroed("path image", pixels.max(1) as u64 * 16)?;
+    let first = path_params(scene, cam, show);
     for k in 0..spp.max(1) {
-        let params = path_params(scene, cam, k, show);
+        let params = PathParams { sample: k, ..first };
         crate::sequence::path_sample(&mut ex, &params, &cam_buf, &materials, &lights, &hdr)?;
     }
     ex.read(&hdr, pixels)

@@ -27,7 +27,7 @@ use crate::gpu::tone::{GpuToned, tone_map};
 use crate::scene::Scene;
 use crate::sequence::path_sample;
 use crate::tone::ToneConfig;
-use crate::types::{Camera, DIRECT_BAKED, EmParams, Light, ShadeParams};
+use crate::types::{Camera, DIRECT_BAKED, EmParams, Light, PathParams, ShadeParams};
 
 pub struct FrameRenderer {
     /// The splats, materials and grid (shared with a bake on another thread).
@@ -367,10 +367,11 @@ impl FrameRenderer {
             .targets
             .as_ref()
             .ok_or_else(|| Error::Invalid("the frame renderer has no targets yet".into()))?;
+        let first = path_params(scene, &cam, show);
         for k in 0..spp.max(1) {
             let mut encoder = gpu.encoder("path sample");
             let mut ex = GpuExecutor::new(gpu, &mut encoder).tracing(&self.on_gpu);
-            let params = path_params(scene, &cam, k, show);
+            let params = PathParams { sample: k, ..first };
             let (materials, lights) = (&self.on_gpu.materials, &self.frame_scene.lights);
             path_sample(&mut ex, &params, &cam_buf, materials, lights, &targets.hdr)?;
             gpu.submit_and_wait(encoder)?;

@@ -409,7 +409,9 @@ pub struct PathParams {
     pub light_count: u32,
     /// Which light terms to show (`shared::splat::SHOW_*` bits, split as path_trace.wgsl says).
     pub show: u32,
-    pub _pad1: u32,
+    /// How far next events' shadow rays start off the surface, along the hit disk's normal:
+    /// the renderer's `frame::shadow_bias`, so that both render one scene (design §10).
+    pub shadow_bias: f32,
 }
 
 /// Uniform of `final_gather`: rays from each fitted splat of the fit list over its hemisphere,

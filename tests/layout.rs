@@ -221,7 +221,7 @@ fn rust_layouts() -> Vec<RustLayout> {
             max_depth,
             light_count,
             show,
-            _pad1
+            shadow_bias
         }),
         layout!(DirectParams {
             splat_count,

@@ -127,7 +127,9 @@ fn main(@builtin(workgroup_id) wg: vec3<u32>, @builtin(num_workgroups) num_wg: v
                 continue;
             }
             var shadow_budget = SHADOW_RAY_BUDGET;
-            let blocked = trace_ray(p, ls.wi, hit.splat, ls.dist * 0.999, &shadow_budget);
+            // Off the surface as the renderer's shadow rays start (design section 10).
+            let blocked = trace_ray(p + params.shadow_bias * n, ls.wi, hit.splat,
+                                    ls.dist - params.shadow_bias, &shadow_budget);
             if blocked.splat != NO_SPLAT {
                 continue;
             }

@@ -118,12 +118,13 @@ fn sample(
                 continue;
             }
             let mut shadow_budget = SHADOW_RAY_BUDGET;
+            // Off the surface as the renderer's shadow rays start (design §10).
             let blocked = trace_ray(
                 geo,
-                p,
+                p + params.shadow_bias * n,
                 ls.wi,
                 hit.splat,
-                ls.dist * 0.999,
+                ls.dist - params.shadow_bias,
                 &mut shadow_budget,
             );
             if blocked.splat != NO_SPLAT {

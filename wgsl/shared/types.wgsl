@@ -223,7 +223,7 @@ struct PathParams {
     max_depth: u32,
     light_count: u32,
     show: u32,
-    _pad1: u32,
+    shadow_bias: f32,
 }
 
 struct GatherParams {
