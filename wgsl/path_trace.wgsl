@@ -55,6 +55,54 @@ fn brdf(n: vec3<f32>, wo: vec3<f32>, wi: vec3<f32>, rho_d: vec3<f32>, m: Materia
     return f;
 }
 
+// How far past a hit, in each disk's radii along the ray, the disks that blend into its normal
+// may lie: the splat frame's depth tolerance (FrameConfig::depth_tolerance).
+const BLEND_DEPTH: f32 = 1.0;
+
+// The normal of the surface the splat frame shows where the ray (o, d) meets disk hit.splat:
+// the disks the ray meets from there to BLEND_DEPTH radii past it, of the hit's surface
+// (same_surface: within 60 degrees of its normal), weighted by the splat kernel at their hits,
+// as the attribute pass blends them in a pixel (design section 10). The search covers the
+// cells within (1 + BLEND_DEPTH) hit radii of the hit point, and a disk counts only in the cell
+// that holds its hit, so none counts twice. The disk's own normal where the search finds none.
+fn blended_normal(o: vec3<f32>, d: vec3<f32>, hit: Hit, skip: u32) -> vec3<f32> {
+    let h = splats_at(hit.splat);
+    let p = o + hit.t * d;
+    let reach = vec3<f32>(h.radius * (1.0 + BLEND_DEPTH));
+    let top = vec3<i32>(grid.dims) - 1;
+    let a = clamp(vec3<i32>(floor((p - reach - grid.origin) * grid.inv_cell_size)), vec3<i32>(0), top);
+    let b = clamp(vec3<i32>(floor((p + reach - grid.origin) * grid.inv_cell_size)), vec3<i32>(0), top);
+    var budget = SHADOW_RAY_BUDGET;
+    var sum = vec3<f32>(0.0);
+    for (var z = a.z; z <= b.z; z++) {
+        for (var y = a.y; y <= b.y; y++) {
+            for (var x = a.x; x <= b.x; x++) {
+                let c = vec3<i32>(x, y, z);
+                let ci = cell_index(vec3<u32>(c), grid);
+                for (var e = cell_start[ci]; e < cell_start[ci + 1u] && budget > 0u; e++) {
+                    budget -= 1u;
+                    let j = cell_splats_at(e);
+                    let s = splats_at(j);
+                    if j == skip || dot(s.normal, h.normal) < FRONT_COS_MIN {
+                        continue;
+                    }
+                    let t = intersect_disk(s, o, d);
+                    if !(t >= hit.t && t <= hit.t + BLEND_DEPTH * s.radius) {
+                        continue;
+                    }
+                    let q = o + t * d;
+                    if any(vec3<i32>(floor((q - grid.origin) * grid.inv_cell_size)) != c) {
+                        continue;
+                    }
+                    let r = q - s.center;
+                    sum += splat_weight(dot(r, r) / (s.radius * s.radius)) * s.normal;
+                }
+            }
+        }
+    }
+    return select(h.normal, normalize(sum), dot(sum, sum) > 0.0);
+}
+
 // 1 where params.show has any of `bits`, else 0.
 fn shown(bits: u32) -> f32 {
     return select(0.0, 1.0, (params.show & bits) != 0u);
@@ -112,7 +160,12 @@ fn main(@builtin(workgroup_id) wg: vec3<u32>, @builtin(num_workgroups) num_wg: v
         let s = splats_at(hit.splat);
         let m = materials[s.material];
         let p = o + hit.t * d;
-        let n = s.normal;
+        // The camera sees the blended surface, as the splat frame shows it; past it, paths
+        // bounce off the disks' own normals, as photons do.
+        var n = s.normal;
+        if depth == 0u {
+            n = blended_normal(o, d, hit, skip);
+        }
         let wo = -d;
         let pd = mean3(s.diffuse);
         let ps = mean3(m.specular);

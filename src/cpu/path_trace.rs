@@ -3,22 +3,24 @@
 // `!(x < y)` is meant: NaN must fail these tests, as it does in the WGSL twin.
 #![allow(clippy::neg_cmp_op_on_partial_ord)]
 
-use glam::{Vec2, Vec3, Vec4};
+use glam::{IVec3, Vec2, Vec3, Vec4};
 use rayon::prelude::*;
 
+use crate::grid::cell_index;
 use crate::shared::lights::{MIN_ALPHA, area_light_hit, sample_light};
 use crate::shared::rng::{
     RNG_BOUNCE_U, RNG_BOUNCE_V, RNG_EMIT_POS_U, RNG_EMIT_POS_V, RNG_ROULETTE, path_key, pcg_hash,
     rand,
 };
 use crate::shared::sampling::{PI, frame_of, power_heuristic};
+use crate::shared::splat::FRONT_COS_MIN;
 use crate::shared::splat::{
     SHADOW_RAY_BUDGET, SHOW_DIRECT_DIFFUSE, SHOW_DIRECT_SPECULAR, SHOW_INDIRECT_DIFFUSE,
-    SHOW_INDIRECT_SPECULAR, pixel_ray,
+    SHOW_INDIRECT_SPECULAR, pixel_ray, splat_weight,
 };
-use crate::shared::trace::{FAR, Geometry, trace_ray};
+use crate::shared::trace::{FAR, Geometry, intersect_disk, trace_ray};
 use crate::shared::ward::{mean3, sample_bounce, ward_pdf, ward_specular};
-use crate::types::{Camera, Light, Material, NO_SPLAT, PathParams, light_kind};
+use crate::types::{Camera, Hit, Light, Material, NO_SPLAT, PathParams, light_kind};
 
 pub const WG: u32 = 64;
 pub const RNG_LIGHT_U: u32 = 7;
@@ -42,6 +44,62 @@ fn brdf(n: Vec3, wo: Vec3, wi: Vec3, rho_d: Vec3, m: &Material, wd: f32, ws: f32
         f += Vec3::from(m.specular) * ward_specular(n, wi, wo, m.roughness) * ws;
     }
     f
+}
+
+/// How far past a hit, in each disk's radii along the ray, the disks that blend into its normal
+/// may lie: the splat frame's depth tolerance.
+pub const BLEND_DEPTH: f32 = 1.0;
+
+/// `blended_normal` in WGSL: the normal of the surface the splat frame shows where the ray
+/// `(o, d)` meets disk `hit.splat` (the disks of its surface the ray meets within
+/// `BLEND_DEPTH` radii past it, weighted by the splat kernel), searched in the same cells in
+/// the same order.
+fn blended_normal(geo: &Geometry, o: Vec3, d: Vec3, hit: &Hit, skip: u32) -> Vec3 {
+    let g = &geo.grid.params;
+    let h = &geo.splats[hit.splat as usize];
+    let hn = Vec3::from(h.normal);
+    let p = o + hit.t * d;
+    let origin = Vec3::from(g.origin);
+    let reach = Vec3::splat(h.radius * (1.0 + BLEND_DEPTH));
+    let top = IVec3::new(g.dims[0] as i32, g.dims[1] as i32, g.dims[2] as i32) - 1;
+    let cell_of = |x: Vec3| ((x - origin) * g.inv_cell_size).floor().as_ivec3();
+    let a = cell_of(p - reach).clamp(IVec3::ZERO, top);
+    let b = cell_of(p + reach).clamp(IVec3::ZERO, top);
+    let mut budget = SHADOW_RAY_BUDGET;
+    let mut sum = Vec3::ZERO;
+    for z in a.z..=b.z {
+        for y in a.y..=b.y {
+            for x in a.x..=b.x {
+                let c = IVec3::new(x, y, z);
+                for &j in geo.grid.cell(cell_index(c.as_uvec3(), g)) {
+                    if budget == 0 {
+                        break;
+                    }
+                    budget -= 1;
+                    let s = &geo.splats[j as usize];
+                    let sn = Vec3::from(s.normal);
+                    if j == skip || sn.dot(hn) < FRONT_COS_MIN {
+                        continue;
+                    }
+                    let t = intersect_disk(s, o, d);
+                    if !(t >= hit.t && t <= hit.t + BLEND_DEPTH * s.radius) {
+                        continue;
+                    }
+                    let q = o + t * d;
+                    if cell_of(q) != c {
+                        continue;
+                    }
+                    let r = q - Vec3::from(s.center);
+                    sum += splat_weight(r.dot(r) / (s.radius * s.radius)) * sn;
+                }
+            }
+        }
+    }
+    if sum.dot(sum) > 0.0 {
+        sum.normalize()
+    } else {
+        hn
+    }
 }
 
 fn shown(show: u32, bits: u32) -> f32 {
@@ -102,7 +160,11 @@ fn sample(
         let s = &geo.splats[hit.splat as usize];
         let m = &materials[s.material as usize];
         let p = o + hit.t * d;
-        let n = Vec3::from(s.normal);
+        // The camera sees the blended surface; past it, the disks' own normals (see WGSL).
+        let n = match depth {
+            0 => blended_normal(geo, o, d, &hit, skip),
+            _ => Vec3::from(s.normal),
+        };
         let wo = -d;
         let (rho_d, rho_s) = (Vec3::from(s.diffuse), Vec3::from(m.specular));
         let (pd, ps) = (mean3(rho_d), mean3(rho_s));
