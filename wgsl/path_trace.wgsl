@@ -58,20 +58,23 @@ fn brdf(n: vec3<f32>, wo: vec3<f32>, wi: vec3<f32>, rho_d: vec3<f32>, m: Materia
 // How far past a hit, in each disk's radii along the ray, the disks that blend into its normal
 // may lie: the splat frame's depth tolerance (FrameConfig::depth_tolerance).
 const BLEND_DEPTH: f32 = 1.0;
+// The largest neighbour, in hit-disk radii, whose hit the search is sure to find.
+const BLEND_REACH: f32 = 1.5;
 
 // The normal of the surface the splat frame shows where the ray (o, d) meets disk hit.splat:
 // the disks the ray meets from there to BLEND_DEPTH radii past it, of the hit's surface
 // (same_surface: within 60 degrees of its normal), weighted by the splat kernel at their hits,
-// as the attribute pass blends them in a pixel (design section 10). The search covers the
-// cells within (1 + BLEND_DEPTH) hit radii of the hit point, and a disk counts only in the cell
+// as the attribute pass blends them in a pixel (design section 10). Their hits lie on the ray
+// within BLEND_DEPTH of their radii past the hit: the search covers the cells of that segment
+// for disks up to BLEND_REACH times the hit disk's radius, and a disk counts only in the cell
 // that holds its hit, so none counts twice. The disk's own normal where the search finds none.
 fn blended_normal(o: vec3<f32>, d: vec3<f32>, hit: Hit, skip: u32) -> vec3<f32> {
     let h = splats_at(hit.splat);
     let p = o + hit.t * d;
-    let reach = vec3<f32>(h.radius * (1.0 + BLEND_DEPTH));
+    let end = p + (BLEND_REACH * BLEND_DEPTH * h.radius) * d;
     let top = vec3<i32>(grid.dims) - 1;
-    let a = clamp(vec3<i32>(floor((p - reach - grid.origin) * grid.inv_cell_size)), vec3<i32>(0), top);
-    let b = clamp(vec3<i32>(floor((p + reach - grid.origin) * grid.inv_cell_size)), vec3<i32>(0), top);
+    let a = clamp(vec3<i32>(floor((min(p, end) - grid.origin) * grid.inv_cell_size)), vec3<i32>(0), top);
+    let b = clamp(vec3<i32>(floor((max(p, end) - grid.origin) * grid.inv_cell_size)), vec3<i32>(0), top);
     var budget = SHADOW_RAY_BUDGET;
     var sum = vec3<f32>(0.0);
     for (var z = a.z; z <= b.z; z++) {

@@ -49,6 +49,8 @@ fn brdf(n: Vec3, wo: Vec3, wi: Vec3, rho_d: Vec3, m: &Material, wd: f32, ws: f32
 /// How far past a hit, in each disk's radii along the ray, the disks that blend into its normal
 /// may lie: the splat frame's depth tolerance.
 pub const BLEND_DEPTH: f32 = 1.0;
+/// The largest neighbour, in hit-disk radii, whose hit the search is sure to find.
+pub const BLEND_REACH: f32 = 1.5;
 
 /// `blended_normal` in WGSL: the normal of the surface the splat frame shows where the ray
 /// `(o, d)` meets disk `hit.splat` (the disks of its surface the ray meets within
@@ -60,11 +62,11 @@ fn blended_normal(geo: &Geometry, o: Vec3, d: Vec3, hit: &Hit, skip: u32) -> Vec
     let hn = Vec3::from(h.normal);
     let p = o + hit.t * d;
     let origin = Vec3::from(g.origin);
-    let reach = Vec3::splat(h.radius * (1.0 + BLEND_DEPTH));
+    let end = p + (BLEND_REACH * BLEND_DEPTH * h.radius) * d;
     let top = IVec3::new(g.dims[0] as i32, g.dims[1] as i32, g.dims[2] as i32) - 1;
     let cell_of = |x: Vec3| ((x - origin) * g.inv_cell_size).floor().as_ivec3();
-    let a = cell_of(p - reach).clamp(IVec3::ZERO, top);
-    let b = cell_of(p + reach).clamp(IVec3::ZERO, top);
+    let a = cell_of(p.min(end)).clamp(IVec3::ZERO, top);
+    let b = cell_of(p.max(end)).clamp(IVec3::ZERO, top);
     let mut budget = SHADOW_RAY_BUDGET;
     let mut sum = Vec3::ZERO;
     for z in a.z..=b.z {
