@@ -591,6 +591,7 @@ fn fit_to_rays<E: Executor>(
             seed: g.setup.seed,
             shadow_bias: g.setup.shadow_bias,
             first,
+            light_count: g.setup.direct.light_count,
             ..Default::default()
         };
         let baked = (&photon_light, &direct.direct);
@@ -600,7 +601,7 @@ fn fit_to_rays<E: Executor>(
             fit_input.fit_list,
             baked,
             &samples,
-            input.materials,
+            (input.materials, g.lights),
         )?;
         ex.read::<u32>(counters, 1)?;
         rays_ms += ms_since(t);
@@ -917,7 +918,8 @@ pub fn bake_direct<E: Executor>(
 /// Final gathering (`final_gather.wgsl`): `samples²` rays from each fitted splat of the fit
 /// list `list`'s entries `first..first + splat_count` (`params`) over its hemisphere, with the
 /// radiance each brings back from the surfaces' baked light (`light`: their photon irradiance;
-/// `direct`: the direct bake) and `materials`, into `samples`: `[radiance, direction bits]`, `samples²` an
+/// `direct`: the direct bake), their `materials` and the scene's `lights` (a ray that meets an
+/// area light first brings none), into `samples`: `[radiance, direction bits]`, `samples²` an
 /// entry from the batch's first.
 pub fn final_gather<E: Executor>(
     ex: &mut E,
@@ -925,7 +927,7 @@ pub fn final_gather<E: Executor>(
     list: &E::Buffer,
     (light, direct): (&E::Buffer, &E::Buffer),
     samples: &E::Buffer,
-    materials: &E::Buffer,
+    (materials, lights): (&E::Buffer, &E::Buffer),
 ) -> Result<()> {
     let per_splat = (params.samples * params.samples) as u64;
     let rays = params.splat_count as u64 * per_splat;
@@ -935,7 +937,7 @@ pub fn final_gather<E: Executor>(
         ))
     })?;
     let uniform = ex.uniform("gather params", params)?;
-    let bindings = [&uniform, list, light, direct, samples, materials];
+    let bindings = [&uniform, list, light, direct, samples, materials, lights];
     ex.dispatch_traced("final_gather", &bindings, groups("final_gather", count)?)
 }
 

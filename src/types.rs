@@ -428,7 +428,8 @@ pub struct GatherParams {
     pub shadow_bias: f32,
     /// The batch's first fit-list entry: sample j of entry `first + k` is at k · samples² + j.
     pub first: u32,
-    pub _pad0: u32,
+    /// Lights bound: a ray that meets an area light before a surface brings none back.
+    pub light_count: u32,
     pub _pad1: u32,
     pub _pad2: u32,
 }

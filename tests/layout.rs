@@ -173,7 +173,7 @@ fn rust_layouts() -> Vec<RustLayout> {
             seed,
             shadow_bias,
             first,
-            _pad0,
+            light_count,
             _pad1,
             _pad2
         }),

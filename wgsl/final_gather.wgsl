@@ -4,7 +4,8 @@
 // entries with FIT_BIT), samples^2 rays over its cosine-weighted hemisphere (one stratum each,
 // jittered); each brings back the radiance of the surface it meets, as the bake already knows
 // it: hit_albedo / pi times its irradiance, direct (the direct bake) and indirect (the
-// photons). Rays that miss, or meet a disk's back, bring none. Sample j of fit-list entry
+// photons). Rays that miss, meet a disk's back, or meet an area light first (its light is the
+// direct bake's part) bring none, as the shade pass's glossy rays. Sample j of fit-list entry
 // params.first + k is at k * samples^2 + j: (radiance, direction as an octahedral u32's bits),
 // where em_fit's gathered dispatch finds it; the host takes the list in batches that bound the
 // samples' memory. One invocation per ray. CPU mirror: src/cpu/final_gather.rs.
@@ -29,6 +30,7 @@
 // bindings a device allows beside the paged geometry).
 @group(0) @binding(4) var<storage, read_write> samples: array<vec4<f32>>;
 @group(0) @binding(5) var<storage, read> materials: array<Material>;
+@group(0) @binding(6) var<storage, read> lights: array<Light>;
 
 const WG: u32 = 64u;
 
@@ -54,7 +56,11 @@ fn main(@builtin(workgroup_id) wg: vec3<u32>, @builtin(num_workgroups) num_wg: v
     var budget = SHADOW_RAY_BUDGET;
     let hit = trace_ray(o, d, i, FAR, &budget);
     var radiance = vec3<f32>(0.0);
-    if hit.splat != NO_SPLAT {
+    var lit = false;
+    for (var li = 0u; li < params.light_count; li++) {
+        lit = lit || light_first(lights[li], o, d, hit.t);
+    }
+    if hit.splat != NO_SPLAT && !lit {
         let h = splats_at(hit.splat);
         if dot(h.normal, d) < 0.0 {
             let e = direct_at(hit.splat).xyz + light_at(hit.splat).irradiance;

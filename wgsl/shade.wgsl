@@ -176,8 +176,7 @@ fn glossy_indirect(sf: Surface, shift: vec2<u32>) -> vec3<f32> {
         }
         var lit = false;
         for (var li = 0u; li < params.light_count; li++) {
-            let t = area_light_hit(lights[li], o, s.wo);
-            lit = lit || (t > 0.0 && t < hit.t);
+            lit = lit || light_first(lights[li], o, s.wo, hit.t);
         }
         let h = splats_at(hit.splat);
         if lit || dot(h.normal, s.wo) >= 0.0 {

@@ -452,9 +452,11 @@ fn run_traced(stage: &str, b: &[&CpuBuffer], geo: &Geometry, groups: u32) -> Res
             let direct = get(stage, b, 3)?;
             let mut samples = get_mut(stage, b, 4)?;
             let materials = get(stage, b, 5)?;
+            let lights = get(stage, b, 6)?;
             let (list, light, direct) = (view(&list), view(&light), view(&direct));
             let (samples, materials) = (view_mut(&mut samples), view(&materials));
-            final_gather::final_gather(&p, list, light, direct, samples, materials, geo);
+            let lights = view(&lights);
+            final_gather::final_gather(&p, list, light, direct, samples, materials, lights, geo);
         }
         "photon_trace" => {
             let p = param(stage, b, 0)?;

@@ -6,18 +6,19 @@ use glam::{Vec3, Vec4};
 use rayon::prelude::*;
 
 use super::em_select::FIT_BIT;
-use crate::shared::lights::area_point;
+use crate::shared::lights::{area_point, light_first};
 use crate::shared::octahedral::oct_encode;
 use crate::shared::rng::pcg_hash;
 use crate::shared::sampling::{frame_of, sample_cosine, to_world};
 use crate::shared::splat::{SHADOW_RAY_BUDGET, hit_albedo};
 use crate::shared::trace::{FAR, Geometry, trace_ray};
-use crate::types::{GatherParams, Material, NO_SPLAT, SplatLight};
+use crate::types::{GatherParams, Light, Material, NO_SPLAT, SplatLight};
 
 pub const WG: u32 = 64;
 
 /// Fills `samples` (`samples²` for each fitted splat of the fit list's entries `first..first
 /// + splat_count`, entry `first + k` at `k · samples²`, each `[radiance, direction bits]`).
+#[allow(clippy::too_many_arguments)]
 pub fn final_gather(
     params: &GatherParams,
     list: &[[u32; 2]],
@@ -25,8 +26,10 @@ pub fn final_gather(
     direct: &[[f32; 4]],
     samples: &mut [[f32; 4]],
     materials: &[Material],
+    lights: &[Light],
     geo: &Geometry,
 ) {
+    let lights = &lights[..params.light_count as usize];
     let rays = (params.samples * params.samples) as usize;
     let first = params.first as usize;
     let entries = &list[first..first + params.splat_count as usize];
@@ -37,12 +40,13 @@ pub fn final_gather(
         .for_each(|(out, [entry, _])| {
             let i = entry & !FIT_BIT;
             for (j, sample) in (0u32..).zip(out) {
-                *sample = ray(params, i, j, light, direct, materials, geo);
+                *sample = ray(params, i, j, light, direct, materials, lights, geo);
             }
         });
 }
 
 /// Ray `j` of splat `i`: the radiance it brings back, and its direction's bits.
+#[allow(clippy::too_many_arguments)]
 fn ray(
     params: &GatherParams,
     i: u32,
@@ -50,6 +54,7 @@ fn ray(
     light: &[SplatLight],
     direct: &[[f32; 4]],
     materials: &[Material],
+    lights: &[Light],
     geo: &Geometry,
 ) -> [f32; 4] {
     let s = &geo.splats[i as usize];
@@ -61,7 +66,8 @@ fn ray(
     let mut budget = SHADOW_RAY_BUDGET;
     let hit = trace_ray(geo, o, d, i, FAR, &mut budget);
     let mut radiance = Vec3::ZERO;
-    if hit.splat != NO_SPLAT {
+    let lit = lights.iter().any(|l| light_first(l, o, d, hit.t));
+    if hit.splat != NO_SPLAT && !lit {
         let h = &geo.splats[hit.splat as usize];
         if Vec3::from(h.normal).dot(d) < 0.0 {
             let e = Vec4::from(direct[hit.splat as usize]).truncate()

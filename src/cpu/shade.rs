@@ -7,7 +7,9 @@
 use glam::{Vec2, Vec3, Vec4};
 use rayon::prelude::*;
 
-use crate::shared::lights::{LightSample, MIN_ALPHA, area_light_hit, area_point, sample_light};
+use crate::shared::lights::{
+    LightSample, MIN_ALPHA, area_light_hit, area_point, light_first, sample_light,
+};
 use crate::shared::rng::{pcg_hash, r2_point, r2_shift};
 use crate::shared::sampling::{PI, frame_of, power_heuristic};
 use crate::shared::splat::{
@@ -195,10 +197,10 @@ fn glossy_indirect(
         if hit.splat == NO_SPLAT {
             continue;
         }
-        let lit = lights.iter().take(params.light_count as usize).any(|l| {
-            let t = area_light_hit(l, o, s.wo);
-            t > 0.0 && t < hit.t
-        });
+        let lit = lights
+            .iter()
+            .take(params.light_count as usize)
+            .any(|l| light_first(l, o, s.wo, hit.t));
         let h = &geo.splats[hit.splat as usize];
         if lit || Vec3::from(h.normal).dot(s.wo) >= 0.0 {
             continue;

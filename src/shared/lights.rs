@@ -76,6 +76,12 @@ pub fn area_point(j: u32, n: u32, r: u32, jitter: bool) -> Vec2 {
     (Vec2::new((j % n) as f32, (j / n) as f32) + o) * inv_n
 }
 
+/// Whether ray `(o, d)` meets area light `l` before distance `t` (a surface's hit).
+pub fn light_first(l: &Light, o: Vec3, d: Vec3, t: f32) -> bool {
+    let tl = area_light_hit(l, o, d);
+    tl > 0.0 && tl < t
+}
+
 /// Where ray `(o, d)` meets area light `l`'s emitting face: `t > 0`, or -1 when it misses it.
 pub fn area_light_hit(l: &Light, o: Vec3, d: Vec3) -> f32 {
     let axis = Vec3::from(l.direction);

@@ -232,7 +232,7 @@ struct GatherParams {
     seed: u32,
     shadow_bias: f32,
     first: u32,
-    _pad0: u32,
+    light_count: u32,
     _pad1: u32,
     _pad2: u32,
 }
