@@ -506,6 +506,16 @@ pub fn fit_lobes<E: Executor>(
         light: &light,
     };
     let mut dispatches = em_fit(ex, cfg, shape, &params, max_candidates, &fit_input)?;
+    if gathering.is_some() {
+        // The photons' estimate where the gather disk leaves the surface (`em_coverage`),
+        // before the rays read it.
+        let coverage = ex.uniform(
+            "em coverage params",
+            &cfg.params(splat_count, splat_count, shape),
+        )?;
+        let groups = groups("em_coverage", splat_count)?;
+        ex.dispatch_traced("em_coverage", &[&coverage, &light], groups)?;
+    }
     ex.read::<u32>(&counters, 1)?;
     let mut fit_ms = ms_since(t) - select_ms - gather_ms;
     let mut final_gather_ms = 0.0;

@@ -56,6 +56,7 @@ pub const STAGES: &[WgslFile] = &[
     stage!("em_select"),
     stage!("em_gather"),
     stage!("em_fit"),
+    stage!("em_coverage"),
     stage!("scan_reduce"),
     stage!("scan_apply"),
     stage!("tonemap_reduce"),

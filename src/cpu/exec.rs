@@ -6,7 +6,9 @@ use std::rc::Rc;
 
 use bytemuck::Pod;
 
-use super::{bin_count, bin_place, bin_rank, bin_scatter, em_fit, em_gather, em_select};
+use super::{
+    bin_count, bin_place, bin_rank, bin_scatter, em_coverage, em_fit, em_gather, em_select,
+};
 use super::{
     direct_bake, final_gather, path_trace, photon_resolve, photon_trace, photon_view, scan_apply,
     scan_reduce, tonemap_apply, tonemap_reduce,
@@ -444,6 +446,11 @@ fn run_traced(stage: &str, b: &[&CpuBuffer], geo: &Geometry, groups: u32) -> Res
             let mut visibility = get_mut(stage, b, 3)?;
             let (direct, visibility) = (view_mut(&mut direct), view_mut(&mut visibility));
             direct_bake::direct_bake(&p, view(&lights), direct, visibility, geo);
+        }
+        "em_coverage" => {
+            let em = param(stage, b, 0)?;
+            let mut light = get_mut(stage, b, 1)?;
+            em_coverage::em_coverage(&em, view_mut(&mut light), geo, groups);
         }
         "final_gather" => {
             let p = param(stage, b, 0)?;

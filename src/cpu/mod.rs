@@ -8,6 +8,7 @@ pub mod bin_place;
 pub mod bin_rank;
 pub mod bin_scatter;
 pub mod direct_bake;
+pub mod em_coverage;
 pub mod em_fit;
 pub mod em_gather;
 pub mod em_select;

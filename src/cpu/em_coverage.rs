@@ -1,0 +1,93 @@
+//! Mirror of `wgsl/em_coverage.wgsl`: per splat with photons, the share of its gather disk its
+//! surface covers, and its photon irradiance divided by it.
+// `!(x < y)` is meant: NaN must fail these tests, as it does in the WGSL twin.
+#![allow(clippy::neg_cmp_op_on_partial_ord)]
+
+use glam::{UVec3, Vec2, Vec3};
+use rayon::prelude::*;
+
+use crate::grid::cell_index;
+use crate::shared::bins::SURFACE_COS_MIN;
+use crate::shared::sampling::frame_of;
+use crate::shared::trace::Geometry;
+use crate::types::{EmParams, SplatLight};
+
+pub const WG: u32 = 64;
+/// Points a side of the grid over the gather disk (69 of its 81 lie within R).
+pub const COVERAGE_GRID: u32 = 9;
+/// The least share divided by: a splat's disk on a thin feature keeps a bounded estimate.
+pub const COVERAGE_MIN: f32 = 0.2;
+/// Disk tests a splat may spend.
+pub const COVERAGE_BUDGET: u32 = 16384;
+
+/// Whether a disk of the surface with normal `n` reaches over `q`, within `slab` of its plane.
+fn covered(geo: &Geometry, q: Vec3, n: Vec3, slab: f32, budget: &mut u32) -> bool {
+    let g = &geo.grid.params;
+    let c = ((q - Vec3::from(g.origin)) * g.inv_cell_size).floor();
+    let dims = UVec3::from(g.dims).as_vec3();
+    if c.cmplt(Vec3::ZERO).any() || c.cmpge(dims).any() {
+        return false;
+    }
+    let ci = cell_index(c.as_uvec3(), g);
+    // An empty cell (the distance field's nonzero) lists no disk.
+    if geo.grid.cell_dist[ci as usize] != 0 {
+        return false;
+    }
+    for &j in geo.grid.cell(ci) {
+        if *budget == 0 {
+            break;
+        }
+        *budget -= 1;
+        let s = &geo.splats[j as usize];
+        let sn = Vec3::from(s.normal);
+        if sn.dot(n) < SURFACE_COS_MIN {
+            continue;
+        }
+        let off = (q - Vec3::from(s.center)).dot(sn);
+        let p = q - off * sn - Vec3::from(s.center);
+        if off.abs() <= slab && p.dot(p) <= s.radius * s.radius {
+            return true;
+        }
+    }
+    false
+}
+
+/// The share of splat `i`'s gather disk its surface covers, or `None` where the search was cut
+/// short.
+fn share(em: &EmParams, geo: &Geometry, i: usize) -> Option<f32> {
+    let s = &geo.splats[i];
+    let (centre, normal) = (Vec3::from(s.center), Vec3::from(s.normal));
+    let f = frame_of(normal);
+    let slab = em.slab * s.radius;
+    let mut budget = COVERAGE_BUDGET;
+    let (mut inside, mut hits) = (0u32, 0u32);
+    for a in 0..COVERAGE_GRID {
+        for b in 0..COVERAGE_GRID {
+            let u = (Vec2::new(a as f32, b as f32) + 0.5) * (2.0 / COVERAGE_GRID as f32) - 1.0;
+            if u.dot(u) > 1.0 {
+                continue;
+            }
+            inside += 1;
+            let q = centre + em.radius * (u.x * f.t + u.y * f.b);
+            if covered(geo, q, normal, slab, &mut budget) {
+                hits += 1;
+            }
+        }
+    }
+    (budget > 0).then(|| (hits as f32 / inside as f32).max(COVERAGE_MIN))
+}
+
+pub fn em_coverage(em: &EmParams, light: &mut [SplatLight], geo: &Geometry, groups: u32) {
+    let count = (groups * WG).min(em.splat_count) as usize;
+    light[..count]
+        .par_iter_mut()
+        .enumerate()
+        .for_each(|(i, l)| {
+            if l.photons == 0 {
+                return;
+            }
+            if let Some(share) = share(em, geo, i) {
+                l.irradiance = (Vec3::from(l.irradiance) / share).into();
+            }
+        });
+}

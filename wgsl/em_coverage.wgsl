@@ -1,0 +1,93 @@
+// Lobe fit with final gathering, after the photon pass (docs/design.md section 6): where a
+// splat's gather disk leaves its surface (an edge, a corner), its photons land on part of the
+// disk but the estimate divides their power by all of it, pi R^2: the faces' light darkens
+// towards their edges. Per splat with photons, the share of the gather disk that its surface
+// covers, at the points of a COVERAGE_GRID^2 grid over the disk in the splat's plane that lie
+// within R: a point is covered where a disk of the same surface (its normal within
+// SURFACE_COS_MIN of the splat's, as the photons' test) lies within the photons' slab of it
+// and reaches over it. The splat's irradiance is divided by that share (at least
+// COVERAGE_MIN). The points are searched in the splat grid's cell that holds them. One
+// invocation per splat. CPU mirror: src/cpu/em_coverage.rs.
+
+// #import types
+// #import dispatch
+// #import bins
+// #import sampling
+// #import trace
+
+@group(0) @binding(0) var<uniform> em: EmParams;
+// #paged
+@group(0) @binding(1) var<storage, read_write> light: array<SplatLight>;
+
+const WG: u32 = 64u;
+// Points a side of the grid over the gather disk (69 of its 81 lie within R).
+const COVERAGE_GRID: u32 = 9u;
+// The least share divided by: a splat's disk on a thin feature keeps a bounded estimate.
+const COVERAGE_MIN: f32 = 0.2;
+// Disk tests a splat may spend (lavapipe ends an invocation's loops near 65 k iterations).
+const COVERAGE_BUDGET: u32 = 16384u;
+
+// Whether a disk of the surface with normal n reaches over point q, within `slab` of its plane.
+fn covered(q: vec3<f32>, n: vec3<f32>, slab: f32, budget: ptr<function, u32>) -> bool {
+    let c = floor((q - grid.origin) * grid.inv_cell_size);
+    if any(c < vec3<f32>(0.0)) || any(c >= vec3<f32>(grid.dims)) {
+        return false;
+    }
+    let ci = cell_index(vec3<u32>(c), grid);
+    // An empty cell (the distance field's nonzero) lists no disk.
+    if cell_dist[ci] != 0u {
+        return false;
+    }
+    for (var e = cell_start[ci]; e < cell_start[ci + 1u] && *budget > 0u; e++) {
+        *budget -= 1u;
+        let s = splats_at(cell_splats_at(e));
+        if dot(s.normal, n) < SURFACE_COS_MIN {
+            continue;
+        }
+        let off = dot(q - s.center, s.normal);
+        let p = q - off * s.normal - s.center;
+        if abs(off) <= slab && dot(p, p) <= s.radius * s.radius {
+            return true;
+        }
+    }
+    return false;
+}
+
+@compute @workgroup_size(64)
+fn main(@builtin(workgroup_id) wg: vec3<u32>, @builtin(num_workgroups) num_wg: vec3<u32>,
+        @builtin(local_invocation_index) lid: u32) {
+    let i = linear_workgroup(wg, num_wg) * WG + lid;
+    if i >= em.splat_count {
+        return;
+    }
+    var l = light_at(i);
+    if l.photons == 0u {
+        return;
+    }
+    let s = splats_at(i);
+    let f = frame_of(s.normal);
+    let slab = em.slab * s.radius;
+    var budget = COVERAGE_BUDGET;
+    var inside = 0u;
+    var hits = 0u;
+    for (var a = 0u; a < COVERAGE_GRID; a++) {
+        for (var b = 0u; b < COVERAGE_GRID; b++) {
+            let u = (vec2<f32>(f32(a), f32(b)) + 0.5) * (2.0 / f32(COVERAGE_GRID)) - 1.0;
+            if dot(u, u) > 1.0 {
+                continue;
+            }
+            inside += 1u;
+            let q = s.center + em.radius * (u.x * f.t + u.y * f.b);
+            if covered(q, s.normal, slab, &budget) {
+                hits += 1u;
+            }
+        }
+    }
+    // A search cut short corrects nothing.
+    if budget == 0u {
+        return;
+    }
+    let share = max(f32(hits) / f32(inside), COVERAGE_MIN);
+    l.irradiance = l.irradiance / share;
+    light_put(i, l);
+}
