@@ -431,6 +431,7 @@ pub struct Fit<B> {
 /// list (irradiance alone) → `em_fit`, one workgroup per splat of the fit list, in one
 /// dispatch or in several that hand the mixture over through the lobe buffer. With final
 /// gathering (`cfg.gather` > 0), that `em_fit` gives the fitted splats only their irradiance,
+/// `em_coverage` divides every splat's by the share of its gather disk its surface covers,
 /// then `direct_bake` → `final_gather` from each fitted splat → `em_fit` over those samples.
 pub fn fit_lobes<E: Executor>(
     ex: &mut E,
