@@ -4,7 +4,7 @@
 
 use crate::error::{Error, Result};
 use crate::types::{GridParams, Splat};
-use glam::{UVec3, Vec3};
+use glam::{IVec3, UVec3, Vec3};
 
 /// How the grid resolution is chosen.
 #[derive(Clone, Copy, Debug, PartialEq, serde::Deserialize, serde::Serialize)]
@@ -64,6 +64,13 @@ pub fn disk_cell_range(s: &Splat, g: &GridParams) -> (UVec3, UVec3) {
     let lo = lo_f.clamp(Vec3::ZERO, top).as_uvec3();
     let hi = hi_f.clamp(Vec3::ZERO, top).as_uvec3();
     (lo, hi)
+}
+
+/// The cell that holds point `p`, unclamped: outside the grid where `p` is.
+pub fn point_cell(p: Vec3, g: &GridParams) -> IVec3 {
+    ((p - Vec3::from(g.origin)) * g.inv_cell_size)
+        .floor()
+        .as_ivec3()
 }
 
 pub fn cell_index(c: UVec3, g: &GridParams) -> u32 {

@@ -29,8 +29,8 @@ const COVERAGE_BUDGET: u32 = 16384u;
 
 // Whether a disk of the surface with normal n reaches over point q, within `slab` of its plane.
 fn covered(q: vec3<f32>, n: vec3<f32>, slab: f32, budget: ptr<function, u32>) -> bool {
-    let c = floor((q - grid.origin) * grid.inv_cell_size);
-    if any(c < vec3<f32>(0.0)) || any(c >= vec3<f32>(grid.dims)) {
+    let c = point_cell(q, grid);
+    if any(c < vec3<i32>(0)) || any(c >= vec3<i32>(grid.dims)) {
         return false;
     }
     let ci = cell_index(vec3<u32>(c), grid);

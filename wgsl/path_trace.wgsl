@@ -73,8 +73,8 @@ fn blended_normal(o: vec3<f32>, d: vec3<f32>, hit: Hit, skip: u32) -> vec3<f32> 
     let p = o + hit.t * d;
     let end = p + (BLEND_REACH * BLEND_DEPTH * h.radius) * d;
     let top = vec3<i32>(grid.dims) - 1;
-    let a = clamp(vec3<i32>(floor((min(p, end) - grid.origin) * grid.inv_cell_size)), vec3<i32>(0), top);
-    let b = clamp(vec3<i32>(floor((max(p, end) - grid.origin) * grid.inv_cell_size)), vec3<i32>(0), top);
+    let a = clamp(point_cell(min(p, end), grid), vec3<i32>(0), top);
+    let b = clamp(point_cell(max(p, end), grid), vec3<i32>(0), top);
     var budget = SHADOW_RAY_BUDGET;
     var sum = vec3<f32>(0.0);
     for (var z = a.z; z <= b.z; z++) {
@@ -94,7 +94,7 @@ fn blended_normal(o: vec3<f32>, d: vec3<f32>, hit: Hit, skip: u32) -> vec3<f32> 
                         continue;
                     }
                     let q = o + t * d;
-                    if any(vec3<i32>(floor((q - grid.origin) * grid.inv_cell_size)) != c) {
+                    if any(point_cell(q, grid) != c) {
                         continue;
                     }
                     let r = q - s.center;

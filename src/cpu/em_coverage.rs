@@ -3,10 +3,10 @@
 // `!(x < y)` is meant: NaN must fail these tests, as it does in the WGSL twin.
 #![allow(clippy::neg_cmp_op_on_partial_ord)]
 
-use glam::{UVec3, Vec2, Vec3};
+use glam::{IVec3, UVec3, Vec2, Vec3};
 use rayon::prelude::*;
 
-use crate::grid::cell_index;
+use crate::grid::{cell_index, point_cell};
 use crate::shared::bins::SURFACE_COS_MIN;
 use crate::shared::sampling::frame_of;
 use crate::shared::trace::Geometry;
@@ -23,9 +23,8 @@ pub const COVERAGE_BUDGET: u32 = 16384;
 /// Whether a disk of the surface with normal `n` reaches over `q`, within `slab` of its plane.
 fn covered(geo: &Geometry, q: Vec3, n: Vec3, slab: f32, budget: &mut u32) -> bool {
     let g = &geo.grid.params;
-    let c = ((q - Vec3::from(g.origin)) * g.inv_cell_size).floor();
-    let dims = UVec3::from(g.dims).as_vec3();
-    if c.cmplt(Vec3::ZERO).any() || c.cmpge(dims).any() {
+    let c = point_cell(q, g);
+    if c.cmplt(IVec3::ZERO).any() || c.cmpge(UVec3::from(g.dims).as_ivec3()).any() {
         return false;
     }
     let ci = cell_index(c.as_uvec3(), g);

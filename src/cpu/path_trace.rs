@@ -6,7 +6,7 @@
 use glam::{IVec3, Vec2, Vec3, Vec4};
 use rayon::prelude::*;
 
-use crate::grid::cell_index;
+use crate::grid::{cell_index, point_cell};
 use crate::shared::lights::{MIN_ALPHA, area_light_hit, sample_light};
 use crate::shared::rng::{
     RNG_BOUNCE_U, RNG_BOUNCE_V, RNG_EMIT_POS_U, RNG_EMIT_POS_V, RNG_ROULETTE, path_key, pcg_hash,
@@ -61,12 +61,10 @@ fn blended_normal(geo: &Geometry, o: Vec3, d: Vec3, hit: &Hit, skip: u32) -> Vec
     let h = &geo.splats[hit.splat as usize];
     let hn = Vec3::from(h.normal);
     let p = o + hit.t * d;
-    let origin = Vec3::from(g.origin);
     let end = p + (BLEND_REACH * BLEND_DEPTH * h.radius) * d;
     let top = IVec3::new(g.dims[0] as i32, g.dims[1] as i32, g.dims[2] as i32) - 1;
-    let cell_of = |x: Vec3| ((x - origin) * g.inv_cell_size).floor().as_ivec3();
-    let a = cell_of(p.min(end)).clamp(IVec3::ZERO, top);
-    let b = cell_of(p.max(end)).clamp(IVec3::ZERO, top);
+    let a = point_cell(p.min(end), g).clamp(IVec3::ZERO, top);
+    let b = point_cell(p.max(end), g).clamp(IVec3::ZERO, top);
     let mut budget = SHADOW_RAY_BUDGET;
     let mut sum = Vec3::ZERO;
     for z in a.z..=b.z {
@@ -88,7 +86,7 @@ fn blended_normal(geo: &Geometry, o: Vec3, d: Vec3, hit: &Hit, skip: u32) -> Vec
                         continue;
                     }
                     let q = o + t * d;
-                    if cell_of(q) != c {
+                    if point_cell(q, g) != c {
                         continue;
                     }
                     let r = q - Vec3::from(s.center);

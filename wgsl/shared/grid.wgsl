@@ -20,6 +20,12 @@ fn disk_cell_range(s: Splat, g: GridParams) -> CellRange {
     return r;
 }
 
+// The cell that holds point p, unclamped: outside the grid where p is. Mirrored by
+// `grid::point_cell`.
+fn point_cell(p: vec3<f32>, g: GridParams) -> vec3<i32> {
+    return vec3<i32>(floor((p - g.origin) * g.inv_cell_size));
+}
+
 fn cell_index(c: vec3<u32>, g: GridParams) -> u32 {
     return c.x + g.dims.x * (c.y + g.dims.y * c.z);
 }
