@@ -34,10 +34,16 @@ impl Fnv {
     }
 }
 
+/// Raised whenever the bake's result changes for the same scene and settings (an estimator
+/// mended, a stage added), so that caches baked before are stale rather than silently loaded:
+/// 1: photons end at the lights they meet.
+const BAKE_REVISION: u32 = 1;
+
 /// The hash of what the bake depends on.
 pub fn bake_key(scene: &Scene) -> u64 {
     let mut h = Fnv(0xcbf2_9ce4_8422_2325);
     h.write(env!("CARGO_PKG_VERSION").as_bytes());
+    h.write(&BAKE_REVISION.to_le_bytes());
     h.write(bytemuck::cast_slice(&scene.splats));
     h.write(bytemuck::cast_slice(&scene.materials));
     h.write(bytemuck::cast_slice(&scene.lights));

@@ -188,9 +188,11 @@ fn final_gather_matches_the_mirror_and_the_photons() {
 /// Lobes fitted to final gathering's samples (`gather`): device against mirror from the same
 /// photons, and the energy the fit hands its lobes. The default scene at 100 k photons, 8 × 8
 /// rays a glossy splat. Every fitted splat's lobes carry its irradiance (their sum within
-/// 1e-4 of it), which is the samples' estimate, π / N Σ L, above the photons' by as much as
-/// the test above finds (within 5 %); device and mirror agree within 1e-3 on 99 % of the
-/// splats, and within 1e-3 on the mean.
+/// 1e-4 of it), which is the samples' estimate, π / N Σ L. Over the fitted splats its mean
+/// is the photons' (with em_coverage's share at the faces' edges, as the gathering fit's photon
+/// pass makes it) within 1 % (measured −0.04 %; against the photon fit alone, which leaves the
+/// share out, it read +5 %). Device and mirror agree within 1e-3 on 99 % of the splats, and
+/// within 1e-3 on the mean.
 #[test]
 fn lobes_fitted_to_gathered_samples_match_the_mirror() {
     let gpu = common::gpu();
@@ -216,7 +218,23 @@ fn lobes_fitted_to_gathered_samples_match_the_mirror() {
     let on_cpu =
         cpu::fit_lobes_gathering(&cfg, &bins, splats, materials, shape, gathering).unwrap();
     let by_photons = EmConfig { gather: 0, ..cfg };
-    let photons = cpu::fit_lobes(&by_photons, &bins, splats, materials, shape).unwrap();
+    let mut photons = cpu::fit_lobes(&by_photons, &bins, splats, materials, shape).unwrap();
+    // The photons' estimate as the gathering fit's photon pass makes it: with em_coverage's
+    // share at the faces' edges, which the photon fit alone leaves out.
+    photons.light = {
+        let geometry = Geometry {
+            grid: &grid,
+            splats: &scene.splats,
+        };
+        let mut ex = CpuExecutor::tracing(geometry);
+        let n = splats.len() as u32;
+        let light = ex.upload("light", &photons.light).unwrap();
+        let params = ex.uniform("em", &cfg.params(n, n, shape)).unwrap();
+        let groups = lobelight::sequence::groups("em_coverage", n).unwrap();
+        ex.dispatch_traced("em_coverage", &[&params, &light], groups)
+            .unwrap();
+        ex.read(&light, n as usize).unwrap()
+    };
     let grey = |e: [f32; 3]| (e[0] + e[1] + e[2]) / 3.0;
     let fitted: Vec<usize> = (0..splats.len())
         .filter(|&i| on_cpu.light[i].lobes > 0)
@@ -255,5 +273,5 @@ fn lobes_fitted_to_gathered_samples_match_the_mirror() {
     );
     assert!(close as f64 >= 0.99 * a.len() as f64);
     assert!((mean(&a) - mean(&b)).abs() <= 1e-3 * mean(&b));
-    assert!((mean(&b) / mean(&p) - 1.0).abs() <= 0.05);
+    assert!((mean(&b) / mean(&p) - 1.0).abs() <= 0.01);
 }

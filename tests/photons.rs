@@ -374,6 +374,36 @@ fn every_light_delivers_its_power() {
     }
 }
 
+/// An area light is an opaque emitter, as the path tracer sees it: a photon that meets its face
+/// ends there (absorbed) instead of passing on to the ceiling behind it. In a closed box with
+/// the light a millimetre under the ceiling, no photon lands on the ceiling behind the light's
+/// middle (more than 0.1 in from its edges), while the rest of the ceiling receives many, on the
+/// device and the mirror.
+#[test]
+fn photons_end_at_the_light_they_meet() {
+    let gpu = common::gpu();
+    let light = "[[light]]\ntype = \"area\"\ncenter = [0.0, 0.999, 0.0]\nsize = [0.6, 0.6]\n\
+                 normal = [0.0, -1.0, 0.0]\npower = 10.0";
+    let scene = parse(&closed_box("diffuse = 0.8", light));
+    let cfg = config(&scene, 40_000, StoreRange::All);
+    for (what, map) in [
+        ("GPU", on_gpu(&gpu, &scene, &cfg)),
+        ("CPU", on_cpu(&scene, &cfg)),
+    ] {
+        check_closed(&map, what);
+        let on_ceiling = |p: &&Photon| p.position[1] > 0.99;
+        let behind = |p: &&&Photon| p.position[0].abs() < 0.2 && p.position[2].abs() < 0.2;
+        let ceiling: Vec<&Photon> = map.photons.iter().filter(on_ceiling).collect();
+        let hidden = ceiling.iter().filter(behind).count();
+        assert_eq!(hidden, 0, "{what}: photons behind the light");
+        assert!(
+            ceiling.len() > 1000,
+            "{what}: {} on the ceiling",
+            ceiling.len()
+        );
+    }
+}
+
 /// A directional light emits from a disk covering the scene: a target of area A receives
 /// E·A, up to the binomial error of how many photons hit it. The target is one disk, whose
 /// area is exact (a quad of splats overhangs its edges by about a splat radius).

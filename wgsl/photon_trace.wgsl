@@ -4,6 +4,9 @@
 // when its bounce count is at least params.min_bounce, then Russian roulette picks a diffuse
 // bounce (cosine, power * rho_d / P_d), a specular bounce (Ward sampling, power *
 // rho_s * f cos / pdf / P_s) or absorption, with P_d = mean(rho_d), P_s = mean(rho_s).
+// A photon that meets an area light's face before a surface ends there, absorbed: a light is
+// an opaque emitter that reflects nothing, as the path tracer and final gathering see it
+// (the surface behind it would otherwise reflect light the light hides).
 // Random numbers are keyed by (path, bounce, purpose), so the CPU mirror retraces the same
 // paths; the slot of a stored photon comes from an atomic counter and varies between runs,
 // (path, bounce) does not.
@@ -15,6 +18,7 @@
 // #import sampling
 // #import ward
 // #import trace
+// #import lights
 
 @group(0) @binding(0) var<uniform> params: TraceParams;
 @group(0) @binding(1) var<storage, read> emitters: array<Emitter>;
@@ -81,6 +85,16 @@ fn emit(path: u32, key: u32) -> Emission {
     return e;
 }
 
+// Whether the ray meets an area light's face before distance t.
+fn meets_light(o: vec3<f32>, d: vec3<f32>, t: f32) -> bool {
+    for (var k = 0u; k < params.emitter_count; k++) {
+        if light_first(emitters[k].light, o, d, t) {
+            return true;
+        }
+    }
+    return false;
+}
+
 fn store(p: Photon) {
     let slot = atomicAdd(&counters.stored, 1u);
     if slot < counters.capacity {
@@ -109,6 +123,10 @@ fn main(@builtin(workgroup_id) wg: vec3<u32>, @builtin(num_workgroups) num_wg: v
         let hit = trace_ray(o, d, skip, FAR, &budget);
         if hit.aborted != 0u {
             atomicAdd(&counters.aborted, 1u);
+            return;
+        }
+        if meets_light(o, d, hit.t) {
+            atomicAdd(&counters.absorbed, 1u);
             return;
         }
         if hit.splat == NO_SPLAT {

@@ -7,6 +7,7 @@
 use glam::Vec3;
 use rayon::prelude::*;
 
+use crate::shared::lights::light_first;
 use crate::shared::rng::*;
 use crate::shared::sampling::*;
 use crate::shared::trace::{FAR, Geometry, trace_ray};
@@ -82,6 +83,13 @@ enum End {
     Aborted,
 }
 
+/// Whether the ray meets an area light's face before distance `t`: the photon ends there.
+fn meets_light(params: &TraceParams, emitters: &[Emitter], o: Vec3, d: Vec3, t: f32) -> bool {
+    emitters[..params.emitter_count as usize]
+        .iter()
+        .any(|e| light_first(&e.light, o, d, t))
+}
+
 /// One invocation of `main`: the photons it stores, in order, and how its path ended.
 fn trace_path(
     params: &TraceParams,
@@ -101,6 +109,9 @@ fn trace_path(
         let hit = trace_ray(geo, o, d, skip, FAR, &mut budget);
         if hit.aborted != 0 {
             return End::Aborted;
+        }
+        if meets_light(params, emitters, o, d, hit.t) {
+            return End::Absorbed;
         }
         if hit.splat == NO_SPLAT {
             return End::Escaped;

@@ -69,14 +69,14 @@ fn area_point(j: u32, n: u32, r: u32, jitter: bool) -> vec2<f32> {
     return (vec2<f32>(f32(j % n), f32(j / n)) + o) * inv_n;
 }
 
-// Where ray (o, d) meets area light l's emitting face: t > 0, or -1 when it misses it (or
-// meets its back, which emits nothing).
 // Whether the ray (o, d) meets area light l before distance t (a surface's hit).
 fn light_first(l: Light, o: vec3<f32>, d: vec3<f32>, t: f32) -> bool {
     let tl = area_light_hit(l, o, d);
     return tl > 0.0 && tl < t;
 }
 
+// Where ray (o, d) meets area light l's emitting face: t > 0, or -1 when it misses it (or
+// meets its back, which emits nothing).
 fn area_light_hit(l: Light, o: vec3<f32>, d: vec3<f32>) -> f32 {
     let denom = dot(d, l.direction);
     if l.kind != LIGHT_AREA || !(denom < 0.0) {
