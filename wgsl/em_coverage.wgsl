@@ -6,8 +6,10 @@
 // within R: a point is covered where a disk of the same surface (its normal within
 // SURFACE_COS_MIN of the splat's, as the photons' test) lies within the photons' slab of it
 // and reaches over it. The splat's irradiance is divided by that share (at least
-// COVERAGE_MIN). The points are searched in the splat grid's cell that holds them. One
-// invocation per splat. CPU mirror: src/cpu/em_coverage.rs.
+// COVERAGE_MIN). The points are searched in the splat grid's cell that holds them. Eight of
+// them, near the rim (COVERAGE_PROBES), are tested first: a splat whose probes are all covered
+// lies inside its face and keeps its estimate, so that a dense scan's splats, nearly all inside,
+// cost 8 point tests and not 69. One invocation per splat. CPU mirror: src/cpu/em_coverage.rs.
 
 // #import types
 // #import dispatch
@@ -26,6 +28,17 @@ const COVERAGE_GRID: u32 = 9u;
 const COVERAGE_MIN: f32 = 0.2;
 // Disk tests a splat may spend (lavapipe ends an invocation's loops near 65 k iterations).
 const COVERAGE_BUDGET: u32 = 16384u;
+// Grid points (a, b) tested first, near the rim: the four at the ends of the axes and the four
+// on the diagonals.
+const COVERAGE_PROBES = array<vec2<u32>, 8>(
+    vec2<u32>(0u, 4u), vec2<u32>(8u, 4u), vec2<u32>(4u, 0u), vec2<u32>(4u, 8u),
+    vec2<u32>(1u, 1u), vec2<u32>(7u, 1u), vec2<u32>(1u, 7u), vec2<u32>(7u, 7u),
+);
+
+// Grid point (a, b) in the splat's frame, in units of R (inside the disk where |u| <= 1).
+fn grid_point(a: u32, b: u32) -> vec2<f32> {
+    return (vec2<f32>(f32(a), f32(b)) + 0.5) * (2.0 / f32(COVERAGE_GRID)) - 1.0;
+}
 
 // Whether a disk of the surface with normal n reaches over point q, within `slab` of its plane.
 fn covered(q: vec3<f32>, n: vec3<f32>, slab: f32, budget: ptr<function, u32>) -> bool {
@@ -68,11 +81,22 @@ fn main(@builtin(workgroup_id) wg: vec3<u32>, @builtin(num_workgroups) num_wg: v
     let f = frame_of(s.normal);
     let slab = em.slab * s.radius;
     var budget = COVERAGE_BUDGET;
+    var probes = 0u;
+    for (var k = 0u; k < 8u; k++) {
+        let u = grid_point(COVERAGE_PROBES[k].x, COVERAGE_PROBES[k].y);
+        let q = s.center + em.radius * (u.x * f.t + u.y * f.b);
+        if covered(q, s.normal, slab, &budget) {
+            probes += 1u;
+        }
+    }
+    if probes == 8u {
+        return;
+    }
     var inside = 0u;
     var hits = 0u;
     for (var a = 0u; a < COVERAGE_GRID; a++) {
         for (var b = 0u; b < COVERAGE_GRID; b++) {
-            let u = (vec2<f32>(f32(a), f32(b)) + 0.5) * (2.0 / f32(COVERAGE_GRID)) - 1.0;
+            let u = grid_point(a, b);
             if dot(u, u) > 1.0 {
                 continue;
             }

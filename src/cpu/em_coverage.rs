@@ -19,6 +19,23 @@ pub const COVERAGE_GRID: u32 = 9;
 pub const COVERAGE_MIN: f32 = 0.2;
 /// Disk tests a splat may spend.
 pub const COVERAGE_BUDGET: u32 = 16384;
+/// Grid points `(a, b)` tested first, near the rim: a splat whose probes are all covered lies
+/// inside its face and keeps its estimate.
+pub const COVERAGE_PROBES: [(u32, u32); 8] = [
+    (0, 4),
+    (8, 4),
+    (4, 0),
+    (4, 8),
+    (1, 1),
+    (7, 1),
+    (1, 7),
+    (7, 7),
+];
+
+/// Grid point `(a, b)` in the splat's frame, in units of R (inside the disk where |u| <= 1).
+fn grid_point(a: u32, b: u32) -> Vec2 {
+    (Vec2::new(a as f32, b as f32) + 0.5) * (2.0 / COVERAGE_GRID as f32) - 1.0
+}
 
 /// Whether a disk of the surface with normal `n` reaches over `q`, within `slab` of its plane.
 fn covered(geo: &Geometry, q: Vec3, n: Vec3, slab: f32, budget: &mut u32) -> bool {
@@ -59,16 +76,23 @@ fn share(em: &EmParams, geo: &Geometry, i: usize) -> Option<f32> {
     let f = frame_of(normal);
     let slab = em.slab * s.radius;
     let mut budget = COVERAGE_BUDGET;
+    let point = |u: Vec2| centre + em.radius * (u.x * f.t + u.y * f.b);
+    let probes = COVERAGE_PROBES
+        .iter()
+        .filter(|&&(a, b)| covered(geo, point(grid_point(a, b)), normal, slab, &mut budget))
+        .count();
+    if probes == COVERAGE_PROBES.len() {
+        return Some(1.0);
+    }
     let (mut inside, mut hits) = (0u32, 0u32);
     for a in 0..COVERAGE_GRID {
         for b in 0..COVERAGE_GRID {
-            let u = (Vec2::new(a as f32, b as f32) + 0.5) * (2.0 / COVERAGE_GRID as f32) - 1.0;
+            let u = grid_point(a, b);
             if u.dot(u) > 1.0 {
                 continue;
             }
             inside += 1;
-            let q = centre + em.radius * (u.x * f.t + u.y * f.b);
-            if covered(geo, q, normal, slab, &mut budget) {
+            if covered(geo, point(u), normal, slab, &mut budget) {
                 hits += 1;
             }
         }
