@@ -508,14 +508,9 @@ pub fn fit_lobes<E: Executor>(
     };
     let mut dispatches = em_fit(ex, cfg, shape, &params, max_candidates, &fit_input)?;
     if gathering.is_some() {
-        // The photons' estimate where the gather disk leaves the surface (`em_coverage`),
-        // before the rays read it.
-        let coverage = ex.uniform(
-            "em coverage params",
-            &cfg.params(splat_count, splat_count, shape),
-        )?;
-        let groups = groups("em_coverage", splat_count)?;
-        ex.dispatch_traced("em_coverage", &[&coverage, &light], groups)?;
+        // The photons' estimate where the gather disk leaves the surface, before the rays
+        // read it.
+        cover_light(ex, &cfg.params(splat_count, splat_count, shape), &light)?;
     }
     ex.read::<u32>(&counters, 1)?;
     let mut fit_ms = ms_since(t) - select_ms - gather_ms;
@@ -544,6 +539,15 @@ pub fn fit_lobes<E: Executor>(
         fit_ms,
         final_gather_ms,
     })
+}
+
+/// `em_coverage`: each of `params.splat_count` splats' photon irradiance in `light` divided by
+/// the share of its gather disk (radius and slab from `params`) that its surface covers. The
+/// executor must trace the scene's geometry.
+pub fn cover_light<E: Executor>(ex: &mut E, params: &EmParams, light: &E::Buffer) -> Result<()> {
+    let uniform = ex.uniform("em coverage params", params)?;
+    let groups = groups("em_coverage", params.splat_count)?;
+    ex.dispatch_traced("em_coverage", &[&uniform, light], groups)
 }
 
 /// What `fit_to_rays` takes of the photon fit: its `em_fit` buffers, its counters (read back

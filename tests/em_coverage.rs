@@ -11,7 +11,7 @@ use lobelight::cpu::CpuExecutor;
 use lobelight::gpu::exec::GpuExecutor;
 use lobelight::gpu::scene::GpuScene;
 use lobelight::scene::{self, Scene};
-use lobelight::sequence::{Executor, groups};
+use lobelight::sequence::{Executor, cover_light};
 use lobelight::shared::trace::Geometry;
 use lobelight::types::{EmParams, SplatLight};
 
@@ -27,10 +27,7 @@ fn covered<E: Executor>(ex: &mut E, scene: &Scene, em: &EmParams) -> Vec<f32> {
         n
     ];
     let light = ex.upload("light", &start).unwrap();
-    let uniform = ex.uniform("em params", em).unwrap();
-    let groups = groups("em_coverage", n as u32).unwrap();
-    ex.dispatch_traced("em_coverage", &[&uniform, &light], groups)
-        .unwrap();
+    cover_light(ex, em, &light).unwrap();
     let out: Vec<SplatLight> = ex.read(&light, n).unwrap();
     out.iter().map(|l| l.irradiance[0]).collect()
 }

@@ -17,7 +17,7 @@ use lobelight::gpu::bins::GpuBins;
 use lobelight::gpu::em::{fit_lobes_gathering, fit_shape};
 use lobelight::gpu::exec::GpuExecutor;
 use lobelight::gpu::scene::GpuScene;
-use lobelight::sequence::{Executor, final_gather};
+use lobelight::sequence::{Executor, cover_light, final_gather};
 use lobelight::shared::lights::area_light_hit;
 use lobelight::shared::octahedral::oct_decode;
 use lobelight::shared::trace::Geometry;
@@ -229,10 +229,7 @@ fn lobes_fitted_to_gathered_samples_match_the_mirror() {
         let mut ex = CpuExecutor::tracing(geometry);
         let n = splats.len() as u32;
         let light = ex.upload("light", &photons.light).unwrap();
-        let params = ex.uniform("em", &cfg.params(n, n, shape)).unwrap();
-        let groups = lobelight::sequence::groups("em_coverage", n).unwrap();
-        ex.dispatch_traced("em_coverage", &[&params, &light], groups)
-            .unwrap();
+        cover_light(&mut ex, &cfg.params(n, n, shape), &light).unwrap();
         ex.read(&light, n as usize).unwrap()
     };
     let grey = |e: [f32; 3]| (e[0] + e[1] + e[2]) / 3.0;

@@ -30,7 +30,8 @@ const COVERAGE_MIN: f32 = 0.2;
 const COVERAGE_BUDGET: u32 = 16384u;
 // Grid points (a, b) tested first, near the rim: the four at the ends of the axes and the four
 // on the diagonals.
-const COVERAGE_PROBES = array<vec2<u32>, 8>(
+const PROBE_COUNT: u32 = 8u;
+const COVERAGE_PROBES = array<vec2<u32>, PROBE_COUNT>(
     vec2<u32>(0u, 4u), vec2<u32>(8u, 4u), vec2<u32>(4u, 0u), vec2<u32>(4u, 8u),
     vec2<u32>(1u, 1u), vec2<u32>(7u, 1u), vec2<u32>(1u, 7u), vec2<u32>(7u, 7u),
 );
@@ -38,6 +39,11 @@ const COVERAGE_PROBES = array<vec2<u32>, 8>(
 // Grid point (a, b) in the splat's frame, in units of R (inside the disk where |u| <= 1).
 fn grid_point(a: u32, b: u32) -> vec2<f32> {
     return (vec2<f32>(f32(a), f32(b)) + 0.5) * (2.0 / f32(COVERAGE_GRID)) - 1.0;
+}
+
+// Point u (in units of R) of splat s's gather disk, in frame f of its plane.
+fn disk_point(s: Splat, f: Frame, u: vec2<f32>) -> vec3<f32> {
+    return s.center + em.radius * (u.x * f.t + u.y * f.b);
 }
 
 // Whether a disk of the surface with normal n reaches over point q, within `slab` of its plane.
@@ -82,14 +88,13 @@ fn main(@builtin(workgroup_id) wg: vec3<u32>, @builtin(num_workgroups) num_wg: v
     let slab = em.slab * s.radius;
     var budget = COVERAGE_BUDGET;
     var probes = 0u;
-    for (var k = 0u; k < 8u; k++) {
+    for (var k = 0u; k < PROBE_COUNT; k++) {
         let u = grid_point(COVERAGE_PROBES[k].x, COVERAGE_PROBES[k].y);
-        let q = s.center + em.radius * (u.x * f.t + u.y * f.b);
-        if covered(q, s.normal, slab, &budget) {
+        if covered(disk_point(s, f, u), s.normal, slab, &budget) {
             probes += 1u;
         }
     }
-    if probes == 8u {
+    if probes == PROBE_COUNT {
         return;
     }
     var inside = 0u;
@@ -101,8 +106,7 @@ fn main(@builtin(workgroup_id) wg: vec3<u32>, @builtin(num_workgroups) num_wg: v
                 continue;
             }
             inside += 1u;
-            let q = s.center + em.radius * (u.x * f.t + u.y * f.b);
-            if covered(q, s.normal, slab, &budget) {
+            if covered(disk_point(s, f, u), s.normal, slab, &budget) {
                 hits += 1u;
             }
         }
