@@ -19,7 +19,6 @@ use crate::gpu::scene::GpuScene;
 use crate::grid::SplatGrid;
 use crate::photons::{PhotonConfig, PhotonStats, ms_since};
 use crate::scene::Scene;
-use crate::shared::trace::Geometry;
 use crate::types::EmParams;
 
 /// One stage's line of `--stats` / `--json` (docs/cli.md).
@@ -249,10 +248,7 @@ pub fn bins_cpu(
         bar.set_position(done);
         progress.traced(done);
     };
-    let geo = Geometry {
-        grid,
-        splats: &scene.splats,
-    };
+    let geo = scene.geometry(grid);
     let map = cpu::trace_photons(
         &scene.lights,
         &scene.materials,
@@ -324,7 +320,7 @@ pub fn bake(scene: &Scene, device: BakeDevice, progress: &Progress) -> Result<Ba
                 &scene.splats,
                 &scene.materials,
                 FitShape::default(),
-                Some((grid, &gather_setup(scene))),
+                Some((scene.geometry(grid), &gather_setup(scene))),
             )?;
             spin.finish_and_clear();
             (lobes, b.photons, b.binning)

@@ -11,7 +11,6 @@ use crate::error::{Error, Result};
 use crate::grid::SplatGrid;
 use crate::scene::Scene;
 use crate::sequence::Executor;
-use crate::shared::trace::Geometry;
 use crate::types::{
     Camera, DIRECT_BAKED, DIRECT_RAYS, DirectParams, EmParams, PathParams, ShadeParams, Splat,
     SplatLod,
@@ -256,10 +255,7 @@ pub fn direct_params(scene: &Scene) -> DirectParams {
 
 /// The direct bake on the CPU mirror (`sequence::bake_direct`).
 pub fn cpu_direct(scene: &Scene, grid: &SplatGrid) -> Result<DirectMap> {
-    let geo = Geometry {
-        grid,
-        splats: &scene.splats,
-    };
+    let geo = scene.geometry(grid);
     let params = direct_params(scene);
     let mut ex = cpu::CpuExecutor::tracing(geo);
     let lights = ex.upload("lights", &scene.lights)?;
@@ -292,10 +288,7 @@ pub fn cpu_path(
     show: u32,
     spp: u32,
 ) -> Result<Vec<[f32; 4]>> {
-    let geo = Geometry {
-        grid,
-        splats: &scene.splats,
-    };
+    let geo = scene.geometry(grid);
     let pixels = (cam.size[0] * cam.size[1]) as usize;
     let mut ex = cpu::CpuExecutor::tracing(geo);
     let cam_buf = ex.uniform("camera", cam)?;
@@ -421,7 +414,7 @@ pub fn cpu_frame_into(
         _ => std::borrow::Cow::Borrowed(&scene.splats[..]),
     };
     let tiles = cpu::splat_visibility::bin_tiles(cam, &drawn);
-    let visible = cpu::splat_visibility::splat_visibility(cam, &drawn, &tiles);
+    let visible = cpu::splat_visibility::splat_visibility(cam, &drawn, &scene.clips, &tiles);
     let shading = cpu::splat_shading::Shading {
         params,
         splat_light: &lobes.light,
@@ -443,16 +436,14 @@ pub fn cpu_frame_into(
     let sums = cpu::splat_attributes::splat_attributes(
         cam,
         &drawn,
+        &scene.clips,
         &scene.materials,
         &shading,
         &shaded,
         &visible,
         &tiles,
     );
-    let geo = Geometry {
-        grid,
-        splats: &scene.splats,
-    };
+    let geo = scene.geometry(grid);
     let hit_light = cpu::shade::HitLight {
         splat_light: &lobes.light,
         direct_light: &direct.direct,
@@ -506,10 +497,7 @@ pub fn cpu_reference(
         ..cfg.clone()
     };
     let params = shade_params(scene, &LobeMap::default(), &cfg);
-    let geo = Geometry {
-        grid,
-        splats: &scene.splats,
-    };
+    let geo = scene.geometry(grid);
     let sums = cpu::reference_gather::reference_gather(cam, em, &scene.materials, bins, &geo);
     let mut hdr = vec![[0.0; 4]; (cam.size[0] * cam.size[1]) as usize];
     let no_hits = cpu::shade::HitLight {

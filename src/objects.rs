@@ -74,10 +74,7 @@ pub fn object_ids(scene: &Scene, grid: &SplatGrid, cam: &Camera, samples: u32) -
             MIXED - 2
         )));
     }
-    let geo = Geometry {
-        grid,
-        splats: &scene.splats,
-    };
+    let geo = scene.geometry(grid);
     let cam = Camera {
         jitter: [0.0; 2],
         ..*cam

@@ -97,6 +97,7 @@ pub const SHARED: &[WgslFile] = &[
     shared!("splat_shading"),
     shared!("lobe_brdf"),
     shared!("fullscreen"),
+    shared!("drawn_clip"),
 ];
 
 pub fn stage(name: &str) -> Option<&'static WgslFile> {

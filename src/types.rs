@@ -19,6 +19,84 @@ pub struct Splat {
     pub object: u32,
 }
 
+/// Where a surface's disks end (docs/design.md §2): a hit on one of its disks counts only where
+/// the affine map `rows` (world → the surface's unit cube, grown by a slack) takes the hit
+/// point within [−1, 1]³. A box's disks overhang its faces' edges by up to a third of the
+/// spacing; one-sided, the overhang stops light falling past a convex edge that a ray leaving
+/// the face below passes (from the overhang's back), so light would not be reciprocal there.
+/// Clipped, both see the box. All-zero rows (a model, a sphere, a scan) clip nothing.
+#[repr(C)]
+#[derive(Clone, Copy, Debug, Default, PartialEq, Pod, Zeroable)]
+pub struct SurfaceClip {
+    pub x: [f32; 4],
+    pub y: [f32; 4],
+    pub z: [f32; 4],
+}
+
+impl SurfaceClip {
+    /// The clip of the volume `m` maps the cube [−1, 1]³ onto, grown by `slack` (world units)
+    /// on every side, so that the faces' disks meet at an edge without a crack; none where `m`
+    /// has no finite inverse (a flat or degenerate transform clips nothing, not everything).
+    pub fn of_cube(m: &glam::Affine3A, slack: f32) -> SurfaceClip {
+        let inv = m.inverse();
+        let c = inv.matrix3;
+        let t = inv.translation;
+        // Row r reads 1 at a distance 1 / |r.xyz| from the centre plane: scaled by
+        // 1 / (1 + slack |r.xyz|), it reads 1 that much farther out.
+        let row = |a: glam::Vec3, w: f32| {
+            let k = 1.0 / (1.0 + slack * a.length());
+            [a.x * k, a.y * k, a.z * k, w * k]
+        };
+        let rows = [
+            row(glam::Vec3::new(c.x_axis.x, c.y_axis.x, c.z_axis.x), t.x),
+            row(glam::Vec3::new(c.x_axis.y, c.y_axis.y, c.z_axis.y), t.y),
+            row(glam::Vec3::new(c.x_axis.z, c.y_axis.z, c.z_axis.z), t.z),
+        ];
+        if m.matrix3.determinant().abs() > 0.0 && rows.iter().flatten().all(|v| v.is_finite()) {
+            SurfaceClip {
+                x: rows[0],
+                y: rows[1],
+                z: rows[2],
+            }
+        } else {
+            SurfaceClip::default()
+        }
+    }
+
+    /// The same clip for a scene mapped by `m` (a point p is now m(p)): the rows composed with
+    /// m's inverse. Zero rows stay zero.
+    pub fn mapped(&self, m: &glam::Affine3A) -> SurfaceClip {
+        let inv = glam::Mat4::from(m.inverse());
+        let row = |r: [f32; 4]| (inv.transpose() * glam::Vec4::from(r)).to_array();
+        SurfaceClip {
+            x: row(self.x),
+            y: row(self.y),
+            z: row(self.z),
+        }
+    }
+
+    /// Whether the clip keeps every point of splat `s`'s disk (then no hit on it needs the
+    /// test): each row's extreme over the disk is its value at the centre plus the radius
+    /// times the row's gradient within the disk's plane.
+    pub fn holds_disk(&self, s: &Splat) -> bool {
+        let (c, n) = (glam::Vec3::from(s.center), glam::Vec3::from(s.normal));
+        [self.x, self.y, self.z].iter().all(|r| {
+            let a = glam::Vec3::new(r[0], r[1], r[2]);
+            let along = a.dot(n);
+            let reach = s.radius * (a.dot(a) - along * along).max(0.0).sqrt();
+            (a.dot(c) + r[3]).abs() + reach <= 1.0
+        })
+    }
+
+    /// Whether a hit at `p` counts (NaN does not).
+    pub fn keeps(&self, p: glam::Vec3) -> bool {
+        let p = p.extend(1.0);
+        [self.x, self.y, self.z]
+            .iter()
+            .all(|r| glam::Vec4::from(*r).dot(p).abs() <= 1.0)
+    }
+}
+
 /// A splat's place in the level of detail's merge tree (`lod`, docs/design.md §8). Level L's
 /// splats are a subset of level L − 1's; each splat of level L − 1 is merged into one of them,
 /// whose disk at level L is grown to cover every splat merged into it, at every level below.

@@ -12,7 +12,6 @@ use lobelight::gpu::exec::GpuExecutor;
 use lobelight::gpu::scene::GpuScene;
 use lobelight::scene::{self, Scene};
 use lobelight::sequence::{Executor, cover_light};
-use lobelight::shared::trace::Geometry;
 use lobelight::types::{EmParams, SplatLight};
 
 /// Every splat's light after `em_coverage` on `ex`, each splat starting with irradiance 1.
@@ -73,10 +72,7 @@ material = "white"
         ..Default::default()
     };
     let grid = common::host_grid(&scene);
-    let geometry = Geometry {
-        grid: &grid,
-        splats: &scene.splats,
-    };
+    let geometry = scene.geometry(&grid);
     let on_cpu = covered(&mut CpuExecutor::tracing(geometry), &scene, &em);
     let on_gpu = {
         let on_gpu = GpuScene::upload(&gpu, &scene).unwrap();

@@ -20,7 +20,6 @@ use lobelight::gpu::scene::GpuScene;
 use lobelight::sequence::{Executor, cover_light, final_gather};
 use lobelight::shared::lights::area_light_hit;
 use lobelight::shared::octahedral::oct_decode;
-use lobelight::shared::trace::Geometry;
 use lobelight::types::{GatherParams, Light, Material, SplatLight};
 
 /// Per listed splat, the irradiance its samples estimate: π / N Σ L (cosine-weighted rays).
@@ -124,10 +123,7 @@ fn final_gather_matches_the_mirror_and_the_photons() {
             (&scene.materials, &scene.lights),
         )
     };
-    let geometry = Geometry {
-        grid: &grid,
-        splats: &scene.splats,
-    };
+    let geometry = scene.geometry(&grid);
     let on_cpu = gather(
         &mut CpuExecutor::tracing(geometry),
         &params,
@@ -214,7 +210,7 @@ fn lobes_fitted_to_gathered_samples_match_the_mirror() {
             .unwrap()
     };
     let (splats, materials) = (&scene.splats, &scene.materials);
-    let gathering = Some((&grid, &setup));
+    let gathering = Some((scene.geometry(&grid), &setup));
     let on_cpu =
         cpu::fit_lobes_gathering(&cfg, &bins, splats, materials, shape, gathering).unwrap();
     let by_photons = EmConfig { gather: 0, ..cfg };
@@ -222,10 +218,7 @@ fn lobes_fitted_to_gathered_samples_match_the_mirror() {
     // The photons' estimate as the gathering fit's photon pass makes it: with em_coverage's
     // share at the faces' edges, which the photon fit alone leaves out.
     photons.light = {
-        let geometry = Geometry {
-            grid: &grid,
-            splats: &scene.splats,
-        };
+        let geometry = scene.geometry(&grid);
         let mut ex = CpuExecutor::tracing(geometry);
         let n = splats.len() as u32;
         let light = ex.upload("light", &photons.light).unwrap();

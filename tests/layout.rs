@@ -32,6 +32,7 @@ fn rust_layouts() -> Vec<RustLayout> {
             diffuse,
             object
         }),
+        layout!(SurfaceClip { x, y, z }),
         layout!(SplatLod {
             extent,
             top,

@@ -14,7 +14,6 @@ use lobelight::gpu::photons::GpuPhotons;
 use lobelight::gpu::scene::GpuScene;
 use lobelight::photons::{PhotonConfig, PhotonMap};
 use lobelight::scene::{self, Scene};
-use lobelight::shared::trace::Geometry;
 use lobelight::types::Camera;
 
 /// Pixels whose sums may differ: a photon on a pixel's edge, or a visibility ray that grazes a
@@ -42,10 +41,7 @@ fn total(image: &[[f32; 4]]) -> f64 {
 fn device_matches_the_cpu_mirror() {
     let gpu = common::gpu();
     let (scene, map, grid, cam, scale) = setup();
-    let geo = Geometry {
-        grid: &grid,
-        splats: &scene.splats,
-    };
+    let geo = scene.geometry(&grid);
     let ours = cpu::photon_image(&cam, &scene.materials, &map.photons, &geo, scale).unwrap();
     let on_gpu = GpuScene::upload(&gpu, &scene).unwrap();
     let photons = GpuPhotons::upload(&gpu, &map).unwrap();
@@ -69,10 +65,7 @@ fn device_matches_the_cpu_mirror() {
 #[test]
 fn the_sums_do_not_depend_on_photon_order() {
     let (scene, mut map, grid, cam, scale) = setup();
-    let geo = Geometry {
-        grid: &grid,
-        splats: &scene.splats,
-    };
+    let geo = scene.geometry(&grid);
     let forward = cpu::photon_image(&cam, &scene.materials, &map.photons, &geo, scale).unwrap();
     map.photons.reverse();
     let backward = cpu::photon_image(&cam, &scene.materials, &map.photons, &geo, scale).unwrap();

@@ -116,7 +116,7 @@ fn level_of_detail_leaves_no_hole() {
     let scene = scene::load(Path::new("scenes/cornell.toml")).unwrap();
     let lods = lobelight::lod::splat_lods(&scene.splats);
     let covered = |cam: &lobelight::types::Camera, splats: &[lobelight::types::Splat]| {
-        let visible = splat_visibility(cam, splats, &bin_tiles(cam, splats));
+        let visible = splat_visibility(cam, splats, &scene.clips, &bin_tiles(cam, splats));
         visible.iter().map(|v| v.depth > 0.0).collect::<Vec<bool>>()
     };
     for size in [24, 48, 96] {
@@ -591,4 +591,80 @@ fn culled_splats_cover_no_pixel() {
         }
     }
     assert!(culled > 1000, "only {culled} splats culled");
+}
+
+/// A box's drawn edges are where the box ends (`wgsl/shared/drawn_clip.wgsl`), as traced rays
+/// see them: looking square at a face, no pixel whose ray passes more than half a pixel outside
+/// the box is drawn, by the raster passes, the compute splatter or the mirror, while every
+/// pixel as far inside is. Without the clips the face's disks, overhanging its edges by 6 mm
+/// (two pixels), would draw a rim around it.
+#[test]
+fn a_drawn_box_ends_at_its_edges() {
+    use glam::{Vec2, Vec3};
+    use lobelight::shared::splat::pixel_ray;
+    let toml = r#"
+        [camera]
+        eye = [3.0, 0.0, 0.0125]
+        target = [0.0, 0.0, 0.0125]
+        up = [0.0, 1.0, 0.0]
+        fov = 15.0
+        [[light]]
+        type = "point"
+        position = [2.0, 0.1, 0.2]
+        power = [20.0, 20.0, 20.0]
+        [[object]]
+        shape = "box"
+        scale = 0.3
+        spacing = 0.025
+    "#;
+    let mut scene = scene::parse(Path::new("box.toml"), toml).unwrap();
+    scene.bake.photons = 2_000;
+    let grid = common::host_grid(&scene);
+    let lobes = cpu_bake(&scene, &grid);
+    let view = View::new(&scene.camera, 256, 256);
+    let cam = camera_uniform(&view, scene.bounds(), &FrameConfig::default());
+    // Where each pixel's ray meets the plane of the face x = 0.3, and a pixel there.
+    let eye = Vec3::from(cam.eye);
+    let pixel = 2.0 * (eye.x - 0.3) * (7.5f32).to_radians().tan() / 256.0;
+    let (mut inside, mut outside) = (Vec::new(), Vec::new());
+    for i in 0..256 * 256 {
+        let d = pixel_ray(
+            &cam,
+            Vec2::new((i % 256) as f32 + 0.5, (i / 256) as f32 + 0.5),
+        );
+        let p = eye + (0.3 - eye.x) / d.x * d;
+        let past = p.y.abs().max(p.z.abs()) - 0.3;
+        if past > 0.5 * pixel {
+            outside.push(i);
+        } else if past < -0.5 * pixel {
+            inside.push(i);
+        }
+    }
+    let drawn = |image: &[[f32; 4]], i: usize| image[i][..3].iter().any(|&c| c > 0.0);
+    let check = |what: &str, image: &[[f32; 4]]| {
+        let rim = outside.iter().filter(|&&i| drawn(image, i)).count();
+        let holes = inside.iter().filter(|&&i| !drawn(image, i)).count();
+        assert_eq!(
+            (rim, holes),
+            (0, 0),
+            "{what}: pixels drawn outside, undrawn inside"
+        );
+    };
+    let gpu = common::gpu();
+    for splatter in [Splatter::Raster, Splatter::Compute] {
+        let cfg = FrameConfig {
+            splatter,
+            ..FrameConfig::default()
+        };
+        check(
+            splatter.name(),
+            &gpu_frame(&gpu, &scene, &lobes, &view, &cfg),
+        );
+    }
+    let cfg = FrameConfig::default();
+    check("mirror", &cpu_hdr(&scene, &grid, &lobes, &view, &cfg));
+    scene.clips.clear();
+    let unclipped = cpu_hdr(&scene, &grid, &lobes, &view, &cfg);
+    let rim = outside.iter().filter(|&&i| drawn(&unclipped, i)).count();
+    assert!(rim > 500, "unclipped, {rim} pixels drawn outside the box");
 }

@@ -205,7 +205,7 @@ fn mirror_workgroup_shapes_match_the_wgsl() {
 /// What the host and the mirrors bind is read from the WGSL too: each compute stage's
 /// bindings are numbered from 0 without gaps in each group (so "binding order" is the order a
 /// dispatch lists its buffers, as the CPU executor checks), and only the tracing stages use
-/// group 1, the scene's five geometry buffers.
+/// group 1, the scene's geometry buffers (`GEOMETRY_BINDINGS`).
 #[test]
 fn stage_bindings_are_read_from_the_wgsl() {
     use lobelight::shaders::{STAGES, resolve_stage, stage_shape};
@@ -236,7 +236,12 @@ fn stage_bindings_are_read_from_the_wgsl() {
             assert_eq!(numbers, expected, "{} group {group}", stage.name);
         }
         if traced.contains(&stage.name) {
-            assert_eq!(shape.bindings[1], 5, "{}: the geometry group", stage.name);
+            assert_eq!(
+                shape.bindings[1] as usize,
+                lobelight::gpu::scene::GEOMETRY_BINDINGS,
+                "{}: the geometry group",
+                stage.name
+            );
         } else {
             assert_eq!(shape.bindings[1], 0, "{}: no geometry group", stage.name);
         }

@@ -190,6 +190,11 @@ fn moved(scene: &Scene, s: f32, offset: Vec3) -> Scene {
         l.edge_v = (Vec3::from(l.edge_v) * s).to_array();
         l.area *= s * s;
     }
+    let m =
+        glam::Affine3A::from_scale_rotation_translation(Vec3::splat(s), Default::default(), offset);
+    for c in &mut t.clips {
+        *c = c.mapped(&m);
+    }
     t.camera.eye = at(t.camera.eye);
     t.camera.target = at(t.camera.target);
     if let Some(r) = t.bake.radius.as_mut() {

@@ -9,10 +9,11 @@ use glam::Vec3;
 use lobelight::cpu::{self, groups_for, trace_rays};
 use lobelight::gpu::Gpu;
 use lobelight::gpu::grid::build_grid;
+use lobelight::gpu::scene::device_clips;
 use lobelight::grid::{GridConfig, SplatGrid, grid_params};
 use lobelight::photons::ITERATION_BUDGET;
 use lobelight::shared::trace::{Geometry, intersect_disk, trace_ray};
-use lobelight::types::{Hit, NO_SPLAT, Ray, Splat, TraceParams};
+use lobelight::types::{Hit, NO_SPLAT, Ray, Splat, SurfaceClip, TraceParams};
 
 fn cpu_grid(splats: &[Splat]) -> SplatGrid {
     cpu::build_grid(
@@ -30,11 +31,12 @@ fn params(rays: usize, budget: u32) -> TraceParams {
     }
 }
 
-fn cpu_trace(splats: &[Splat], rays: &[Ray], budget: u32) -> Vec<Hit> {
+fn cpu_trace(splats: &[Splat], clips: &[SurfaceClip], rays: &[Ray], budget: u32) -> Vec<Hit> {
     let grid = cpu_grid(splats);
     let geo = Geometry {
         grid: &grid,
         splats,
+        clips,
     };
     let mut hits = vec![Hit::default(); rays.len()];
     let groups = groups_for(rays.len() as u32, trace_rays::WG);
@@ -42,9 +44,18 @@ fn cpu_trace(splats: &[Splat], rays: &[Ray], budget: u32) -> Vec<Hit> {
     hits
 }
 
-fn gpu_trace(gpu: &Gpu, splats: &[Splat], rays: &[Ray], budget: u32) -> Vec<Hit> {
+fn gpu_trace(
+    gpu: &Gpu,
+    splats: &[Splat],
+    clips: &[SurfaceClip],
+    rays: &[Ray],
+    budget: u32,
+) -> Vec<Hit> {
     let p = grid_params(splats, &GridConfig::default()).unwrap();
     let splat_buf = gpu.storage("splats", splats).unwrap();
+    let clip_buf = gpu
+        .storage("surface clips", &device_clips(clips, splats))
+        .unwrap();
     let grid = build_grid(gpu, &p, &splat_buf).unwrap();
     let params_buf = gpu.uniform("trace params", &params(rays.len(), budget));
     let ray_buf = gpu.storage("rays", rays).unwrap();
@@ -63,6 +74,7 @@ fn gpu_trace(gpu: &Gpu, splats: &[Splat], rays: &[Ray], budget: u32) -> Vec<Hit>
                 &grid.cell_start,
                 &grid.cell_splats,
                 &grid.cell_dist,
+                &clip_buf,
             ],
         ],
         groups_for(rays.len() as u32, trace_rays::WG),
@@ -74,6 +86,11 @@ fn gpu_trace(gpu: &Gpu, splats: &[Splat], rays: &[Ray], budget: u32) -> Vec<Hit>
 
 /// The nearest front-facing hit over all disks, by the same disk test.
 fn brute_force(splats: &[Splat], r: &Ray) -> (f32, u32) {
+    brute_force_clipped(splats, &[], r)
+}
+
+/// `brute_force` where the surfaces' clips keep the hit.
+fn brute_force_clipped(splats: &[Splat], clips: &[SurfaceClip], r: &Ray) -> (f32, u32) {
     let (o, d) = (Vec3::from(r.origin), Vec3::from(r.direction));
     let mut best = (r.t_max, NO_SPLAT);
     for (i, s) in splats.iter().enumerate() {
@@ -81,6 +98,8 @@ fn brute_force(splats: &[Splat], r: &Ray) -> (f32, u32) {
             continue;
         }
         let t = intersect_disk(s, o, d);
+        let kept = |p: Vec3| clips.get(s.object as usize).is_none_or(|c| c.keeps(p));
+        let t = if t > 0.0 && kept(o + t * d) { t } else { -1.0 };
         if t > 0.0 && t < best.0 {
             best = (t, i as u32);
         }
@@ -143,7 +162,7 @@ fn scenes() -> Vec<(&'static str, Vec<Splat>)> {
 fn traversal_finds_the_nearest_hit_of_brute_force() {
     for (name, splats) in scenes() {
         let rays = random_rays(&splats, 4_000, 31);
-        let hits = cpu_trace(&splats, &rays, ITERATION_BUDGET);
+        let hits = cpu_trace(&splats, &[], &rays, ITERATION_BUDGET);
         let mut hit_count = 0;
         for (k, (r, h)) in rays.iter().zip(&hits).enumerate() {
             assert_eq!(h.aborted, 0, "{name}: ray {k} aborted");
@@ -173,8 +192,8 @@ fn gpu_trace_rays_equals_cpu_mirror() {
     let gpu = common::gpu();
     for (name, splats) in scenes() {
         let rays = random_rays(&splats, 20_000, 41);
-        let on_cpu = cpu_trace(&splats, &rays, ITERATION_BUDGET);
-        let on_gpu = gpu_trace(&gpu, &splats, &rays, ITERATION_BUDGET);
+        let on_cpu = cpu_trace(&splats, &[], &rays, ITERATION_BUDGET);
+        let on_gpu = gpu_trace(&gpu, &splats, &[], &rays, ITERATION_BUDGET);
         let mut differ = 0;
         for (k, (a, b)) in on_gpu.iter().zip(&on_cpu).enumerate() {
             let same = a.splat == b.splat
@@ -277,8 +296,8 @@ fn hit_policy_is_as_documented() {
     ];
     let rays: Vec<Ray> = cases.iter().map(|c| c.1).collect();
     let gpu = common::gpu();
-    let on_cpu = cpu_trace(&splats, &rays, ITERATION_BUDGET);
-    let on_gpu = gpu_trace(&gpu, &splats, &rays, ITERATION_BUDGET);
+    let on_cpu = cpu_trace(&splats, &[], &rays, ITERATION_BUDGET);
+    let on_gpu = gpu_trace(&gpu, &splats, &[], &rays, ITERATION_BUDGET);
     for (k, (what, r, expected)) in cases.iter().enumerate() {
         assert_eq!(on_cpu[k].splat, *expected, "CPU: {what}");
         assert_eq!(on_gpu[k].splat, *expected, "GPU: {what}");
@@ -289,7 +308,7 @@ fn hit_policy_is_as_documented() {
     limited.skip = 0;
     limited.t_max = 1.0;
     let skip_both = Ray { skip: 1, ..limited };
-    let h = cpu_trace(&splats, &[limited, skip_both], ITERATION_BUDGET);
+    let h = cpu_trace(&splats, &[], &[limited, skip_both], ITERATION_BUDGET);
     assert_eq!(
         h[0].splat, 1,
         "t_max: the coplanar neighbour at t = 0.5 is within"
@@ -298,7 +317,7 @@ fn hit_policy_is_as_documented() {
         t_max: 1.0,
         ..ray([-0.35, 0.0, 0.5], [0.0, 0.0, -1.0], NO_SPLAT)
     };
-    let h = cpu_trace(&splats, &[far], ITERATION_BUDGET);
+    let h = cpu_trace(&splats, &[], &[far], ITERATION_BUDGET);
     assert_eq!(h[0].splat, NO_SPLAT, "t_max: disk 2 at t = 1.5 is beyond 1");
 }
 
@@ -309,13 +328,13 @@ fn budget_stops_a_ray_and_says_so() {
     // A ray through the whole cloud needs far more than 3 steps.
     let rays = vec![ray([-1.5, -1.5, -1.5], [1.0, 1.0, 1.0], NO_SPLAT)];
     for hits in [
-        cpu_trace(&splats, &rays, 3),
-        gpu_trace(&gpu, &splats, &rays, 3),
+        cpu_trace(&splats, &[], &rays, 3),
+        gpu_trace(&gpu, &splats, &[], &rays, 3),
     ] {
         assert_eq!(hits[0].aborted, 1);
         assert_eq!(hits[0].splat, NO_SPLAT);
     }
-    let full = cpu_trace(&splats, &rays, ITERATION_BUDGET);
+    let full = cpu_trace(&splats, &[], &rays, ITERATION_BUDGET);
     assert_eq!(full[0].aborted, 0);
     assert_ne!(full[0].splat, NO_SPLAT);
 }
@@ -327,10 +346,7 @@ fn traversal_on_the_cornell_box() {
     let scene = lobelight::scene::load(std::path::Path::new("scenes/cornell.toml")).unwrap();
     let splats = &scene.splats;
     let grid = cpu_grid(splats);
-    let geo = Geometry {
-        grid: &grid,
-        splats,
-    };
+    let geo = scene.geometry(&grid);
     let rays = random_rays(splats, 2_000, 61);
     for (k, r) in rays.iter().enumerate() {
         let mut budget = ITERATION_BUDGET;
@@ -342,7 +358,7 @@ fn traversal_on_the_cornell_box() {
             r.t_max,
             &mut budget,
         );
-        let (t, s) = brute_force(splats, r);
+        let (t, s) = brute_force_clipped(splats, &scene.clips, r);
         let same = h.splat == s
             || (h.splat != NO_SPLAT && s != NO_SPLAT && (h.t - t).abs() <= 1e-5 * t.max(1.0));
         assert!(
@@ -351,4 +367,62 @@ fn traversal_on_the_cornell_box() {
             h.splat, h.t
         );
     }
+}
+
+/// A box's disks end at its edges (`SurfaceClip`): a ray falling past the box's side, through
+/// where the top face's disks overhang it, meets nothing, on the device and the mirror, while a
+/// ray just inside the edge, or on it, still meets the top face. Unclipped, the overhang would
+/// stop the first ray though a ray from the side face below passes it from behind.
+#[test]
+fn box_disks_end_at_the_box_edges() {
+    let toml = r#"
+        [[light]]
+        type = "point"
+        position = [0.0, 2.0, 0.0]
+        power = [1.0, 1.0, 1.0]
+        [[object]]
+        shape = "box"
+        scale = 0.3
+        spacing = 0.025
+    "#;
+    let scene = lobelight::scene::parse(std::path::Path::new("box.toml"), toml).unwrap();
+    // The top face's disks on the row z = 0.0125 reach x = 0.2875 + 0.0186 past the side x = 0.3.
+    let overhang = scene
+        .splats
+        .iter()
+        .filter(|s| s.normal[1] > 0.5)
+        .map(|s| s.center[0] + s.radius)
+        .fold(f32::MIN, f32::max);
+    assert!(
+        overhang > 0.305,
+        "the top face's disks reach x = {overhang}"
+    );
+    let down = |x: f32| ray([x, 1.0, 0.0125], [0.0, -1.0, 0.0], NO_SPLAT);
+    let rays = [down(0.303), down(0.297), down(0.3)];
+    let top = |h: &Hit| h.splat != NO_SPLAT && scene.splats[h.splat as usize].normal[1] > 0.5;
+    let gpu = common::gpu();
+    let on_gpu = gpu_trace(&gpu, &scene.splats, &scene.clips, &rays, ITERATION_BUDGET);
+    let on_cpu = cpu_trace(&scene.splats, &scene.clips, &rays, ITERATION_BUDGET);
+    for (name, hits) in [("GPU", &on_gpu), ("CPU", &on_cpu)] {
+        assert_eq!(
+            hits[0].splat, NO_SPLAT,
+            "{name}: the ray past the side hit a disk"
+        );
+        assert!(
+            top(&hits[1]),
+            "{name}: the ray inside the edge missed the top face"
+        );
+        assert!(
+            top(&hits[2]),
+            "{name}: the ray on the edge missed the top face"
+        );
+        assert!(
+            (hits[1].t - 0.7).abs() < 1e-4,
+            "{name}: top face at t = {}",
+            hits[1].t
+        );
+    }
+    // Without the clips the overhang stops the first ray.
+    let unclipped = cpu_trace(&scene.splats, &[], &rays[..1], ITERATION_BUDGET);
+    assert!(top(&unclipped[0]), "the overhang did not reach the ray");
 }

@@ -5,8 +5,9 @@
 // covers, at the points of a COVERAGE_GRID^2 grid over the disk in the splat's plane that lie
 // within R: a point is covered where a disk of the same surface (its normal within
 // SURFACE_COS_MIN of the splat's, as the photons' test) lies within the photons' slab of it
-// and reaches over it. The splat's irradiance is divided by that share (at least
-// COVERAGE_MIN). The points are searched in the splat grid's cell that holds them. Eight of
+// and reaches over it where its surface keeps it (SurfaceClip: photons pass a box's disks
+// past its edges). The splat's irradiance is divided by that share (at least COVERAGE_MIN).
+// The points are searched in the splat grid's cell that holds them. Eight of
 // them, near the rim (COVERAGE_PROBES), are tested first: a splat whose probes are all covered
 // lies inside its face and keeps its estimate, so that a dense scan's splats, nearly all inside,
 // cost 8 point tests and not 69. One invocation per splat. CPU mirror: src/cpu/em_coverage.rs.
@@ -65,7 +66,8 @@ fn covered(q: vec3<f32>, n: vec3<f32>, slab: f32, budget: ptr<function, u32>) ->
         }
         let off = dot(q - s.center, s.normal);
         let p = q - off * s.normal - s.center;
-        if abs(off) <= slab && dot(p, p) <= s.radius * s.radius {
+        // Where the disk's surface ends (a box's edge), it covers nothing, as photons see it.
+        if abs(off) <= slab && dot(p, p) <= s.radius * s.radius && surface_keeps(s, q - off * s.normal) {
             return true;
         }
     }

@@ -89,7 +89,7 @@ fn blended_normal(o: vec3<f32>, d: vec3<f32>, hit: Hit, skip: u32) -> vec3<f32> 
                     if j == skip || dot(s.normal, h.normal) < FRONT_COS_MIN {
                         continue;
                     }
-                    let t = intersect_disk(s, o, d);
+                    let t = intersect_splat(s, o, d);
                     if !(t >= hit.t && t <= hit.t + BLEND_DEPTH * s.radius) {
                         continue;
                     }

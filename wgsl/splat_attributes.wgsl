@@ -9,6 +9,7 @@
 
 // #import splat
 // #import splat_shading
+// #import drawn_clip
 
 @group(0) @binding(0) var<uniform> cam: Camera;
 // #paged
@@ -25,10 +26,17 @@
 @group(0) @binding(13) var<storage, read> selected_count: array<u32>;
 // #paged
 @group(0) @binding(14) var<storage, read> selected: array<u32>;
+// Where each surface's disks end (drawn_clip.wgsl).
+@group(0) @binding(15) var<storage, read> drawn_clips: array<SurfaceClip>;
 
 // Whether splat s is of the surface the pixel sees (same_surface).
 fn in_front(v: SplatVertex, s: Splat) -> bool {
     return same_surface(textureLoad(front, vec2<i32>(v.position.xy), 0).x, s.normal);
+}
+
+// Whether a fragment's hit at p on a disk of `SplatVertex.clip` `clip` is drawn.
+fn clip_passes(clip: u32, p: vec3<f32>) -> bool {
+    return clip == NO_CLIP || clip_keeps(drawn_clips[clip], p);
 }
 
 @vertex
@@ -37,7 +45,9 @@ fn vs_main(@builtin(vertex_index) k: u32, @builtin(instance_index) b: u32) -> Sp
     if i >= splats_len() {
         return surplus_vertex(i);
     }
-    return splat_vertex(cam, splats_at(i), i, instance_corner(k));
+    let s = splats_at(i);
+    return clipped_vertex(splat_vertex(cam, s, i, instance_corner(k)), s,
+                          drawn_clips[s.object]);
 }
 
 @fragment
@@ -46,7 +56,7 @@ fn fs_main(v: SplatVertex) -> Attributes {
     s.radius = v.radius;
     let d = pixel_ray(cam, v.position.xy);
     let h = splat_hit(s, cam.eye, d);
-    if !covers(cam, h, d) || !in_front(v, s) {
+    if !covers(cam, h, d) || !clip_passes(v.clip, cam.eye + h.t * d) || !in_front(v, s) {
         discard;
     }
     let w = splat_weight(h.q);
@@ -76,7 +86,8 @@ fn vs_baked(@builtin(vertex_index) k: u32, @builtin(instance_index) b: u32) -> S
     }
     let listed = selected_at(i);
     let s = drawn_splat(splats_at(listed), drawn_at(listed));
-    var out = splat_vertex(cam, s, listed, instance_corner(k));
+    let v = splat_vertex(cam, s, listed, instance_corner(k));
+    var out = clipped_vertex(v, s, drawn_clips[s.object]);
     out.radiance = shaded_at(listed).xyz;
     return out;
 }
@@ -90,7 +101,7 @@ fn fs_baked(v: SplatVertex) -> BakedAttributes {
     let s = vertex_splat(v);
     let d = pixel_ray(cam, v.position.xy);
     let h = splat_hit(s, cam.eye, d);
-    if !covers(cam, h, d) || !in_front(v, s) {
+    if !covers(cam, h, d) || !clip_passes(v.clip, cam.eye + h.t * d) || !in_front(v, s) {
         discard;
     }
     let w = splat_weight(h.q);

@@ -24,6 +24,8 @@
 @group(0) @binding(15) var geometry_sum: texture_storage_2d<rgba32float, write>;
 @group(0) @binding(16) var diffuse_sum: texture_storage_2d<rgba32float, write>;
 @group(0) @binding(17) var specular_sum: texture_storage_2d<rgba32float, write>;
+// Where each surface's disks end (drawn_clip.wgsl).
+@group(0) @binding(18) var<storage, read> drawn_clips: array<SurfaceClip>;
 
 const WG: u32 = 64u;
 
@@ -51,7 +53,7 @@ fn main(@builtin(workgroup_id) wg: vec3<u32>, @builtin(num_workgroups) num_wg: v
     for (var k = begin; k < end; k++) {
         let s = splats_at(tile_splats[k]);
         let h = splat_hit(s, cam.eye, d);
-        if covers(cam, h, d) {
+        if covers(cam, h, d) && clip_keeps(drawn_clips[s.object], cam.eye + h.t * d) {
             let z = view_depth(cam, h.t * z_of + cam.depth_tolerance * s.radius);
             if z > nearest {
                 nearest = z;
@@ -69,7 +71,8 @@ fn main(@builtin(workgroup_id) wg: vec3<u32>, @builtin(num_workgroups) num_wg: v
         let i = tile_splats[k];
         let s = splats_at(i);
         let h = splat_hit(s, cam.eye, d);
-        if !covers(cam, h, d) || !(view_depth(cam, h.t * z_of) >= nearest)
+        if !covers(cam, h, d) || !clip_keeps(drawn_clips[s.object], cam.eye + h.t * d)
+            || !(view_depth(cam, h.t * z_of) >= nearest)
             || !same_surface(front, s.normal) {
             continue;
         }

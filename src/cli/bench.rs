@@ -290,7 +290,7 @@ pub fn em(
                     &scene.splats,
                     &scene.materials,
                     FitShape::default(),
-                    Some((&grid, &setup)),
+                    Some((scene.geometry(&grid), &setup)),
                 )
             };
             let fits = [fit(&cfg)?, fit(&skip_cfg)?, fit(&fixed_cfg)?];

@@ -25,7 +25,6 @@ use crate::renderer::FrameRenderer;
 use crate::scene::Scene;
 use crate::scene::file::CameraDesc;
 use crate::shared::tone::srgb_byte;
-use crate::shared::trace::Geometry;
 use crate::tone::ToneConfig;
 
 #[derive(Clone, Copy, Debug, Default, PartialEq, Eq, clap::ValueEnum, Serialize)]
@@ -696,10 +695,7 @@ fn render_photons(
             let (map, grid, grid_ms) = cpu::trace_scene(scene, &cfg, &mut on_batch)?;
             bar.finish_and_clear();
             let t = Instant::now();
-            let geo = Geometry {
-                grid: &grid,
-                splats: &scene.splats,
-            };
+            let geo = scene.geometry(&grid);
             let hdr = cpu::photon_image(&cam, &scene.materials, &map.photons, &geo, scale)?;
             (hdr, map.stats, grid_ms, ms_since(t))
         }

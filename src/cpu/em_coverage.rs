@@ -61,7 +61,7 @@ fn covered(geo: &Geometry, q: Vec3, n: Vec3, slab: f32, budget: &mut u32) -> boo
         }
         let off = (q - Vec3::from(s.center)).dot(sn);
         let p = q - off * sn - Vec3::from(s.center);
-        if off.abs() <= slab && p.dot(p) <= s.radius * s.radius {
+        if off.abs() <= slab && p.dot(p) <= s.radius * s.radius && geo.keeps(s, q - off * sn) {
             return true;
         }
     }

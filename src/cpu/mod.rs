@@ -140,10 +140,7 @@ pub fn trace_scene(
     let t = Instant::now();
     let grid = scene_grid(scene)?;
     let grid_ms = ms_since(t);
-    let geo = Geometry {
-        grid: &grid,
-        splats: &scene.splats,
-    };
+    let geo = scene.geometry(&grid);
     let map = trace_photons(&scene.lights, &scene.materials, &geo, cfg, progress)?;
     Ok((map, grid, grid_ms))
 }
@@ -182,13 +179,13 @@ pub fn fit_lobes_gathering(
     splats: &[Splat],
     materials: &[Material],
     shape: FitShape,
-    gathering: Option<(&SplatGrid, &GatherSetup)>,
+    gathering: Option<(Geometry, &GatherSetup)>,
 ) -> Result<LobeMap> {
     let t = Instant::now();
     let splat_count = u32::try_from(splats.len())
         .map_err(|_| Error::Invalid("too many splats for the lobe fit".into()))?;
     let mut ex = match gathering {
-        Some((grid, _)) => CpuExecutor::tracing(Geometry { grid, splats }),
+        Some((geo, _)) => CpuExecutor::tracing(geo),
         None => CpuExecutor::default(),
     };
     let lights = match gathering {

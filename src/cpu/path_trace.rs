@@ -18,7 +18,7 @@ use crate::shared::splat::{
     SHADOW_RAY_BUDGET, SHOW_DIRECT_DIFFUSE, SHOW_DIRECT_SPECULAR, SHOW_INDIRECT_DIFFUSE,
     SHOW_INDIRECT_SPECULAR, pixel_ray, splat_weight,
 };
-use crate::shared::trace::{FAR, Geometry, intersect_disk, trace_ray};
+use crate::shared::trace::{FAR, Geometry, trace_ray};
 use crate::shared::ward::{mean3, sample_bounce, ward_pdf, ward_specular};
 use crate::types::{Camera, Hit, Light, Material, NO_SPLAT, PathParams, light_kind};
 
@@ -81,7 +81,7 @@ fn blended_normal(geo: &Geometry, o: Vec3, d: Vec3, hit: &Hit, skip: u32) -> Vec
                     if j == skip || sn.dot(hn) < FRONT_COS_MIN {
                         continue;
                     }
-                    let t = intersect_disk(s, o, d);
+                    let t = geo.intersect(s, o, d);
                     if !(t >= hit.t && t <= hit.t + BLEND_DEPTH * s.radius) {
                         continue;
                     }

@@ -7,8 +7,10 @@ use glam::{Vec3, Vec4};
 
 use super::splat_shading::Shading;
 use super::splat_visibility::{TILE, Tiles, Visible, gather, raster};
-use crate::shared::splat::{covers, pixel_ray, same_surface, splat_hit, splat_weight, view_depth};
-use crate::types::{Camera, DIRECT_BAKED, Material, Splat};
+use crate::shared::splat::{
+    covers, drawn_keeps, pixel_ray, same_surface, splat_hit, splat_weight, view_depth,
+};
+use crate::types::{Camera, DIRECT_BAKED, Material, Splat, SurfaceClip};
 
 /// The four blended targets of the attribute pass (see the WGSL file for what each holds).
 #[derive(Clone, Debug, Default)]
@@ -23,6 +25,7 @@ pub struct Attributes {
 pub fn splat_attributes(
     cam: &Camera,
     splats: &[Splat],
+    clips: &[SurfaceClip],
     materials: &[Material],
     shading: &Shading,
     shaded: &[[f32; 4]],
@@ -42,7 +45,7 @@ pub fn splat_attributes(
             let s = &splats[i as usize];
             let d = pixel_ray(cam, centre);
             let h = splat_hit(s, eye, d);
-            if !covers(cam, h, d) {
+            if !covers(cam, h, d) || !drawn_keeps(clips, s, eye + h.t * d) {
                 return;
             }
             // Depth test `GreaterEqual` against the visibility pass, no write.

@@ -10,10 +10,10 @@ use rayon::prelude::*;
 
 use crate::shared::octahedral::oct_encode;
 use crate::shared::splat::{
-    SPLAT_CORNERS, clip_position, covers, faces_camera, pixel_ray, splat_corner, splat_hit,
-    view_depth,
+    SPLAT_CORNERS, clip_position, covers, drawn_keeps, faces_camera, pixel_ray, splat_corner,
+    splat_hit, view_depth,
 };
-use crate::types::{Camera, Splat};
+use crate::types::{Camera, Splat, SurfaceClip};
 
 /// Tile edge in pixels.
 pub const TILE: u32 = 32;
@@ -149,7 +149,12 @@ pub fn gather<P: Copy + Default>(tiles: &Tiles, blocks: &[(Rect, Vec<P>)]) -> Ve
 /// The visibility pass's targets: per pixel, the greatest (nearest) reversed depth of a
 /// covering splat's hit pushed back by the tolerance, 0 where nothing covers, and the normal
 /// of the first splat that reached it.
-pub fn splat_visibility(cam: &Camera, splats: &[Splat], tiles: &Tiles) -> Vec<Visible> {
+pub fn splat_visibility(
+    cam: &Camera,
+    splats: &[Splat],
+    clips: &[SurfaceClip],
+    tiles: &Tiles,
+) -> Vec<Visible> {
     let eye = Vec3::from(cam.eye);
     let forward = Vec3::from(cam.forward);
     let blocks = raster(
@@ -159,7 +164,7 @@ pub fn splat_visibility(cam: &Camera, splats: &[Splat], tiles: &Tiles) -> Vec<Vi
             let s = &splats[i as usize];
             let d = pixel_ray(cam, centre);
             let h = splat_hit(s, eye, d);
-            if !covers(cam, h, d) {
+            if !covers(cam, h, d) || !drawn_keeps(clips, s, eye + h.t * d) {
                 return;
             }
             let z = h.t * d.dot(forward);

@@ -4,7 +4,7 @@
 use bytemuck::Pod;
 
 use super::Gpu;
-use super::scene::GpuScene;
+use super::scene::{GEOMETRY_BINDINGS, GpuScene};
 use crate::error::Result;
 use crate::sequence::Executor;
 
@@ -12,7 +12,7 @@ pub struct GpuExecutor<'a> {
     gpu: &'a Gpu,
     encoder: &'a mut wgpu::CommandEncoder,
     /// Bind group 1 of the tracing stages (`GpuScene::geometry`).
-    geometry: Option<[&'a wgpu::Buffer; 5]>,
+    geometry: Option<[&'a wgpu::Buffer; GEOMETRY_BINDINGS]>,
 }
 
 impl<'a> GpuExecutor<'a> {

@@ -4,7 +4,7 @@
 //! viewer or a benchmark draws frame after frame with nothing but a new camera uniform.
 
 use super::exec::GpuExecutor;
-use super::scene::GpuScene;
+use super::scene::{GEOMETRY_BINDINGS, GpuScene};
 use std::collections::HashMap;
 use std::sync::{Mutex, OnceLock};
 
@@ -41,6 +41,11 @@ const SHADED_BINDING: u32 = 11;
 /// `vs_baked`'s binding of the radius `splat_select` chose for each splat; the list's length
 /// and entries follow it.
 const DRAWN_BINDING: u32 = 12;
+/// The drawing passes' bindings of the surfaces' clips (`drawn_clips`, each after the pass's
+/// own: `splat_visibility`'s, `splat_attributes`' and `splat_compute`'s).
+const VISIBILITY_CLIP_BINDING: u32 = 5;
+const ATTRIBUTES_CLIP_BINDING: u32 = 15;
+const COMPUTE_CLIP_BINDING: u32 = 18;
 /// The bindings of `wgsl/shared/splat_shading.wgsl` that only the direct bake's shading reads
 /// (the lights, the baked light and visibility): `splat_shade` binds them, the fragment
 /// shading of the other passes does not, so their derived layouts lack them.
@@ -63,7 +68,9 @@ pub struct SceneBuffers<'a> {
     pub direct: &'a wgpu::Buffer,
     pub visibility: &'a wgpu::Buffer,
     /// Bind group 1 of tracing stages (`GpuScene::geometry`).
-    pub geometry: [&'a wgpu::Buffer; 5],
+    pub geometry: [&'a wgpu::Buffer; GEOMETRY_BINDINGS],
+    /// Where each surface's disks end (`GpuScene::clips`), which the drawing passes also read.
+    pub clips: &'a wgpu::Buffer,
     /// What `splat_shade` writes for frames of baked direct light: per splat, the radiance
     /// it sends towards the eye.
     pub shaded: &'a wgpu::Buffer,
@@ -214,6 +221,7 @@ impl FrameScene {
             direct: &self.direct.direct,
             visibility: &self.direct.visibility,
             geometry: on_gpu.geometry(),
+            clips: &on_gpu.clips,
             shaded: &self.shaded,
             selected_count: &self.selected_count,
             selected: &self.selected,
@@ -391,7 +399,7 @@ fn shade_layouts(gpu: &Gpu, paging: &Paging) -> Result<[wgpu::BindGroupLayout; 2
         let pages = paging.of(&p.name).map_or(1, |l| l.pages);
         geometry.extend((1..pages).map(|k| buffer_entry(p.binding + k * PAGE_BINDING_STEP, READ)));
     }
-    geometry.extend((1..5).map(|b| buffer_entry(b, READ)));
+    geometry.extend((1..GEOMETRY_BINDINGS as u32).map(|b| buffer_entry(b, READ)));
     Ok([frame, geometry].map(|entries| {
         gpu.device
             .create_bind_group_layout(&wgpu::BindGroupLayoutDescriptor {
@@ -529,8 +537,8 @@ impl Raster {
 }
 
 /// Storage buffers `splat_compute` binds: the splats, the eight of `splat_shading`, the tile
-/// lists' starts and entries, and `splat_shade`'s output.
-const SPLAT_COMPUTE_BUFFERS: u32 = 12;
+/// lists' starts and entries, `splat_shade`'s output and the surfaces' clips.
+const SPLAT_COMPUTE_BUFFERS: u32 = 13;
 
 /// Whether the device can run the compute splatter: it stores f32 targets from a compute pass
 /// and binds its buffers in one stage.
@@ -834,10 +842,11 @@ impl SplatPipelines {
         buffers.extend([&tile_params, &lists.start, &lists.splats, scene.shaded]);
         let paging = gpu.paging("splat_compute", &[&buffers])?;
         let pipeline = &gpu.variant_paged("splat_compute", &[], &[], &paging)?;
-        let bound: Vec<_> = (0u32..)
+        let mut bound: Vec<_> = (0u32..)
             .zip(buffers.iter().copied())
             .filter(|(b, _)| !DIRECT_BAKE_BINDINGS.contains(b))
             .collect();
+        bound.push((COMPUTE_CLIP_BINDING, scene.clips));
         let mut entries = gpu.paged_entries_at("splat_compute", 0, &bound, &paging)?;
         entries.extend(
             out.sums
@@ -928,6 +937,7 @@ impl SplatPipelines {
                 (2, scene.drawn),
                 (3, scene.selected_count),
                 (4, scene.selected),
+                (VISIBILITY_CLIP_BINDING, scene.clips),
             ];
             let (pipeline, vis_group) = bound(Raster::Visibility, &list)?;
             let front = Some(wgpu::RenderPassColorAttachment {
@@ -959,7 +969,7 @@ impl SplatPipelines {
             // `fs_main` reads none of the direct bake's bindings (the lights, the bake's two
             // buffers), so its derived layout has none; `fs_baked` reads the camera, the splats
             // and what `splat_shade` wrote.
-            let list: Vec<(u32, &wgpu::Buffer)> = match baked {
+            let mut list: Vec<(u32, &wgpu::Buffer)> = match baked {
                 true => vec![
                     (0, cam_buf),
                     (1, scene.splats),
@@ -973,6 +983,7 @@ impl SplatPipelines {
                     .filter(|(b, _)| !DIRECT_BAKE_BINDINGS.contains(b))
                     .collect(),
             };
+            list.push((ATTRIBUTES_CLIP_BINDING, scene.clips));
             let which = match baked {
                 true => Raster::AttributesBaked,
                 false => Raster::Attributes,

@@ -9,10 +9,16 @@ use crate::error::Result;
 use crate::grid::grid_params;
 use crate::photons::ms_since;
 use crate::scene::Scene;
+use crate::types::{Splat, SurfaceClip};
+
+/// Buffers in bind group 1 of the tracing stages (`GpuScene::geometry`).
+pub const GEOMETRY_BINDINGS: usize = 6;
 
 pub struct GpuScene {
     pub splats: wgpu::Buffer,
     pub materials: wgpu::Buffer,
+    /// `Scene::clips`, at least one entry (a zero clip keeps every hit).
+    pub clips: wgpu::Buffer,
     pub grid: GpuGrid,
     /// Time to upload the splats and build the grid.
     pub grid_ms: f64,
@@ -25,22 +31,39 @@ impl GpuScene {
         let splats = gpu.storage("splats", &scene.splats)?;
         let materials = gpu.storage("materials", &scene.materials)?;
         let grid = build_grid(gpu, &params, &splats)?;
+        let clips = gpu.storage("surface clips", &device_clips(&scene.clips, &scene.splats))?;
         Ok(GpuScene {
             splats,
             materials,
+            clips,
             grid,
             grid_ms: ms_since(t),
         })
     }
 
     /// Bind group 1 of tracing stages, in binding order (see `wgsl/shared/trace.wgsl`).
-    pub fn geometry(&self) -> [&wgpu::Buffer; 5] {
+    pub fn geometry(&self) -> [&wgpu::Buffer; GEOMETRY_BINDINGS] {
         [
             &self.grid.params_buf,
             &self.splats,
             &self.grid.cell_start,
             &self.grid.cell_splats,
             &self.grid.cell_dist,
+            &self.clips,
         ]
     }
+}
+
+/// A scene's surface clips as the device binds them: an entry for every surface a splat names
+/// (a zero clip, which keeps every hit, for those the scene has none for, as the mirror reads
+/// them), at least one.
+pub fn device_clips(clips: &[SurfaceClip], splats: &[Splat]) -> Vec<SurfaceClip> {
+    let named = splats
+        .iter()
+        .map(|s| s.object as usize + 1)
+        .max()
+        .unwrap_or(0);
+    let mut out = clips.to_vec();
+    out.resize(clips.len().max(named).max(1), SurfaceClip::default());
+    out
 }

@@ -12,9 +12,10 @@ use std::path::{Path, PathBuf};
 use glam::{Affine3A, Quat, Vec3};
 
 use crate::error::{Error, Result};
-use crate::grid::{GridConfig, splat_is_sane};
+use crate::grid::{GridConfig, SplatGrid, splat_is_sane};
+use crate::shared::trace::Geometry;
 
-use crate::types::{Light, Material, Splat, light_kind};
+use crate::types::{Light, Material, Splat, SurfaceClip, light_kind};
 pub use file::BakeDesc;
 use file::{Anchor, CameraDesc, LightDesc, MaterialDesc, ObjectDesc, Scale, SceneFile, ShapeKind};
 use shapes::Disk;
@@ -43,6 +44,9 @@ pub struct Scene {
     /// a Cornell box's five walls apart ("#1 cornell_box floor"), so that an object-ID image
     /// tells the walls apart.
     pub surfaces: Vec<String>,
+    /// Where each surface's disks end, one per surface (`SurfaceClip`): a box's and a quad's
+    /// at its edges; none for spheres and models. A surface past its end clips nothing.
+    pub clips: Vec<SurfaceClip>,
     /// Where this scene's origin lies in the file's coordinates (`recentre`); zero for a
     /// scene near the origin.
     pub origin: Vec3,
@@ -79,7 +83,18 @@ impl Scene {
         self.lights.iter_mut().for_each(|l| shift(&mut l.position));
         shift(&mut self.camera.eye);
         shift(&mut self.camera.target);
+        let moved = Affine3A::from_translation(-centre);
+        self.clips.iter_mut().for_each(|c| *c = c.mapped(&moved));
         self.origin += centre;
+    }
+
+    /// What rays trace in this scene, through its splat grid `grid`.
+    pub fn geometry<'a>(&'a self, grid: &'a SplatGrid) -> Geometry<'a> {
+        Geometry {
+            grid,
+            splats: &self.splats,
+            clips: &self.clips,
+        }
     }
 
     /// Bounds of the splat disks.
@@ -166,6 +181,7 @@ pub fn parse(path: &Path, text: &str) -> Result<Scene> {
     let mut splats = Vec::new();
     let mut objects = Vec::new();
     let mut surfaces = Vec::new();
+    let mut clips = Vec::new();
     let mut extra_materials = Vec::new();
     for (k, obj) in file.objects.iter().enumerate() {
         let span = obj.span();
@@ -184,6 +200,7 @@ pub fn parse(path: &Path, text: &str) -> Result<Scene> {
             Built {
                 splats: &mut splats,
                 surfaces: &mut surfaces,
+                clips: &mut clips,
                 name: surface_name(k, obj),
                 extra_materials: &mut extra_materials,
                 first_extra: material_names.len() as u32,
@@ -226,6 +243,7 @@ pub fn parse(path: &Path, text: &str) -> Result<Scene> {
         lights,
         objects,
         surfaces,
+        clips,
         origin: Vec3::ZERO,
     };
     scene.recentre();
@@ -533,6 +551,7 @@ fn set_keys(o: &ObjectDesc) -> Vec<&'static str> {
 struct Built<'a> {
     splats: &'a mut Vec<Splat>,
     surfaces: &'a mut Vec<String>,
+    clips: &'a mut Vec<SurfaceClip>,
     name: String,
     /// Materials the object's model file defines (MTL), appended after the scene's own
     /// `first_extra` materials.
@@ -606,6 +625,7 @@ fn build_object(
     let Built {
         splats,
         surfaces,
+        clips,
         name,
         extra_materials,
         first_extra,
@@ -621,23 +641,25 @@ fn build_object(
     let diffuse_of = |mat: u32| material_descs[mat as usize].diffuse.rgb();
     let before = splats.len();
     // Each call is one surface, named `name` plus `part` where an object has several.
-    let mut push = |disks: &[Disk], mat: u32, diffuse: Option<&[[f32; 3]]>, part: &str| {
-        let object = surfaces.len() as u32;
-        surfaces.push(match part {
-            "" => name.clone(),
-            part => format!("{name} {part}"),
-        });
-        for (k, d) in disks.iter().enumerate() {
-            splats.push(Splat {
-                center: d.center.into(),
-                radius: d.radius,
-                normal: d.normal.into(),
-                material: mat,
-                diffuse: diffuse.map_or_else(|| diffuse_of(mat), |c| c[k]),
-                object,
+    let mut push =
+        |disks: &[Disk], mat: u32, diffuse: Option<&[[f32; 3]]>, part: &str, clip: SurfaceClip| {
+            let object = surfaces.len() as u32;
+            clips.push(clip);
+            surfaces.push(match part {
+                "" => name.clone(),
+                part => format!("{name} {part}"),
             });
-        }
-    };
+            for (k, d) in disks.iter().enumerate() {
+                splats.push(Splat {
+                    center: d.center.into(),
+                    radius: d.radius,
+                    normal: d.normal.into(),
+                    material: mat,
+                    diffuse: diffuse.map_or_else(|| diffuse_of(mat), |c| c[k]),
+                    object,
+                });
+            }
+        };
     let planned = match o.shape {
         ShapeKind::CornellBox => shapes::cornell_count(&m, spacing),
         ShapeKind::Box => shapes::cube_count(&m, spacing),
@@ -669,23 +691,37 @@ fn build_object(
                     4 => right,
                     _ => material,
                 };
-                push(&disks[start..start + n], mat, None, CORNELL_WALLS[wall]);
+                // Each wall ends where the box does.
+                let clip = shapes::cube_clip(&m, spacing);
+                push(
+                    &disks[start..start + n],
+                    mat,
+                    None,
+                    CORNELL_WALLS[wall],
+                    clip,
+                );
                 start += n;
             }
         }
         ShapeKind::Box => {
             shapes::cube(&m, spacing, &mut disks);
-            push(&disks, material, None, "");
+            push(&disks, material, None, "", shapes::cube_clip(&m, spacing));
         }
         ShapeKind::Sphere => {
             let r = positive(o.radius.unwrap_or(1.0), "radius").map_err(at)?;
             shapes::sphere(&m, r, spacing, &mut disks);
-            push(&disks, material, None, "");
+            push(&disks, material, None, "", SurfaceClip::default());
         }
         ShapeKind::Quad => {
             let size = positive_size(o.size.unwrap_or([1.0, 1.0])).map_err(at)?;
             shapes::quad(&m, size, spacing, &mut disks);
-            push(&disks, material, None, "");
+            push(
+                &disks,
+                material,
+                None,
+                "",
+                shapes::quad_clip(&m, size, spacing),
+            );
         }
         ShapeKind::Model => {
             let rel = o
@@ -744,7 +780,8 @@ fn build_object(
                             None => vec![albedo; pick.len()],
                         };
                         if !disks.is_empty() {
-                            push(&disks, index, Some(&albedos), &mm.name);
+                            let none = SurfaceClip::default();
+                            push(&disks, index, Some(&albedos), &mm.name, none);
                         }
                     }
                     // Faces with no material keep their vertex colours, as in a model with none.
@@ -752,10 +789,11 @@ fn build_object(
                     let rest_colors: Option<Vec<[f32; 3]>> =
                         colors.map(|c| groups[none].iter().map(|&i| c[i]).collect());
                     if !rest.is_empty() {
-                        push(&rest, material, rest_colors.as_deref(), "");
+                        let none = SurfaceClip::default();
+                        push(&rest, material, rest_colors.as_deref(), "", none);
                     }
                 }
-                None => push(&placed, material, colors, ""),
+                None => push(&placed, material, colors, "", SurfaceClip::default()),
             }
             source = Some(rel.clone());
         }

@@ -4,6 +4,8 @@
 
 use glam::{Affine3A, Mat3, Vec3};
 
+use crate::types::SurfaceClip;
+
 /// A splat before material assignment.
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct Disk {
@@ -108,6 +110,25 @@ pub fn quad(m: &Affine3A, size: [f32; 2], spacing: f32, out: &mut Vec<Disk>) {
         out,
     );
 }
+
+/// Where `quad`'s disks end: its rectangle, built from the transformed edges and normal so that
+/// a transform that flattens local z (the quad's own normal) still clips.
+pub fn quad_clip(m: &Affine3A, size: [f32; 2], spacing: f32) -> SurfaceClip {
+    let u = m.transform_vector3(Vec3::new(size[0] / 2.0, 0.0, 0.0));
+    let v = m.transform_vector3(Vec3::new(0.0, size[1] / 2.0, 0.0));
+    let n = u.cross(v).normalize_or_zero();
+    let rect = Affine3A::from_cols(u.into(), v.into(), n.into(), m.translation);
+    SurfaceClip::of_cube(&rect, CLIP_SLACK * spacing)
+}
+
+/// Where `cube`'s (or `cornell_walls`') disks end: the cube.
+pub fn cube_clip(m: &Affine3A, spacing: f32) -> SurfaceClip {
+    SurfaceClip::of_cube(m, CLIP_SLACK * spacing)
+}
+
+/// How far past its shape a clipped surface's hit still counts, in splat spacings: far above
+/// a hit point's rounding, far below the disks' overhang (a third of a spacing).
+pub const CLIP_SLACK: f32 = 1e-3;
 
 /// A sphere of `radius` (local units) with a Fibonacci lattice at about `spacing` (world units).
 pub fn sphere(m: &Affine3A, radius: f32, spacing: f32, out: &mut Vec<Disk>) {

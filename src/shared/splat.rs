@@ -7,7 +7,7 @@ use glam::{Vec2, Vec3, Vec4};
 
 use super::lobes::FAMILY_WARD;
 use super::sampling::frame_of;
-use crate::types::{Camera, Material, Splat, SplatLod};
+use crate::types::{Camera, Material, Splat, SplatLod, SurfaceClip};
 
 pub const KERNEL_SHARPNESS: f32 = 2.0;
 
@@ -142,6 +142,14 @@ pub fn splat_hit(s: &Splat, o: Vec3, d: Vec3) -> SplatHit {
 
 pub fn covers(cam: &Camera, h: SplatHit, d: Vec3) -> bool {
     h.q <= 1.0 && h.t * d.dot(Vec3::from(cam.forward)) >= cam.near
+}
+
+/// Twin of `wgsl/shared/drawn_clip.wgsl`: whether a pixel's hit at `p` on splat `s` is drawn,
+/// where its surface (`clips[s.object]`, none past the end) keeps it.
+pub fn drawn_keeps(clips: &[SurfaceClip], s: &Splat, p: Vec3) -> bool {
+    clips
+        .get(s.object as usize)
+        .is_none_or(|c| c.holds_disk(s) || c.keeps(p))
 }
 
 pub fn splat_weight(q: f32) -> f32 {

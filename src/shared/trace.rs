@@ -1,12 +1,13 @@
 //! Twin of `wgsl/shared/trace.wgsl`: the nearest front-facing disk along a ray through the
-//! splat grid, with the same hit policy and the same traversal steps (see the WGSL file).
+//! splat grid, where its surface keeps it, with the same hit policy and the same traversal
+//! steps (see the WGSL file).
 // `!(x < y)` is meant: NaN must fail these tests, as it does in the WGSL twin.
 #![allow(clippy::neg_cmp_op_on_partial_ord)]
 
 use glam::{BVec3, IVec3, Vec3};
 
 use crate::grid::SplatGrid;
-use crate::types::{Hit, NO_SPLAT, Splat};
+use crate::types::{Hit, NO_SPLAT, Splat, SurfaceClip};
 
 pub const PARALLEL_COS: f32 = 1e-6;
 pub const FAR: f32 = 3.0e38;
@@ -16,6 +17,25 @@ pub const FAR: f32 = 3.0e38;
 pub struct Geometry<'a> {
     pub grid: &'a SplatGrid,
     pub splats: &'a [Splat],
+    /// Per surface (`Splat::object`), where its disks end; a surface past the end clips nothing.
+    pub clips: &'a [SurfaceClip],
+}
+
+impl Geometry<'_> {
+    /// Ray parameter of the hit with splat `s`'s disk where its surface keeps it, or −1.
+    pub fn intersect(&self, s: &Splat, o: Vec3, d: Vec3) -> f32 {
+        let t = intersect_disk(s, o, d);
+        if t < 0.0 || self.keeps(s, o + t * d) {
+            t
+        } else {
+            -1.0
+        }
+    }
+
+    /// Whether splat `s`'s surface keeps the point `p` of its disk (`SurfaceClip`).
+    pub fn keeps(&self, s: &Splat, p: Vec3) -> bool {
+        self.clips.get(s.object as usize).is_none_or(|c| c.keeps(p))
+    }
 }
 
 /// Ray parameter of the hit with a disk's front face, or −1.
@@ -112,7 +132,7 @@ pub fn trace_ray(geo: &Geometry, o: Vec3, d: Vec3, skip: u32, t_max: f32, budget
                 if s == skip {
                     continue;
                 }
-                let th = intersect_disk(&geo.splats[s as usize], o, d);
+                let th = geo.intersect(&geo.splats[s as usize], o, d);
                 if th > 0.0 && th < hit.t && th <= limit {
                     hit.t = th;
                     hit.splat = s;

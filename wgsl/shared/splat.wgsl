@@ -63,6 +63,8 @@ struct SplatVertex {
     @location(3) @interpolate(flat) normal: vec3<f32>,
     // The radiance splat_shade gave the splat (the baked attribute pass), else 0.
     @location(4) @interpolate(flat) radiance: vec3<f32>,
+    // The surface whose bounds the disk crosses, or NO_CLIP (drawn_clip.wgsl's clip_index).
+    @location(5) @interpolate(flat) clip: u32,
 }
 
 // Corners of the splat's primitive: the equilateral triangle circumscribing its disk
@@ -187,6 +189,7 @@ fn splat_vertex(cam: Camera, s: Splat, i: u32, corner: u32) -> SplatVertex {
     out.normal = s.normal;
     out.radius = s.radius;
     out.radiance = vec3<f32>(0.0);
+    out.clip = NO_CLIP;
     return out;
 }
 

@@ -8,6 +8,9 @@
 //   coplanar neighbours it starts behind, and light never leaks *into* a closed model through
 //   the back of its own splats.
 // - Rays within PARALLEL_COS of a disk's plane miss it (a disk has no thickness).
+// - A hit counts only where the disk's surface keeps it (`surface_clips`, SurfaceClip in
+//   src/types.rs): a box's disks end at its edges, so that light meets the same box going
+//   either way past a convex edge.
 // - The disk a ray leaves (`skip`) is ignored; any other front-facing hit with 0 < t counts.
 // - Overlapping disks hit at exactly the same t: the first in the cell's list wins, i.e. the
 //   lowest splat index, since lists are sorted.
@@ -30,6 +33,8 @@
 // #paged
 @group(1) @binding(3) var<storage, read> cell_splats: array<u32>;
 @group(1) @binding(4) var<storage, read> cell_dist: array<u32>;
+// Per surface (Splat.object); a surface past the end clips nothing.
+@group(1) @binding(5) var<storage, read> surface_clips: array<SurfaceClip>;
 
 const PARALLEL_COS: f32 = 1e-6;
 
@@ -45,6 +50,20 @@ fn intersect_disk(s: Splat, o: vec3<f32>, d: vec3<f32>) -> f32 {
         return -1.0;
     }
     return t;
+}
+
+// Whether splat s's surface keeps the point p of its disk.
+fn surface_keeps(s: Splat, p: vec3<f32>) -> bool {
+    return s.object >= arrayLength(&surface_clips) || clip_keeps(surface_clips[s.object], p);
+}
+
+// Ray parameter of the hit with splat s's disk where its surface keeps it, or -1.
+fn intersect_splat(s: Splat, o: vec3<f32>, d: vec3<f32>) -> f32 {
+    let t = intersect_disk(s, o, d);
+    if t < 0.0 || surface_keeps(s, o + t * d) {
+        return t;
+    }
+    return -1.0;
 }
 
 fn miss(t_max: f32) -> Hit {
@@ -108,7 +127,7 @@ fn trace_ray(o: vec3<f32>, d: vec3<f32>, skip: u32, t_max: f32, budget: ptr<func
                 if s == skip {
                     continue;
                 }
-                let th = intersect_disk(splats_at(s), o, d);
+                let th = intersect_splat(splats_at(s), o, d);
                 if th > 0.0 && th < hit.t && th <= limit {
                     hit.t = th;
                     hit.splat = s;

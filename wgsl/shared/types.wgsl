@@ -10,6 +10,36 @@ struct Splat {
     object: u32,
 }
 
+// Where a surface's disks end: world -> the surface's unit cube, rows of an affine map; a hit
+// counts where all three land within 1 (src/types.rs). Zero rows clip nothing.
+struct SurfaceClip {
+    x: vec4<f32>,
+    y: vec4<f32>,
+    z: vec4<f32>,
+}
+
+// A drawn disk wholly inside its surface's bounds (`clipped_vertex` in drawn_clip.wgsl).
+const NO_CLIP: u32 = 0xffffffffu;
+
+fn clip_keeps(c: SurfaceClip, p: vec3<f32>) -> bool {
+    let q = vec4<f32>(p, 1.0);
+    return abs(dot(c.x, q)) <= 1.0 && abs(dot(c.y, q)) <= 1.0 && abs(dot(c.z, q)) <= 1.0;
+}
+
+// Whether row r of a clip keeps all of splat s's disk: r's extreme over the disk is its value
+// at the centre plus the radius times r's gradient within the disk's plane.
+fn clip_row_holds(r: vec4<f32>, s: Splat) -> bool {
+    let a = r.xyz;
+    let along = dot(a, s.normal);
+    let reach = s.radius * sqrt(max(dot(a, a) - along * along, 0.0));
+    return abs(dot(a, s.center) + r.w) + reach <= 1.0;
+}
+
+// Whether clip c keeps every point of splat s's disk (then no hit on it needs the test).
+fn clip_holds_disk(c: SurfaceClip, s: Splat) -> bool {
+    return clip_row_holds(c.x, s) && clip_row_holds(c.y, s) && clip_row_holds(c.z, s);
+}
+
 // A splat's place in the level of detail's merge tree (src/types.rs).
 struct SplatLod {
     extent: array<f32, 3>,
