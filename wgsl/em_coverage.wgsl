@@ -67,7 +67,8 @@ fn covered(q: vec3<f32>, n: vec3<f32>, slab: f32, budget: ptr<function, u32>) ->
         let off = dot(q - s.center, s.normal);
         let p = q - off * s.normal - s.center;
         // Where the disk's surface ends (a box's edge), it covers nothing, as photons see it.
-        if abs(off) <= slab && dot(p, p) <= s.radius * s.radius && surface_keeps(s, q - off * s.normal) {
+        if abs(off) <= slab && dot(p, p) <= s.radius * s.radius
+            && surface_keeps(s, q - off * s.normal) {
             return true;
         }
     }

@@ -63,7 +63,7 @@ struct SplatVertex {
     @location(3) @interpolate(flat) normal: vec3<f32>,
     // The radiance splat_shade gave the splat (the baked attribute pass), else 0.
     @location(4) @interpolate(flat) radiance: vec3<f32>,
-    // The surface whose bounds the disk crosses, or NO_CLIP (drawn_clip.wgsl's clip_index).
+    // The surface whose bounds the disk crosses, or NO_CLIP (drawn_clip.wgsl's clipped_vertex).
     @location(5) @interpolate(flat) clip: u32,
 }
 
