@@ -414,7 +414,13 @@ pub fn cpu_frame_into(
         _ => std::borrow::Cow::Borrowed(&scene.splats[..]),
     };
     let tiles = cpu::splat_visibility::bin_tiles(cam, &drawn);
-    let visible = cpu::splat_visibility::splat_visibility(cam, &drawn, &scene.clips, &tiles);
+    // Moving frames (baked direct light) draw disks as they are; still images end them where
+    // their surfaces end (wgsl/shared/drawn_clip.wgsl).
+    let clips: &[crate::types::SurfaceClip] = match params.direct == crate::types::DIRECT_BAKED {
+        true => &[],
+        false => &scene.clips,
+    };
+    let visible = cpu::splat_visibility::splat_visibility(cam, &drawn, clips, &tiles);
     let shading = cpu::splat_shading::Shading {
         params,
         splat_light: &lobes.light,
@@ -436,7 +442,7 @@ pub fn cpu_frame_into(
     let sums = cpu::splat_attributes::splat_attributes(
         cam,
         &drawn,
-        &scene.clips,
+        clips,
         &scene.materials,
         &shading,
         &shaded,

@@ -79,13 +79,21 @@ impl SurfaceClip {
     /// test): each row's extreme over the disk is its value at the centre plus the radius
     /// times the row's gradient within the disk's plane.
     pub fn holds_disk(&self, s: &Splat) -> bool {
-        let (c, n) = (glam::Vec3::from(s.center), glam::Vec3::from(s.normal));
-        [self.x, self.y, self.z].iter().all(|r| {
-            let a = glam::Vec3::new(r[0], r[1], r[2]);
-            let along = a.dot(n);
-            let reach = s.radius * (a.dot(a) - along * along).max(0.0).sqrt();
-            (a.dot(c) + r[3]).abs() + reach <= 1.0
-        })
+        [self.x, self.y, self.z].iter().all(|r| row_holds(r, s))
+    }
+
+    /// The rows that cut splat `s`'s disk, the first two of them, zero where fewer do (a zero
+    /// row keeps everything): what a drawn disk is tested against per pixel. A disk of a box's
+    /// face lies in the face's plane, whose row keeps it; the two others cut it at a corner.
+    pub fn drawn_rows(&self, s: &Splat) -> [[f32; 4]; 2] {
+        let mut rows = [[0.0; 4]; 2];
+        let cutting = [self.x, self.y, self.z]
+            .into_iter()
+            .filter(|r| !row_holds(r, s));
+        for (slot, r) in rows.iter_mut().zip(cutting) {
+            *slot = r;
+        }
+        rows
     }
 
     /// Whether a hit at `p` counts (NaN does not).
@@ -95,6 +103,15 @@ impl SurfaceClip {
             .iter()
             .all(|r| glam::Vec4::from(*r).dot(p).abs() <= 1.0)
     }
+}
+
+/// Whether clip row `r` keeps all of splat `s`'s disk (`SurfaceClip::holds_disk`).
+fn row_holds(r: &[f32; 4], s: &Splat) -> bool {
+    let (c, n) = (glam::Vec3::from(s.center), glam::Vec3::from(s.normal));
+    let a = glam::Vec3::new(r[0], r[1], r[2]);
+    let along = a.dot(n);
+    let reach = s.radius * (a.dot(a) - along * along).max(0.0).sqrt();
+    (a.dot(c) + r[3]).abs() + reach <= 1.0
 }
 
 /// A splat's place in the level of detail's merge tree (`lod`, docs/design.md §8). Level L's

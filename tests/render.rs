@@ -594,7 +594,7 @@ fn culled_splats_cover_no_pixel() {
 }
 
 /// A box's drawn edges are where the box ends (`wgsl/shared/drawn_clip.wgsl`), as traced rays
-/// see them: looking square at a face, no pixel whose ray passes more than half a pixel outside
+/// see them, in still images (moving frames draw disks as they are): looking square at a face, no pixel whose ray passes more than half a pixel outside
 /// the box is drawn, by the raster passes, the compute splatter or the mirror, while every
 /// pixel as far inside is. Without the clips the face's disks, overhanging its edges by 6 mm
 /// (two pixels), would draw a rim around it.
@@ -602,22 +602,8 @@ fn culled_splats_cover_no_pixel() {
 fn a_drawn_box_ends_at_its_edges() {
     use glam::{Vec2, Vec3};
     use lobelight::shared::splat::pixel_ray;
-    let toml = r#"
-        [camera]
-        eye = [3.0, 0.0, 0.0125]
-        target = [0.0, 0.0, 0.0125]
-        up = [0.0, 1.0, 0.0]
-        fov = 15.0
-        [[light]]
-        type = "point"
-        position = [2.0, 0.1, 0.2]
-        power = [20.0, 20.0, 20.0]
-        [[object]]
-        shape = "box"
-        scale = 0.3
-        spacing = 0.025
-    "#;
-    let mut scene = scene::parse(Path::new("box.toml"), toml).unwrap();
+    let camera = "[camera]\neye = [3.0, 0.0, 0.0125]\ntarget = [0.0, 0.0, 0.0125]\nfov = 15.0";
+    let mut scene = common::lit_box(camera, [2.0, 0.1, 0.2], 20.0);
     scene.bake.photons = 2_000;
     let grid = common::host_grid(&scene);
     let lobes = cpu_bake(&scene, &grid);
@@ -650,18 +636,20 @@ fn a_drawn_box_ends_at_its_edges() {
             "{what}: pixels drawn outside, undrawn inside"
         );
     };
+    // Still images (direct light by shadow rays); moving frames draw disks as they are.
+    let still = FrameConfig {
+        direct: Direct::Rays,
+        ..FrameConfig::default()
+    };
     let gpu = common::gpu();
     for splatter in [Splatter::Raster, Splatter::Compute] {
-        let cfg = FrameConfig {
-            splatter,
-            ..FrameConfig::default()
-        };
+        let cfg = FrameConfig { splatter, ..still };
         check(
             splatter.name(),
             &gpu_frame(&gpu, &scene, &lobes, &view, &cfg),
         );
     }
-    let cfg = FrameConfig::default();
+    let cfg = still.clone();
     check("mirror", &cpu_hdr(&scene, &grid, &lobes, &view, &cfg));
     scene.clips.clear();
     let unclipped = cpu_hdr(&scene, &grid, &lobes, &view, &cfg);

@@ -375,17 +375,7 @@ fn traversal_on_the_cornell_box() {
 /// stop the first ray though a ray from the side face below passes it from behind.
 #[test]
 fn box_disks_end_at_the_box_edges() {
-    let toml = r#"
-        [[light]]
-        type = "point"
-        position = [0.0, 2.0, 0.0]
-        power = [1.0, 1.0, 1.0]
-        [[object]]
-        shape = "box"
-        scale = 0.3
-        spacing = 0.025
-    "#;
-    let scene = lobelight::scene::parse(std::path::Path::new("box.toml"), toml).unwrap();
+    let scene = common::lit_box("", [0.0, 2.0, 0.0], 1.0);
     // The top face's disks on the row z = 0.0125 reach x = 0.2875 + 0.0186 past the side x = 0.3.
     let overhang = scene
         .splats

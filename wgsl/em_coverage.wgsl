@@ -58,20 +58,37 @@ fn covered(q: vec3<f32>, n: vec3<f32>, slab: f32, budget: ptr<function, u32>) ->
     if cell_dist[ci] != 0u {
         return false;
     }
-    for (var e = cell_start[ci]; e < cell_start[ci + 1u] && *budget > 0u; e++) {
-        *budget -= 1u;
-        let s = splats_at(cell_splats_at(e));
-        if dot(s.normal, n) < SURFACE_COS_MIN {
-            continue;
+    var e = cell_start[ci];
+    let end = cell_start[ci + 1u];
+    // Where a disk's surface ends (a box's edge), it covers nothing, as photons see it. The
+    // clip is read out of the disk loop, for the next disk that reaches over q (as trace_ray).
+    loop {
+        var found = NO_SPLAT;
+        var at = q;
+        for (; e < end && *budget > 0u; e++) {
+            *budget -= 1u;
+            let j = cell_splats_at(e);
+            let s = splats_at(j);
+            if dot(s.normal, n) < SURFACE_COS_MIN {
+                continue;
+            }
+            let off = dot(q - s.center, s.normal);
+            let p = q - off * s.normal - s.center;
+            if abs(off) <= slab && dot(p, p) <= s.radius * s.radius {
+                found = j;
+                at = q - off * s.normal;
+                e++;
+                break;
+            }
         }
-        let off = dot(q - s.center, s.normal);
-        let p = q - off * s.normal - s.center;
-        // Where the disk's surface ends (a box's edge), it covers nothing, as photons see it.
-        if abs(off) <= slab && dot(p, p) <= s.radius * s.radius
-            && surface_keeps(s, q - off * s.normal) {
+        if found == NO_SPLAT {
+            return false;
+        }
+        if surface_keeps(splats_at(found), at) {
             return true;
         }
     }
+    // Not reached (naga asks every path to return).
     return false;
 }
 

@@ -27,16 +27,16 @@
 // #paged
 @group(0) @binding(14) var<storage, read> selected: array<u32>;
 // Where each surface's disks end (drawn_clip.wgsl).
-@group(0) @binding(15) var<storage, read> drawn_clips: array<SurfaceClip>;
+@group(0) @binding(15) var<uniform> drawn_clips: array<SurfaceClip, DRAWN_CLIPS>;
 
 // Whether splat s is of the surface the pixel sees (same_surface).
 fn in_front(v: SplatVertex, s: Splat) -> bool {
     return same_surface(textureLoad(front, vec2<i32>(v.position.xy), 0).x, s.normal);
 }
 
-// Whether a fragment's hit at p on a disk of `SplatVertex.clip` `clip` is drawn.
-fn clip_passes(clip: u32, p: vec3<f32>) -> bool {
-    return clip == NO_CLIP || clip_keeps(drawn_clips[clip], p);
+// Splat s's surface's clip as drawn (drawn_clip.wgsl).
+fn drawn_clip(s: Splat) -> SurfaceClip {
+    return drawn_clips[min(s.object, DRAWN_CLIPS - 1u)];
 }
 
 @vertex
@@ -47,7 +47,7 @@ fn vs_main(@builtin(vertex_index) k: u32, @builtin(instance_index) b: u32) -> Sp
     }
     let s = splats_at(i);
     return clipped_vertex(splat_vertex(cam, s, i, instance_corner(k)), s,
-                          drawn_clips[s.object]);
+                          drawn_clip(s));
 }
 
 @fragment
@@ -56,7 +56,7 @@ fn fs_main(v: SplatVertex) -> Attributes {
     s.radius = v.radius;
     let d = pixel_ray(cam, v.position.xy);
     let h = splat_hit(s, cam.eye, d);
-    if !covers(cam, h, d) || !clip_passes(v.clip, cam.eye + h.t * d) || !in_front(v, s) {
+    if !covers(cam, h, d) || !clip_passes(v, cam.eye + h.t * d) || !in_front(v, s) {
         discard;
     }
     let w = splat_weight(h.q);
@@ -86,8 +86,8 @@ fn vs_baked(@builtin(vertex_index) k: u32, @builtin(instance_index) b: u32) -> S
     }
     let listed = selected_at(i);
     let s = drawn_splat(splats_at(listed), drawn_at(listed));
-    let v = splat_vertex(cam, s, listed, instance_corner(k));
-    var out = clipped_vertex(v, s, drawn_clips[s.object]);
+    // Moving frames draw disks as they are (drawn_clip.wgsl).
+    var out = splat_vertex(cam, s, listed, instance_corner(k));
     out.radiance = shaded_at(listed).xyz;
     return out;
 }
@@ -101,7 +101,7 @@ fn fs_baked(v: SplatVertex) -> BakedAttributes {
     let s = vertex_splat(v);
     let d = pixel_ray(cam, v.position.xy);
     let h = splat_hit(s, cam.eye, d);
-    if !covers(cam, h, d) || !clip_passes(v.clip, cam.eye + h.t * d) || !in_front(v, s) {
+    if !covers(cam, h, d) || !in_front(v, s) {
         discard;
     }
     let w = splat_weight(h.q);

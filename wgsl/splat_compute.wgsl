@@ -10,6 +10,7 @@
 // #import dispatch
 // #import splat
 // #import splat_shading
+// #import drawn_clip
 
 @group(0) @binding(0) var<uniform> cam: Camera;
 // #paged
@@ -25,9 +26,21 @@
 @group(0) @binding(16) var diffuse_sum: texture_storage_2d<rgba32float, write>;
 @group(0) @binding(17) var specular_sum: texture_storage_2d<rgba32float, write>;
 // Where each surface's disks end (drawn_clip.wgsl).
-@group(0) @binding(18) var<storage, read> drawn_clips: array<SurfaceClip>;
+@group(0) @binding(18) var<uniform> drawn_clips: array<SurfaceClip, DRAWN_CLIPS>;
 
 const WG: u32 = 64u;
+
+// Whether a hit at p on splat s is drawn where its surface ends (as the raster passes test;
+// moving frames, of baked direct light, draw disks as they are).
+fn drawn(s: Splat, p: vec3<f32>) -> bool {
+    let rows = clip_drawn_rows(drawn_clip(s), s);
+    return rows_pass(rows[0], rows[1], p);
+}
+
+// Splat s's surface's clip as drawn (drawn_clip.wgsl).
+fn drawn_clip(s: Splat) -> SurfaceClip {
+    return drawn_clips[min(s.object, DRAWN_CLIPS - 1u)];
+}
 
 @compute @workgroup_size(64)
 fn main(@builtin(workgroup_id) wg: vec3<u32>, @builtin(num_workgroups) num_wg: vec3<u32>,
@@ -44,6 +57,7 @@ fn main(@builtin(workgroup_id) wg: vec3<u32>, @builtin(num_workgroups) num_wg: v
     }
     let d = pixel_ray(cam, vec2<f32>(px) + 0.5);
     let z_of = dot(d, cam.forward);
+    let baked = params.direct == DIRECT_BAKED;
     let begin = tile_start[t];
     let end = tile_start[t + 1u];
     // Pass 1: the nearest surface's depth, pushed back (reversed depth: greater is nearer),
@@ -53,7 +67,7 @@ fn main(@builtin(workgroup_id) wg: vec3<u32>, @builtin(num_workgroups) num_wg: v
     for (var k = begin; k < end; k++) {
         let s = splats_at(tile_splats[k]);
         let h = splat_hit(s, cam.eye, d);
-        if covers(cam, h, d) && clip_keeps(drawn_clips[s.object], cam.eye + h.t * d) {
+        if covers(cam, h, d) && (baked || drawn(s, cam.eye + h.t * d)) {
             let z = view_depth(cam, h.t * z_of + cam.depth_tolerance * s.radius);
             if z > nearest {
                 nearest = z;
@@ -66,12 +80,11 @@ fn main(@builtin(workgroup_id) wg: vec3<u32>, @builtin(num_workgroups) num_wg: v
     var geometry = vec4<f32>(0.0);
     var diffuse = vec4<f32>(0.0);
     var specular = vec4<f32>(0.0);
-    let baked = params.direct == DIRECT_BAKED;
     for (var k = begin; k < end; k++) {
         let i = tile_splats[k];
         let s = splats_at(i);
         let h = splat_hit(s, cam.eye, d);
-        if !covers(cam, h, d) || !clip_keeps(drawn_clips[s.object], cam.eye + h.t * d)
+        if !covers(cam, h, d) || !(baked || drawn(s, cam.eye + h.t * d))
             || !(view_depth(cam, h.t * z_of) >= nearest)
             || !same_surface(front, s.normal) {
             continue;

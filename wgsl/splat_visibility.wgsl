@@ -1,6 +1,6 @@
 // Splat pass 1, visibility (docs/design.md section 8): every front-facing splat as a triangle; the
-// fragment shader intersects the pixel's view ray with the disk, discards outside it (and
-// outside its surface's bounds, drawn_clip.wgsl), and
+// fragment shader intersects the pixel's view ray with the disk, discards outside it (and,
+// but in moving frames (LISTED), outside its surface's bounds, drawn_clip.wgsl), and
 // writes the hit's depth pushed back by `depth_tolerance` splat radii along view z, and the
 // splat's normal (octahedral) into the front target. The attribute pass then blends every
 // splat within that tolerance of the nearest surface and facing its way (same_surface).
@@ -20,11 +20,11 @@
 // #paged
 @group(0) @binding(4) var<storage, read> selected: array<u32>;
 // Where each surface's disks end (drawn_clip.wgsl).
-@group(0) @binding(5) var<storage, read> drawn_clips: array<SurfaceClip>;
+@group(0) @binding(5) var<uniform> drawn_clips: array<SurfaceClip, DRAWN_CLIPS>;
 
-// Whether a fragment's hit at p on a disk of `SplatVertex.clip` `clip` is drawn.
-fn clip_passes(clip: u32, p: vec3<f32>) -> bool {
-    return clip == NO_CLIP || clip_keeps(drawn_clips[clip], p);
+// Splat s's surface's clip as drawn (drawn_clip.wgsl).
+fn drawn_clip(s: Splat) -> SurfaceClip {
+    return drawn_clips[min(s.object, DRAWN_CLIPS - 1u)];
 }
 
 @vertex
@@ -35,16 +35,16 @@ fn vs_main(@builtin(vertex_index) k: u32, @builtin(instance_index) b: u32) -> Sp
             return surplus_vertex(i);
         }
         let listed = selected_at(i);
-        let s = drawn_splat(splats_at(listed), drawn_at(listed));
-        let v = splat_vertex(cam, s, listed, instance_corner(k));
-        return clipped_vertex(v, s, drawn_clips[s.object]);
+        // Moving frames draw disks as they are (drawn_clip.wgsl).
+        return splat_vertex(cam, drawn_splat(splats_at(listed), drawn_at(listed)), listed,
+                            instance_corner(k));
     }
     if i >= splats_len() {
         return surplus_vertex(i);
     }
     let s = splats_at(i);
     return clipped_vertex(splat_vertex(cam, s, i, instance_corner(k)), s,
-                          drawn_clips[s.object]);
+                          drawn_clip(s));
 }
 
 struct Visible {
@@ -57,7 +57,7 @@ fn fs_main(v: SplatVertex) -> Visible {
     let s = vertex_splat(v);
     let d = pixel_ray(cam, v.position.xy);
     let h = splat_hit(s, cam.eye, d);
-    if !covers(cam, h, d) || !clip_passes(v.clip, cam.eye + h.t * d) {
+    if !covers(cam, h, d) || (!LISTED && !clip_passes(v, cam.eye + h.t * d)) {
         discard;
     }
     let z = h.t * dot(d, cam.forward);

@@ -49,23 +49,33 @@ fn covered(geo: &Geometry, q: Vec3, n: Vec3, slab: f32, budget: &mut u32) -> boo
     if geo.grid.cell_dist[ci as usize] != 0 {
         return false;
     }
-    for &j in geo.grid.cell(ci) {
-        if *budget == 0 {
-            break;
+    // The next disk that reaches over q, then its clip (as the WGSL twin reads it).
+    let mut disks = geo.grid.cell(ci).iter();
+    loop {
+        let mut found = None;
+        for &j in disks.by_ref() {
+            if *budget == 0 {
+                break;
+            }
+            *budget -= 1;
+            let s = &geo.splats[j as usize];
+            let sn = Vec3::from(s.normal);
+            if sn.dot(n) < SURFACE_COS_MIN {
+                continue;
+            }
+            let off = (q - Vec3::from(s.center)).dot(sn);
+            let p = q - off * sn - Vec3::from(s.center);
+            if off.abs() <= slab && p.dot(p) <= s.radius * s.radius {
+                found = Some((s, q - off * sn));
+                break;
+            }
         }
-        *budget -= 1;
-        let s = &geo.splats[j as usize];
-        let sn = Vec3::from(s.normal);
-        if sn.dot(n) < SURFACE_COS_MIN {
-            continue;
-        }
-        let off = (q - Vec3::from(s.center)).dot(sn);
-        let p = q - off * sn - Vec3::from(s.center);
-        if off.abs() <= slab && p.dot(p) <= s.radius * s.radius && geo.keeps(s, q - off * sn) {
-            return true;
+        match found {
+            None => return false,
+            Some((s, at)) if geo.keeps(s, at) => return true,
+            Some(_) => {}
         }
     }
-    false
 }
 
 /// The share of splat `i`'s gather disk its surface covers, or `None` where the search was cut

@@ -69,7 +69,7 @@ pub struct SceneBuffers<'a> {
     pub visibility: &'a wgpu::Buffer,
     /// Bind group 1 of tracing stages (`GpuScene::geometry`).
     pub geometry: [&'a wgpu::Buffer; GEOMETRY_BINDINGS],
-    /// Where each surface's disks end (`GpuScene::clips`), which the drawing passes also read.
+    /// Where each surface's disks end, as the drawing passes read it (`GpuScene::drawn_clips`).
     pub clips: &'a wgpu::Buffer,
     /// What `splat_shade` writes for frames of baked direct light: per splat, the radiance
     /// it sends towards the eye.
@@ -221,7 +221,7 @@ impl FrameScene {
             direct: &self.direct.direct,
             visibility: &self.direct.visibility,
             geometry: on_gpu.geometry(),
-            clips: &on_gpu.clips,
+            clips: &on_gpu.drawn_clips,
             shaded: &self.shaded,
             selected_count: &self.selected_count,
             selected: &self.selected,
@@ -983,7 +983,10 @@ impl SplatPipelines {
                     .filter(|(b, _)| !DIRECT_BAKE_BINDINGS.contains(b))
                     .collect(),
             };
-            list.push((ATTRIBUTES_CLIP_BINDING, scene.clips));
+            // Moving frames (baked) draw disks as they are: `fs_baked` reads no clip.
+            if !baked {
+                list.push((ATTRIBUTES_CLIP_BINDING, scene.clips));
+            }
             let which = match baked {
                 true => Raster::AttributesBaked,
                 false => Raster::Attributes,

@@ -9,6 +9,7 @@ use crate::error::Result;
 use crate::grid::grid_params;
 use crate::photons::ms_since;
 use crate::scene::Scene;
+use crate::shared::splat::DRAWN_CLIPS;
 use crate::types::{Splat, SurfaceClip};
 
 /// Buffers in bind group 1 of the tracing stages (`GpuScene::geometry`).
@@ -19,6 +20,8 @@ pub struct GpuScene {
     pub materials: wgpu::Buffer,
     /// `Scene::clips`, at least one entry (a zero clip keeps every hit).
     pub clips: wgpu::Buffer,
+    /// The drawing passes' uniform of clips (`drawn_clips`).
+    pub drawn_clips: wgpu::Buffer,
     pub grid: GpuGrid,
     /// Time to upload the splats and build the grid.
     pub grid_ms: f64,
@@ -32,10 +35,13 @@ impl GpuScene {
         let materials = gpu.storage("materials", &scene.materials)?;
         let grid = build_grid(gpu, &params, &splats)?;
         let clips = gpu.storage("surface clips", &device_clips(&scene.clips, &scene.splats))?;
+        let drawn = drawn_clips(&scene.clips);
+        let drawn_clips = gpu.uniform("drawn clips", &drawn);
         Ok(GpuScene {
             splats,
             materials,
             clips,
+            drawn_clips,
             grid,
             grid_ms: ms_since(t),
         })
@@ -52,6 +58,17 @@ impl GpuScene {
             &self.clips,
         ]
     }
+}
+
+/// The clips the drawing passes hold (`wgsl/shared/drawn_clip.wgsl`): the first
+/// `DRAWN_CLIPS` − 1 surfaces', then zero (a later surface is drawn unclipped, as the mirror
+/// draws it).
+pub fn drawn_clips(clips: &[SurfaceClip]) -> [SurfaceClip; DRAWN_CLIPS] {
+    let mut out = [SurfaceClip::default(); DRAWN_CLIPS];
+    for (slot, c) in out.iter_mut().zip(clips.iter().take(DRAWN_CLIPS - 1)) {
+        *slot = *c;
+    }
+    out
 }
 
 /// A scene's surface clips as the device binds them: an entry for every surface a splat names

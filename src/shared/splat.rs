@@ -144,12 +144,22 @@ pub fn covers(cam: &Camera, h: SplatHit, d: Vec3) -> bool {
     h.q <= 1.0 && h.t * d.dot(Vec3::from(cam.forward)) >= cam.near
 }
 
+/// Surfaces whose clips the drawing passes hold, the last entry zero (`DRAWN_CLIPS` in
+/// `wgsl/shared/drawn_clip.wgsl`): a later surface is drawn unclipped.
+pub const DRAWN_CLIPS: usize = 64;
+
 /// Twin of `wgsl/shared/drawn_clip.wgsl`: whether a pixel's hit at `p` on splat `s` is drawn,
-/// where its surface (`clips[s.object]`, none past the end) keeps it.
+/// where the rows of its surface's clip (`clips[s.object]`; none past the end or past
+/// `DRAWN_CLIPS` − 1) that cut its disk keep it.
 pub fn drawn_keeps(clips: &[SurfaceClip], s: &Splat, p: Vec3) -> bool {
-    clips
-        .get(s.object as usize)
-        .is_none_or(|c| c.holds_disk(s) || c.keeps(p))
+    let surface = s.object as usize;
+    let Some(c) = clips.get(surface).filter(|_| surface < DRAWN_CLIPS - 1) else {
+        return true;
+    };
+    let q = p.extend(1.0);
+    c.drawn_rows(s)
+        .iter()
+        .all(|r| Vec4::from(*r).dot(q).abs() <= 1.0)
 }
 
 pub fn splat_weight(q: f32) -> f32 {

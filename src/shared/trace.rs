@@ -121,22 +121,37 @@ pub fn trace_ray(geo: &Geometry, o: Vec3, d: Vec3, skip: u32, t_max: f32, budget
         let t_exit = tf.x.min(tf.y.min(tf.z));
         if dist == 0 {
             let limit = t_exit + 1e-4 * cs;
-            let end = geo.grid.cell_start[ci + 1];
-            for e in geo.grid.cell_start[ci]..end {
-                if *budget == 0 {
-                    hit.aborted = 1;
-                    return hit;
+            let (start, end) = (geo.grid.cell_start[ci], geo.grid.cell_start[ci + 1]);
+            // The cell's nearest disk in (t, list position) order, searched again past one its
+            // surface's clip passes over (as the WGSL twin, which reads the clip once a cell).
+            let (mut floor_t, mut floor_e) = (0.0f32, NO_SPLAT);
+            loop {
+                let (mut best_t, mut best, mut best_e) = (hit.t, NO_SPLAT, 0);
+                for e in start..end {
+                    if *budget == 0 {
+                        hit.aborted = 1;
+                        return hit;
+                    }
+                    *budget -= 1;
+                    let s = geo.grid.cell_splats[e as usize];
+                    if s == skip {
+                        continue;
+                    }
+                    let th = intersect_disk(&geo.splats[s as usize], o, d);
+                    let past =
+                        th > floor_t || (th == floor_t && floor_e != NO_SPLAT && e > floor_e);
+                    if past && th < best_t && th <= limit {
+                        (best_t, best, best_e) = (th, s, e);
+                    }
                 }
-                *budget -= 1;
-                let s = geo.grid.cell_splats[e as usize];
-                if s == skip {
-                    continue;
+                if best == NO_SPLAT || geo.keeps(&geo.splats[best as usize], o + best_t * d) {
+                    if best != NO_SPLAT {
+                        hit.t = best_t;
+                    }
+                    hit.splat = best;
+                    break;
                 }
-                let th = geo.intersect(&geo.splats[s as usize], o, d);
-                if th > 0.0 && th < hit.t && th <= limit {
-                    hit.t = th;
-                    hit.splat = s;
-                }
+                (floor_t, floor_e) = (best_t, best_e);
             }
             if hit.splat != NO_SPLAT {
                 return hit;

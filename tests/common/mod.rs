@@ -77,6 +77,16 @@ pub fn host_grid(scene: &lobelight::scene::Scene) -> lobelight::grid::SplatGrid 
     lobelight::cpu::scene_grid(scene).unwrap()
 }
 
+/// The cube [−0.3, 0.3]³ at spacing 0.025 (its faces' disks reach 6 mm past its edges), lit by
+/// a point light at `light` of power `power`, after the scene file's lines `head` (a camera).
+pub fn lit_box(head: &str, light: [f32; 3], power: f32) -> lobelight::scene::Scene {
+    let toml = format!(
+        "{head}\n[[light]]\ntype = \"point\"\nposition = {light:?}\npower = {power:?}\n\
+         [[object]]\nshape = \"box\"\nscale = 0.3\nspacing = 0.025\n"
+    );
+    lobelight::scene::parse(std::path::Path::new("box.toml"), &toml).unwrap()
+}
+
 /// The unit sphere's Fibonacci lattice of `n` points.
 pub fn fibonacci_sphere(n: u32) -> Vec<glam::Vec3> {
     (0..n)

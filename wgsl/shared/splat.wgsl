@@ -63,8 +63,10 @@ struct SplatVertex {
     @location(3) @interpolate(flat) normal: vec3<f32>,
     // The radiance splat_shade gave the splat (the baked attribute pass), else 0.
     @location(4) @interpolate(flat) radiance: vec3<f32>,
-    // The surface whose bounds the disk crosses, or NO_CLIP (drawn_clip.wgsl's clipped_vertex).
-    @location(5) @interpolate(flat) clip: u32,
+    // The rows of its surface's clip that cut the disk, zero where none does
+    // (drawn_clip.wgsl's clipped_vertex).
+    @location(5) @interpolate(flat) clip_a: vec4<f32>,
+    @location(6) @interpolate(flat) clip_b: vec4<f32>,
 }
 
 // Corners of the splat's primitive: the equilateral triangle circumscribing its disk
@@ -189,7 +191,8 @@ fn splat_vertex(cam: Camera, s: Splat, i: u32, corner: u32) -> SplatVertex {
     out.normal = s.normal;
     out.radius = s.radius;
     out.radiance = vec3<f32>(0.0);
-    out.clip = NO_CLIP;
+    out.clip_a = vec4<f32>(0.0);
+    out.clip_b = vec4<f32>(0.0);
     return out;
 }
 

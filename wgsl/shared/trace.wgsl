@@ -116,22 +116,43 @@ fn trace_ray(o: vec3<f32>, d: vec3<f32>, skip: u32, t_max: f32, budget: ptr<func
         let t_exit = min(tf.x, min(tf.y, tf.z));
         if dist == 0u {
             let limit = t_exit + 1e-4 * cs;
+            let start = cell_start[ci];
             let end = cell_start[ci + 1u];
-            for (var e = cell_start[ci]; e < end; e++) {
-                if *budget == 0u {
-                    hit.aborted = 1u;
-                    return hit;
+            // The cell's nearest disk in (t, list position) order; one its surface's clip
+            // passes over is skipped and the cell searched again past it. The clip is then
+            // read once a cell, not once a disk: in the disk loop, llvmpipe paid it for every
+            // disk (photon tracing 25 % slower).
+            var floor_t = 0.0;
+            var floor_e = NO_SPLAT;
+            loop {
+                var best_t = hit.t;
+                var best = NO_SPLAT;
+                var best_e = 0u;
+                for (var e = start; e < end; e++) {
+                    if *budget == 0u {
+                        hit.aborted = 1u;
+                        return hit;
+                    }
+                    *budget -= 1u;
+                    let s = cell_splats_at(e);
+                    if s == skip {
+                        continue;
+                    }
+                    let th = intersect_disk(splats_at(s), o, d);
+                    let past = th > floor_t || (th == floor_t && floor_e != NO_SPLAT && e > floor_e);
+                    if past && th < best_t && th <= limit {
+                        best_t = th;
+                        best = s;
+                        best_e = e;
+                    }
                 }
-                *budget -= 1u;
-                let s = cell_splats_at(e);
-                if s == skip {
-                    continue;
+                if best == NO_SPLAT || surface_keeps(splats_at(best), o + best_t * d) {
+                    hit.t = select(hit.t, best_t, best != NO_SPLAT);
+                    hit.splat = best;
+                    break;
                 }
-                let th = intersect_splat(splats_at(s), o, d);
-                if th > 0.0 && th < hit.t && th <= limit {
-                    hit.t = th;
-                    hit.splat = s;
-                }
+                floor_t = best_t;
+                floor_e = best_e;
             }
             if hit.splat != NO_SPLAT {
                 return hit;

@@ -18,9 +18,6 @@ struct SurfaceClip {
     z: vec4<f32>,
 }
 
-// A drawn disk wholly inside its surface's bounds (`clipped_vertex` in drawn_clip.wgsl).
-const NO_CLIP: u32 = 0xffffffffu;
-
 fn clip_keeps(c: SurfaceClip, p: vec3<f32>) -> bool {
     let q = vec4<f32>(p, 1.0);
     return abs(dot(c.x, q)) <= 1.0 && abs(dot(c.y, q)) <= 1.0 && abs(dot(c.z, q)) <= 1.0;
@@ -38,6 +35,26 @@ fn clip_row_holds(r: vec4<f32>, s: Splat) -> bool {
 // Whether clip c keeps every point of splat s's disk (then no hit on it needs the test).
 fn clip_holds_disk(c: SurfaceClip, s: Splat) -> bool {
     return clip_row_holds(c.x, s) && clip_row_holds(c.y, s) && clip_row_holds(c.z, s);
+}
+
+// The rows of clip c that cut splat s's disk, the first two of them, zero where fewer do (a
+// zero row keeps everything): what a drawn disk needs tested per pixel. A disk of a box's face
+// lies in the face's plane, whose row keeps it; the two others cut it at a corner.
+fn clip_drawn_rows(c: SurfaceClip, s: Splat) -> array<vec4<f32>, 2> {
+    var rows = array<vec4<f32>, 2>(vec4<f32>(0.0), vec4<f32>(0.0));
+    var k = 0u;
+    if !clip_row_holds(c.x, s) {
+        rows[k] = c.x;
+        k += 1u;
+    }
+    if !clip_row_holds(c.y, s) {
+        rows[k] = c.y;
+        k += 1u;
+    }
+    if !clip_row_holds(c.z, s) && k < 2u {
+        rows[k] = c.z;
+    }
+    return rows;
 }
 
 // A splat's place in the level of detail's merge tree (src/types.rs).
