@@ -19,7 +19,7 @@ pub struct Splat {
     pub object: u32,
 }
 
-/// Where a surface's disks end (docs/design.md §2): a hit on one of its disks counts only where
+/// Where a surface's disks end (docs/design.md §4): a hit on one of its disks counts only where
 /// the affine map `rows` (world → the surface's unit cube, grown by a slack) takes the hit
 /// point within [−1, 1]³. A box's disks overhang its faces' edges by up to a third of the
 /// spacing; one-sided, the overhang stops light falling past a convex edge that a ray leaving
