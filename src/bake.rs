@@ -8,18 +8,18 @@ use std::time::Instant;
 
 use crate::bins::{PhotonBins, bin_params};
 use crate::cpu;
-use crate::em::{EmConfig, FitShape, GatherSetup, LobeMap};
+use crate::em::{EmConfig, FitShape, GatherSetup, LobeMap, deposit_params};
 use crate::error::Result;
 use crate::frame::{direct_params, shadow_bias};
 use crate::gpu::Gpu;
-use crate::gpu::bins::{GpuBins, bin_photons};
-use crate::gpu::em::fit_lobes_gathering;
+use crate::gpu::bins::{GpuBins, GpuDeposits, bin_photons, deposit_photons};
+use crate::gpu::em::{fit_lobes_gathering, fit_lobes_to_deposits};
 use crate::gpu::photons::{GpuPhotons, trace_photons};
 use crate::gpu::scene::GpuScene;
 use crate::grid::SplatGrid;
-use crate::photons::{PhotonConfig, PhotonStats, ms_since};
+use crate::photons::{PhotonConfig, PhotonMap, PhotonStats, ms_since};
 use crate::scene::Scene;
-use crate::types::EmParams;
+use crate::types::{DepositParams, EmParams};
 
 /// One stage's line of `--stats` / `--json` (docs/cli.md).
 #[derive(Clone, Debug, Default, serde::Serialize)]
@@ -188,12 +188,17 @@ fn binned<B>(scene: &Scene, bins: B, stats: &PhotonStats, binning_ms: f64) -> Bi
     Binned {
         bins,
         em: em.params(scene.splats.len() as u32, 0, FitShape::default()),
-        photons: StageReport {
-            emitted: Some(stats.emitted),
-            stored: Some(stats.stored),
-            ..StageReport::ran(stats.trace_ms)
-        },
+        photons: traced_report(stats),
         binning: StageReport::ran(binning_ms),
+    }
+}
+
+/// The photon pass's report.
+fn traced_report(stats: &PhotonStats) -> StageReport {
+    StageReport {
+        emitted: Some(stats.emitted),
+        stored: Some(stats.stored),
+        ..StageReport::ran(stats.trace_ms)
     }
 }
 
@@ -215,16 +220,8 @@ pub fn traced_and_binned_gpu(
     on_gpu: &GpuScene,
     progress: &Progress,
 ) -> Result<(GpuPhotons, Binned<GpuBins>)> {
-    let photon_cfg = PhotonConfig::from_scene(scene);
-    let bar = progress.bar(photon_cfg.photons);
-    let mut on_batch = |done: u64, _total: u64| {
-        bar.set_position(done);
-        progress.traced(done);
-    };
-    let traced = trace_photons(gpu, scene, on_gpu, &photon_cfg, &mut on_batch)?;
-    bar.finish_and_clear();
+    let traced = traced_gpu(scene, gpu, on_gpu, progress)?;
     let stats = traced.stats.clone();
-    progress_photons(progress, &stats);
     let spin = progress.spinner("binning");
     let t = Instant::now();
     let radius = EmConfig::from_scene(scene).radius;
@@ -242,22 +239,7 @@ pub fn bins_cpu(
     grid: &SplatGrid,
     progress: &Progress,
 ) -> Result<Binned<PhotonBins>> {
-    let photon_cfg = PhotonConfig::from_scene(scene);
-    let bar = progress.bar(photon_cfg.photons);
-    let mut on_batch = |done: u64, _total: u64| {
-        bar.set_position(done);
-        progress.traced(done);
-    };
-    let geo = scene.geometry(grid);
-    let map = cpu::trace_photons(
-        &scene.lights,
-        &scene.materials,
-        &geo,
-        &photon_cfg,
-        &mut on_batch,
-    )?;
-    bar.finish_and_clear();
-    progress_photons(progress, &map.stats);
+    let map = traced_cpu(scene, grid, progress)?;
     let spin = progress.spinner("binning");
     let t = Instant::now();
     let radius = EmConfig::from_scene(scene).radius;
@@ -272,20 +254,136 @@ pub fn bins_cpu(
     Ok(binned(scene, bins, &map.stats, binning_ms))
 }
 
-/// Fits the lobes to photons binned on the device; they come back to the host.
+/// Traces on the CPU mirror.
+fn traced_cpu(scene: &Scene, grid: &SplatGrid, progress: &Progress) -> Result<PhotonMap> {
+    let photon_cfg = PhotonConfig::from_scene(scene);
+    let bar = progress.bar(photon_cfg.photons);
+    let mut on_batch = |done: u64, _total: u64| {
+        bar.set_position(done);
+        progress.traced(done);
+    };
+    let map = cpu::trace_photons(
+        &scene.lights,
+        &scene.materials,
+        &scene.geometry(grid),
+        &photon_cfg,
+        &mut on_batch,
+    )?;
+    bar.finish_and_clear();
+    progress_photons(progress, &map.stats);
+    Ok(map)
+}
+
+/// Traces on the device.
+fn traced_gpu(
+    scene: &Scene,
+    gpu: &Gpu,
+    on_gpu: &GpuScene,
+    progress: &Progress,
+) -> Result<GpuPhotons> {
+    let photon_cfg = PhotonConfig::from_scene(scene);
+    let bar = progress.bar(photon_cfg.photons);
+    let mut on_batch = |done: u64, _total: u64| {
+        bar.set_position(done);
+        progress.traced(done);
+    };
+    let traced = trace_photons(gpu, scene, on_gpu, &photon_cfg, &mut on_batch)?;
+    bar.finish_and_clear();
+    progress_photons(progress, &traced.stats);
+    Ok(traced)
+}
+
+/// The deposits' uniform for the scene's photons.
+fn scene_deposit_params(scene: &Scene) -> Result<DepositParams> {
+    deposit_params(
+        &scene.lights,
+        scene.bake.photons,
+        &scene.splats,
+        scene.search_radius(),
+    )
+}
+
+/// Photon deposits on the device, with their time as the binning's.
+fn deposits_gpu(
+    scene: &Scene,
+    gpu: &Gpu,
+    on_gpu: &GpuScene,
+    traced: &GpuPhotons,
+    progress: &Progress,
+) -> Result<(GpuDeposits, f64)> {
+    let spin = progress.spinner("deposits");
+    let t = Instant::now();
+    let params = scene_deposit_params(scene)?;
+    let deposits = deposit_photons(gpu, traced, &on_gpu.splats, &params, &on_gpu.grid.params)?;
+    let ms = ms_since(t);
+    spin.finish_and_clear();
+    progress.done("deposits", ms, "");
+    Ok((deposits, ms))
+}
+
+/// Fits the lobes on the device: over the deposits of the traced photons where the scene's
+/// estimate asks for them (`EmConfig::uses_deposits`), else over the binned photons; they
+/// come back to the host.
 pub fn fit_gpu(
     scene: &Scene,
     gpu: &Gpu,
     on_gpu: &GpuScene,
-    binned: &Binned<GpuBins>,
+    (traced, binned): (&GpuPhotons, &Binned<GpuBins>),
+    progress: &Progress,
+) -> Result<LobeMap> {
+    if EmConfig::from_scene(scene).uses_deposits() {
+        let (deposits, _) = deposits_gpu(scene, gpu, on_gpu, traced, progress)?;
+        return fit_on_gpu(
+            scene,
+            gpu,
+            on_gpu,
+            (&binned.bins, Some(&deposits)),
+            progress,
+        );
+    }
+    fit_on_gpu(scene, gpu, on_gpu, (&binned.bins, None), progress)
+}
+
+/// Fits the lobes on the device to binned photons, or with the irradiance from `deposits`
+/// where they are given.
+fn fit_on_gpu(
+    scene: &Scene,
+    gpu: &Gpu,
+    on_gpu: &GpuScene,
+    (bins, deposits): (&GpuBins, Option<&GpuDeposits>),
     progress: &Progress,
 ) -> Result<LobeMap> {
     let spin = progress.spinner("em");
     let n = scene.splats.len() as u32;
     let em_cfg = EmConfig::from_scene(scene);
     let setup = gather_setup(scene);
-    let fitted = fit_lobes_gathering(gpu, on_gpu, n, &binned.bins, &em_cfg, &setup)?;
+    let fitted = match deposits {
+        Some(d) => fit_lobes_to_deposits(gpu, on_gpu, n, d, &em_cfg, &setup)?,
+        None => fit_lobes_gathering(gpu, on_gpu, n, bins, &em_cfg, &setup)?,
+    };
     let lobes = fitted.download(gpu)?;
+    spin.finish_and_clear();
+    Ok(lobes)
+}
+
+/// Fits the lobes on the CPU mirror to binned photons, or with the irradiance from
+/// `deposits` where they are given.
+fn fit_on_cpu(
+    scene: &Scene,
+    grid: &SplatGrid,
+    (bins, deposits): (&PhotonBins, Option<&cpu::DepositBins>),
+    progress: &Progress,
+) -> Result<LobeMap> {
+    let spin = progress.spinner("em");
+    let em_cfg = EmConfig::from_scene(scene);
+    let (splats, materials) = (&scene.splats, &scene.materials);
+    let shape = FitShape::default();
+    let setup = gather_setup(scene);
+    let gathering = Some((scene.geometry(grid), &setup));
+    let lobes = match deposits {
+        Some(d) => cpu::fit_lobes_to_deposits(&em_cfg, d, splats, materials, shape, gathering),
+        None => cpu::fit_lobes_gathering(&em_cfg, bins, splats, materials, shape, gathering),
+    }?;
     spin.finish_and_clear();
     Ok(lobes)
 }
@@ -306,23 +404,35 @@ pub fn gather_setup(scene: &Scene) -> GatherSetup<'_> {
 pub fn bake(scene: &Scene, device: BakeDevice, progress: &Progress) -> Result<Baked> {
     let em_cfg = EmConfig::from_scene(scene);
     let (lobes, photons, binning) = match device {
+        // The photons are deposited, not binned: the binning's report is the deposits'.
+        BakeDevice::Gpu(gpu, on_gpu) if em_cfg.uses_deposits() => {
+            let traced = traced_gpu(scene, gpu, on_gpu, progress)?;
+            let (deposits, ms) = deposits_gpu(scene, gpu, on_gpu, &traced, progress)?;
+            let binned = (&deposits.bins, Some(&deposits));
+            let lobes = fit_on_gpu(scene, gpu, on_gpu, binned, progress)?;
+            (lobes, traced_report(&traced.stats), StageReport::ran(ms))
+        }
         BakeDevice::Gpu(gpu, on_gpu) => {
             let b = bins_gpu(scene, gpu, on_gpu, progress)?;
-            let lobes = fit_gpu(scene, gpu, on_gpu, &b, progress)?;
+            let lobes = fit_on_gpu(scene, gpu, on_gpu, (&b.bins, None), progress)?;
             (lobes, b.photons, b.binning)
+        }
+        BakeDevice::Cpu(grid) if em_cfg.uses_deposits() => {
+            let map = traced_cpu(scene, grid, progress)?;
+            let spin = progress.spinner("deposits");
+            let t = Instant::now();
+            let params = scene_deposit_params(scene)?;
+            let deposits =
+                cpu::deposit_photons(&params, &map.photons, &scene.splats, &grid.params)?;
+            let ms = ms_since(t);
+            spin.finish_and_clear();
+            progress.done("deposits", ms, "");
+            let lobes = fit_on_cpu(scene, grid, (&deposits.bins, Some(&deposits)), progress)?;
+            (lobes, traced_report(&map.stats), StageReport::ran(ms))
         }
         BakeDevice::Cpu(grid) => {
             let b = bins_cpu(scene, grid, progress)?;
-            let spin = progress.spinner("em");
-            let lobes = cpu::fit_lobes_gathering(
-                &em_cfg,
-                &b.bins,
-                &scene.splats,
-                &scene.materials,
-                FitShape::default(),
-                Some((scene.geometry(grid), &gather_setup(scene))),
-            )?;
-            spin.finish_and_clear();
+            let lobes = fit_on_cpu(scene, grid, (&b.bins, None), progress)?;
             (lobes, b.photons, b.binning)
         }
     };

@@ -34,6 +34,21 @@ impl LobeFamily {
     }
 }
 
+/// Where each splat's photon irradiance comes from (design §6).
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Deserialize, Serialize)]
+#[cfg_attr(feature = "cli", derive(clap::ValueEnum))]
+#[serde(rename_all = "lowercase")]
+pub enum Estimate {
+    /// Each splat's photons summed into its deposit, and a splat's irradiance the share of
+    /// its neighbours' deposits that its gather disk holds (`em_share`): time bounded by
+    /// splats, not photons. Fitted splats need final gathering for their lobes; with
+    /// `gather` 0 the photons' estimate is used.
+    #[default]
+    Deposits,
+    /// Every photon within R of the splat (`em_gather`, `em_fit`): time grows with photons.
+    Photons,
+}
+
 /// Settings of the lobe fit.
 #[derive(Clone, Debug, PartialEq)]
 pub struct EmConfig {
@@ -60,9 +75,17 @@ pub struct EmConfig {
     /// Final gathering: fitted splats fit their lobes to `gather`² rays from their centres
     /// (`sequence::fit_lobes`), not to the photons (0).
     pub gather: u32,
+    /// Where the splats' photon irradiance comes from.
+    pub estimate: Estimate,
 }
 
 impl EmConfig {
+    /// Whether the irradiance comes from deposits: asked for, and final gathering fits the
+    /// lobes (the photon fit needs the photons themselves).
+    pub fn uses_deposits(&self) -> bool {
+        self.estimate == Estimate::Deposits && self.gather > 0
+    }
+
     pub fn validate(&self) -> Result<()> {
         let check = || -> std::result::Result<(), String> {
             check_lobes(self.lobes)?;
@@ -344,4 +367,42 @@ impl LobeMap {
     pub fn fitted(&self) -> impl Iterator<Item = &SplatLight> {
         self.light.iter().filter(|l| l.lobes > 0)
     }
+}
+
+/// Fixed-point units of the largest power one emitted photon carries, in a deposit's sums:
+/// 2²⁰, so that a photon keeps 6 digits and may gain 4096× its power on its bounces before
+/// its value saturates.
+pub const DEPOSIT_POWER_UNITS: f32 = 1_048_576.0;
+
+/// How far past its photons' mean a deposit's disk may reach, in splat radii: photons land
+/// within a radius of the centre, so the spread's disk, rho² = 2 E|x − mean|², is at most √2.
+pub const DEPOSIT_REACH: f32 = std::f32::consts::SQRT_2;
+
+/// The deposit passes' uniform for `photons` emitted from `lights` onto `splats`, for search
+/// radius `radius` (photon counts per dispatch are filled in per page).
+pub fn deposit_params(
+    lights: &[Light],
+    photons: u64,
+    splats: &[crate::types::Splat],
+    radius: f32,
+) -> Result<crate::types::DepositParams> {
+    check_radius(radius).map_err(Error::Invalid)?;
+    let unit = crate::photons::emitters(lights, photons.max(1))?
+        .iter()
+        .flat_map(|e| e.photon_power.map(|p| p * e.falloff_norm))
+        .fold(0.0f32, f32::max);
+    if !(unit > 0.0 && unit.is_finite()) {
+        return Err(Error::Invalid(
+            "the lights' photons carry no finite power to deposit".into(),
+        ));
+    }
+    let splat_count = u32::try_from(splats.len())
+        .map_err(|_| Error::Invalid("too many splats for the deposits".into()))?;
+    let largest = splats.iter().map(|s| s.radius).fold(0.0f32, f32::max);
+    Ok(crate::types::DepositParams {
+        power_scale: DEPOSIT_POWER_UNITS / unit,
+        photon_count: 0,
+        splat_count,
+        reach: radius + DEPOSIT_REACH * largest,
+    })
 }

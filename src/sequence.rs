@@ -25,8 +25,9 @@ use crate::shared::dispatch::groups_for;
 use crate::shared::lobes::EM_DEFER_FIT;
 use crate::tone::{ToneConfig, reduce_levels};
 use crate::types::{
-    BinParams, Camera, DirectParams, DistanceParams, EmParams, Emitter, GatherParams, GridParams,
-    PathParams, Photon, PhotonViewParams, ScanParams, TileParams, TraceCounters,
+    BinParams, Camera, DepositParams, DirectParams, DistanceParams, EmParams, Emitter,
+    GatherParams, GridParams, PathParams, Photon, PhotonViewParams, ScanParams, TileParams,
+    TraceCounters,
 };
 
 /// Where a sequence runs: buffers, uniforms, dispatches by stage name, copies and readbacks.
@@ -379,6 +380,71 @@ pub fn bin_photons<E: Executor>(
     })
 }
 
+/// Per-splat photon deposits (design §6, "Deposits"), listed as one record a splat with
+/// photons and binned as photons are, for `em_share`.
+pub struct Deposits<B> {
+    pub params: DepositParams,
+    pub params_buf: B,
+    /// The records binned: key (splat, 0), their photons' mean position, total power.
+    pub bins: Bins<B>,
+    /// Per splat: its photons' spread (the radius of a uniform disk as spread) and count.
+    pub spread: B,
+}
+
+/// Photon deposits of the stored photons in `pages` (a buffer and its photon count each):
+/// `em_deposit` per page → `em_deposit_list` → (split: the records' count) → `bin_photons`
+/// of the records in cells of `params.reach` over `grid`'s box.
+pub fn deposit_photons<E: Executor>(
+    ex: &mut E,
+    pages: &[(&E::Buffer, u32)],
+    splats: &E::Buffer,
+    params: &DepositParams,
+    grid: &GridParams,
+) -> Result<Deposits<E::Buffer>> {
+    let n = params.splat_count as u64;
+    let words = crate::shared::deposits::DEPOSIT_WORDS as u64;
+    let deposits = ex.zeroed("deposits", n.max(1) * words * 4)?;
+    for &(page, count) in pages {
+        let page_params = DepositParams {
+            photon_count: count,
+            ..*params
+        };
+        let uniform = ex.uniform("deposit page params", &page_params)?;
+        let bindings = [&uniform, page, splats, &deposits];
+        ex.dispatch("em_deposit", &bindings, groups("em_deposit", count)?)?;
+    }
+    let params_buf = ex.uniform("deposit params", params)?;
+    let list = ex.zeroed("deposit list", n.max(1) * size_of::<Photon>() as u64)?;
+    let spread = ex.zeroed("deposit spread", n.max(1) * 8)?;
+    let listed = ex.zeroed("deposits listed", 4)?;
+    let bindings = [&params_buf, splats, &deposits, &list, &spread, &listed];
+    ex.dispatch(
+        "em_deposit_list",
+        &bindings,
+        groups("em_deposit_list", params.splat_count)?,
+    )?;
+    let listed = match ex.read::<u32>(&listed, 1)?[..] {
+        [c] => c,
+        _ => return Err(Error::Gpu("deposit count readback was short".into())),
+    };
+    let bin = crate::bins::bin_params(grid, params.reach, listed as u64)?;
+    let bins = bin_photons(ex, &[(&list, listed)], splats, &bin)?;
+    Ok(Deposits {
+        params: *params,
+        params_buf,
+        bins,
+        spread,
+    })
+}
+
+/// What `em_share` reads besides the binned records (`FitInput`'s bins are then the
+/// deposits' bins).
+pub struct DepositInput<'a, B> {
+    pub params: &'a B,
+    pub keys: &'a B,
+    pub spread: &'a B,
+}
+
 /// What the lobe fit reads of the binned photons.
 pub struct FitInput<'a, B> {
     pub bin_params: &'a B,
@@ -392,6 +458,9 @@ pub struct FitInput<'a, B> {
     /// Final gathering for the fitted splats' lobes, with `EmConfig::gather` rays a side; the
     /// executor then traces the scene's splats.
     pub gathering: Option<Gathering<'a, B>>,
+    /// The bins hold deposits, not photons: every splat's irradiance comes from `em_share`
+    /// (which needs final gathering: the deposits carry no photon directions to fit).
+    pub deposits: Option<DepositInput<'a, B>>,
 }
 
 /// What final gathering needs besides the photons: its setup (`em::GatherSetup`), with the
@@ -464,21 +533,45 @@ pub fn fit_lobes<E: Executor>(
         _ => return Err(Error::Gpu("em counters readback was short".into())),
     };
     let select_ms = ms_since(t);
-    let gather = ex.uniform(
-        "em gather params",
-        &cfg.params(splat_count, gathered, shape),
-    )?;
-    let bindings = [
-        &gather,
-        input.bin_params,
-        input.splats,
-        &gather_list,
-        input.cell_start,
-        input.geom,
-        input.power,
-        &light,
-    ];
-    ex.dispatch("em_gather", &bindings, groups("em_gather", gathered)?)?;
+    match &input.deposits {
+        // Every splat's irradiance from the deposits around it.
+        Some(d) => {
+            let share = ex.uniform(
+                "em share params",
+                &cfg.params(splat_count, splat_count, shape),
+            )?;
+            let bindings = [
+                &share,
+                d.params,
+                input.bin_params,
+                input.splats,
+                input.cell_start,
+                d.keys,
+                input.geom,
+                input.power,
+                d.spread,
+                &light,
+            ];
+            ex.dispatch("em_share", &bindings, groups("em_share", splat_count)?)?;
+        }
+        None => {
+            let gather = ex.uniform(
+                "em gather params",
+                &cfg.params(splat_count, gathered, shape),
+            )?;
+            let bindings = [
+                &gather,
+                input.bin_params,
+                input.splats,
+                &gather_list,
+                input.cell_start,
+                input.geom,
+                input.power,
+                &light,
+            ];
+            ex.dispatch("em_gather", &bindings, groups("em_gather", gathered)?)?;
+        }
+    }
     // A split point of its own, so that the gather's time and the fit's are told apart (one
     // more submission, well under a millisecond).
     ex.read::<u32>(&counters, 1)?;
@@ -495,6 +588,13 @@ pub fn fit_lobes<E: Executor>(
             ));
         }
     };
+    if input.deposits.is_some() && cfg.gather == 0 {
+        return Err(Error::Invalid(
+            "deposits carry no photon directions: the photon fit (gather 0) needs the \
+             photons' estimate"
+                .into(),
+        ));
+    }
     let mut params = cfg.params(splat_count, listed, shape);
     if gathering.is_some() {
         params.flags |= EM_DEFER_FIT;
@@ -506,7 +606,11 @@ pub fn fit_lobes<E: Executor>(
         lobes: &lobes,
         light: &light,
     };
-    let mut dispatches = em_fit(ex, cfg, shape, &params, max_candidates, &fit_input)?;
+    // With deposits em_share gave every splat its irradiance; no pass over photons is left.
+    let mut dispatches = match input.deposits {
+        Some(_) => 0,
+        None => em_fit(ex, cfg, shape, &params, max_candidates, &fit_input)?,
+    };
     if gathering.is_some() {
         // The photons' estimate where the gather disk leaves the surface, before the rays
         // read it.

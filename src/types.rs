@@ -410,6 +410,21 @@ pub struct EmParams {
     pub _pad2: u32,
 }
 
+/// The uniform of the deposit passes (`em_deposit`, `em_deposit_list`, `em_share`; design
+/// §6, "Deposits").
+#[repr(C)]
+#[derive(Clone, Copy, Debug, Default, PartialEq, Pod, Zeroable)]
+pub struct DepositParams {
+    /// Fixed-point units of one unit of photon power in a deposit's sums.
+    pub power_scale: f32,
+    /// Photons of this `em_deposit` dispatch (one store page).
+    pub photon_count: u32,
+    pub splat_count: u32,
+    /// How far from a splat's centre a deposit's mean may lie and still reach its gather
+    /// disk: R plus the most a deposit's disk reaches past its mean (`em_share`'s box).
+    pub reach: f32,
+}
+
 /// Per-frame camera uniform of the splat passes: a pinhole at `eye` looking along `forward`,
 /// with `right`/`up` unit vectors and the tangents of the half fields of view. A pixel's ray
 /// and the depth mapping are `wgsl/shared/splat.wgsl`'s `pixel_ray` and `view_depth`.

@@ -97,6 +97,7 @@ fn config(family: LobeFamily, lobes: u32, iterations: u32) -> EmConfig {
         slab: 2.0,
         fit_candidates: 0,
         gather: 0,
+        estimate: lobelight::em::Estimate::Photons,
     }
 }
 

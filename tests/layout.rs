@@ -168,6 +168,12 @@ fn rust_layouts() -> Vec<RustLayout> {
             _pad1,
             _pad2
         }),
+        layout!(DepositParams {
+            power_scale,
+            photon_count,
+            splat_count,
+            reach
+        }),
         layout!(GatherParams {
             splat_count,
             samples,

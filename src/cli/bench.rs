@@ -12,7 +12,7 @@ use crate::cli::measure::median;
 use crate::cli::render::Method;
 use crate::cli::view::{ViewOptions, ViewReport};
 use crate::cpu;
-use crate::em::{EmConfig, EmStats, FitShape, LobeFamily, LobeMap};
+use crate::em::{EmConfig, EmStats, FitShape, LobeFamily, LobeMap, deposit_params};
 use crate::error::Result;
 use crate::frame::{
     DirectMap, FrameConfig, camera_uniform, cpu_direct, cpu_frame_into, shade_params,
@@ -186,6 +186,10 @@ pub struct EmBench {
     pub fits_per_s: f64,
     pub em_ms: f64,
     pub binning_ms: f64,
+    /// The photons' deposits (`em_deposit`, `em_deposit_list`, their binning), where the fit
+    /// a render runs reads them (`skipping`, `pruning`); like the binning, not in `em_ms`.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub deposits_ms: Option<f64>,
     pub photons_ms: f64,
     pub splats_fitted: u32,
     /// Photons gathered per fitted splat (within R, front side, inside the slab).
@@ -248,6 +252,11 @@ pub fn em(
         ..skip_cfg.clone()
     };
     let setup = gather_setup(scene);
+    let deposit_cfg = skip_cfg
+        .uses_deposits()
+        .then(|| deposit_params(&scene.lights, photons.photons, &scene.splats, cfg.radius));
+    let deposit_cfg = deposit_cfg.transpose()?;
+    let mut deposits_ms = None;
     let ([map, skipping, fixed], traced_stats, binning_ms, adapter, backend) = match gpu {
         Some(gpu) => {
             let on_gpu = GpuScene::upload(gpu, scene)?;
@@ -257,16 +266,40 @@ pub fn em(
             let t = Instant::now();
             let bins = gpu_bins::bin_photons(gpu, &traced, &on_gpu.splats, &params)?;
             let binning_ms = ms_since(t);
+            let t = Instant::now();
+            let deposits = match &deposit_cfg {
+                Some(d) => Some(gpu_bins::deposit_photons(
+                    gpu,
+                    &traced,
+                    &on_gpu.splats,
+                    d,
+                    &on_gpu.grid.params,
+                )?),
+                None => None,
+            };
+            if deposits.is_some() {
+                deposits_ms = Some(ms_since(t));
+            }
             drop(traced);
             let n = scene.splats.len() as u32;
+            // The fit every splat's (the thesis's timing) over the photons; the fits a render
+            // runs over what its estimate reads.
             let fit = |c: &EmConfig| gpu_em::fit_lobes_gathering(gpu, &on_gpu, n, &bins, c, &setup);
+            let fit_as_rendered = |c: &EmConfig| match &deposits {
+                Some(d) => gpu_em::fit_lobes_to_deposits(gpu, &on_gpu, n, d, c, &setup),
+                None => fit(c),
+            };
             fit(&EmConfig {
                 iterations: 1,
                 ..cfg.clone()
             })?;
+            fit_as_rendered(&EmConfig {
+                iterations: 1,
+                ..skip_cfg.clone()
+            })?;
             let map = fit(&cfg)?.download(gpu)?;
-            let skipping = fit(&skip_cfg)?.download(gpu)?;
-            let fixed = fit(&fixed_cfg)?.download(gpu)?;
+            let skipping = fit_as_rendered(&skip_cfg)?.download(gpu)?;
+            let fixed = fit_as_rendered(&fixed_cfg)?.download(gpu)?;
             let name = gpu.info.name.clone();
             let backend = gpu.backend_name().to_string();
             (
@@ -283,15 +316,29 @@ pub fn em(
             let t = Instant::now();
             let bins = cpu::bin_photons(&params, &traced.photons, &scene.splats)?;
             let binning_ms = ms_since(t);
-            let fit = |c: &EmConfig| {
-                cpu::fit_lobes_gathering(
-                    c,
-                    &bins,
+            let t = Instant::now();
+            let deposits = match &deposit_cfg {
+                Some(d) => Some(cpu::deposit_photons(
+                    d,
+                    &traced.photons,
                     &scene.splats,
-                    &scene.materials,
-                    FitShape::default(),
-                    Some((scene.geometry(&grid), &setup)),
-                )
+                    &grid.params,
+                )?),
+                None => None,
+            };
+            if deposits.is_some() {
+                deposits_ms = Some(ms_since(t));
+            }
+            let parts = (scene.splats.as_slice(), scene.materials.as_slice());
+            let fit = |c: &EmConfig| {
+                let gathering = Some((scene.geometry(&grid), &setup));
+                let shape = FitShape::default();
+                match &deposits {
+                    Some(d) if !c.fit_all => {
+                        cpu::fit_lobes_to_deposits(c, d, parts.0, parts.1, shape, gathering)
+                    }
+                    _ => cpu::fit_lobes_gathering(c, &bins, parts.0, parts.1, shape, gathering),
+                }
             };
             let fits = [fit(&cfg)?, fit(&skip_cfg)?, fit(&fixed_cfg)?];
             let threads = rayon::current_num_threads();
@@ -314,6 +361,7 @@ pub fn em(
         fits_per_s: s.fitted as f64 / (s.ms / 1e3),
         em_ms: s.ms,
         binning_ms,
+        deposits_ms,
         photons_ms: traced_stats.trace_ms,
         splats_fitted: s.fitted,
         mean_photons: map.mean_photons(),

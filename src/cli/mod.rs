@@ -17,7 +17,7 @@ pub mod view;
 use std::path::PathBuf;
 use std::process::ExitCode;
 
-use crate::em::{EmConfig, LobeFamily};
+use crate::em::{EmConfig, Estimate, LobeFamily};
 use crate::frame::{Direct, FrameConfig, Show, Splatter};
 use crate::gpu::{BackendChoice, Gpu};
 use crate::photons::PhotonConfig;
@@ -117,6 +117,11 @@ struct BakeArgs {
     /// photons within the search radius (0: the photons).
     #[arg(long, value_name = "N")]
     gather: Option<u32>,
+    /// Where the splats' photon irradiance comes from: each splat's deposit shared with its
+    /// neighbours (time bounded by splats; with final gathering) or every photon within the
+    /// search radius.
+    #[arg(long, value_enum)]
+    estimate: Option<Estimate>,
 }
 
 impl BakeArgs {
@@ -147,6 +152,9 @@ impl BakeArgs {
         }
         if let Some(n) = self.gather {
             scene.bake.gather = n;
+        }
+        if let Some(e) = self.estimate {
+            scene.bake.estimate = e;
         }
         scene.bake.sparse |= self.sparse;
         scene.bake.prune &= !self.fixed_lobes;

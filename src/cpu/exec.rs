@@ -7,7 +7,8 @@ use std::rc::Rc;
 use bytemuck::Pod;
 
 use super::{
-    bin_count, bin_place, bin_rank, bin_scatter, em_coverage, em_fit, em_gather, em_select,
+    bin_count, bin_place, bin_rank, bin_scatter, em_coverage, em_deposit, em_deposit_list, em_fit,
+    em_gather, em_select, em_share,
 };
 use super::{
     direct_bake, final_gather, path_trace, photon_resolve, photon_trace, photon_view, scan_apply,
@@ -355,6 +356,61 @@ fn run(stage: &str, b: &[&CpuBuffer], groups: u32) -> Result<()> {
                 view_mut(&mut active),
                 counters,
                 &mut gather_list,
+                groups,
+            );
+        }
+        "em_deposit" => {
+            let p = param(stage, b, 0)?;
+            let photons = get(stage, b, 1)?;
+            let splats = get(stage, b, 2)?;
+            let mut deposits = get_mut(stage, b, 3)?;
+            em_deposit::em_deposit(&p, view(&photons), view(&splats), &mut deposits, groups);
+        }
+        "em_deposit_list" => {
+            let p = param(stage, b, 0)?;
+            let splats = get(stage, b, 1)?;
+            let deposits = get(stage, b, 2)?;
+            let mut list = get_mut(stage, b, 3)?;
+            let mut spread = get_mut(stage, b, 4)?;
+            let mut listed = get_mut(stage, b, 5)?;
+            let listed = listed
+                .first_mut()
+                .ok_or_else(|| Error::Invalid(format!("{stage}: no list counter")))?;
+            em_deposit_list::em_deposit_list(
+                &p,
+                view(&splats),
+                &deposits,
+                view_mut(&mut list),
+                view_mut(&mut spread),
+                listed,
+                groups,
+            );
+        }
+        "em_share" => {
+            let em = param(stage, b, 0)?;
+            let deposit = param(stage, b, 1)?;
+            let bins = param(stage, b, 2)?;
+            let splats = get(stage, b, 3)?;
+            let cell_start = get(stage, b, 4)?;
+            let keys = get(stage, b, 5)?;
+            let geom = get(stage, b, 6)?;
+            let power = get(stage, b, 7)?;
+            let spread = get(stage, b, 8)?;
+            let mut light = get_mut(stage, b, 9)?;
+            let binned = em_share::BinnedDeposits {
+                cell_start: &cell_start,
+                keys: view(&keys),
+                geom: view(&geom),
+                power: view(&power),
+                spread: view(&spread),
+            };
+            em_share::em_share(
+                &em,
+                &deposit,
+                &bins,
+                view(&splats),
+                &binned,
+                view_mut(&mut light),
                 groups,
             );
         }

@@ -9,9 +9,12 @@ pub mod bin_rank;
 pub mod bin_scatter;
 pub mod direct_bake;
 pub mod em_coverage;
+pub mod em_deposit;
+pub mod em_deposit_list;
 pub mod em_fit;
 pub mod em_gather;
 pub mod em_select;
+pub mod em_share;
 pub mod exec;
 pub mod final_gather;
 pub mod grid_count;
@@ -46,13 +49,13 @@ use crate::error::{Error, Result};
 use crate::grid::SplatGrid;
 use crate::photons::{PhotonConfig, PhotonMap, emitters, ms_since};
 use crate::shared::trace::Geometry;
-use crate::types::{BinParams, GridParams, Lobe, Splat, SplatLight};
+use crate::types::{BinParams, DepositParams, GridParams, Lobe, Splat, SplatLight};
 use crate::types::{Light, Material, Photon};
 
 pub use crate::shared::dispatch::groups_for;
 pub use exec::{CpuBuffer, CpuExecutor};
 
-use crate::sequence::{self, Executor, FitInput, Gathering};
+use crate::sequence::{self, DepositInput, Executor, FitInput, Gathering};
 
 /// Tone mapping on the CPU mirror (`sequence::tone_map`); returns RGBA8 pixels and
 /// (Σ log(ε + Y), count).
@@ -181,6 +184,60 @@ pub fn fit_lobes_gathering(
     shape: FitShape,
     gathering: Option<(Geometry, &GatherSetup)>,
 ) -> Result<LobeMap> {
+    fit_binned(cfg, (bins, None), (splats, materials), shape, gathering)
+}
+
+/// Photon deposits on the host (`sequence::deposit_photons`): the records binned, each
+/// splat's spread and count, and the passes' settings.
+#[derive(Clone, Debug, Default, PartialEq)]
+pub struct DepositBins {
+    pub params: DepositParams,
+    pub bins: PhotonBins,
+    pub spread: Vec<[f32; 2]>,
+}
+
+/// The deposits of `photons`, which landed on `splats`, binned over `grid`'s box.
+pub fn deposit_photons(
+    params: &DepositParams,
+    photons: &[Photon],
+    splats: &[Splat],
+    grid: &GridParams,
+) -> Result<DepositBins> {
+    let n = u32::try_from(photons.len())
+        .map_err(|_| Error::Invalid("too many photons to deposit".into()))?;
+    let mut ex = CpuExecutor::default();
+    let page = ex.upload("photons", photons)?;
+    let splat_buf = ex.upload("splats", splats)?;
+    let d = sequence::deposit_photons(&mut ex, &[(&page, n)], &splat_buf, params, grid)?;
+    Ok(DepositBins {
+        params: d.params,
+        bins: d.bins.read_back(&mut ex)?,
+        spread: ex.read(&d.spread, splats.len())?,
+    })
+}
+
+/// The lobe fit with every splat's irradiance from `deposits` (`em_share`) and the fitted
+/// splats' lobes from final gathering through `gathering`'s scene.
+pub fn fit_lobes_to_deposits(
+    cfg: &EmConfig,
+    deposits: &DepositBins,
+    splats: &[Splat],
+    materials: &[Material],
+    shape: FitShape,
+    gathering: Option<(Geometry, &GatherSetup)>,
+) -> Result<LobeMap> {
+    let binned = (&deposits.bins, Some(deposits));
+    fit_binned(cfg, binned, (splats, materials), shape, gathering)
+}
+
+/// The lobe fit over binned photons, or over binned deposits where they are given.
+fn fit_binned(
+    cfg: &EmConfig,
+    (bins, deposits): (&PhotonBins, Option<&DepositBins>),
+    (splats, materials): (&[Splat], &[Material]),
+    shape: FitShape,
+    gathering: Option<(Geometry, &GatherSetup)>,
+) -> Result<LobeMap> {
     let t = Instant::now();
     let splat_count = u32::try_from(splats.len())
         .map_err(|_| Error::Invalid("too many splats for the lobe fit".into()))?;
@@ -198,6 +255,14 @@ pub fn fit_lobes_gathering(
     let power = ex.upload("binned power", &bins.power)?;
     let splat_buf = ex.upload("splats", splats)?;
     let material_buf = ex.upload("materials", materials)?;
+    let deposit_bufs = match deposits {
+        Some(d) => Some((
+            ex.uniform("deposit params", &d.params)?,
+            ex.upload("deposit keys", &d.bins.keys)?,
+            ex.upload("deposit spread", &d.spread)?,
+        )),
+        None => None,
+    };
     let input = FitInput {
         bin_params: &bin_params,
         cell_start: &cell_start,
@@ -212,6 +277,13 @@ pub fn fit_lobes_gathering(
                 setup,
                 lights,
                 batch_bytes: GATHER_BATCH_BYTES,
+            }),
+        deposits: deposit_bufs
+            .as_ref()
+            .map(|(params, keys, spread)| DepositInput {
+                params,
+                keys,
+                spread,
             }),
     };
     let fit = sequence::fit_lobes(&mut ex, &input, cfg, shape)?;

@@ -5,9 +5,10 @@ use super::Gpu;
 use super::exec::GpuExecutor;
 use super::photons::GpuPhotons;
 use crate::bins::{PhotonBins, check_binned};
-use crate::error::Result;
-use crate::sequence;
-use crate::types::BinParams;
+use crate::cpu::DepositBins;
+use crate::error::{Error, Result};
+use crate::sequence::{self, Executor};
+use crate::types::{BinParams, DepositParams, GridParams};
 
 /// Binned photons on the device (see `PhotonBins`).
 pub type GpuBins = sequence::Bins<wgpu::Buffer>;
@@ -53,4 +54,48 @@ pub fn bin_photons(
     let bins = sequence::bin_photons(&mut ex, &pages, splats, params)?;
     gpu.submit_and_wait(encoder)?;
     Ok(bins)
+}
+
+/// Photon deposits on the device (see `cpu::DepositBins`).
+pub type GpuDeposits = sequence::Deposits<wgpu::Buffer>;
+
+impl GpuDeposits {
+    pub fn download(&self, gpu: &Gpu) -> Result<DepositBins> {
+        let mut encoder = gpu.encoder("deposits download");
+        let mut ex = GpuExecutor::new(gpu, &mut encoder);
+        Ok(DepositBins {
+            params: self.params,
+            bins: self.bins.read_back(&mut ex)?,
+            spread: ex.read(&self.spread, self.params.splat_count as usize)?,
+        })
+    }
+}
+
+/// The deposits of the photons of every store page on the device
+/// (`sequence::deposit_photons`), which landed on `splats`, binned over `grid`'s box.
+pub fn deposit_photons(
+    gpu: &Gpu,
+    photons: &GpuPhotons,
+    splats: &wgpu::Buffer,
+    params: &DepositParams,
+    grid: &GridParams,
+) -> Result<GpuDeposits> {
+    let words = crate::shared::deposits::DEPOSIT_WORDS as u64;
+    if params.splat_count as u64 * words * 4 > gpu.max_binding_bytes() {
+        return Err(Error::Invalid(format!(
+            "the deposits of {} splats exceed one storage binding of this device: use the \
+             photons' estimate (--estimate photons)",
+            params.splat_count
+        )));
+    }
+    let pages: Vec<(&wgpu::Buffer, u32)> = photons
+        .pages
+        .iter()
+        .map(|p| (&p.buffer, p.count as u32))
+        .collect();
+    let mut encoder = gpu.encoder("deposits");
+    let mut ex = GpuExecutor::new(gpu, &mut encoder);
+    let deposits = sequence::deposit_photons(&mut ex, &pages, splats, params, grid)?;
+    gpu.submit_and_wait(encoder)?;
+    Ok(deposits)
 }

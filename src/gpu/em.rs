@@ -4,14 +4,14 @@
 use std::time::Instant;
 
 use super::Gpu;
-use super::bins::GpuBins;
+use super::bins::{GpuBins, GpuDeposits};
 use super::exec::GpuExecutor;
 use super::scene::GpuScene;
 use crate::cpu::GATHER_BATCH_BYTES;
 use crate::em::{EmConfig, EmStats, FitShape, GatherSetup, LobeMap, workgroup_size};
 use crate::error::{Error, Result};
 use crate::photons::ms_since;
-use crate::sequence::{self, FitInput, Gathering};
+use crate::sequence::{self, DepositInput, FitInput, Gathering};
 use crate::types::{Lobe, SplatLight};
 
 /// The fit's output on the device.
@@ -90,15 +90,35 @@ pub fn fit_lobes_gathering(
     cfg: &EmConfig,
     setup: &GatherSetup,
 ) -> Result<GpuLobes> {
+    fit_scene(gpu, (on_gpu, splat_count), (bins, None), cfg, setup)
+}
+
+/// The lobe fit over the scene on the device with every splat's irradiance from `deposits`
+/// (`em_share`) and the fitted splats' lobes from final gathering.
+pub fn fit_lobes_to_deposits(
+    gpu: &Gpu,
+    on_gpu: &GpuScene,
+    splat_count: u32,
+    deposits: &GpuDeposits,
+    cfg: &EmConfig,
+    setup: &GatherSetup,
+) -> Result<GpuLobes> {
+    let binned = (&deposits.bins, Some(deposits));
+    fit_scene(gpu, (on_gpu, splat_count), binned, cfg, setup)
+}
+
+/// The fit of the scene's first `splat_count` splats, in the device's shape, with final
+/// gathering where `cfg.gather` asks for it.
+fn fit_scene(
+    gpu: &Gpu,
+    (on_gpu, splat_count): (&GpuScene, u32),
+    binned: (&GpuBins, Option<&GpuDeposits>),
+    cfg: &EmConfig,
+    setup: &GatherSetup,
+) -> Result<GpuLobes> {
     let splats = (&on_gpu.splats, &on_gpu.materials, splat_count);
-    fit_on_device(
-        gpu,
-        splats,
-        bins,
-        cfg,
-        fit_shape(gpu),
-        Some((on_gpu, setup)),
-    )
+    let gathering = Some((on_gpu, setup));
+    fit_on_device(gpu, splats, binned, cfg, fit_shape(gpu), gathering)
 }
 
 /// `fit_lobes` in a given shape (tests run both reductions on one device).
@@ -114,7 +134,7 @@ pub fn fit_lobes_shaped(
     fit_on_device(
         gpu,
         (splats, materials, splat_count),
-        bins,
+        (bins, None),
         cfg,
         shape,
         None,
@@ -126,7 +146,7 @@ pub fn fit_lobes_shaped(
 fn fit_on_device(
     gpu: &Gpu,
     (splats, materials, splat_count): (&wgpu::Buffer, &wgpu::Buffer, u32),
-    bins: &GpuBins,
+    (bins, deposits): (&GpuBins, Option<&GpuDeposits>),
     cfg: &EmConfig,
     shape: FitShape,
     gathering: Option<(&GpuScene, &GatherSetup)>,
@@ -158,6 +178,11 @@ fn fit_on_device(
                 lights,
                 batch_bytes: gpu.page_bytes().min(GATHER_BATCH_BYTES),
             }),
+        deposits: deposits.map(|d| DepositInput {
+            params: &d.params_buf,
+            keys: &d.bins.keys,
+            spread: &d.spread,
+        }),
     };
     let mut encoder = gpu.encoder("lobe fit");
     let mut ex = GpuExecutor::new(gpu, &mut encoder);

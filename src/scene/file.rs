@@ -125,6 +125,9 @@ pub struct BakeDesc {
     /// centres, each bringing back the baked light of the diffuse surface it meets, instead
     /// of to the photons within the search radius (0: the photons, the thesis's fit).
     pub gather: u32,
+    /// Where the splats' photon irradiance comes from: "deposits" (default; time bounded by
+    /// splats, with final gathering) or "photons" (every photon within the search radius).
+    pub estimate: crate::em::Estimate,
 }
 
 impl Default for BakeDesc {
@@ -143,6 +146,7 @@ impl Default for BakeDesc {
             prune: true,
             fit_candidates: crate::em::DEFAULT_FIT_CANDIDATES,
             gather: crate::em::DEFAULT_GATHER,
+            estimate: crate::em::Estimate::Deposits,
         }
     }
 }

@@ -35,6 +35,7 @@ impl EmConfig {
             slab: b.slab,
             fit_candidates: b.fit_candidates,
             gather: b.gather,
+            estimate: b.estimate,
         }
     }
 }

@@ -2,6 +2,7 @@
 //! names and the same operations in the same order, used by the CPU mirrors of the stages.
 
 pub mod bins;
+pub mod deposits;
 pub mod dispatch;
 pub mod lights;
 pub mod lobe_brdf;

@@ -220,6 +220,13 @@ struct EmParams {
     _pad2: u32,
 }
 
+struct DepositParams {
+    power_scale: f32,
+    photon_count: u32,
+    splat_count: u32,
+    reach: f32,
+}
+
 struct Camera {
     eye: vec3<f32>,
     near: f32,

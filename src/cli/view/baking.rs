@@ -132,7 +132,7 @@ fn bake_pass(
 ) -> Result<BakeResult> {
     let progress = Progress::counting(traced.clone());
     let (photons, binned) = traced_and_binned_gpu(scene, gpu, on_gpu, &progress)?;
-    let lobes = fit_gpu(scene, gpu, on_gpu, &binned, &progress)?;
+    let lobes = fit_gpu(scene, gpu, on_gpu, (&photons, &binned), &progress)?;
     Ok(BakeResult {
         lobes,
         emitted: photons.stats.emitted,

@@ -1,0 +1,54 @@
+//! Mirror of `wgsl/em_deposit_list.wgsl`: each splat with a deposit lists it as a photon
+//! record at its photons' mean, and writes their spread and count. Sequential, so the list is
+//! in splat order (the device's is in any order; binning sorts both alike).
+
+use glam::Vec3;
+
+use crate::shared::deposits::{
+    DEPOSIT_COUNT, DEPOSIT_OFFSET, DEPOSIT_OFFSET_SUM, DEPOSIT_POSITION_UNITS, DEPOSIT_POWER,
+    DEPOSIT_SQUARE_SUM, DEPOSIT_WORDS, deposit_value,
+};
+use crate::types::{DepositParams, Photon, Splat};
+
+pub const WG: u32 = 64;
+
+pub fn em_deposit_list(
+    deposit: &DepositParams,
+    splats: &[Splat],
+    deposits: &[u32],
+    deposit_list: &mut [Photon],
+    spread: &mut [[f32; 2]],
+    listed: &mut u32,
+    groups: u32,
+) {
+    let wide = |at: usize| deposit_value(deposits[at], deposits[at + 1]);
+    for j in 0..(groups * WG).min(deposit.splat_count) {
+        let base = (j * DEPOSIT_WORDS) as usize;
+        let count = deposits[base + DEPOSIT_COUNT as usize];
+        if count == 0 {
+            continue;
+        }
+        let s = &splats[j as usize];
+        let per_photon = 1.0 / count as f32;
+        let mut power = [0.0f32; 3];
+        let mut mean = Vec3::ZERO;
+        for c in 0..3 {
+            power[c] = wide(base + DEPOSIT_POWER as usize + 2 * c) / deposit.power_scale;
+            mean[c] = wide(base + DEPOSIT_OFFSET_SUM as usize + 2 * c) / DEPOSIT_POSITION_UNITS
+                * per_photon
+                - DEPOSIT_OFFSET;
+        }
+        let square = wide(base + DEPOSIT_SQUARE_SUM as usize) / DEPOSIT_POSITION_UNITS * per_photon;
+        let rho = s.radius * (2.0 * (square - mean.dot(mean)).max(0.0)).sqrt();
+        deposit_list[*listed as usize] = Photon {
+            position: (Vec3::from(s.center) + mean * s.radius).into(),
+            bounce: 0,
+            direction: s.normal,
+            splat: j,
+            power,
+            path: j,
+        };
+        *listed += 1;
+        spread[j as usize] = [rho, count as f32];
+    }
+}

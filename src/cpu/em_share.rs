@@ -1,0 +1,76 @@
+//! Mirror of `wgsl/em_share.wgsl`: each splat's photon irradiance from the binned deposits
+//! around it, in the candidates' order.
+
+use glam::Vec3;
+use rayon::prelude::*;
+
+use crate::shared::bins::{SURFACE_COS_MIN, bin_box, bin_row, bin_row_count, photon_weight};
+use crate::shared::deposits::{disk_share, front_share};
+use crate::shared::octahedral::surface_decode;
+use crate::types::{BinParams, BinnedPhoton, DepositParams, EmParams, Splat, SplatLight};
+
+pub const WG: u32 = 64;
+
+/// The binned deposits `em_share` reads: list starts, keys, geometry, power, and each splat's
+/// spread and count.
+pub struct BinnedDeposits<'a> {
+    pub cell_start: &'a [u32],
+    pub keys: &'a [[u32; 2]],
+    pub geom: &'a [BinnedPhoton],
+    pub power: &'a [[f32; 4]],
+    pub spread: &'a [[f32; 2]],
+}
+
+pub fn em_share(
+    em: &EmParams,
+    deposit: &DepositParams,
+    bins: &BinParams,
+    splats: &[Splat],
+    d: &BinnedDeposits,
+    light: &mut [SplatLight],
+    groups: u32,
+) {
+    let count = (groups * WG).min(em.splat_count) as usize;
+    let reach2 = deposit.reach * deposit.reach;
+    light[..count]
+        .par_iter_mut()
+        .zip(&splats[..count])
+        .for_each(|(out, s)| {
+            let (center, normal) = (Vec3::from(s.center), Vec3::from(s.normal));
+            let slab = em.slab * s.radius;
+            let bx = bin_box(center, deposit.reach, bins);
+            let mut rgb = Vec3::ZERO;
+            let mut photons = 0.0f32;
+            let mut weight = 0.0f32;
+            for r in 0..bin_row_count(&bx) {
+                let row = bin_row(&bx, r, bins);
+                for k in d.cell_start[row.x as usize]..d.cell_start[row.y as usize] {
+                    let k = k as usize;
+                    let dv = Vec3::from(d.geom[k].position) - center;
+                    let l2 = dv.dot(dv);
+                    if l2 > reach2 || dv.dot(normal).abs() > slab {
+                        continue;
+                    }
+                    let power = d.power[k];
+                    if surface_decode(power[3]).dot(normal) < SURFACE_COS_MIN {
+                        continue;
+                    }
+                    let j = d.keys[k][0] as usize;
+                    let form = d.spread[j];
+                    let share = disk_share(l2.sqrt(), em.radius, form[0])
+                        * front_share(normal, Vec3::from(splats[j].normal));
+                    rgb += Vec3::new(power[0], power[1], power[2]) * share;
+                    photons += form[1] * share;
+                    weight += photon_weight(power) * share;
+                }
+            }
+            *out = SplatLight {
+                irradiance: (rgb * em.inv_area).into(),
+                photons: photons.ceil() as u32,
+                log_likelihood: 0.0,
+                weight,
+                lobes: 0,
+                first_lobe: 0,
+            };
+        });
+}
