@@ -404,5 +404,6 @@ pub fn deposit_params(
         photon_count: 0,
         splat_count,
         reach: radius + DEPOSIT_REACH * largest,
+        ..Default::default()
     })
 }

@@ -391,44 +391,64 @@ pub struct Deposits<B> {
     pub spread: B,
 }
 
-/// Photon deposits of the stored photons in `pages` (a buffer and its photon count each):
-/// `em_deposit` per page → `em_deposit_list` → (split: the records' count) → `bin_photons`
-/// of the records in cells of `params.reach` over `grid`'s box.
+/// Photon deposits of the stored photons in `pages` (a buffer and its photon count each),
+/// with at most `range` splats' deposits in one buffer: per range of splats, `em_deposit` per
+/// photon page → `em_deposit_list` → (split: the ranges' record counts) → `bin_photons` of
+/// the records, one page a range, in cells of `params.reach` over `grid`'s box.
 pub fn deposit_photons<E: Executor>(
     ex: &mut E,
     pages: &[(&E::Buffer, u32)],
     splats: &E::Buffer,
     params: &DepositParams,
-    grid: &GridParams,
+    (grid, range): (&GridParams, u32),
 ) -> Result<Deposits<E::Buffer>> {
-    let n = params.splat_count as u64;
+    let n = params.splat_count;
     let words = crate::shared::deposits::DEPOSIT_WORDS as u64;
-    let deposits = ex.zeroed("deposits", n.max(1) * words * 4)?;
-    for &(page, count) in pages {
-        let page_params = DepositParams {
-            photon_count: count,
+    let range = range.max(1);
+    let params_buf = ex.uniform("deposit params", params)?;
+    let spread = ex.zeroed("deposit spread", (n as u64).max(1) * 8)?;
+    let mut lists = Vec::new();
+    for first in (0..n.max(1)).step_by(range as usize) {
+        let count = range.min(n - first.min(n));
+        let in_range = DepositParams {
+            first_splat: first,
+            splat_count: count,
             ..*params
         };
-        let uniform = ex.uniform("deposit page params", &page_params)?;
-        let bindings = [&uniform, page, splats, &deposits];
-        ex.dispatch("em_deposit", &bindings, groups("em_deposit", count)?)?;
+        let deposits = ex.zeroed("deposits", (count as u64).max(1) * words * 4)?;
+        for &(page, photons) in pages {
+            let page_params = DepositParams {
+                photon_count: photons,
+                ..in_range
+            };
+            let uniform = ex.uniform("deposit page params", &page_params)?;
+            let bindings = [&uniform, page, splats, &deposits];
+            ex.dispatch("em_deposit", &bindings, groups("em_deposit", photons)?)?;
+        }
+        let uniform = ex.uniform("deposit range params", &in_range)?;
+        let list = ex.zeroed(
+            "deposit list",
+            (count as u64).max(1) * size_of::<Photon>() as u64,
+        )?;
+        let listed = ex.zeroed("deposits listed", 4)?;
+        let bindings = [&uniform, splats, &deposits, &list, &spread, &listed];
+        ex.dispatch(
+            "em_deposit_list",
+            &bindings,
+            groups("em_deposit_list", count)?,
+        )?;
+        lists.push((list, listed));
     }
-    let params_buf = ex.uniform("deposit params", params)?;
-    let list = ex.zeroed("deposit list", n.max(1) * size_of::<Photon>() as u64)?;
-    let spread = ex.zeroed("deposit spread", n.max(1) * 8)?;
-    let listed = ex.zeroed("deposits listed", 4)?;
-    let bindings = [&params_buf, splats, &deposits, &list, &spread, &listed];
-    ex.dispatch(
-        "em_deposit_list",
-        &bindings,
-        groups("em_deposit_list", params.splat_count)?,
-    )?;
-    let listed = match ex.read::<u32>(&listed, 1)?[..] {
-        [c] => c,
-        _ => return Err(Error::Gpu("deposit count readback was short".into())),
-    };
-    let bin = crate::bins::bin_params(grid, params.reach, listed as u64)?;
-    let bins = bin_photons(ex, &[(&list, listed)], splats, &bin)?;
+    let mut records = Vec::with_capacity(lists.len());
+    for (list, listed) in &lists {
+        match ex.read::<u32>(listed, 1)?[..] {
+            [c] => records.push((list, c)),
+            _ => return Err(Error::Gpu("deposit count readback was short".into())),
+        }
+    }
+    let total: u64 = records.iter().map(|r| r.1 as u64).sum();
+    let bin = crate::bins::bin_params(grid, params.reach, total)?;
+    let bins = bin_photons(ex, &records, splats, &bin)?;
     Ok(Deposits {
         params: *params,
         params_buf,

@@ -419,10 +419,16 @@ pub struct DepositParams {
     pub power_scale: f32,
     /// Photons of this `em_deposit` dispatch (one store page).
     pub photon_count: u32,
+    /// The splats whose deposits this dispatch's deposit buffer holds, from `first_splat`
+    /// (deposits larger than one storage binding are split by splat ranges).
     pub splat_count: u32,
     /// How far from a splat's centre a deposit's mean may lie and still reach its gather
     /// disk: R plus the most a deposit's disk reaches past its mean (`em_share`'s box).
     pub reach: f32,
+    pub first_splat: u32,
+    pub _pad0: u32,
+    pub _pad1: u32,
+    pub _pad2: u32,
 }
 
 /// Per-frame camera uniform of the splat passes: a pinhole at `eye` looking along `forward`,

@@ -172,7 +172,11 @@ fn rust_layouts() -> Vec<RustLayout> {
             power_scale,
             photon_count,
             splat_count,
-            reach
+            reach,
+            first_splat,
+            _pad0,
+            _pad1,
+            _pad2
         }),
         layout!(GatherParams {
             splat_count,

@@ -2,7 +2,9 @@
 // store page adds itself to the deposit of the splat it landed on: its count, its RGB power
 // in fixed point (deposit.power_scale units a unit of power), and its offset from the splat's
 // centre and that offset's square, as 64-bit sums of u32 atomics. Integer sums do not depend
-// on the order the photons arrive in, so the deposits are the same on every run.
+// on the order the photons arrive in, so the deposits are the same on every run. The
+// deposit buffer holds the splats [first_splat, first_splat + splat_count): where the
+// deposits outgrow one storage binding, each range has its own and its own dispatches.
 // One invocation per photon. CPU mirror: src/cpu/em_deposit.rs.
 
 // #import types
@@ -38,13 +40,15 @@ fn main(@builtin(workgroup_id) wg: vec3<u32>, @builtin(num_workgroups) num_wg: v
         return;
     }
     let p = photons[i];
-    if p.splat >= deposit.splat_count {
+    // Only the splats of this dispatch's deposit buffer (u32 wraps below first_splat).
+    let local = p.splat - deposit.first_splat;
+    if local >= deposit.splat_count {
         return;
     }
     let s = splats_at(p.splat);
     let o = clamp((p.position - s.center) / s.radius, vec3<f32>(-DEPOSIT_OFFSET),
                   vec3<f32>(DEPOSIT_OFFSET));
-    let base = p.splat * DEPOSIT_WORDS;
+    let base = local * DEPOSIT_WORDS;
     atomicAdd(&deposits[base + DEPOSIT_COUNT], 1u);
     for (var c = 0u; c < 3u; c++) {
         add_wide(base + DEPOSIT_POWER + 2u * c, fixed(max(p.power[c], 0.0), deposit.power_scale));

@@ -4,7 +4,8 @@
 // the splat's index for its key, so that the binned list comes out in splat order whatever
 // order this pass writes in. Beside it, in `spread` at the splat's index: the radius of the
 // uniform disk with its photons' spread about their mean (rho^2 = 2 E|x - mean|^2) and their
-// count. One invocation per splat. CPU mirror: src/cpu/em_deposit_list.rs.
+// count. One invocation per splat of one range (deposit.first_splat on; see em_deposit), whose
+// records go to the range's own list. CPU mirror: src/cpu/em_deposit_list.rs.
 
 // #import types
 // #import dispatch
@@ -29,11 +30,12 @@ fn wide(at: u32) -> f32 {
 @compute @workgroup_size(64)
 fn main(@builtin(workgroup_id) wg: vec3<u32>, @builtin(num_workgroups) num_wg: vec3<u32>,
         @builtin(local_invocation_index) lid: u32) {
-    let j = linear_workgroup(wg, num_wg) * WG + lid;
-    if j >= deposit.splat_count {
+    let local = linear_workgroup(wg, num_wg) * WG + lid;
+    if local >= deposit.splat_count {
         return;
     }
-    let base = j * DEPOSIT_WORDS;
+    let j = deposit.first_splat + local;
+    let base = local * DEPOSIT_WORDS;
     let count = deposits[base + DEPOSIT_COUNT];
     if count == 0u {
         return;

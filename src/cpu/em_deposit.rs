@@ -27,13 +27,14 @@ pub fn em_deposit(
 ) {
     let count = (groups * WG).min(deposit.photon_count) as usize;
     for p in &photons[..count.min(photons.len())] {
-        if p.splat >= deposit.splat_count {
+        let local = p.splat.wrapping_sub(deposit.first_splat);
+        if local >= deposit.splat_count {
             continue;
         }
         let s = &splats[p.splat as usize];
         let o = ((Vec3::from(p.position) - Vec3::from(s.center)) / s.radius)
             .clamp(Vec3::splat(-DEPOSIT_OFFSET), Vec3::splat(DEPOSIT_OFFSET));
-        let base = (p.splat * DEPOSIT_WORDS) as usize;
+        let base = (local * DEPOSIT_WORDS) as usize;
         deposits[base + DEPOSIT_COUNT as usize] += 1;
         for c in 0..3 {
             let power = fixed(p.power[c].max(0.0), deposit.power_scale);

@@ -1,6 +1,7 @@
 //! Mirror of `wgsl/em_deposit_list.wgsl`: each splat with a deposit lists it as a photon
-//! record at its photons' mean, and writes their spread and count. Sequential, so the list is
-//! in splat order (the device's is in any order; binning sorts both alike).
+//! record at its photons' mean, and writes their spread and count, for one range of splats.
+//! Sequential, so the list is in splat order (the device's is in any order; binning sorts both
+//! alike).
 
 use glam::Vec3;
 
@@ -22,8 +23,9 @@ pub fn em_deposit_list(
     groups: u32,
 ) {
     let wide = |at: usize| deposit_value(deposits[at], deposits[at + 1]);
-    for j in 0..(groups * WG).min(deposit.splat_count) {
-        let base = (j * DEPOSIT_WORDS) as usize;
+    for local in 0..(groups * WG).min(deposit.splat_count) {
+        let j = deposit.first_splat + local;
+        let base = (local * DEPOSIT_WORDS) as usize;
         let count = deposits[base + DEPOSIT_COUNT as usize];
         if count == 0 {
             continue;

@@ -208,7 +208,8 @@ pub fn deposit_photons(
     let mut ex = CpuExecutor::default();
     let page = ex.upload("photons", photons)?;
     let splat_buf = ex.upload("splats", splats)?;
-    let d = sequence::deposit_photons(&mut ex, &[(&page, n)], &splat_buf, params, grid)?;
+    let range = params.splat_count;
+    let d = sequence::deposit_photons(&mut ex, &[(&page, n)], &splat_buf, params, (grid, range))?;
     Ok(DepositBins {
         params: d.params,
         bins: d.bins.read_back(&mut ex)?,

@@ -6,7 +6,7 @@ use super::exec::GpuExecutor;
 use super::photons::GpuPhotons;
 use crate::bins::{PhotonBins, check_binned};
 use crate::cpu::DepositBins;
-use crate::error::{Error, Result};
+use crate::error::Result;
 use crate::sequence::{self, Executor};
 use crate::types::{BinParams, DepositParams, GridParams};
 
@@ -80,14 +80,9 @@ pub fn deposit_photons(
     params: &DepositParams,
     grid: &GridParams,
 ) -> Result<GpuDeposits> {
+    // The splats whose deposits one buffer holds.
     let words = crate::shared::deposits::DEPOSIT_WORDS as u64;
-    if params.splat_count as u64 * words * 4 > gpu.max_binding_bytes() {
-        return Err(Error::Invalid(format!(
-            "the deposits of {} splats exceed one storage binding of this device: use the \
-             photons' estimate (--estimate photons)",
-            params.splat_count
-        )));
-    }
+    let range = (gpu.page_bytes() / (words * 4)).clamp(1, u32::MAX as u64) as u32;
     let pages: Vec<(&wgpu::Buffer, u32)> = photons
         .pages
         .iter()
@@ -95,7 +90,7 @@ pub fn deposit_photons(
         .collect();
     let mut encoder = gpu.encoder("deposits");
     let mut ex = GpuExecutor::new(gpu, &mut encoder);
-    let deposits = sequence::deposit_photons(&mut ex, &pages, splats, params, grid)?;
+    let deposits = sequence::deposit_photons(&mut ex, &pages, splats, params, (grid, range))?;
     gpu.submit_and_wait(encoder)?;
     Ok(deposits)
 }

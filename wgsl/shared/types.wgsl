@@ -225,6 +225,10 @@ struct DepositParams {
     photon_count: u32,
     splat_count: u32,
     reach: f32,
+    first_splat: u32,
+    _pad0: u32,
+    _pad1: u32,
+    _pad2: u32,
 }
 
 struct Camera {
