@@ -22,7 +22,7 @@ use crate::photons::{
 use crate::shaders::stage_shape;
 use crate::shared::bins::list_count;
 use crate::shared::dispatch::groups_for;
-use crate::shared::lobes::EM_DEFER_FIT;
+use crate::shared::lobes::{EM_DEFER_FIT, EM_SHARE};
 use crate::tone::{ToneConfig, reduce_levels};
 use crate::types::{
     BinParams, Camera, DepositParams, DirectParams, DistanceParams, EmParams, Emitter,
@@ -460,6 +460,8 @@ pub fn deposit_photons<E: Executor>(
 /// What `em_share` reads besides the binned records (`FitInput`'s bins are then the
 /// deposits' bins).
 pub struct DepositInput<'a, B> {
+    /// `DepositParams::reach`: `em_select` lists the splats with deposits within it.
+    pub reach: f32,
     pub params: &'a B,
     pub keys: &'a B,
     pub spread: &'a B,
@@ -522,6 +524,9 @@ pub struct Fit<B> {
 /// gathering (`cfg.gather` > 0), that `em_fit` gives the fitted splats only their irradiance,
 /// `em_coverage` divides every splat's by the share of its gather disk its surface covers,
 /// then `direct_bake` → `final_gather` from each fitted splat → `em_fit` over those samples.
+/// With deposits (`input.deposits`, final gathering only), the bins hold the deposits:
+/// `em_share` gives every splat its irradiance in place of `em_gather` and the photon
+/// `em_fit`, and `em_coverage` and final gathering follow.
 pub fn fit_lobes<E: Executor>(
     ex: &mut E,
     input: &FitInput<E::Buffer>,
@@ -529,6 +534,13 @@ pub fn fit_lobes<E: Executor>(
     shape: FitShape,
 ) -> Result<Fit<E::Buffer>> {
     cfg.validate()?;
+    if input.deposits.is_some() && cfg.gather == 0 {
+        return Err(Error::Invalid(
+            "deposits carry no photon directions: the photon fit (gather 0) needs the \
+             photons' estimate"
+                .into(),
+        ));
+    }
     let t = std::time::Instant::now();
     let splat_count = input.splat_count;
     let n = splat_count as u64;
@@ -536,7 +548,12 @@ pub fn fit_lobes<E: Executor>(
     let fit_list = ex.zeroed("fit list", n.max(1) * 8)?;
     let gather_list = ex.zeroed("gather list", n.max(1) * 4)?;
     let counters = ex.zeroed("em counters", 16)?;
-    let select = ex.uniform("em select params", &cfg.params(splat_count, 0, shape))?;
+    let mut select_params = cfg.params(splat_count, 0, shape);
+    if let Some(d) = &input.deposits {
+        select_params.radius = d.reach;
+        select_params.flags |= EM_SHARE;
+    }
+    let select = ex.uniform("em select params", &select_params)?;
     let bindings = [
         &select,
         input.bin_params,
@@ -565,6 +582,8 @@ pub fn fit_lobes<E: Executor>(
                 d.params,
                 input.bin_params,
                 input.splats,
+                input.materials,
+                &counters,
                 input.cell_start,
                 d.keys,
                 input.geom,
@@ -593,8 +612,12 @@ pub fn fit_lobes<E: Executor>(
         }
     }
     // A split point of its own, so that the gather's time and the fit's are told apart (one
-    // more submission, well under a millisecond).
-    ex.read::<u32>(&counters, 1)?;
+    // more submission, well under a millisecond); em_share counts the splats it lit that are
+    // not fitted.
+    let gathered = match (&input.deposits, &ex.read::<u32>(&counters, 4)?[..]) {
+        (Some(_), &[.., lit]) => lit,
+        _ => gathered,
+    };
     let gather_ms = ms_since(t) - select_ms;
     // Lobes for the fitted splats alone, at the slots em_select gave them.
     let lobes = ex.zeroed("lobes", (fitted as u64 * cfg.lobes as u64).max(1) * 32)?;
@@ -608,13 +631,6 @@ pub fn fit_lobes<E: Executor>(
             ));
         }
     };
-    if input.deposits.is_some() && cfg.gather == 0 {
-        return Err(Error::Invalid(
-            "deposits carry no photon directions: the photon fit (gather 0) needs the \
-             photons' estimate"
-                .into(),
-        ));
-    }
     let mut params = cfg.params(splat_count, listed, shape);
     if gathering.is_some() {
         params.flags |= EM_DEFER_FIT;

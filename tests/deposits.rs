@@ -273,15 +273,21 @@ fn shared_light_of_a_flat_field_is_the_photons_estimate() {
         spread: &d.spread,
     };
     let groups = n.div_ceil(cpu::em_share::WG);
+    let mut counters = [0; 4];
+    let matte = [lobelight::types::Material::default()];
+    let (bins, out) = (&d.bins.params, &mut shared);
     cpu::em_share::em_share(
         &params,
         &d.params,
-        &d.bins.params,
+        bins,
         &splats,
         &binned,
-        &mut shared,
+        &matte,
+        out,
+        &mut counters,
         groups,
     );
+    assert_eq!(counters[3], n, "every splat of the field is lit");
 
     let bins = cpu::bin_photons(
         &bin_params(&grid, r, photons.len() as u64).unwrap(),

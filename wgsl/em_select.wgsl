@@ -8,7 +8,8 @@
 // depend on scheduling, but each em_fit workgroup writes only its own splat's light and slot,
 // and the host packs the lobes in splat order (LobeMap::pack), so the results do not.
 // counters = [fit-list splats, most candidate photons of a fit-list splat, splats fitted,
-// gather-list splats].
+// gather-list splats]. With deposits (EM_SHARE) em_share lights every splat, and only the
+// fitted splats are listed (on the fit list), without a look at the others' candidates.
 // CPU mirror: src/cpu/em_select.rs.
 
 // #import types
@@ -36,6 +37,12 @@ fn main(@builtin(workgroup_id) wg: vec3<u32>, @builtin(num_workgroups) num_wg: v
         return;
     }
     let s = splats_at(i);
+    let glossy = any(materials[s.material].specular > vec3<f32>(0.0));
+    let fit = glossy || (em.flags & EM_FIT_ALL) != 0u;
+    // With deposits em_share lights every splat; only the fitted ones are listed.
+    if (em.flags & EM_SHARE) != 0u && !fit {
+        return;
+    }
     let box = bin_box(s.center, em.radius, bins);
     var candidates = 0u;
     for (var r = 0u; r < bin_row_count(box); r++) {
@@ -45,8 +52,6 @@ fn main(@builtin(workgroup_id) wg: vec3<u32>, @builtin(num_workgroups) num_wg: v
     if candidates == 0u {
         return;
     }
-    let glossy = any(materials[s.material].specular > vec3<f32>(0.0));
-    let fit = glossy || (em.flags & EM_FIT_ALL) != 0u;
     if !fit && candidates <= GATHER_MAX {
         gather_list[atomicAdd(&counters[3], 1u)] = i;
         return;

@@ -7,31 +7,37 @@
 // photons spread as cosine about the deposit's normal). In flat surroundings that is the
 // photons' estimate with each photon's position smoothed over its deposit's disk.
 // The deposits are em_deposit_list's records, binned (cells of deposit.reach, which bounds
-// how far a deposit's photons lie from its mean, plus R). One invocation per splat; every
-// splat's light is written. CPU mirror: src/cpu/em_share.rs.
+// how far a deposit's photons lie from its mean, plus R). One invocation per splat, in splat
+// order (a list of the splats with deposits near them saves nothing: the reach holds hundreds
+// of splats, and the list's scheduling order cost a 3 M-splat terrain 0.5 s); every splat's
+// light is written, and counters[3] counts those lit that are not fitted (em_select lists and
+// counts those). CPU mirror: src/cpu/em_share.rs.
 
 // #import types
 // #import dispatch
 // #import bins
 // #import octahedral
 // #import deposits
+// #import lobes
 
 @group(0) @binding(0) var<uniform> em: EmParams;
 @group(0) @binding(1) var<uniform> deposit: DepositParams;
 @group(0) @binding(2) var<uniform> bins: BinParams;
 // #paged
 @group(0) @binding(3) var<storage, read> splats: array<Splat>;
-@group(0) @binding(4) var<storage, read> cell_start: array<u32>;
+@group(0) @binding(4) var<storage, read> materials: array<Material>;
+@group(0) @binding(5) var<storage, read_write> counters: array<atomic<u32>, 4>;
+@group(0) @binding(6) var<storage, read> cell_start: array<u32>;
 // #paged
-@group(0) @binding(5) var<storage, read> bin_keys: array<vec2<u32>>;
+@group(0) @binding(7) var<storage, read> bin_keys: array<vec2<u32>>;
 // #paged
-@group(0) @binding(6) var<storage, read> bin_geom: array<BinnedPhoton>;
+@group(0) @binding(8) var<storage, read> bin_geom: array<BinnedPhoton>;
 // #paged
-@group(0) @binding(7) var<storage, read> bin_power: array<vec4<f32>>;
+@group(0) @binding(9) var<storage, read> bin_power: array<vec4<f32>>;
 // #paged
-@group(0) @binding(8) var<storage, read> spread: array<vec2<f32>>;
+@group(0) @binding(10) var<storage, read> spread: array<vec2<f32>>;
 // #paged
-@group(0) @binding(9) var<storage, read_write> light: array<SplatLight>;
+@group(0) @binding(11) var<storage, read_write> light: array<SplatLight>;
 
 const WG: u32 = 64u;
 
@@ -78,4 +84,9 @@ fn main(@builtin(workgroup_id) wg: vec3<u32>, @builtin(num_workgroups) num_wg: v
     out.lobes = 0u;
     out.first_lobe = 0u;
     light_put(i, out);
+    // The splats lit and not fitted: em_select listed the fitted ones (counters[2]).
+    let glossy = any(materials[s.material].specular > vec3<f32>(0.0));
+    if count > 0.0 && !glossy && (em.flags & EM_FIT_ALL) == 0u {
+        atomicAdd(&counters[3], 1u);
+    }
 }

@@ -282,8 +282,8 @@ pub fn em(
             }
             drop(traced);
             let n = scene.splats.len() as u32;
-            // The fit every splat's (the thesis's timing) over the photons; the fits a render
-            // runs over what its estimate reads.
+            // The fit of every splat (the thesis's timing) reads the photons; the render's
+            // fits read what its estimate reads.
             let fit = |c: &EmConfig| gpu_em::fit_lobes_gathering(gpu, &on_gpu, n, &bins, c, &setup);
             let fit_as_rendered = |c: &EmConfig| match &deposits {
                 Some(d) => gpu_em::fit_lobes_to_deposits(gpu, &on_gpu, n, d, c, &setup),

@@ -4,7 +4,7 @@
 use glam::Vec3;
 
 use crate::shared::bins::{bin_box, bin_row, bin_row_count};
-use crate::shared::lobes::{EM_FIT_ALL, GATHER_MAX};
+use crate::shared::lobes::{EM_FIT_ALL, EM_SHARE, GATHER_MAX};
 use crate::types::{BinParams, EmParams, Material, Splat};
 
 pub const WG: u32 = 64;
@@ -30,6 +30,14 @@ pub fn em_select(
                 continue;
             }
             let s = &splats[i as usize];
+            let glossy = materials[s.material as usize]
+                .specular
+                .iter()
+                .any(|&x| x > 0.0);
+            let fit = glossy || em.flags & EM_FIT_ALL != 0;
+            if em.flags & EM_SHARE != 0 && !fit {
+                continue;
+            }
             let bx = bin_box(Vec3::from(s.center), em.radius, bins);
             let mut candidates = 0;
             for r in 0..bin_row_count(&bx) {
@@ -39,11 +47,6 @@ pub fn em_select(
             if candidates == 0 {
                 continue;
             }
-            let glossy = materials[s.material as usize]
-                .specular
-                .iter()
-                .any(|&x| x > 0.0);
-            let fit = glossy || em.flags & EM_FIT_ALL != 0;
             if !fit && candidates <= GATHER_MAX {
                 gather_list[counters[3] as usize] = i;
                 counters[3] += 1;

@@ -1,13 +1,14 @@
 //! Mirror of `wgsl/em_share.wgsl`: each splat's photon irradiance from the binned deposits
-//! around it, in the candidates' order.
+//! around it, in the candidates' order, and the count of splats lit.
 
 use glam::Vec3;
 use rayon::prelude::*;
 
 use crate::shared::bins::{SURFACE_COS_MIN, bin_box, bin_row, bin_row_count, photon_weight};
 use crate::shared::deposits::{disk_share, front_share};
+use crate::shared::lobes::EM_FIT_ALL;
 use crate::shared::octahedral::surface_decode;
-use crate::types::{BinParams, BinnedPhoton, DepositParams, EmParams, Splat, SplatLight};
+use crate::types::{BinParams, BinnedPhoton, DepositParams, EmParams, Material, Splat, SplatLight};
 
 pub const WG: u32 = 64;
 
@@ -21,13 +22,16 @@ pub struct BinnedDeposits<'a> {
     pub spread: &'a [[f32; 2]],
 }
 
+#[allow(clippy::too_many_arguments)]
 pub fn em_share(
     em: &EmParams,
     deposit: &DepositParams,
     bins: &BinParams,
     splats: &[Splat],
     d: &BinnedDeposits,
+    materials: &[Material],
     light: &mut [SplatLight],
+    counters: &mut [u32; 4],
     groups: u32,
 ) {
     let count = (groups * WG).min(em.splat_count) as usize;
@@ -73,4 +77,16 @@ pub fn em_share(
                 first_lobe: 0,
             };
         });
+    let fitted = |s: &Splat| {
+        let glossy = materials[s.material as usize]
+            .specular
+            .iter()
+            .any(|&x| x > 0.0);
+        glossy || em.flags & EM_FIT_ALL != 0
+    };
+    let lit = light[..count]
+        .iter()
+        .zip(splats)
+        .filter(|(l, s)| l.photons > 0 && !fitted(s));
+    counters[3] += lit.count() as u32;
 }

@@ -391,12 +391,18 @@ fn run(stage: &str, b: &[&CpuBuffer], groups: u32) -> Result<()> {
             let deposit = param(stage, b, 1)?;
             let bins = param(stage, b, 2)?;
             let splats = get(stage, b, 3)?;
-            let cell_start = get(stage, b, 4)?;
-            let keys = get(stage, b, 5)?;
-            let geom = get(stage, b, 6)?;
-            let power = get(stage, b, 7)?;
-            let spread = get(stage, b, 8)?;
-            let mut light = get_mut(stage, b, 9)?;
+            let materials = get(stage, b, 4)?;
+            let mut counters = get_mut(stage, b, 5)?;
+            let cell_start = get(stage, b, 6)?;
+            let keys = get(stage, b, 7)?;
+            let geom = get(stage, b, 8)?;
+            let power = get(stage, b, 9)?;
+            let spread = get(stage, b, 10)?;
+            let mut light = get_mut(stage, b, 11)?;
+            let counters: &mut [u32; 4] = counters
+                .get_mut(..4)
+                .and_then(|c| c.try_into().ok())
+                .ok_or_else(|| Error::Invalid(format!("{stage}: counters too short")))?;
             let binned = em_share::BinnedDeposits {
                 cell_start: &cell_start,
                 keys: view(&keys),
@@ -410,7 +416,9 @@ fn run(stage: &str, b: &[&CpuBuffer], groups: u32) -> Result<()> {
                 &bins,
                 view(&splats),
                 &binned,
+                view(&materials),
                 view_mut(&mut light),
+                counters,
                 groups,
             );
         }

@@ -282,6 +282,7 @@ fn fit_binned(
         deposits: deposit_bufs
             .as_ref()
             .map(|(params, keys, spread)| DepositInput {
+                reach: deposits.map_or(0.0, |d| d.params.reach),
                 params,
                 keys,
                 spread,

@@ -179,6 +179,7 @@ fn fit_on_device(
                 batch_bytes: gpu.page_bytes().min(GATHER_BATCH_BYTES),
             }),
         deposits: deposits.map(|d| DepositInput {
+            reach: d.params.reach,
             params: &d.params_buf,
             keys: &d.bins.keys,
             spread: &d.spread,

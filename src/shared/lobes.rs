@@ -18,6 +18,9 @@ pub const EM_SUBGROUP_REDUCE: u32 = 8;
 /// Fitted splats take only their irradiance from the photons; a dispatch over final
 /// gathering's samples fits their lobes after (`em_fit.wgsl`, "Gathered samples").
 pub const EM_DEFER_FIT: u32 = 16;
+/// The bins hold deposits: `em_share` lights every splat, and `em_select` lists only the
+/// fitted splats (on the fit list).
+pub const EM_SHARE: u32 = 32;
 /// Most candidate photons of a splat `em_gather` sums in one invocation.
 pub const GATHER_MAX: u32 = 16384;
 

@@ -26,6 +26,9 @@ const EM_SUBGROUP_REDUCE: u32 = 8u;
 // Fitted splats take only their irradiance from the photons: a dispatch over final gathering's
 // samples fits their lobes after (em_fit.wgsl, "Gathered samples").
 const EM_DEFER_FIT: u32 = 16u;
+// The bins hold deposits: em_share lights every splat, and em_select lists only the fitted
+// splats (on the fit list).
+const EM_SHARE: u32 = 32u;
 
 // A fit-list entry is a splat index with this bit set when the splat's lobes are fitted.
 const FIT_BIT: u32 = 0x80000000u;
