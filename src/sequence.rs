@@ -405,6 +405,9 @@ pub fn deposit_photons<E: Executor>(
     let n = params.splat_count;
     let words = crate::shared::deposits::DEPOSIT_WORDS as u64;
     let range = range.max(1);
+    // A range lists at most one record a photon: a scan of many splats lit by few photons
+    // allocates no list for the dark ones.
+    let stored: u64 = pages.iter().map(|p| p.1 as u64).sum();
     let params_buf = ex.uniform("deposit params", params)?;
     let spread = ex.zeroed("deposit spread", (n as u64).max(1) * 8)?;
     let mut lists = Vec::new();
@@ -426,10 +429,8 @@ pub fn deposit_photons<E: Executor>(
             ex.dispatch("em_deposit", &bindings, groups("em_deposit", photons)?)?;
         }
         let uniform = ex.uniform("deposit range params", &in_range)?;
-        let list = ex.zeroed(
-            "deposit list",
-            (count as u64).max(1) * size_of::<Photon>() as u64,
-        )?;
+        let records = (count as u64).min(stored).max(1);
+        let list = ex.zeroed("deposit list", records * size_of::<Photon>() as u64)?;
         let listed = ex.zeroed("deposits listed", 4)?;
         let bindings = [&uniform, splats, &deposits, &list, &spread, &listed];
         ex.dispatch(

@@ -28,7 +28,9 @@
 @group(0) @binding(5) var specular_sum: texture_2d<f32>;
 @group(0) @binding(6) var<storage, read> lights: array<Light>;
 @group(0) @binding(7) var<storage, read_write> hdr: array<vec4<f32>>;
+// #paged
 @group(0) @binding(8) var<storage, read> splat_light: array<SplatLight>;
+// #paged
 @group(0) @binding(9) var<storage, read> direct_light: array<vec4<f32>>;
 @group(0) @binding(10) var<storage, read> materials: array<Material>;
 
@@ -182,7 +184,7 @@ fn glossy_indirect(sf: Surface, shift: vec2<u32>) -> vec3<f32> {
         if lit || dot(h.normal, s.wo) >= 0.0 {
             continue;
         }
-        let e = direct_light[hit.splat].xyz + splat_light[hit.splat].irradiance;
+        let e = direct_light_at(hit.splat).xyz + splat_light_at(hit.splat).irradiance;
         sum += s.weight * hit_albedo(h, materials[h.material]) * e * (1.0 / PI);
     }
     return sf.rho_s * sum * (1.0 / f32(params.glossy_rays));

@@ -397,7 +397,11 @@ fn shade_layouts(gpu: &Gpu, paging: &Paging) -> Result<[wgpu::BindGroupLayout; 2
     let mut geometry = vec![buffer_entry(0, UNIFORM)];
     for p in crate::shaders::paged_bindings("shade")? {
         let pages = paging.of(&p.name).map_or(1, |l| l.pages);
-        geometry.extend((1..pages).map(|k| buffer_entry(p.binding + k * PAGE_BINDING_STEP, READ)));
+        let more = (1..pages).map(|k| buffer_entry(p.binding + k * PAGE_BINDING_STEP, READ));
+        match p.group {
+            0 => frame.extend(more),
+            _ => geometry.extend(more),
+        }
     }
     geometry.extend((1..GEOMETRY_BINDINGS as u32).map(|b| buffer_entry(b, READ)));
     Ok([frame, geometry].map(|entries| {
@@ -1039,17 +1043,18 @@ impl SplatPipelines {
             binding: 7,
             resource: out.hdr.as_entire_binding(),
         });
-        // The baked light at the glossy rays' hits, and the hit disks' materials.
+        // The baked light at the glossy rays' hits (paged: a splat's each, like the geometry),
+        // and the hit disks' materials.
         let hits = [
             (8, scene.splat_light),
             (9, scene.direct),
             (10, scene.materials),
         ];
-        frame_entries.extend(hits.map(|(binding, b)| wgpu::BindGroupEntry {
-            binding,
-            resource: b.as_entire_binding(),
-        }));
-        let paging = gpu.paging("shade", &[&[], &scene.geometry])?;
+        let paging = gpu.paging_by("shade", |group, binding| match group {
+            0 => hits.iter().find(|h| h.0 == binding).map(|h| h.1),
+            _ => scene.geometry.get(binding as usize).copied(),
+        })?;
+        frame_entries.extend(gpu.paged_entries_at("shade", 0, &hits, &paging)?);
         let shade = self.shade_pipeline(gpu, &paging, uniforms.direct != DIRECT_BAKED)?;
         let geometry_entries = gpu.paged_entries("shade", 1, &scene.geometry, &paging)?;
         let groups = [frame_entries, geometry_entries]
