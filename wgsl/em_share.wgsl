@@ -9,7 +9,7 @@
 // The deposits are em_deposit_list's records, binned (cells of deposit.reach, which bounds
 // how far a deposit's photons lie from its mean, plus R). One invocation per splat, in splat
 // order (a list of the splats with deposits near them saves nothing: the reach holds hundreds
-// of splats, and the list's scheduling order cost a 3 M-splat terrain 0.5 s); every splat's
+// of splats, and the list's scheduling order cost a 3 M-splat terrain 0.8 s); every splat's
 // light is written, and counters[3] counts those lit that are not fitted (em_select lists and
 // counts those). CPU mirror: src/cpu/em_share.rs.
 
