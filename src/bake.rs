@@ -221,16 +221,28 @@ pub fn traced_and_binned_gpu(
     progress: &Progress,
 ) -> Result<(GpuPhotons, Binned<GpuBins>)> {
     let traced = traced_gpu(scene, gpu, on_gpu, progress)?;
+    let binned = binned_gpu(scene, gpu, on_gpu, &traced, progress)?;
+    Ok((traced, binned))
+}
+
+/// Bins photons traced on the device.
+pub fn binned_gpu(
+    scene: &Scene,
+    gpu: &Gpu,
+    on_gpu: &GpuScene,
+    traced: &GpuPhotons,
+    progress: &Progress,
+) -> Result<Binned<GpuBins>> {
     let stats = traced.stats.clone();
     let spin = progress.spinner("binning");
     let t = Instant::now();
     let radius = EmConfig::from_scene(scene).radius;
     let params = bin_params(&on_gpu.grid.params, radius, stats.stored)?;
-    let bins = bin_photons(gpu, &traced, &on_gpu.splats, &params)?;
+    let bins = bin_photons(gpu, traced, &on_gpu.splats, &params)?;
     let binning_ms = ms_since(t);
     spin.finish_and_clear();
     progress.done("binning", binning_ms, "");
-    Ok((traced, binned(scene, bins, &stats, binning_ms)))
+    Ok(binned(scene, bins, &stats, binning_ms))
 }
 
 /// Traces and bins on the CPU mirror.
@@ -275,7 +287,7 @@ fn traced_cpu(scene: &Scene, grid: &SplatGrid, progress: &Progress) -> Result<Ph
 }
 
 /// Traces on the device.
-fn traced_gpu(
+pub fn traced_gpu(
     scene: &Scene,
     gpu: &Gpu,
     on_gpu: &GpuScene,
@@ -321,27 +333,25 @@ fn deposits_gpu(
     Ok((deposits, ms))
 }
 
-/// Fits the lobes on the device: over the deposits of the traced photons where the scene's
-/// estimate asks for them (`EmConfig::uses_deposits`), else over the binned photons; they
-/// come back to the host.
+/// Fits the lobes on the device to the traced photons: over their deposits where the scene's
+/// estimate asks for them (`EmConfig::uses_deposits`), else over their bins, binned here and
+/// returned (the deposits need none: the reference view bins them when it is shown). The
+/// lobes come back to the host.
 pub fn fit_gpu(
     scene: &Scene,
     gpu: &Gpu,
     on_gpu: &GpuScene,
-    (traced, binned): (&GpuPhotons, &Binned<GpuBins>),
+    traced: &GpuPhotons,
     progress: &Progress,
-) -> Result<LobeMap> {
+) -> Result<(LobeMap, Option<Binned<GpuBins>>)> {
     if EmConfig::from_scene(scene).uses_deposits() {
         let (deposits, _) = deposits_gpu(scene, gpu, on_gpu, traced, progress)?;
-        return fit_on_gpu(
-            scene,
-            gpu,
-            on_gpu,
-            (&binned.bins, Some(&deposits)),
-            progress,
-        );
+        let binned = (&deposits.bins, Some(&deposits));
+        return Ok((fit_on_gpu(scene, gpu, on_gpu, binned, progress)?, None));
     }
-    fit_on_gpu(scene, gpu, on_gpu, (&binned.bins, None), progress)
+    let binned = binned_gpu(scene, gpu, on_gpu, traced, progress)?;
+    let lobes = fit_on_gpu(scene, gpu, on_gpu, (&binned.bins, None), progress)?;
+    Ok((lobes, Some(binned)))
 }
 
 /// Fits the lobes on the device to binned photons, or with the irradiance from `deposits`

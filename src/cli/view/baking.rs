@@ -2,8 +2,8 @@
 //! result after each of its passes: a light that moved gets a quick preview bake with a
 //! fraction of the photons first, then the full bake. Starting a newer bake makes the older
 //! one stop at its next pass (a generation counter), so keys pressed in a row never queue
-//! bakes up. The photons and their bins stay on the device for the reference and photon
-//! views.
+//! bakes up. The photons stay on the device for the photon view, and their bins for the
+//! reference view (binned when it is first shown, where the bake needed no bins).
 
 use std::path::PathBuf;
 use std::sync::Arc;
@@ -11,7 +11,7 @@ use std::sync::atomic::{AtomicU64, Ordering};
 use std::sync::mpsc::{Receiver, TryRecvError, channel};
 use std::time::Instant;
 
-use crate::bake::{Binned, Progress, fit_gpu, traced_and_binned_gpu};
+use crate::bake::{Binned, Progress, fit_gpu, traced_gpu};
 use crate::em::LobeMap;
 use crate::error::{Error, Result};
 use crate::gpu::Gpu;
@@ -34,7 +34,9 @@ const PREVIEW_MIN: u64 = 200_000;
 pub struct BakeResult {
     pub lobes: LobeMap,
     pub photons: GpuPhotons,
-    pub binned: Binned<GpuBins>,
+    /// The photons binned, where the bake binned them (the photon fit); else the reference
+    /// view bins them the first time it is shown.
+    pub binned: Option<Binned<GpuBins>>,
     /// Photons emitted in this pass.
     pub emitted: u64,
     /// More passes follow (this one is a preview).
@@ -131,8 +133,8 @@ fn bake_pass(
     traced: &Arc<AtomicU64>,
 ) -> Result<BakeResult> {
     let progress = Progress::counting(traced.clone());
-    let (photons, binned) = traced_and_binned_gpu(scene, gpu, on_gpu, &progress)?;
-    let lobes = fit_gpu(scene, gpu, on_gpu, (&photons, &binned), &progress)?;
+    let photons = traced_gpu(scene, gpu, on_gpu, &progress)?;
+    let (lobes, binned) = fit_gpu(scene, gpu, on_gpu, &photons, &progress)?;
     Ok(BakeResult {
         lobes,
         emitted: photons.stats.emitted,

@@ -22,6 +22,7 @@ use winit::event_loop::{ActiveEventLoop, EventLoop, OwnedDisplayHandle};
 use winit::keyboard::{Key, NamedKey};
 use winit::window::{Window, WindowId};
 
+use crate::bake::{Progress, binned_gpu};
 use crate::camera::View;
 use crate::cli::render::Method;
 use crate::cpu::photon_view::scene_scale;
@@ -318,7 +319,7 @@ impl State {
         let view = View::new(&self.orbit.camera(), w, h);
         let cam = camera_uniform(&view, scene.bounds(), frame);
         let gpu = &self.gpu;
-        match (self.method, &self.baked) {
+        match (self.method, &mut self.baked) {
             (Method::Photons, Some(baked)) => {
                 let scale = scene_scale(&scene.lights, baked.emitted)?;
                 let on_gpu = &self.renderer.on_gpu;
@@ -326,7 +327,16 @@ impl State {
                 Ok(std::borrow::Cow::Owned(hdr))
             }
             (Method::Reference, Some(baked)) => {
-                let (bins, em) = (&baked.binned.bins, &baked.binned.em);
+                // Bins the first time the view is shown, where the bake needed none.
+                let binned = match baked.binned.take() {
+                    Some(b) => b,
+                    None => {
+                        let (on_gpu, quiet) = (&self.renderer.on_gpu, Progress::new(false));
+                        binned_gpu(scene, gpu, on_gpu, &baked.photons, &quiet)?
+                    }
+                };
+                let binned = baked.binned.insert(binned);
+                let (bins, em) = (&binned.bins, &binned.em);
                 let hdr = self
                     .renderer
                     .record_reference(gpu, encoder, scene, bins, em, &cam, frame)?;
