@@ -25,8 +25,11 @@ use crate::types::{Camera, NO_SPLAT};
 pub const NONE: u16 = 0;
 /// A pixel whose points see different surfaces (an edge).
 pub const MIXED: u16 = u16::MAX;
-/// Points traced per pixel: the still image's default refinement frames.
-pub const SAMPLES: u32 = 16;
+/// Points traced per pixel: four times the still image's default refinement frames. With as
+/// many points as frames, an edge pixel whose frames all fell on one side counted as that
+/// side, while a path tracer's samples cover the whole pixel: the diffuse box's floor and
+/// blocks read 2 % bright in direct light at 64² (16 points), 0.4–1.6 % at 64.
+pub const SAMPLES: u32 = 64;
 
 /// The ID of surface `k` (`Splat::object`) in an object-ID image.
 pub fn id_of(surface: u32) -> u16 {

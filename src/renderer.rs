@@ -118,7 +118,7 @@ impl FrameRenderer {
         self.set_lights(gpu, scene)?;
         let params = direct_params(scene);
         let mut encoder = gpu.encoder("direct bake");
-        let mut ex = GpuExecutor::new(gpu, &mut encoder).tracing(&self.on_gpu);
+        let mut ex = GpuExecutor::new(gpu, &mut encoder).tracing(self.on_gpu.geometry());
         let direct = crate::sequence::bake_direct(&mut ex, &self.frame_scene.lights, &params)?;
         gpu.submit_and_wait(encoder)?;
         self.frame_scene.direct = direct;
@@ -370,7 +370,7 @@ impl FrameRenderer {
         let first = path_params(scene, &cam, show);
         for k in 0..spp.max(1) {
             let mut encoder = gpu.encoder("path sample");
-            let mut ex = GpuExecutor::new(gpu, &mut encoder).tracing(&self.on_gpu);
+            let mut ex = GpuExecutor::new(gpu, &mut encoder).tracing(self.on_gpu.geometry());
             let params = PathParams { sample: k, ..first };
             let (materials, lights) = (&self.on_gpu.materials, &self.frame_scene.lights);
             path_sample(&mut ex, &params, &cam_buf, materials, lights, &targets.hdr)?;

@@ -523,11 +523,12 @@ pub struct Fit<B> {
 /// list (irradiance alone) → `em_fit`, one workgroup per splat of the fit list, in one
 /// dispatch or in several that hand the mixture over through the lobe buffer. With final
 /// gathering (`cfg.gather` > 0), that `em_fit` gives the fitted splats only their irradiance,
-/// `em_coverage` divides every splat's by the share of its gather disk its surface covers,
 /// then `direct_bake` → `final_gather` from each fitted splat → `em_fit` over those samples.
 /// With deposits (`input.deposits`, final gathering only), the bins hold the deposits:
 /// `em_share` gives every splat its irradiance in place of `em_gather` and the photon
-/// `em_fit`, and `em_coverage` and final gathering follow.
+/// `em_fit`. Wherever the scene's geometry is given (`input.gathering`), `em_coverage` divides
+/// every splat's irradiance by the share of its gather disk its surface covers before final
+/// gathering, whether or not anything is fitted.
 pub fn fit_lobes<E: Executor>(
     ex: &mut E,
     input: &FitInput<E::Buffer>,
@@ -648,9 +649,10 @@ pub fn fit_lobes<E: Executor>(
         Some(_) => 0,
         None => em_fit(ex, cfg, shape, &params, max_candidates, &fit_input)?,
     };
-    if gathering.is_some() {
-        // The photons' estimate where the gather disk leaves the surface, before the rays
-        // read it.
+    // The photons' estimate where the gather disk leaves the surface, on every path that has
+    // the scene's geometry: before final gathering's rays read it, and where no fit follows
+    // (an all-diffuse scene fits nothing, yet its edges darkened as the glossy scene's did).
+    if input.gathering.is_some() {
         cover_light(ex, &cfg.params(splat_count, splat_count, shape), &light)?;
     }
     ex.read::<u32>(&counters, 1)?;
@@ -683,7 +685,8 @@ pub fn fit_lobes<E: Executor>(
 }
 
 /// `em_coverage`: each of `params.splat_count` splats' photon irradiance in `light` divided by
-/// the share of its gather disk (radius and slab from `params`) that its surface covers. The
+/// the share of its gather disk (radius and slab from `params`) that its surface covers; a
+/// splat whose lobes the photon fit wrote keeps its light (the lobes carry their own). The
 /// executor must trace the scene's geometry.
 pub fn cover_light<E: Executor>(ex: &mut E, params: &EmParams, light: &E::Buffer) -> Result<()> {
     let uniform = ex.uniform("em coverage params", params)?;

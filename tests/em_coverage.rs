@@ -77,7 +77,7 @@ material = "white"
     let on_gpu = {
         let on_gpu = GpuScene::upload(&gpu, &scene).unwrap();
         let mut encoder = gpu.encoder("coverage");
-        let mut ex = GpuExecutor::new(&gpu, &mut encoder).tracing(&on_gpu);
+        let mut ex = GpuExecutor::new(&gpu, &mut encoder).tracing(on_gpu.geometry());
         covered(&mut ex, &scene, &em)
     };
     for (i, (a, b)) in on_gpu.iter().zip(&on_cpu).enumerate() {

@@ -113,7 +113,7 @@ fn final_gather_matches_the_mirror_and_the_photons() {
     let on_gpu = {
         let on_gpu = GpuScene::upload(&gpu, &scene).unwrap();
         let mut encoder = gpu.encoder("final gather");
-        let mut ex = GpuExecutor::new(&gpu, &mut encoder).tracing(&on_gpu);
+        let mut ex = GpuExecutor::new(&gpu, &mut encoder).tracing(on_gpu.geometry());
         gather(
             &mut ex,
             &params,
@@ -215,13 +215,19 @@ fn lobes_fitted_to_gathered_samples_match_the_mirror() {
         cpu::fit_lobes_gathering(&cfg, &bins, splats, materials, shape, gathering).unwrap();
     let by_photons = EmConfig { gather: 0, ..cfg };
     let mut photons = cpu::fit_lobes(&by_photons, &bins, splats, materials, shape).unwrap();
-    // The photons' estimate as the gathering fit's photon pass makes it: with em_coverage's
-    // share at the faces' edges, which the photon fit alone leaves out.
+    // The photons' estimate as the gathering fit's photon pass makes it: the irradiance
+    // alone (no lobes, which em_coverage leaves as the photon fit wrote them), with
+    // em_coverage's share at the faces' edges.
     photons.light = {
         let geometry = scene.geometry(&grid);
         let mut ex = CpuExecutor::tracing(geometry);
         let n = splats.len() as u32;
-        let light = ex.upload("light", &photons.light).unwrap();
+        let irradiance_alone: Vec<SplatLight> = photons
+            .light
+            .iter()
+            .map(|l| SplatLight { lobes: 0, ..*l })
+            .collect();
+        let light = ex.upload("light", &irradiance_alone).unwrap();
         cover_light(&mut ex, &cfg.params(n, n, shape), &light).unwrap();
         ex.read(&light, n as usize).unwrap()
     };

@@ -241,7 +241,7 @@ fn stage_bindings_are_read_from_the_wgsl() {
         if traced.contains(&stage.name) {
             assert_eq!(
                 shape.bindings[1] as usize,
-                lobelight::gpu::scene::GEOMETRY_BINDINGS,
+                lobelight::gpu::exec::GEOMETRY_BINDINGS,
                 "{}: the geometry group",
                 stage.name
             );

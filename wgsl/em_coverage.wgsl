@@ -1,4 +1,4 @@
-// Lobe fit with final gathering, after the photon pass (docs/design.md section 6): where a
+// Lobe fit, after the photon pass, on every path (docs/design.md section 6): where a
 // splat's gather disk leaves its surface (an edge, a corner), its photons land on part of the
 // disk but the estimate divides their power by all of it, pi R^2: the faces' light darkens
 // towards their edges. Per splat with photons, the share of the gather disk that its surface
@@ -100,7 +100,9 @@ fn main(@builtin(workgroup_id) wg: vec3<u32>, @builtin(num_workgroups) num_wg: v
         return;
     }
     var l = light_at(i);
-    if l.photons == 0u {
+    // Lobes the photon fit wrote carry their own irradiance: correcting the total alone would
+    // split the splat's diffuse light from its glossy light.
+    if l.photons == 0u || l.lobes > 0u {
         return;
     }
     let s = splats_at(i);

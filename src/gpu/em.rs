@@ -188,7 +188,7 @@ fn fit_on_device(
     let mut encoder = gpu.encoder("lobe fit");
     let mut ex = GpuExecutor::new(gpu, &mut encoder);
     if let Some((on_gpu, _)) = gathering {
-        ex = ex.tracing(on_gpu);
+        ex = ex.tracing(on_gpu.geometry());
     }
     let fit = sequence::fit_lobes(&mut ex, &input, cfg, shape)?;
     gpu.submit_and_wait(encoder)?;

@@ -4,15 +4,20 @@
 use bytemuck::Pod;
 
 use super::Gpu;
-use super::scene::{GEOMETRY_BINDINGS, GpuScene};
 use crate::error::Result;
 use crate::sequence::Executor;
+
+/// Buffers in bind group 1 of the tracing stages (`GpuScene::geometry`).
+pub const GEOMETRY_BINDINGS: usize = 6;
+
+/// Bind group 1 of the tracing stages, in binding order (see `wgsl/shared/trace.wgsl`).
+pub type GeometryBuffers<'a> = [&'a wgpu::Buffer; GEOMETRY_BINDINGS];
 
 pub struct GpuExecutor<'a> {
     gpu: &'a Gpu,
     encoder: &'a mut wgpu::CommandEncoder,
     /// Bind group 1 of the tracing stages (`GpuScene::geometry`).
-    geometry: Option<[&'a wgpu::Buffer; GEOMETRY_BINDINGS]>,
+    geometry: Option<GeometryBuffers<'a>>,
 }
 
 impl<'a> GpuExecutor<'a> {
@@ -25,9 +30,9 @@ impl<'a> GpuExecutor<'a> {
         }
     }
 
-    /// Tracing stages walk `on_gpu`'s splats and grid.
-    pub fn tracing(mut self, on_gpu: &'a GpuScene) -> GpuExecutor<'a> {
-        self.geometry = Some(on_gpu.geometry());
+    /// Tracing stages walk the splats and grid of `geometry` (`GpuScene::geometry`).
+    pub fn tracing(mut self, geometry: GeometryBuffers<'a>) -> GpuExecutor<'a> {
+        self.geometry = Some(geometry);
         self
     }
 }

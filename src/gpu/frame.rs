@@ -4,7 +4,8 @@
 //! viewer or a benchmark draws frame after frame with nothing but a new camera uniform.
 
 use super::exec::GpuExecutor;
-use super::scene::{GEOMETRY_BINDINGS, GpuScene};
+use super::exec::{GEOMETRY_BINDINGS, GeometryBuffers};
+use super::scene::GpuScene;
 use std::collections::HashMap;
 use std::sync::{Mutex, OnceLock};
 
@@ -68,7 +69,7 @@ pub struct SceneBuffers<'a> {
     pub direct: &'a wgpu::Buffer,
     pub visibility: &'a wgpu::Buffer,
     /// Bind group 1 of tracing stages (`GpuScene::geometry`).
-    pub geometry: [&'a wgpu::Buffer; GEOMETRY_BINDINGS],
+    pub geometry: GeometryBuffers<'a>,
     /// Where each surface's disks end, as the drawing passes read it (`GpuScene::drawn_clips`).
     pub clips: &'a wgpu::Buffer,
     /// What `splat_shade` writes for frames of baked direct light: per splat, the radiance

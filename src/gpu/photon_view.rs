@@ -24,6 +24,6 @@ pub fn photon_image(
         .iter()
         .map(|p| (&p.buffer, p.count as u32))
         .collect();
-    let mut ex = GpuExecutor::new(gpu, encoder).tracing(on_gpu);
+    let mut ex = GpuExecutor::new(gpu, encoder).tracing(on_gpu.geometry());
     sequence::photon_image(&mut ex, &on_gpu.materials, &pages, cam, scale)
 }

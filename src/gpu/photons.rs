@@ -57,7 +57,7 @@ pub fn trace_photons(
     let emitters = emitters(&scene.lights, cfg.photons)?;
     let max_page = page_photons(cfg, gpu.max_binding_bytes() / PHOTON_BYTES);
     let mut encoder = gpu.encoder("photon trace");
-    let mut ex = GpuExecutor::new(gpu, &mut encoder).tracing(on_gpu);
+    let mut ex = GpuExecutor::new(gpu, &mut encoder).tracing(on_gpu.geometry());
     let traced = sequence::trace_photons(
         &mut ex,
         &emitters,

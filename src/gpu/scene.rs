@@ -4,6 +4,7 @@
 use std::time::Instant;
 
 use super::Gpu;
+use super::exec::GeometryBuffers;
 use super::grid::{GpuGrid, build_grid};
 use crate::error::Result;
 use crate::grid::grid_params;
@@ -11,9 +12,6 @@ use crate::photons::ms_since;
 use crate::scene::Scene;
 use crate::shared::splat::DRAWN_CLIPS;
 use crate::types::{Splat, SurfaceClip};
-
-/// Buffers in bind group 1 of the tracing stages (`GpuScene::geometry`).
-pub const GEOMETRY_BINDINGS: usize = 6;
 
 pub struct GpuScene {
     pub splats: wgpu::Buffer,
@@ -48,7 +46,7 @@ impl GpuScene {
     }
 
     /// Bind group 1 of tracing stages, in binding order (see `wgsl/shared/trace.wgsl`).
-    pub fn geometry(&self) -> [&wgpu::Buffer; GEOMETRY_BINDINGS] {
+    pub fn geometry(&self) -> GeometryBuffers<'_> {
         [
             &self.grid.params_buf,
             &self.splats,
