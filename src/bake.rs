@@ -8,8 +8,8 @@ use std::time::Instant;
 
 use crate::bins::{PhotonBins, bin_params};
 use crate::cpu;
-use crate::em::{EmConfig, FitShape, GatherSetup, LobeMap, deposit_params};
-use crate::error::Result;
+use crate::em::{EmConfig, FitShape, GatherSetup, LobeMap};
+use crate::error::{Error, Result};
 use crate::frame::{direct_params, shadow_bias};
 use crate::gpu::Gpu;
 use crate::gpu::bins::{GpuBins, GpuDeposits, bin_photons, deposit_photons};
@@ -17,7 +17,8 @@ use crate::gpu::em::{fit_lobes_gathering, fit_lobes_to_deposits};
 use crate::gpu::photons::{GpuPhotons, trace_photons};
 use crate::gpu::scene::GpuScene;
 use crate::grid::SplatGrid;
-use crate::photons::{PhotonConfig, PhotonMap, PhotonStats, ms_since};
+use crate::photons::{PhotonMap, PhotonStats, ms_since};
+use crate::plan::BakePlan;
 use crate::scene::Scene;
 use crate::types::{DepositParams, EmParams};
 
@@ -183,13 +184,12 @@ pub struct Binned<B> {
     pub binning: StageReport,
 }
 
-fn binned<B>(scene: &Scene, bins: B, stats: &PhotonStats, binning_ms: f64) -> Binned<B> {
-    let em = EmConfig::from_scene(scene);
+fn binned<B>(plan: &BakePlan, splats: usize, bins: B, stats: &PhotonStats, ms: f64) -> Binned<B> {
     Binned {
         bins,
-        em: em.params(scene.splats.len() as u32, 0, FitShape::default()),
+        em: plan.em.params(splats as u32, 0, FitShape::default()),
         photons: traced_report(stats),
-        binning: StageReport::ran(binning_ms),
+        binning: StageReport::ran(ms),
     }
 }
 
@@ -209,25 +209,15 @@ pub fn bins_gpu(
     on_gpu: &GpuScene,
     progress: &Progress,
 ) -> Result<Binned<GpuBins>> {
-    Ok(traced_and_binned_gpu(scene, gpu, on_gpu, progress)?.1)
-}
-
-/// Traces and bins on the device, and keeps the traced photons too (the viewer's photon view
-/// draws them).
-pub fn traced_and_binned_gpu(
-    scene: &Scene,
-    gpu: &Gpu,
-    on_gpu: &GpuScene,
-    progress: &Progress,
-) -> Result<(GpuPhotons, Binned<GpuBins>)> {
-    let traced = traced_gpu(scene, gpu, on_gpu, progress)?;
-    let binned = binned_gpu(scene, gpu, on_gpu, &traced, progress)?;
-    Ok((traced, binned))
+    let plan = BakePlan::new(scene)?;
+    let traced = traced_gpu(scene, &plan, gpu, on_gpu, progress)?;
+    binned_gpu(scene, &plan, gpu, on_gpu, &traced, progress)
 }
 
 /// Bins photons traced on the device.
 pub fn binned_gpu(
     scene: &Scene,
+    plan: &BakePlan,
     gpu: &Gpu,
     on_gpu: &GpuScene,
     traced: &GpuPhotons,
@@ -236,13 +226,12 @@ pub fn binned_gpu(
     let stats = traced.stats.clone();
     let spin = progress.spinner("binning");
     let t = Instant::now();
-    let radius = EmConfig::from_scene(scene).radius;
-    let params = bin_params(&on_gpu.grid.params, radius, stats.stored)?;
+    let params = bin_params(&on_gpu.grid.params, plan.em.radius, stats.stored)?;
     let bins = bin_photons(gpu, traced, &on_gpu.splats, &params)?;
-    let binning_ms = ms_since(t);
+    let ms = ms_since(t);
     spin.finish_and_clear();
-    progress.done("binning", binning_ms, "");
-    Ok(binned(scene, bins, &stats, binning_ms))
+    progress.done("binning", ms, "");
+    Ok(binned(plan, scene.splats.len(), bins, &stats, ms))
 }
 
 /// Traces and bins on the CPU mirror.
@@ -251,25 +240,34 @@ pub fn bins_cpu(
     grid: &SplatGrid,
     progress: &Progress,
 ) -> Result<Binned<PhotonBins>> {
-    let map = traced_cpu(scene, grid, progress)?;
+    binned_cpu(scene, &BakePlan::new(scene)?, grid, progress)
+}
+
+fn binned_cpu(
+    scene: &Scene,
+    plan: &BakePlan,
+    grid: &SplatGrid,
+    progress: &Progress,
+) -> Result<Binned<PhotonBins>> {
+    let map = traced_cpu(scene, plan, grid, progress)?;
     let spin = progress.spinner("binning");
     let t = Instant::now();
-    let radius = EmConfig::from_scene(scene).radius;
-    let bins = cpu::bin_photons(
-        &bin_params(&grid.params, radius, map.stats.stored)?,
-        &map.photons,
-        &scene.splats,
-    )?;
-    let binning_ms = ms_since(t);
+    let params = bin_params(&grid.params, plan.em.radius, map.stats.stored)?;
+    let bins = cpu::bin_photons(&params, &map.photons, &scene.splats)?;
+    let ms = ms_since(t);
     spin.finish_and_clear();
-    progress.done("binning", binning_ms, "");
-    Ok(binned(scene, bins, &map.stats, binning_ms))
+    progress.done("binning", ms, "");
+    Ok(binned(plan, scene.splats.len(), bins, &map.stats, ms))
 }
 
 /// Traces on the CPU mirror.
-fn traced_cpu(scene: &Scene, grid: &SplatGrid, progress: &Progress) -> Result<PhotonMap> {
-    let photon_cfg = PhotonConfig::from_scene(scene);
-    let bar = progress.bar(photon_cfg.photons);
+fn traced_cpu(
+    scene: &Scene,
+    plan: &BakePlan,
+    grid: &SplatGrid,
+    progress: &Progress,
+) -> Result<PhotonMap> {
+    let bar = progress.bar(plan.photons.photons);
     let mut on_batch = |done: u64, _total: u64| {
         bar.set_position(done);
         progress.traced(done);
@@ -278,7 +276,7 @@ fn traced_cpu(scene: &Scene, grid: &SplatGrid, progress: &Progress) -> Result<Ph
         &scene.lights,
         &scene.materials,
         &scene.geometry(grid),
-        &photon_cfg,
+        &plan.photons,
         &mut on_batch,
     )?;
     bar.finish_and_clear();
@@ -289,35 +287,32 @@ fn traced_cpu(scene: &Scene, grid: &SplatGrid, progress: &Progress) -> Result<Ph
 /// Traces on the device.
 pub fn traced_gpu(
     scene: &Scene,
+    plan: &BakePlan,
     gpu: &Gpu,
     on_gpu: &GpuScene,
     progress: &Progress,
 ) -> Result<GpuPhotons> {
-    let photon_cfg = PhotonConfig::from_scene(scene);
-    let bar = progress.bar(photon_cfg.photons);
+    let bar = progress.bar(plan.photons.photons);
     let mut on_batch = |done: u64, _total: u64| {
         bar.set_position(done);
         progress.traced(done);
     };
-    let traced = trace_photons(gpu, scene, on_gpu, &photon_cfg, &mut on_batch)?;
+    let traced = trace_photons(gpu, scene, on_gpu, &plan.photons, &mut on_batch)?;
     bar.finish_and_clear();
     progress_photons(progress, &traced.stats);
     Ok(traced)
 }
 
-/// The deposits' uniform for the scene's photons.
-fn scene_deposit_params(scene: &Scene) -> Result<DepositParams> {
-    deposit_params(
-        &scene.lights,
-        scene.bake.photons,
-        &scene.splats,
-        scene.search_radius(),
-    )
+/// The deposits' uniform of a plan whose fit reads deposits.
+fn planned_deposits(plan: &BakePlan) -> Result<&DepositParams> {
+    plan.deposits.as_ref().ok_or_else(|| {
+        Error::Invalid("internal: the bake's plan has no deposits for a fit that reads them".into())
+    })
 }
 
 /// Photon deposits on the device, with their time as the binning's.
 fn deposits_gpu(
-    scene: &Scene,
+    plan: &BakePlan,
     gpu: &Gpu,
     on_gpu: &GpuScene,
     traced: &GpuPhotons,
@@ -325,8 +320,26 @@ fn deposits_gpu(
 ) -> Result<(GpuDeposits, f64)> {
     let spin = progress.spinner("deposits");
     let t = Instant::now();
-    let params = scene_deposit_params(scene)?;
-    let deposits = deposit_photons(gpu, traced, &on_gpu.splats, &params, &on_gpu.grid.params)?;
+    let params = planned_deposits(plan)?;
+    let deposits = deposit_photons(gpu, traced, &on_gpu.splats, params, &on_gpu.grid.params)?;
+    let ms = ms_since(t);
+    spin.finish_and_clear();
+    progress.done("deposits", ms, "");
+    Ok((deposits, ms))
+}
+
+/// Photon deposits on the CPU mirror, with their time as the binning's.
+fn deposits_cpu(
+    scene: &Scene,
+    plan: &BakePlan,
+    grid: &SplatGrid,
+    map: &PhotonMap,
+    progress: &Progress,
+) -> Result<(cpu::DepositBins, f64)> {
+    let spin = progress.spinner("deposits");
+    let t = Instant::now();
+    let params = planned_deposits(plan)?;
+    let deposits = cpu::deposit_photons(params, &map.photons, &scene.splats, &grid.params)?;
     let ms = ms_since(t);
     spin.finish_and_clear();
     progress.done("deposits", ms, "");
@@ -339,18 +352,22 @@ fn deposits_gpu(
 /// lobes come back to the host.
 pub fn fit_gpu(
     scene: &Scene,
+    plan: &BakePlan,
     gpu: &Gpu,
     on_gpu: &GpuScene,
     traced: &GpuPhotons,
     progress: &Progress,
 ) -> Result<(LobeMap, Option<Binned<GpuBins>>)> {
-    if EmConfig::from_scene(scene).uses_deposits() {
-        let (deposits, _) = deposits_gpu(scene, gpu, on_gpu, traced, progress)?;
+    if plan.em.uses_deposits() {
+        let (deposits, _) = deposits_gpu(plan, gpu, on_gpu, traced, progress)?;
         let binned = (&deposits.bins, Some(&deposits));
-        return Ok((fit_on_gpu(scene, gpu, on_gpu, binned, progress)?, None));
+        return Ok((
+            fit_on_gpu(scene, plan, gpu, on_gpu, binned, progress)?,
+            None,
+        ));
     }
-    let binned = binned_gpu(scene, gpu, on_gpu, traced, progress)?;
-    let lobes = fit_on_gpu(scene, gpu, on_gpu, (&binned.bins, None), progress)?;
+    let binned = binned_gpu(scene, plan, gpu, on_gpu, traced, progress)?;
+    let lobes = fit_on_gpu(scene, plan, gpu, on_gpu, (&binned.bins, None), progress)?;
     Ok((lobes, Some(binned)))
 }
 
@@ -358,6 +375,7 @@ pub fn fit_gpu(
 /// where they are given.
 fn fit_on_gpu(
     scene: &Scene,
+    plan: &BakePlan,
     gpu: &Gpu,
     on_gpu: &GpuScene,
     (bins, deposits): (&GpuBins, Option<&GpuDeposits>),
@@ -365,11 +383,10 @@ fn fit_on_gpu(
 ) -> Result<LobeMap> {
     let spin = progress.spinner("em");
     let n = scene.splats.len() as u32;
-    let em_cfg = EmConfig::from_scene(scene);
-    let setup = gather_setup(scene);
+    let setup = plan.gather_setup(scene);
     let fitted = match deposits {
-        Some(d) => fit_lobes_to_deposits(gpu, on_gpu, n, d, &em_cfg, &setup)?,
-        None => fit_lobes_gathering(gpu, on_gpu, n, bins, &em_cfg, &setup)?,
+        Some(d) => fit_lobes_to_deposits(gpu, on_gpu, n, d, &plan.em, &setup)?,
+        None => fit_lobes_gathering(gpu, on_gpu, n, bins, &plan.em, &setup)?,
     };
     let lobes = fitted.download(gpu)?;
     spin.finish_and_clear();
@@ -380,19 +397,20 @@ fn fit_on_gpu(
 /// `deposits` where they are given.
 fn fit_on_cpu(
     scene: &Scene,
+    plan: &BakePlan,
     grid: &SplatGrid,
     (bins, deposits): (&PhotonBins, Option<&cpu::DepositBins>),
     progress: &Progress,
 ) -> Result<LobeMap> {
     let spin = progress.spinner("em");
-    let em_cfg = EmConfig::from_scene(scene);
     let (splats, materials) = (&scene.splats, &scene.materials);
     let shape = FitShape::default();
-    let setup = gather_setup(scene);
+    let setup = plan.gather_setup(scene);
     let gathering = Some((scene.geometry(grid), &setup));
+    let em = &plan.em;
     let lobes = match deposits {
-        Some(d) => cpu::fit_lobes_to_deposits(&em_cfg, d, splats, materials, shape, gathering),
-        None => cpu::fit_lobes_gathering(&em_cfg, bins, splats, materials, shape, gathering),
+        Some(d) => cpu::fit_lobes_to_deposits(em, d, splats, materials, shape, gathering),
+        None => cpu::fit_lobes_gathering(em, bins, splats, materials, shape, gathering),
     }?;
     spin.finish_and_clear();
     Ok(lobes)
@@ -409,40 +427,37 @@ pub fn gather_setup(scene: &Scene) -> GatherSetup<'_> {
     }
 }
 
-/// Traces, bins and fits; the lobes come back to the host (a few bytes per splat), from
-/// where a cache file or any device can take them.
+/// Traces, then deposits or bins, and fits, from one plan of the scene (`BakePlan`); the lobes
+/// come back to the host (a few bytes per splat), from where a cache file or any device can
+/// take them.
 pub fn bake(scene: &Scene, device: BakeDevice, progress: &Progress) -> Result<Baked> {
-    let em_cfg = EmConfig::from_scene(scene);
+    let plan = BakePlan::new(scene)?;
+    let em_cfg = &plan.em;
     let (lobes, photons, binning) = match device {
         // The photons are deposited, not binned: the binning's report is the deposits'.
         BakeDevice::Gpu(gpu, on_gpu) if em_cfg.uses_deposits() => {
-            let traced = traced_gpu(scene, gpu, on_gpu, progress)?;
-            let (deposits, ms) = deposits_gpu(scene, gpu, on_gpu, &traced, progress)?;
+            let traced = traced_gpu(scene, &plan, gpu, on_gpu, progress)?;
+            let (deposits, ms) = deposits_gpu(&plan, gpu, on_gpu, &traced, progress)?;
             let binned = (&deposits.bins, Some(&deposits));
-            let lobes = fit_on_gpu(scene, gpu, on_gpu, binned, progress)?;
+            let lobes = fit_on_gpu(scene, &plan, gpu, on_gpu, binned, progress)?;
             (lobes, traced_report(&traced.stats), StageReport::ran(ms))
         }
         BakeDevice::Gpu(gpu, on_gpu) => {
-            let b = bins_gpu(scene, gpu, on_gpu, progress)?;
-            let lobes = fit_on_gpu(scene, gpu, on_gpu, (&b.bins, None), progress)?;
+            let traced = traced_gpu(scene, &plan, gpu, on_gpu, progress)?;
+            let b = binned_gpu(scene, &plan, gpu, on_gpu, &traced, progress)?;
+            let lobes = fit_on_gpu(scene, &plan, gpu, on_gpu, (&b.bins, None), progress)?;
             (lobes, b.photons, b.binning)
         }
         BakeDevice::Cpu(grid) if em_cfg.uses_deposits() => {
-            let map = traced_cpu(scene, grid, progress)?;
-            let spin = progress.spinner("deposits");
-            let t = Instant::now();
-            let params = scene_deposit_params(scene)?;
-            let deposits =
-                cpu::deposit_photons(&params, &map.photons, &scene.splats, &grid.params)?;
-            let ms = ms_since(t);
-            spin.finish_and_clear();
-            progress.done("deposits", ms, "");
-            let lobes = fit_on_cpu(scene, grid, (&deposits.bins, Some(&deposits)), progress)?;
+            let map = traced_cpu(scene, &plan, grid, progress)?;
+            let (deposits, ms) = deposits_cpu(scene, &plan, grid, &map, progress)?;
+            let binned = (&deposits.bins, Some(&deposits));
+            let lobes = fit_on_cpu(scene, &plan, grid, binned, progress)?;
             (lobes, traced_report(&map.stats), StageReport::ran(ms))
         }
         BakeDevice::Cpu(grid) => {
-            let b = bins_cpu(scene, grid, progress)?;
-            let lobes = fit_on_cpu(scene, grid, (&b.bins, None), progress)?;
+            let b = binned_cpu(scene, &plan, grid, progress)?;
+            let lobes = fit_on_cpu(scene, &plan, grid, (&b.bins, None), progress)?;
             (lobes, b.photons, b.binning)
         }
     };
@@ -462,7 +477,7 @@ pub fn bake(scene: &Scene, device: BakeDevice, progress: &Progress) -> Result<Ba
         splats_lit: Some(s.listed),
         lobes_kept: Some(lobes.lobes.len() as u64),
         lobes_fitted: Some(s.fitted as u64 * em_cfg.lobes as u64),
-        skipped_reason: Some(em_skipped(&lobes, &em_cfg, scene.splats.len())),
+        skipped_reason: Some(em_skipped(&lobes, em_cfg, scene.splats.len())),
         ..StageReport::ran(s.ms)
     };
     Ok(Baked {

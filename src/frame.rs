@@ -226,6 +226,23 @@ pub fn frame_camera(cam: &Camera, params: &ShadeParams, compute: bool) -> Camera
     }
 }
 
+/// What frames take of a scene's splats, walked once (`FrameRenderer` keeps it): its bounds
+/// (the camera's depth range) and its shadow bias.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct SceneExtent {
+    pub bounds: (glam::Vec3, glam::Vec3),
+    pub shadow_bias: f32,
+}
+
+impl SceneExtent {
+    pub fn of(scene: &Scene) -> SceneExtent {
+        SceneExtent {
+            bounds: scene.bounds(),
+            shadow_bias: shadow_bias(&scene.splats),
+        }
+    }
+}
+
 /// Shadow rays start half a mean splat radius off the blended surface: enough to clear the
 /// blend's dip below a curved surface, little enough to keep contact shadows.
 pub fn shadow_bias(splats: &[Splat]) -> f32 {
@@ -243,12 +260,17 @@ pub use crate::sequence::DirectMap;
 
 /// The direct bake's uniform for the scene's splats and lights.
 pub fn direct_params(scene: &Scene) -> DirectParams {
+    direct_params_biased(scene, shadow_bias(&scene.splats))
+}
+
+/// `direct_params` with the scene's shadow bias already known (`BakePlan`, `FrameRenderer`).
+pub fn direct_params_biased(scene: &Scene, shadow_bias: f32) -> DirectParams {
     DirectParams {
         splat_count: scene.splats.len() as u32,
         light_count: scene.lights.len() as u32,
         samples: DIRECT_SAMPLES,
         seed: scene.bake.seed,
-        shadow_bias: shadow_bias(&scene.splats),
+        shadow_bias,
         ..Default::default()
     }
 }
@@ -266,7 +288,7 @@ pub fn cpu_direct(scene: &Scene, grid: &SplatGrid) -> Result<DirectMap> {
 /// The path tracer's uniform for the first sample of an image `cam.size` (set `sample` for the
 /// others), with the bake's path length and seed, showing the light terms `show`
 /// (`FrameConfig::show`).
-pub fn path_params(scene: &Scene, cam: &Camera, show: u32) -> PathParams {
+pub fn path_params(scene: &Scene, cam: &Camera, show: u32, shadow_bias: f32) -> PathParams {
     PathParams {
         width: cam.size[0] as u32,
         height: cam.size[1] as u32,
@@ -275,7 +297,7 @@ pub fn path_params(scene: &Scene, cam: &Camera, show: u32) -> PathParams {
         max_depth: scene.bake.max_depth,
         light_count: scene.lights.len() as u32,
         show,
-        shadow_bias: shadow_bias(&scene.splats),
+        shadow_bias,
     }
 }
 
@@ -295,7 +317,7 @@ pub fn cpu_path(
     let materials = ex.upload("materials", &scene.materials)?;
     let lights = ex.upload("lights", &scene.lights)?;
     let hdr = ex.zeroed("path image", pixels.max(1) as u64 * 16)?;
-    let first = path_params(scene, cam, show);
+    let first = path_params(scene, cam, show, shadow_bias(&scene.splats));
     for k in 0..spp.max(1) {
         let params = PathParams { sample: k, ..first };
         crate::sequence::path_sample(&mut ex, &params, &cam_buf, &materials, &lights, &hdr)?;
@@ -347,17 +369,28 @@ pub fn refinement(base: &ShadeParams, k: u32, spp: u32) -> ShadeParams {
 
 /// The shading uniform of a bake; the image size comes with the camera.
 pub fn shade_params(scene: &Scene, lobes: &LobeMap, cfg: &FrameConfig) -> ShadeParams {
-    shade_params_for(scene, lobes.lobes_per_splat, cfg)
+    shade_params_for(
+        scene,
+        lobes.lobes_per_splat,
+        shadow_bias(&scene.splats),
+        cfg,
+    )
 }
 
-/// `shade_params` for a lobe map of `lobes_per_splat` (what the passes need of it).
-pub fn shade_params_for(scene: &Scene, lobes_per_splat: u32, cfg: &FrameConfig) -> ShadeParams {
+/// `shade_params` for a lobe map of `lobes_per_splat` (what the passes need of it), with the
+/// scene's shadow bias known (`SceneExtent`).
+pub fn shade_params_for(
+    scene: &Scene,
+    lobes_per_splat: u32,
+    shadow_bias: f32,
+    cfg: &FrameConfig,
+) -> ShadeParams {
     ShadeParams {
         lobes_per_splat,
         family: scene.bake.family.code(),
         light_count: scene.lights.len() as u32,
         area_samples: cfg.area_samples,
-        shadow_bias: shadow_bias(&scene.splats),
+        shadow_bias,
         seed: cfg.seed,
         show: cfg.show,
         direct: cfg.direct.code(),

@@ -44,6 +44,7 @@ pub mod grid;
 pub mod lod;
 pub mod objects;
 pub mod photons;
+pub mod plan;
 pub mod renderer;
 pub mod scene;
 pub mod sequence;

@@ -14,8 +14,8 @@ use crate::camera::View;
 use crate::em::LobeMap;
 use crate::error::{Error, Result};
 use crate::frame::{
-    Direct, DirectMap, FrameConfig, Splatter, camera_uniform, direct_params, frame_camera, jitter,
-    path_params, refinement, shade_params_for,
+    Direct, DirectMap, FrameConfig, SceneExtent, Splatter, camera_uniform, direct_params_biased,
+    frame_camera, jitter, path_params, refinement, shade_params_for,
 };
 use crate::gpu::Gpu;
 use crate::gpu::bins::GpuBins;
@@ -43,6 +43,8 @@ pub struct FrameRenderer {
     direct_ms: Option<f64>,
     /// The lights on the device.
     lights: Vec<Light>,
+    /// The scene's bounds and shadow bias, walked once per scene, not per frame.
+    extent: SceneExtent,
     targets: Option<FrameTargets>,
 }
 
@@ -63,6 +65,7 @@ impl FrameRenderer {
             lobes_per_splat: lobes.lobes_per_splat,
             direct_ms: None,
             lights: scene.lights.clone(),
+            extent: SceneExtent::of(scene),
             targets: None,
         })
     }
@@ -75,6 +78,7 @@ impl FrameRenderer {
         self.lobes_per_splat = 0;
         self.direct_ms = None;
         self.lights = scene.lights.clone();
+        self.extent = SceneExtent::of(scene);
         Ok(())
     }
 
@@ -116,7 +120,7 @@ impl FrameRenderer {
     pub fn bake_direct(&mut self, gpu: &Gpu, scene: &Scene) -> Result<f64> {
         let start = std::time::Instant::now();
         self.set_lights(gpu, scene)?;
-        let params = direct_params(scene);
+        let params = direct_params_biased(scene, self.extent.shadow_bias);
         let mut encoder = gpu.encoder("direct bake");
         let mut ex = GpuExecutor::new(gpu, &mut encoder).tracing(self.on_gpu.geometry());
         let direct = crate::sequence::bake_direct(&mut ex, &self.frame_scene.lights, &params)?;
@@ -125,6 +129,11 @@ impl FrameRenderer {
         let ms = crate::photons::ms_since(start);
         self.direct_ms = Some(ms);
         Ok(ms)
+    }
+
+    /// The scene's bounds and shadow bias, as the frames read them.
+    pub fn extent(&self) -> SceneExtent {
+        self.extent
     }
 
     /// Whether the current lights' direct bake is made.
@@ -143,7 +152,7 @@ impl FrameRenderer {
     /// The direct bake of the current lights in host memory (tests, comparisons).
     pub fn read_direct(&mut self, gpu: &Gpu, scene: &Scene) -> Result<DirectMap> {
         self.ensure_direct(gpu, scene)?;
-        let params = direct_params(scene);
+        let params = direct_params_biased(scene, self.extent.shadow_bias);
         let mut encoder = gpu.encoder("direct read");
         let mut ex = GpuExecutor::new(gpu, &mut encoder);
         self.frame_scene.direct.read_back(&mut ex, &params)
@@ -174,7 +183,7 @@ impl FrameRenderer {
         cam: &Camera,
         cfg: &FrameConfig,
     ) -> Result<&wgpu::Buffer> {
-        let params = shade_params_for(scene, self.lobes_per_splat, cfg);
+        let params = shade_params_for(scene, self.lobes_per_splat, self.extent.shadow_bias, cfg);
         self.record_params(gpu, encoder, scene, cam, &params, cfg.splatter)
     }
 
@@ -192,7 +201,7 @@ impl FrameRenderer {
         k: u32,
         spp: u32,
     ) -> Result<&wgpu::Buffer> {
-        let base = shade_params_for(scene, self.lobes_per_splat, cfg);
+        let base = shade_params_for(scene, self.lobes_per_splat, self.extent.shadow_bias, cfg);
         let cam = Camera {
             jitter: jitter(k),
             ..*cam
@@ -269,7 +278,7 @@ impl FrameRenderer {
             glossy_rays: 0,
             ..cfg.clone()
         };
-        let params = shade_params_for(scene, 0, &cfg);
+        let params = shade_params_for(scene, 0, self.extent.shadow_bias, &cfg);
         let buffers = self.frame_scene.buffers(&self.on_gpu);
         reference.draw(
             gpu,
@@ -297,7 +306,7 @@ impl FrameRenderer {
         if cfg.needs_direct_bake() {
             self.ensure_direct(gpu, scene)?;
         }
-        let cam = camera_uniform(view, scene.bounds(), cfg);
+        let cam = camera_uniform(view, self.extent.bounds, cfg);
         let mut encoder = gpu.encoder("frame");
         self.record(gpu, &mut encoder, scene, &cam, cfg)?;
         gpu.submit_and_wait(encoder)?;
@@ -319,7 +328,7 @@ impl FrameRenderer {
         if cfg.needs_direct_bake() {
             self.ensure_direct(gpu, scene)?;
         }
-        let cam = camera_uniform(view, scene.bounds(), cfg);
+        let cam = camera_uniform(view, self.extent.bounds, cfg);
         for k in 0..spp.max(1) {
             let mut encoder = gpu.encoder("refinement frame");
             self.record_sample(gpu, &mut encoder, scene, &cam, cfg, k, spp)?;
@@ -339,7 +348,7 @@ impl FrameRenderer {
         cfg: &FrameConfig,
     ) -> Result<&FrameTargets> {
         self.resize(gpu, view.width, view.height)?;
-        let cam = camera_uniform(view, scene.bounds(), cfg);
+        let cam = camera_uniform(view, self.extent.bounds, cfg);
         let mut encoder = gpu.encoder("reference");
         let (bins, em) = (&binned.bins, &binned.em);
         self.record_reference(gpu, &mut encoder, scene, bins, em, &cam, cfg)?;
@@ -361,13 +370,13 @@ impl FrameRenderer {
     ) -> Result<&FrameTargets> {
         self.resize(gpu, view.width, view.height)?;
         self.set_lights(gpu, scene)?;
-        let cam = camera_uniform(view, scene.bounds(), &FrameConfig::default());
+        let cam = camera_uniform(view, self.extent.bounds, &FrameConfig::default());
         let cam_buf = gpu.uniform("camera", &cam);
         let targets = self
             .targets
             .as_ref()
             .ok_or_else(|| Error::Invalid("the frame renderer has no targets yet".into()))?;
-        let first = path_params(scene, &cam, show);
+        let first = path_params(scene, &cam, show, self.extent.shadow_bias);
         for k in 0..spp.max(1) {
             let mut encoder = gpu.encoder("path sample");
             let mut ex = GpuExecutor::new(gpu, &mut encoder).tracing(self.on_gpu.geometry());
@@ -393,8 +402,8 @@ impl FrameRenderer {
         if cfg.needs_direct_bake() {
             self.ensure_direct(gpu, scene)?;
         }
-        let cam = camera_uniform(view, scene.bounds(), cfg);
-        let params = shade_params_for(scene, self.lobes_per_splat, cfg);
+        let cam = camera_uniform(view, self.extent.bounds, cfg);
+        let params = shade_params_for(scene, self.lobes_per_splat, self.extent.shadow_bias, cfg);
         let compute = self.pipelines.uses_compute(cfg.splatter)?;
         let buffers = self.frame_buffers(gpu, scene, &cam, &params, compute)?;
         self.pipelines

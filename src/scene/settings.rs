@@ -2,6 +2,7 @@
 //! the scene so that the stages know nothing of scene files.
 
 use super::Scene;
+use super::file::BakeDesc;
 use crate::em::EmConfig;
 use crate::photons::{DEFAULT_BATCH, ITERATION_BUDGET, PhotonConfig};
 
@@ -22,7 +23,15 @@ impl PhotonConfig {
 
 impl EmConfig {
     pub fn from_scene(scene: &Scene) -> EmConfig {
-        let b = &scene.bake;
+        EmConfig {
+            radius: scene.search_radius(),
+            ..EmConfig::from_settings(&scene.bake)
+        }
+    }
+
+    /// The fit's settings of a scene's `[bake]`, with the search radius it names (`None`: 0,
+    /// for the caller to fill in from the scene's bounds, `Scene::search_radius`).
+    pub fn from_settings(b: &BakeDesc) -> EmConfig {
         EmConfig {
             lobes: b.lobes,
             iterations: b.iterations,
@@ -31,7 +40,7 @@ impl EmConfig {
             priors: true,
             fit_all: false,
             prune: b.prune,
-            radius: scene.search_radius(),
+            radius: b.radius.unwrap_or(0.0),
             slab: b.slab,
             fit_candidates: b.fit_candidates,
             gather: b.gather,

@@ -19,6 +19,7 @@ use crate::gpu::bins::GpuBins;
 use crate::gpu::photons::GpuPhotons;
 use crate::gpu::scene::GpuScene;
 use crate::photons::ms_since;
+use crate::plan::BakePlan;
 use crate::scene::{BakeDesc, Scene};
 
 /// A preview bake traces this fraction of the scene's photons, with this fraction of its EM
@@ -133,8 +134,9 @@ fn bake_pass(
     traced: &Arc<AtomicU64>,
 ) -> Result<BakeResult> {
     let progress = Progress::counting(traced.clone());
-    let photons = traced_gpu(scene, gpu, on_gpu, &progress)?;
-    let (lobes, binned) = fit_gpu(scene, gpu, on_gpu, &photons, &progress)?;
+    let plan = BakePlan::new(scene)?;
+    let photons = traced_gpu(scene, &plan, gpu, on_gpu, &progress)?;
+    let (lobes, binned) = fit_gpu(scene, &plan, gpu, on_gpu, &photons, &progress)?;
     Ok(BakeResult {
         lobes,
         emitted: photons.stats.emitted,

@@ -32,6 +32,7 @@ use crate::gpu::photon_view::photon_image;
 use crate::gpu::present::PresentPipeline;
 use crate::gpu::tone::tone_map;
 use crate::gpu::{BackendChoice, Gpu};
+use crate::plan::BakePlan;
 use crate::renderer::FrameRenderer;
 use crate::scene::Scene;
 use crate::tone::ToneConfig;
@@ -317,7 +318,7 @@ impl State {
     ) -> Result<std::borrow::Cow<'a, wgpu::Buffer>> {
         let (w, h) = (self.config.width, self.config.height);
         let view = View::new(&self.orbit.camera(), w, h);
-        let cam = camera_uniform(&view, scene.bounds(), frame);
+        let cam = camera_uniform(&view, self.renderer.extent().bounds, frame);
         let gpu = &self.gpu;
         match (self.method, &mut self.baked) {
             (Method::Photons, Some(baked)) => {
@@ -332,7 +333,8 @@ impl State {
                     Some(b) => b,
                     None => {
                         let (on_gpu, quiet) = (&self.renderer.on_gpu, Progress::new(false));
-                        binned_gpu(scene, gpu, on_gpu, &baked.photons, &quiet)?
+                        let plan = BakePlan::new(scene)?;
+                        binned_gpu(scene, &plan, gpu, on_gpu, &baked.photons, &quiet)?
                     }
                 };
                 let binned = baked.binned.insert(binned);
