@@ -17,9 +17,10 @@ use crate::gpu::em::{fit_lobes_gathering, fit_lobes_to_deposits};
 use crate::gpu::photons::{GpuPhotons, trace_photons};
 use crate::gpu::scene::GpuScene;
 use crate::grid::SplatGrid;
-use crate::photons::{PhotonMap, PhotonStats, ms_since};
+use crate::photons::{PhotonMap, PhotonStats};
 use crate::plan::BakePlan;
 use crate::scene::Scene;
+use crate::timing::ms_since;
 use crate::types::{DepositParams, EmParams};
 
 /// One stage's line of `--stats` / `--json` (docs/cli.md).

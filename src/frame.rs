@@ -1,19 +1,15 @@
-//! One frame of the baked scene (docs/design.md §7–8): the camera uniform, the shading settings,
-//! and the CPU mirror of the splat passes. `gpu::frame` records the same passes on a device.
+//! One frame of the baked scene (docs/design.md §7–8): what to show, the camera uniform, the
+//! shading settings and the uniforms of the direct bake and the path tracer. `gpu::frame`
+//! records the splat passes on a device, `cpu::frames` runs them on the mirrors.
 
 use glam::{Vec2, Vec3};
 
-use crate::bins::PhotonBins;
 use crate::camera::View;
-use crate::cpu;
 use crate::em::LobeMap;
 use crate::error::{Error, Result};
-use crate::grid::SplatGrid;
 use crate::scene::Scene;
-use crate::sequence::Executor;
 use crate::types::{
-    Camera, DIRECT_BAKED, DIRECT_RAYS, DirectParams, EmParams, PathParams, ShadeParams, Splat,
-    SplatLod,
+    Camera, DIRECT_BAKED, DIRECT_RAYS, DirectParams, PathParams, ShadeParams, Splat,
 };
 
 /// Which light a frame shows: everything, or one part of it (the viewer's keys 1–5).
@@ -275,16 +271,6 @@ pub fn direct_params_biased(scene: &Scene, shadow_bias: f32) -> DirectParams {
     }
 }
 
-/// The direct bake on the CPU mirror (`sequence::bake_direct`).
-pub fn cpu_direct(scene: &Scene, grid: &SplatGrid) -> Result<DirectMap> {
-    let geo = scene.geometry(grid);
-    let params = direct_params(scene);
-    let mut ex = cpu::CpuExecutor::tracing(geo);
-    let lights = ex.upload("lights", &scene.lights)?;
-    let baked = crate::sequence::bake_direct(&mut ex, &lights, &params)?;
-    baked.read_back(&mut ex, &params)
-}
-
 /// The path tracer's uniform for the first sample of an image `cam.size` (set `sample` for the
 /// others), with the bake's path length and seed, showing the light terms `show`
 /// (`FrameConfig::show`).
@@ -299,30 +285,6 @@ pub fn path_params(scene: &Scene, cam: &Camera, show: u32, shadow_bias: f32) -> 
         show,
         shadow_bias,
     }
-}
-
-/// The path-traced image of `cam` on the CPU mirror: `spp` samples per pixel, averaged, of
-/// the light terms `show`.
-pub fn cpu_path(
-    scene: &Scene,
-    grid: &SplatGrid,
-    cam: &Camera,
-    show: u32,
-    spp: u32,
-) -> Result<Vec<[f32; 4]>> {
-    let geo = scene.geometry(grid);
-    let pixels = (cam.size[0] * cam.size[1]) as usize;
-    let mut ex = cpu::CpuExecutor::tracing(geo);
-    let cam_buf = ex.uniform("camera", cam)?;
-    let materials = ex.upload("materials", &scene.materials)?;
-    let lights = ex.upload("lights", &scene.lights)?;
-    let hdr = ex.zeroed("path image", pixels.max(1) as u64 * 16)?;
-    let first = path_params(scene, cam, show, shadow_bias(&scene.splats));
-    for k in 0..spp.max(1) {
-        let params = PathParams { sample: k, ..first };
-        crate::sequence::path_sample(&mut ex, &params, &cam_buf, &materials, &lights, &hdr)?;
-    }
-    ex.read(&hdr, pixels)
 }
 
 /// Point `k` of the Halton sequence in `base` (k ≥ 1), in [0, 1).
@@ -399,151 +361,4 @@ pub fn shade_params_for(
         sample: 0,
         glossy_rays: cfg.glossy_rays,
     }
-}
-
-/// The splat passes on the CPU: visibility, attributes, shade; linear HDR pixels. Baked
-/// direct light (`params.direct`) is baked first.
-pub fn cpu_frame(
-    scene: &Scene,
-    grid: &SplatGrid,
-    lobes: &LobeMap,
-    cam: &Camera,
-    params: &ShadeParams,
-) -> Result<Vec<[f32; 4]>> {
-    let direct = match params.direct == DIRECT_BAKED || params.glossy_rays > 0 {
-        true => cpu_direct(scene, grid)?,
-        false => DirectMap::default(),
-    };
-    let mut hdr = vec![[0.0; 4]; (cam.size[0] * cam.size[1]) as usize];
-    cpu_frame_into(scene, grid, lobes, &direct, cam, params, &mut hdr);
-    Ok(hdr)
-}
-
-/// `cpu_frame` with the direct bake made, into `hdr` (a refinement frame adds to it).
-pub fn cpu_frame_into(
-    scene: &Scene,
-    grid: &SplatGrid,
-    lobes: &LobeMap,
-    direct: &DirectMap,
-    cam: &Camera,
-    params: &ShadeParams,
-    hdr: &mut [[f32; 4]],
-) {
-    let cam = &frame_camera(cam, params, false);
-    let selection = match params.direct {
-        DIRECT_BAKED => {
-            let lods = match cam.lod > 0.0 {
-                true => crate::lod::splat_lods(&scene.splats),
-                false => vec![SplatLod::default(); scene.splats.len()],
-            };
-            Some(cpu::splat_select::selection(cam, &scene.splats, &lods))
-        }
-        _ => None,
-    };
-    let drawn = match (&selection, cam.lod > 0.0) {
-        (Some(sel), true) => {
-            std::borrow::Cow::Owned(cpu::splat_select::drawn_splats(&scene.splats, &sel.drawn))
-        }
-        _ => std::borrow::Cow::Borrowed(&scene.splats[..]),
-    };
-    let tiles = cpu::splat_visibility::bin_tiles(cam, &drawn);
-    // Moving frames (baked direct light) draw disks as they are; still images end them where
-    // their surfaces end (wgsl/shared/drawn_clip.wgsl).
-    let clips: &[crate::types::SurfaceClip] = match params.direct == crate::types::DIRECT_BAKED {
-        true => &[],
-        false => &scene.clips,
-    };
-    let visible = cpu::splat_visibility::splat_visibility(cam, &drawn, clips, &tiles);
-    let shading = cpu::splat_shading::Shading {
-        params,
-        splat_light: &lobes.light,
-        lobes: &lobes.lobes,
-        lobe_norms: crate::convolution::lobe_norms(),
-        baked: cpu::splat_shading::BakedDirect {
-            lights: &scene.lights,
-            direct: &direct.direct,
-            visibility: &direct.visibility,
-        },
-    };
-    let shaded = match &selection {
-        Some(sel) => {
-            let (splats, materials) = (&scene.splats, &scene.materials);
-            cpu::splat_shade::splat_shade(cam, splats, materials, &shading, &sel.selected)
-        }
-        None => Vec::new(),
-    };
-    let sums = cpu::splat_attributes::splat_attributes(
-        cam,
-        &drawn,
-        clips,
-        &scene.materials,
-        &shading,
-        &shaded,
-        &visible,
-        &tiles,
-    );
-    let geo = scene.geometry(grid);
-    let hit_light = cpu::shade::HitLight {
-        splat_light: &lobes.light,
-        direct_light: &direct.direct,
-        materials: &scene.materials,
-    };
-    cpu::shade::shade(cam, params, &sums, &scene.lights, &hit_light, &geo, hdr);
-}
-
-/// The still image of `cam` on the CPU: `spp` refinement frames, each jittered and with its
-/// share of shadow rays, averaged.
-pub fn cpu_refined(
-    scene: &Scene,
-    grid: &SplatGrid,
-    lobes: &LobeMap,
-    cam: &Camera,
-    params: &ShadeParams,
-    spp: u32,
-) -> Result<Vec<[f32; 4]>> {
-    // Glossy rays read the direct bake at their hits.
-    let direct = match params.glossy_rays > 0 {
-        true => cpu_direct(scene, grid)?,
-        false => DirectMap::default(),
-    };
-    let mut hdr = vec![[0.0; 4]; (cam.size[0] * cam.size[1]) as usize];
-    for k in 0..spp.max(1) {
-        let cam = Camera {
-            jitter: jitter(k),
-            ..*cam
-        };
-        let params = refinement(params, k, spp);
-        cpu_frame_into(scene, grid, lobes, &direct, &cam, &params, &mut hdr);
-    }
-    Ok(hdr)
-}
-
-/// The reference on the CPU: the gather pass in place of visibility and attributes, then the
-/// same shade pass (which reads no lobes: an empty map gives it its other settings) with
-/// shadow rays.
-pub fn cpu_reference(
-    scene: &Scene,
-    grid: &SplatGrid,
-    bins: &PhotonBins,
-    em: &EmParams,
-    cam: &Camera,
-    cfg: &FrameConfig,
-) -> Vec<[f32; 4]> {
-    // The photons give the glossy light too, with the exact BRDF: no glossy rays.
-    let cfg = FrameConfig {
-        direct: Direct::Rays,
-        glossy_rays: 0,
-        ..cfg.clone()
-    };
-    let params = shade_params(scene, &LobeMap::default(), &cfg);
-    let geo = scene.geometry(grid);
-    let sums = cpu::reference_gather::reference_gather(cam, em, &scene.materials, bins, &geo);
-    let mut hdr = vec![[0.0; 4]; (cam.size[0] * cam.size[1]) as usize];
-    let no_hits = cpu::shade::HitLight {
-        splat_light: &[],
-        direct_light: &[],
-        materials: &scene.materials,
-    };
-    cpu::shade::shade(cam, &params, &sums, &scene.lights, &no_hits, &geo, &mut hdr);
-    hdr
 }

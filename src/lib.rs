@@ -50,6 +50,7 @@ pub mod scene;
 pub mod sequence;
 pub mod shaders;
 pub mod shared;
+pub mod timing;
 pub mod tone;
 pub mod types;
 

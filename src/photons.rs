@@ -1,8 +1,6 @@
 //! The photon pass on the host: settings, the lights prepared as emitters, the batch loop
 //! with its growable store, and the statistics both the GPU and the CPU mirror report.
 
-use std::time::Instant;
-
 use crate::error::{Error, Result};
 use crate::types::{Emitter, Light, Photon, TraceCounters, TraceParams, light_kind};
 use serde::Deserialize;
@@ -319,11 +317,6 @@ impl StorePlanner {
             None => StoreAction::HalveBatch,
         }
     }
-}
-
-/// Milliseconds since `t`.
-pub fn ms_since(t: Instant) -> f64 {
-    t.elapsed().as_secs_f64() * 1e3
 }
 
 /// Number of stored photons within `radius` of each splat's centre (a CPU counting sort into

@@ -126,7 +126,7 @@ impl FrameRenderer {
         let direct = crate::sequence::bake_direct(&mut ex, &self.frame_scene.lights, &params)?;
         gpu.submit_and_wait(encoder)?;
         self.frame_scene.direct = direct;
-        let ms = crate::photons::ms_since(start);
+        let ms = crate::timing::ms_since(start);
         self.direct_ms = Some(ms);
         Ok(ms)
     }

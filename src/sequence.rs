@@ -17,12 +17,13 @@ use crate::error::{Error, Result};
 use crate::grid::SplatGrid;
 use crate::grid::check_cell_len;
 use crate::photons::{
-    PhotonConfig, PhotonMap, PhotonStats, StoreAction, StorePlanner, first_capacity, ms_since,
+    PhotonConfig, PhotonMap, PhotonStats, StoreAction, StorePlanner, first_capacity,
 };
 use crate::shaders::stage_shape;
 use crate::shared::bins::list_count;
 use crate::shared::dispatch::groups_for;
 use crate::shared::lobes::{EM_DEFER_FIT, EM_SHARE};
+use crate::timing::ms_since;
 use crate::tone::{ToneConfig, reduce_levels};
 use crate::types::{
     BinParams, Camera, DepositParams, DirectParams, DistanceParams, EmParams, Emitter,

@@ -15,7 +15,8 @@ use std::path::Path;
 use lobelight::bake::{BakeDevice, Progress, bake};
 use lobelight::camera::View;
 use lobelight::cli::compare::{ObjectDifference, per_object};
-use lobelight::frame::{FrameConfig, Show, camera_uniform, cpu_path, cpu_refined, shade_params};
+use lobelight::cpu::frames::{cpu_path, cpu_refined};
+use lobelight::frame::{FrameConfig, Show, camera_uniform, shade_params};
 use lobelight::objects::{SAMPLES, object_ids};
 use lobelight::scene::{self, Scene};
 

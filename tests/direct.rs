@@ -9,10 +9,9 @@ use std::path::Path;
 use lobelight::bake::{BakeDevice, Progress, bake};
 use lobelight::camera::View;
 use lobelight::cli::compare::difference;
+use lobelight::cpu::frames::{cpu_direct, cpu_frame, cpu_refined};
 use lobelight::em::LobeMap;
-use lobelight::frame::{
-    Direct, FrameConfig, Show, camera_uniform, cpu_direct, cpu_frame, cpu_refined, shade_params,
-};
+use lobelight::frame::{Direct, FrameConfig, Show, camera_uniform, shade_params};
 use lobelight::renderer::FrameRenderer;
 use lobelight::scene::{self, Scene};
 

@@ -7,7 +7,8 @@ use std::path::Path;
 
 use glam::Vec3;
 use lobelight::camera::View;
-use lobelight::frame::{FrameConfig, camera_uniform, cpu_path};
+use lobelight::cpu::frames::cpu_path;
+use lobelight::frame::{FrameConfig, camera_uniform};
 use lobelight::renderer::FrameRenderer;
 use lobelight::scene::{self, Scene};
 use lobelight::shared::splat::{

@@ -10,9 +10,8 @@ use lobelight::bins::PhotonBins;
 use lobelight::camera::View;
 use lobelight::cli::compare::difference;
 use lobelight::cpu;
-use lobelight::frame::{
-    Direct, FrameConfig, camera_uniform, cpu_frame, cpu_reference, shade_params,
-};
+use lobelight::cpu::frames::{cpu_frame, cpu_reference};
+use lobelight::frame::{Direct, FrameConfig, camera_uniform, shade_params};
 use lobelight::gpu::Gpu;
 use lobelight::gpu::bins::GpuBins;
 use lobelight::grid::SplatGrid;

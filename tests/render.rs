@@ -8,10 +8,9 @@ use std::path::Path;
 use lobelight::bake::{BakeDevice, Progress, bake};
 use lobelight::camera::View;
 use lobelight::cli::compare::difference;
+use lobelight::cpu::frames::cpu_frame;
 use lobelight::em::LobeMap;
-use lobelight::frame::{
-    Direct, FrameConfig, Show, Splatter, camera_uniform, cpu_frame, shade_params,
-};
+use lobelight::frame::{Direct, FrameConfig, Show, Splatter, camera_uniform, shade_params};
 use lobelight::gpu::Gpu;
 use lobelight::gpu::scene::GpuScene;
 use lobelight::grid::SplatGrid;

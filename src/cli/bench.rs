@@ -12,11 +12,10 @@ use crate::cli::measure::median;
 use crate::cli::render::Method;
 use crate::cli::view::{ViewOptions, ViewReport};
 use crate::cpu;
+use crate::cpu::frames::{cpu_direct, cpu_frame_into};
 use crate::em::{EmConfig, EmStats, FitShape, LobeFamily, LobeMap, deposit_params};
 use crate::error::Result;
-use crate::frame::{
-    DirectMap, FrameConfig, camera_uniform, cpu_direct, cpu_frame_into, shade_params,
-};
+use crate::frame::{DirectMap, FrameConfig, camera_uniform, shade_params};
 use crate::gpu::bins as gpu_bins;
 use crate::gpu::em as gpu_em;
 
@@ -25,9 +24,10 @@ use crate::gpu::present::PresentPipeline;
 use crate::gpu::scene::GpuScene;
 
 use crate::gpu::{BackendChoice, Gpu};
-use crate::photons::{PhotonConfig, PhotonMap, PhotonStats, ms_since, photons_within};
+use crate::photons::{PhotonConfig, PhotonMap, PhotonStats, photons_within};
 use crate::renderer::FrameRenderer;
 use crate::scene::Scene;
+use crate::timing::ms_since;
 use crate::tone::ToneConfig;
 
 #[derive(Debug, Serialize)]

@@ -84,7 +84,7 @@ pub fn convolution_bench(out_dir: &Path, q: Quality) -> Result<ConvolutionBench>
             without_factor: summary(&column(&own, 1)),
         },
         heatmaps,
-        ms: crate::photons::ms_since(start),
+        ms: crate::timing::ms_since(start),
     })
 }
 

@@ -13,16 +13,15 @@ use crate::cli::compare::difference;
 use crate::cli::measure::median;
 use crate::cli::view::{move_first_light, passes};
 use crate::cpu;
+use crate::cpu::frames::{cpu_direct, cpu_frame_into};
 use crate::em::LobeMap;
 use crate::error::{Error, Result};
-use crate::frame::{
-    DirectMap, FrameConfig, camera_uniform, cpu_direct, cpu_frame_into, shade_params,
-};
+use crate::frame::{DirectMap, FrameConfig, camera_uniform, shade_params};
 use crate::gpu::Gpu;
 use crate::grid::SplatGrid;
-use crate::photons::ms_since;
 use crate::renderer::FrameRenderer;
 use crate::scene::Scene;
+use crate::timing::ms_since;
 
 /// Light moves timed (one arrow-key step each, along x).
 pub const MOVES: u32 = 3;

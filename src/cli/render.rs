@@ -10,21 +10,21 @@ use crate::bake::{BakeDevice, Baked, Progress, StageReport, bake, bins_cpu};
 use crate::cache::{self, Miss};
 use crate::camera::View;
 use crate::cpu;
+use crate::cpu::frames::{cpu_frame, cpu_path, cpu_reference, cpu_refined};
 use crate::cpu::photon_view::scene_scale;
 use crate::error::{Error, Result};
-use crate::frame::{
-    FrameConfig, camera_uniform, cpu_frame, cpu_path, cpu_reference, cpu_refined, shade_params,
-};
+use crate::frame::{FrameConfig, camera_uniform, shade_params};
 use crate::gpu::Gpu;
 use crate::gpu::photon_view::photon_image;
 use crate::gpu::photons::trace_photons;
 use crate::gpu::scene::GpuScene;
 use crate::gpu::tone::tone_map;
-use crate::photons::{PhotonConfig, ms_since};
+use crate::photons::PhotonConfig;
 use crate::renderer::FrameRenderer;
 use crate::scene::Scene;
 use crate::scene::file::CameraDesc;
 use crate::shared::tone::srgb_byte;
+use crate::timing::ms_since;
 use crate::tone::ToneConfig;
 
 #[derive(Clone, Copy, Debug, Default, PartialEq, Eq, clap::ValueEnum, Serialize)]

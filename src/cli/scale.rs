@@ -17,9 +17,9 @@ use crate::cli::measure::median;
 use crate::error::{Error, Result};
 use crate::frame::FrameConfig;
 use crate::gpu::Gpu;
-use crate::photons::ms_since;
 use crate::renderer::FrameRenderer;
 use crate::scene;
+use crate::timing::ms_since;
 
 /// The splat counts `bench scale` measures unless told.
 pub const DEFAULT_SIZES: [u64; 3] = [1_000_000, 3_000_000, 10_000_000];

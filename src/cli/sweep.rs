@@ -25,16 +25,17 @@ use crate::cli::compare::{Difference, ObjectDifference, Values, difference_of, p
 use crate::cli::measure::median;
 use crate::cli::plot::{Chart, Series};
 use crate::cpu;
+use crate::cpu::frames::{cpu_path, cpu_refined};
 use crate::em::LobeFamily;
 use crate::error::{Error, Result};
-use crate::frame::{Direct, FrameConfig, camera_uniform, cpu_path, cpu_refined, shade_params};
+use crate::frame::{Direct, FrameConfig, camera_uniform, shade_params};
 use crate::gpu::Gpu;
 use crate::objects::{SAMPLES, object_ids};
-use crate::photons::ms_since;
 use crate::renderer::FrameRenderer;
 use crate::scene::Scene;
 use crate::shared::rng::{pcg_hash, unit_float};
 use crate::shared::splat::SHOW_ALL;
+use crate::timing::ms_since;
 
 /// What a sweep varies, and around what.
 #[derive(Clone, Debug, Serialize)]

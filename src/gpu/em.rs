@@ -10,8 +10,8 @@ use super::scene::GpuScene;
 use crate::cpu::GATHER_BATCH_BYTES;
 use crate::em::{EmConfig, EmStats, FitShape, GatherSetup, LobeMap, workgroup_size};
 use crate::error::{Error, Result};
-use crate::photons::ms_since;
 use crate::sequence::{self, DepositInput, FitInput, Gathering};
+use crate::timing::ms_since;
 use crate::types::{Lobe, SplatLight};
 
 /// The fit's output on the device.

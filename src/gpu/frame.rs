@@ -198,7 +198,7 @@ impl FrameScene {
         if self.lods.get().is_none() {
             let start = std::time::Instant::now();
             let tree = crate::lod::splat_lods(&scene.splats);
-            let ms = crate::photons::ms_since(start);
+            let ms = crate::timing::ms_since(start);
             log::info!(
                 "level of detail: merge tree of {} splats in {ms:.0} ms",
                 tree.len()
@@ -724,7 +724,7 @@ impl SplatPipelines {
             let mut encoder = gpu.encoder(pass.name());
             self.record(gpu, &mut encoder, scene, &uniforms, out, pass)?;
             gpu.submit_and_wait(encoder)?;
-            *slot = crate::photons::ms_since(t);
+            *slot = crate::timing::ms_since(t);
         }
         Ok(ms)
     }

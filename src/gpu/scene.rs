@@ -8,9 +8,9 @@ use super::exec::GeometryBuffers;
 use super::grid::{GpuGrid, build_grid};
 use crate::error::Result;
 use crate::grid::grid_params;
-use crate::photons::ms_since;
 use crate::scene::Scene;
 use crate::shared::splat::DRAWN_CLIPS;
+use crate::timing::ms_since;
 use crate::types::{Splat, SurfaceClip};
 
 pub struct GpuScene {

@@ -18,9 +18,9 @@ use crate::gpu::Gpu;
 use crate::gpu::bins::GpuBins;
 use crate::gpu::photons::GpuPhotons;
 use crate::gpu::scene::GpuScene;
-use crate::photons::ms_since;
 use crate::plan::BakePlan;
 use crate::scene::{BakeDesc, Scene};
+use crate::timing::ms_since;
 
 /// A preview bake traces this fraction of the scene's photons, with this fraction of its EM
 /// iterations (at least `PREVIEW_MIN_ITERATIONS`): the fit's cost per splat does not shrink

@@ -409,7 +409,7 @@ impl State {
             .record(&gpu, &mut encoder, &target, &toned.rgba, (w, h));
         gpu.submit_and_wait(encoder)?;
         gpu.queue.present(texture);
-        self.frame_ms = crate::photons::ms_since(start);
+        self.frame_ms = crate::timing::ms_since(start);
         Ok(Some(toned.rgba))
     }
 
