@@ -53,7 +53,7 @@ impl Show {
 }
 
 /// Where a frame's direct light comes from.
-#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, serde::Serialize)]
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Hash, serde::Serialize)]
 #[cfg_attr(feature = "cli", derive(clap::ValueEnum))]
 #[serde(rename_all = "lowercase")]
 pub enum Direct {
@@ -71,6 +71,15 @@ impl Direct {
         match self {
             Direct::Baked => DIRECT_BAKED,
             Direct::Rays => DIRECT_RAYS,
+        }
+    }
+
+    /// The mode a `ShadeParams::direct` code names: baked, or shadow rays for any other code
+    /// (as the shade pass reads it).
+    pub fn of_code(code: u32) -> Direct {
+        match code {
+            DIRECT_BAKED => Direct::Baked,
+            _ => Direct::Rays,
         }
     }
 
@@ -105,6 +114,15 @@ impl Splatter {
             Splatter::Auto => "auto",
         }
     }
+}
+
+/// How a device draws a frame's splats: `Splatter` resolved (`SplatPipelines::splatting`).
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum Splatting {
+    /// The raster passes.
+    Raster,
+    /// The compute splatter over screen tiles.
+    Compute,
 }
 
 /// Settings of the splat passes.
@@ -214,8 +232,8 @@ pub fn camera_uniform(view: &View, bounds: (Vec3, Vec3), cfg: &FrameConfig) -> C
 /// The camera of a frame's passes: the level of detail (`Camera::lod`) only in frames of baked
 /// direct light drawn by the raster passes, a moving camera's; refinement frames, frames of
 /// shadow rays and the compute splatter draw every splat as it is, so the still image is exact.
-pub fn frame_camera(cam: &Camera, params: &ShadeParams, compute: bool) -> Camera {
-    let moving = params.direct == DIRECT_BAKED && !compute;
+pub fn frame_camera(cam: &Camera, params: &ShadeParams, splatting: Splatting) -> Camera {
+    let moving = params.direct == DIRECT_BAKED && splatting == Splatting::Raster;
     Camera {
         lod: if moving { cam.lod } else { 0.0 },
         ..*cam

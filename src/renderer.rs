@@ -14,8 +14,8 @@ use crate::camera::View;
 use crate::em::LobeMap;
 use crate::error::{Error, Result};
 use crate::frame::{
-    Direct, DirectMap, FrameConfig, SceneExtent, Splatter, camera_uniform, direct_params_biased,
-    frame_camera, jitter, path_params, refinement, shade_params_for,
+    Direct, DirectMap, FrameConfig, SceneExtent, Splatter, Splatting, camera_uniform,
+    direct_params_biased, frame_camera, jitter, path_params, refinement, shade_params_for,
 };
 use crate::gpu::Gpu;
 use crate::gpu::bins::GpuBins;
@@ -225,10 +225,10 @@ impl FrameRenderer {
             ));
         }
         let targets = self.targets()?;
-        let compute = self.pipelines.uses_compute(splatter)?;
-        let buffers = self.frame_buffers(gpu, scene, cam, params, compute)?;
+        let splatting = self.pipelines.splatting(splatter)?;
+        let buffers = self.frame_buffers(gpu, scene, cam, params, splatting)?;
         self.pipelines
-            .draw(gpu, encoder, &buffers, cam, params, compute, targets)?;
+            .draw(gpu, encoder, &buffers, cam, params, splatting, targets)?;
         Ok(&targets.hdr)
     }
 
@@ -240,9 +240,9 @@ impl FrameRenderer {
         scene: &Scene,
         cam: &Camera,
         params: &ShadeParams,
-        compute: bool,
+        splatting: Splatting,
     ) -> Result<SceneBuffers<'_>> {
-        if frame_camera(cam, params, compute).lod > 0.0 {
+        if frame_camera(cam, params, splatting).lod > 0.0 {
             self.frame_scene.ensure_lods(gpu, scene)?;
         }
         Ok(self.frame_scene.buffers(&self.on_gpu))
@@ -404,10 +404,10 @@ impl FrameRenderer {
         }
         let cam = camera_uniform(view, self.extent.bounds, cfg);
         let params = shade_params_for(scene, self.lobes_per_splat, self.extent.shadow_bias, cfg);
-        let compute = self.pipelines.uses_compute(cfg.splatter)?;
-        let buffers = self.frame_buffers(gpu, scene, &cam, &params, compute)?;
+        let splatting = self.pipelines.splatting(cfg.splatter)?;
+        let buffers = self.frame_buffers(gpu, scene, &cam, &params, splatting)?;
         self.pipelines
-            .draw_timed(gpu, &buffers, &cam, &params, compute, self.targets()?)
+            .draw_timed(gpu, &buffers, &cam, &params, splatting, self.targets()?)
     }
 
     /// Records the tone mapping of the current targets' HDR image.

@@ -15,7 +15,7 @@ use crate::cpu;
 use crate::cpu::frames::{cpu_direct, cpu_frame_into};
 use crate::em::{EmConfig, EmStats, FitShape, LobeFamily, LobeMap, deposit_params};
 use crate::error::Result;
-use crate::frame::{DirectMap, FrameConfig, camera_uniform, shade_params};
+use crate::frame::{DirectMap, FrameConfig, Splatting, camera_uniform, shade_params};
 use crate::gpu::bins as gpu_bins;
 use crate::gpu::em as gpu_em;
 
@@ -543,7 +543,7 @@ pub fn frame(
             if cfg.needs_direct_bake() {
                 direct_bake_ms = Some(renderer.bake_direct(gpu, scene)?);
             }
-            if renderer.pipelines.uses_compute(cfg.splatter)? {
+            if renderer.pipelines.splatting(cfg.splatter)? == Splatting::Compute {
                 splatter = "compute";
             }
             let present = PresentPipeline::new(gpu, WINDOW_FORMAT)?;

@@ -7,8 +7,8 @@ use crate::cpu;
 use crate::em::LobeMap;
 use crate::error::Result;
 use crate::frame::{
-    Direct, DirectMap, FrameConfig, direct_params, frame_camera, jitter, path_params, refinement,
-    shade_params, shadow_bias,
+    Direct, DirectMap, FrameConfig, Splatting, direct_params, frame_camera, jitter, path_params,
+    refinement, shade_params, shadow_bias,
 };
 use crate::grid::SplatGrid;
 use crate::scene::Scene;
@@ -77,7 +77,7 @@ pub fn cpu_frame_into(
     params: &ShadeParams,
     hdr: &mut [[f32; 4]],
 ) {
-    let cam = &frame_camera(cam, params, false);
+    let cam = &frame_camera(cam, params, Splatting::Raster);
     let selection = match params.direct {
         DIRECT_BAKED => {
             let lods = match cam.lod > 0.0 {

@@ -12,7 +12,7 @@ use std::sync::{Mutex, OnceLock};
 use super::Gpu;
 use crate::em::LobeMap;
 use crate::error::{Error, Result};
-use crate::frame::Splatter;
+use crate::frame::{Direct as DirectMode, Splatter, Splatting};
 use crate::scene::Scene;
 use crate::sequence::{Direct, TileLists, bin_splat_tiles};
 use crate::shaders::{PAGE_BINDING_STEP, Paging};
@@ -242,8 +242,8 @@ struct Uniforms {
     params: wgpu::Buffer,
     /// `ShadeParams::direct`.
     direct: u32,
-    /// The compute splatter in place of the raster passes, and its tile lists once binned.
-    compute: bool,
+    /// The compute splatter or the raster passes, and the splatter's tile lists once binned.
+    splatting: Splatting,
     tiles: std::cell::RefCell<Option<TileLists<wgpu::Buffer>>>,
 }
 
@@ -254,7 +254,7 @@ pub struct SplatPipelines {
     /// unpaged ones, built with the rest, serve every scene whose arrays fit one binding each.
     raster: Mutex<HashMap<(Raster, Paging, bool), wgpu::RenderPipeline>>,
     /// The shade pass by the paging of the scene's geometry and whether it casts shadow rays.
-    shade: Mutex<HashMap<(Paging, bool), ShadePipeline>>,
+    shade: Mutex<HashMap<(Paging, DirectMode), ShadePipeline>>,
     /// The device can run the compute splatter's tile pass (`compute_splatter_fits`).
     splat_compute: bool,
     /// The device draws from a buffer's arguments (`draw_indirect`). Without, the raster
@@ -422,11 +422,12 @@ struct ShadePipeline {
 }
 
 impl ShadePipeline {
-    /// `rays`: the pipeline can cast shadow rays (`SHADOW_RAYS` in the WGSL). Frames of baked
-    /// direct light take the one without: llvmpipe paid for the shadow-ray code even where the
+    /// `direct`: with `DirectMode::Rays` the pipeline can cast shadow rays (`SHADOW_RAYS` in the
+    /// WGSL). Frames of baked direct light take the one without: llvmpipe paid for the shadow-ray code even where the
     /// frame's uniform skipped it (the shade pass of the bunny at 512² took 15.6 ms with it,
     /// 4.9 ms without; docs/measurements.md).
-    fn new(gpu: &Gpu, paging: &Paging, rays: bool) -> Result<ShadePipeline> {
+    fn new(gpu: &Gpu, paging: &Paging, direct: DirectMode) -> Result<ShadePipeline> {
+        let rays = direct == DirectMode::Rays;
         let layouts = shade_layouts(gpu, paging)?;
         let layout = gpu
             .device
@@ -584,8 +585,8 @@ impl SplatPipelines {
         ] {
             pipelines.raster(gpu, which, &unpaged, false)?;
         }
-        for rays in [false, true] {
-            pipelines.shade_pipeline(gpu, &unpaged, rays)?;
+        for direct in [DirectMode::Baked, DirectMode::Rays] {
+            pipelines.shade_pipeline(gpu, &unpaged, direct)?;
         }
         gpu.pipeline("splat_select")?;
         gpu.pipeline("splat_list")?;
@@ -620,12 +621,17 @@ impl SplatPipelines {
 
     /// The shade pass for geometry paged as `paging`, casting shadow rays or not, built on
     /// first use.
-    fn shade_pipeline(&self, gpu: &Gpu, paging: &Paging, rays: bool) -> Result<ShadePipeline> {
-        let key = (paging.clone(), rays);
+    fn shade_pipeline(
+        &self,
+        gpu: &Gpu,
+        paging: &Paging,
+        direct: DirectMode,
+    ) -> Result<ShadePipeline> {
+        let key = (paging.clone(), direct);
         if let Some(p) = self.shade.lock().ok().and_then(|m| m.get(&key).cloned()) {
             return Ok(p);
         }
-        let pipeline = ShadePipeline::new(gpu, paging, rays)?;
+        let pipeline = ShadePipeline::new(gpu, paging, direct)?;
         if let Ok(mut m) = self.shade.lock() {
             m.insert(key, pipeline.clone());
         }
@@ -683,7 +689,7 @@ impl SplatPipelines {
         params: &ShadeParams,
         out: &FrameTargets,
     ) -> Result<()> {
-        let uniforms = self.uniforms(gpu, cam, params, false);
+        let uniforms = self.uniforms(gpu, cam, params, Splatting::Raster);
         self.record(gpu, encoder, scene, &uniforms, out, SplatPass::Shade)
     }
 
@@ -696,10 +702,10 @@ impl SplatPipelines {
         scene: &SceneBuffers,
         cam: &Camera,
         params: &ShadeParams,
-        compute: bool,
+        splatting: Splatting,
         out: &FrameTargets,
     ) -> Result<()> {
-        let uniforms = self.uniforms(gpu, cam, params, compute);
+        let uniforms = self.uniforms(gpu, cam, params, splatting);
         for pass in SplatPass::ALL {
             self.record(gpu, encoder, scene, &uniforms, out, pass)?;
         }
@@ -714,10 +720,10 @@ impl SplatPipelines {
         scene: &SceneBuffers,
         cam: &Camera,
         params: &ShadeParams,
-        compute: bool,
+        splatting: Splatting,
         out: &FrameTargets,
     ) -> Result<[f64; 3]> {
-        let uniforms = self.uniforms(gpu, cam, params, compute);
+        let uniforms = self.uniforms(gpu, cam, params, splatting);
         let mut ms = [0.0; 3];
         for (pass, slot) in SplatPass::ALL.into_iter().zip(&mut ms) {
             let t = std::time::Instant::now();
@@ -731,14 +737,20 @@ impl SplatPipelines {
 
     /// The frame's uniforms; the camera as `frame::frame_camera` gives it to the passes (the
     /// level of detail in moving frames of the raster passes only).
-    fn uniforms(&self, gpu: &Gpu, cam: &Camera, params: &ShadeParams, compute: bool) -> Uniforms {
-        let cam = &crate::frame::frame_camera(cam, params, compute);
+    fn uniforms(
+        &self,
+        gpu: &Gpu,
+        cam: &Camera,
+        params: &ShadeParams,
+        splatting: Splatting,
+    ) -> Uniforms {
+        let cam = &crate::frame::frame_camera(cam, params, splatting);
         Uniforms {
             camera: *cam,
             cam: gpu.uniform("camera", cam),
             params: gpu.uniform("shade params", params),
             direct: params.direct,
-            compute,
+            splatting,
             tiles: Default::default(),
         }
     }
@@ -747,16 +759,16 @@ impl SplatPipelines {
     /// raster passes: on llvmpipe the compute splatter measured 3–4× slower (its per-pixel loop
     /// over each tile's list costs more than the rasterizer's triangle setup saves;
     /// docs/measurements.md), and no other device class has been measured yet.
-    pub fn uses_compute(&self, splatter: Splatter) -> Result<bool> {
+    pub fn splatting(&self, splatter: Splatter) -> Result<Splatting> {
         let can = self.splat_compute;
         match splatter {
-            Splatter::Raster => Ok(false),
-            Splatter::Compute if can => Ok(true),
+            Splatter::Raster => Ok(Splatting::Raster),
+            Splatter::Compute if can => Ok(Splatting::Compute),
             Splatter::Compute => Err(Error::Gpu(format!(
                 "this device cannot run the compute splatter (it needs f32 storage targets and \
                  {SPLAT_COMPUTE_BUFFERS} storage buffers in one stage); use --splatter raster"
             ))),
-            Splatter::Auto => Ok(false),
+            Splatter::Auto => Ok(Splatting::Raster),
         }
     }
 
@@ -899,7 +911,7 @@ impl SplatPipelines {
             }
             _ => {}
         }
-        if uniforms.compute && pass != SplatPass::Shade {
+        if uniforms.splatting == Splatting::Compute && pass != SplatPass::Shade {
             return self.record_compute(gpu, encoder, scene, uniforms, out, pass);
         }
         // A raster pass's pipeline for the paging of `list` (buffers by binding), and its bind
@@ -1056,7 +1068,7 @@ impl SplatPipelines {
             _ => scene.geometry.get(binding as usize).copied(),
         })?;
         frame_entries.extend(gpu.paged_entries_at("shade", 0, &hits, &paging)?);
-        let shade = self.shade_pipeline(gpu, &paging, uniforms.direct != DIRECT_BAKED)?;
+        let shade = self.shade_pipeline(gpu, &paging, DirectMode::of_code(uniforms.direct))?;
         let geometry_entries = gpu.paged_entries("shade", 1, &scene.geometry, &paging)?;
         let groups = [frame_entries, geometry_entries]
             .iter()
