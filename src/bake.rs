@@ -306,9 +306,9 @@ pub fn traced_gpu(
 
 /// The deposits' uniform of a plan whose fit reads deposits.
 fn planned_deposits(plan: &BakePlan) -> Result<&DepositParams> {
-    plan.deposits.as_ref().ok_or_else(|| {
-        Error::Invalid("internal: the bake's plan has no deposits for a fit that reads them".into())
-    })
+    plan.deposits
+        .as_ref()
+        .ok_or_else(|| Error::internal("the bake's plan has no deposits for a fit that reads them"))
 }
 
 /// Photon deposits on the device, with their time as the binning's.

@@ -24,6 +24,10 @@ pub enum Error {
     NoAdapter(String),
     #[error("GPU error: {0}")]
     Gpu(String),
+    /// A broken invariant of lobelight itself, not of its input: a stage bound without a
+    /// buffer it needs, a copy past a buffer's end. Nothing a user changes mends it.
+    #[error("internal error (a bug in lobelight; please report it): {0}")]
+    Internal(String),
 }
 
 pub type Result<T, E = Error> = std::result::Result<T, E>;
@@ -56,6 +60,11 @@ impl Error {
             ));
         }
         std::fs::read(path).map_err(|e| Error::io(path, e))
+    }
+
+    /// A broken internal invariant (`Error::Internal`).
+    pub fn internal(message: impl Into<String>) -> Self {
+        Error::Internal(message.into())
     }
 
     pub fn at_line(path: &Path, line: usize, message: impl Into<String>) -> Self {

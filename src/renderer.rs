@@ -171,7 +171,7 @@ impl FrameRenderer {
     pub fn targets(&self) -> Result<&FrameTargets> {
         self.targets
             .as_ref()
-            .ok_or_else(|| Error::Invalid("the frame renderer has no targets yet".into()))
+            .ok_or_else(|| Error::internal("the frame renderer has no targets yet"))
     }
 
     /// Records the lobes' frame of `cam` into the current targets; returns their HDR image.
@@ -375,7 +375,7 @@ impl FrameRenderer {
         let targets = self
             .targets
             .as_ref()
-            .ok_or_else(|| Error::Invalid("the frame renderer has no targets yet".into()))?;
+            .ok_or_else(|| Error::internal("the frame renderer has no targets yet"))?;
         let first = path_params(scene, &cam, show, self.extent.shadow_bias);
         for k in 0..spp.max(1) {
             let mut encoder = gpu.encoder("path sample");

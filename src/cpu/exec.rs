@@ -71,7 +71,7 @@ impl Executor for CpuExecutor<'_> {
     ) -> Result<()> {
         let geo = self
             .geometry
-            .ok_or_else(|| Error::Invalid(format!("{stage}: no scene geometry to trace")))?;
+            .ok_or_else(|| Error::Internal(format!("{stage}: no scene geometry to trace")))?;
         run_traced(stage, b, &geo, groups)
     }
 
@@ -100,14 +100,14 @@ impl Executor for CpuExecutor<'_> {
             let src: &[u8] = bytemuck::cast_slice(&src);
             let range = src_offset as usize..(src_offset + bytes) as usize;
             src.get(range)
-                .ok_or_else(|| Error::Invalid("copy past the end of a buffer".into()))?
+                .ok_or_else(|| Error::Internal("copy past the end of a buffer".into()))?
                 .to_vec()
         };
         let mut dst = dst.borrow_mut();
         let dst: &mut [u8] = bytemuck::cast_slice_mut(&mut dst);
         let range = dst_offset as usize..(dst_offset + bytes) as usize;
         dst.get_mut(range)
-            .ok_or_else(|| Error::Invalid("copy past the end of a buffer".into()))?
+            .ok_or_else(|| Error::Internal("copy past the end of a buffer".into()))?
             .copy_from_slice(&data);
         Ok(())
     }
@@ -118,7 +118,7 @@ impl Executor for CpuExecutor<'_> {
         values
             .get(..count)
             .map(<[T]>::to_vec)
-            .ok_or_else(|| Error::Invalid("readback past the end of a buffer".into()))
+            .ok_or_else(|| Error::Internal("readback past the end of a buffer".into()))
     }
 }
 
@@ -137,17 +137,17 @@ fn view_mut<T: Pod>(words: &mut [u32]) -> &mut [T] {
 /// Binding `i` of a dispatch, read-only.
 fn get<'a>(stage: &str, b: &'a [&CpuBuffer], i: usize) -> Result<Ref<'a, Vec<u32>>> {
     b.get(i)
-        .ok_or_else(|| Error::Invalid(format!("{stage}: no binding {i}")))?
+        .ok_or_else(|| Error::Internal(format!("{stage}: no binding {i}")))?
         .try_borrow()
-        .map_err(|_| Error::Invalid(format!("{stage}: binding {i} is also written")))
+        .map_err(|_| Error::Internal(format!("{stage}: binding {i} is also written")))
 }
 
 /// Binding `i` of a dispatch, written.
 fn get_mut<'a>(stage: &str, b: &'a [&CpuBuffer], i: usize) -> Result<RefMut<'a, Vec<u32>>> {
     b.get(i)
-        .ok_or_else(|| Error::Invalid(format!("{stage}: no binding {i}")))?
+        .ok_or_else(|| Error::Internal(format!("{stage}: no binding {i}")))?
         .try_borrow_mut()
-        .map_err(|_| Error::Invalid(format!("{stage}: binding {i} is bound twice")))
+        .map_err(|_| Error::Internal(format!("{stage}: binding {i} is bound twice")))
 }
 
 /// A uniform binding's value.
@@ -155,7 +155,7 @@ fn param<T: Pod>(stage: &str, b: &[&CpuBuffer], i: usize) -> Result<T> {
     view::<T>(&get(stage, b, i)?)
         .first()
         .copied()
-        .ok_or_else(|| Error::Invalid(format!("{stage}: binding {i} is too short")))
+        .ok_or_else(|| Error::Internal(format!("{stage}: binding {i} is too short")))
 }
 
 /// Refuses a dispatch whose bindings are not the ones `stage`'s WGSL declares in group 0.
@@ -345,7 +345,7 @@ fn run(stage: &str, b: &[&CpuBuffer], groups: u32) -> Result<()> {
             let counters: &mut [u32; 4] = counters
                 .get_mut(..4)
                 .and_then(|c| c.try_into().ok())
-                .ok_or_else(|| Error::Invalid(format!("{stage}: counters too short")))?;
+                .ok_or_else(|| Error::Internal(format!("{stage}: counters too short")))?;
             let (splats, materials) = (view(&splats), view(&materials));
             em_select::em_select(
                 &em,
@@ -375,7 +375,7 @@ fn run(stage: &str, b: &[&CpuBuffer], groups: u32) -> Result<()> {
             let mut listed = get_mut(stage, b, 5)?;
             let listed = listed
                 .first_mut()
-                .ok_or_else(|| Error::Invalid(format!("{stage}: no list counter")))?;
+                .ok_or_else(|| Error::Internal(format!("{stage}: no list counter")))?;
             em_deposit_list::em_deposit_list(
                 &p,
                 view(&splats),
@@ -402,7 +402,7 @@ fn run(stage: &str, b: &[&CpuBuffer], groups: u32) -> Result<()> {
             let counters: &mut [u32; 4] = counters
                 .get_mut(..4)
                 .and_then(|c| c.try_into().ok())
-                .ok_or_else(|| Error::Invalid(format!("{stage}: counters too short")))?;
+                .ok_or_else(|| Error::Internal(format!("{stage}: counters too short")))?;
             let binned = em_share::BinnedDeposits {
                 cell_start: &cell_start,
                 keys: view(&keys),
@@ -537,7 +537,7 @@ fn run_traced(stage: &str, b: &[&CpuBuffer], geo: &Geometry, groups: u32) -> Res
             let mut counters = get_mut(stage, b, 4)?;
             let counters = view_mut(&mut counters)
                 .first_mut()
-                .ok_or_else(|| Error::Invalid(format!("{stage}: counters too short")))?;
+                .ok_or_else(|| Error::Internal(format!("{stage}: counters too short")))?;
             let (emitters, materials) = (view(&emitters), view(&materials));
             let store = view_mut(&mut store);
             photon_trace::photon_trace(&p, emitters, materials, store, counters, geo, groups);

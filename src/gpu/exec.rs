@@ -67,9 +67,9 @@ impl Executor for GpuExecutor<'_> {
         bindings: &[&wgpu::Buffer],
         groups: u32,
     ) -> Result<()> {
-        let geometry = self
-            .geometry
-            .ok_or_else(|| crate::Error::Invalid(format!("{stage}: no scene geometry to trace")))?;
+        let geometry = self.geometry.ok_or_else(|| {
+            crate::Error::Internal(format!("{stage}: no scene geometry to trace"))
+        })?;
         self.gpu
             .dispatch_groups(self.encoder, stage, &[bindings, &geometry], groups)
     }
