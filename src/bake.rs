@@ -10,7 +10,7 @@ use crate::bins::{PhotonBins, bin_params};
 use crate::cpu;
 use crate::em::{EmConfig, FitShape, GatherSetup, LobeMap};
 use crate::error::{Error, Result};
-use crate::frame::{direct_params, shadow_bias};
+use crate::frame::direct_params;
 use crate::gpu::Gpu;
 use crate::gpu::bins::{GpuBins, GpuDeposits, bin_photons, deposit_photons};
 use crate::gpu::em::{fit_lobes_gathering, fit_lobes_to_deposits};
@@ -140,6 +140,19 @@ impl Progress {
         Bar::hidden()
     }
 
+    /// Runs `work` under a spinner named `stage`, then prints the stage's line; returns its
+    /// result and its milliseconds.
+    fn timed<T>(&self, stage: &str, work: impl FnOnce() -> Result<T>) -> Result<(T, f64)> {
+        let spin = self.spinner(stage);
+        let t = Instant::now();
+        let out = work();
+        let ms = ms_since(t);
+        spin.finish_and_clear();
+        let out = out?;
+        self.done(stage, ms, "");
+        Ok((out, ms))
+    }
+
     /// Prints a finished stage's line.
     pub fn done(&self, stage: &str, ms: f64, rate: &str) {
         if self.show {
@@ -224,15 +237,12 @@ pub fn binned_gpu(
     traced: &GpuPhotons,
     progress: &Progress,
 ) -> Result<Binned<GpuBins>> {
-    let stats = traced.stats.clone();
-    let spin = progress.spinner("binning");
-    let t = Instant::now();
-    let params = bin_params(&on_gpu.grid.params, plan.em.radius, stats.stored)?;
-    let bins = bin_photons(gpu, traced, &on_gpu.splats, &params)?;
-    let ms = ms_since(t);
-    spin.finish_and_clear();
-    progress.done("binning", ms, "");
-    Ok(binned(plan, scene.splats.len(), bins, &stats, ms))
+    let stats = &traced.stats;
+    let (bins, ms) = progress.timed("binning", || {
+        let params = bin_params(&on_gpu.grid.params, plan.em.radius, stats.stored)?;
+        bin_photons(gpu, traced, &on_gpu.splats, &params)
+    })?;
+    Ok(binned(plan, scene.splats.len(), bins, stats, ms))
 }
 
 /// Traces and bins on the CPU mirror.
@@ -251,13 +261,10 @@ fn binned_cpu(
     progress: &Progress,
 ) -> Result<Binned<PhotonBins>> {
     let map = traced_cpu(scene, plan, grid, progress)?;
-    let spin = progress.spinner("binning");
-    let t = Instant::now();
-    let params = bin_params(&grid.params, plan.em.radius, map.stats.stored)?;
-    let bins = cpu::bin_photons(&params, &map.photons, &scene.splats)?;
-    let ms = ms_since(t);
-    spin.finish_and_clear();
-    progress.done("binning", ms, "");
+    let (bins, ms) = progress.timed("binning", || {
+        let params = bin_params(&grid.params, plan.em.radius, map.stats.stored)?;
+        cpu::bin_photons(&params, &map.photons, &scene.splats)
+    })?;
     Ok(binned(plan, scene.splats.len(), bins, &map.stats, ms))
 }
 
@@ -319,14 +326,10 @@ fn deposits_gpu(
     traced: &GpuPhotons,
     progress: &Progress,
 ) -> Result<(GpuDeposits, f64)> {
-    let spin = progress.spinner("deposits");
-    let t = Instant::now();
     let params = planned_deposits(plan)?;
-    let deposits = deposit_photons(gpu, traced, &on_gpu.splats, params, &on_gpu.grid.params)?;
-    let ms = ms_since(t);
-    spin.finish_and_clear();
-    progress.done("deposits", ms, "");
-    Ok((deposits, ms))
+    progress.timed("deposits", || {
+        deposit_photons(gpu, traced, &on_gpu.splats, params, &on_gpu.grid.params)
+    })
 }
 
 /// Photon deposits on the CPU mirror, with their time as the binning's.
@@ -337,14 +340,10 @@ fn deposits_cpu(
     map: &PhotonMap,
     progress: &Progress,
 ) -> Result<(cpu::DepositBins, f64)> {
-    let spin = progress.spinner("deposits");
-    let t = Instant::now();
     let params = planned_deposits(plan)?;
-    let deposits = cpu::deposit_photons(params, &map.photons, &scene.splats, &grid.params)?;
-    let ms = ms_since(t);
-    spin.finish_and_clear();
-    progress.done("deposits", ms, "");
-    Ok((deposits, ms))
+    progress.timed("deposits", || {
+        cpu::deposit_photons(params, &map.photons, &scene.splats, &grid.params)
+    })
 }
 
 /// Fits the lobes on the device to the traced photons: over their deposits where the scene's
@@ -420,12 +419,7 @@ fn fit_on_cpu(
 /// What final gathering reads of `scene` (`EmConfig::gather`): its lights, baked as frames
 /// bake them, and rays that start where shadow rays do.
 pub fn gather_setup(scene: &Scene) -> GatherSetup<'_> {
-    GatherSetup {
-        lights: &scene.lights,
-        direct: direct_params(scene),
-        seed: scene.bake.seed,
-        shadow_bias: shadow_bias(&scene.splats),
-    }
+    GatherSetup::new(&scene.lights, direct_params(scene))
 }
 
 /// Traces, then deposits or bins, and fits, from one plan of the scene (`BakePlan`); the lobes

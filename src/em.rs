@@ -286,6 +286,18 @@ pub struct GatherSetup<'a> {
     pub shadow_bias: f32,
 }
 
+impl<'a> GatherSetup<'a> {
+    /// The setup of `lights` baked with `direct`, whose seed and shadow bias the rays take.
+    pub fn new(lights: &'a [Light], direct: DirectParams) -> GatherSetup<'a> {
+        GatherSetup {
+            lights,
+            direct,
+            seed: direct.seed,
+            shadow_bias: direct.shadow_bias,
+        }
+    }
+}
+
 /// The fit's output: the light of every splat, and the lobes written, packed (splat `i`'s at
 /// `light[i].first_lobe`, `light[i].lobes` of them, at most `lobes_per_splat`).
 #[derive(Clone, Debug, Default)]

@@ -113,15 +113,9 @@ impl Scene {
     pub fn search_radius(&self) -> f32 {
         self.bake.radius.unwrap_or_else(|| {
             let (lo, hi) = self.bounds();
-            default_search_radius(lo, hi)
+            (hi - lo).max_element() / 40.0
         })
     }
-}
-
-/// The photon search radius of a scene within bounds `lo`..`hi` whose file names none: a
-/// fortieth of its largest side.
-pub fn default_search_radius(lo: Vec3, hi: Vec3) -> f32 {
-    (hi - lo).max_element() / 40.0
 }
 
 /// Reads and builds a scene file.

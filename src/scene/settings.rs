@@ -2,7 +2,6 @@
 //! the scene so that the stages know nothing of scene files.
 
 use super::Scene;
-use super::file::BakeDesc;
 use crate::em::EmConfig;
 use crate::photons::{DEFAULT_BATCH, ITERATION_BUDGET, PhotonConfig};
 
@@ -23,15 +22,7 @@ impl PhotonConfig {
 
 impl EmConfig {
     pub fn from_scene(scene: &Scene) -> EmConfig {
-        EmConfig {
-            radius: scene.search_radius(),
-            ..EmConfig::from_settings(&scene.bake)
-        }
-    }
-
-    /// The fit's settings of a scene's `[bake]`, with the search radius it names (`None`: 0,
-    /// for the caller to fill in from the scene's bounds, `Scene::search_radius`).
-    pub fn from_settings(b: &BakeDesc) -> EmConfig {
+        let b = &scene.bake;
         EmConfig {
             lobes: b.lobes,
             iterations: b.iterations,
@@ -40,7 +31,7 @@ impl EmConfig {
             priors: true,
             fit_all: false,
             prune: b.prune,
-            radius: b.radius.unwrap_or(0.0),
+            radius: scene.search_radius(),
             slab: b.slab,
             fit_candidates: b.fit_candidates,
             gather: b.gather,
