@@ -732,3 +732,39 @@ fn bench_scale_reports_each_size() {
     assert!(!bad.status.success());
     assert!(String::from_utf8_lossy(&bad.stderr).contains("above 0"));
 }
+
+/// `benches/gpu-check.sh`, the script a session lent a GPU runs, works on this device too: in
+/// its quick sizes it writes one JSON with the adapter's name and every step's report, each
+/// step run and passed.
+#[test]
+fn the_gpu_check_runs_here() {
+    let out = std::env::temp_dir().join("lobelight-gpu-check.json");
+    let _ = std::fs::remove_file(&out);
+    let run = Command::new("bash")
+        .arg(concat!(env!("CARGO_MANIFEST_DIR"), "/benches/gpu-check.sh"))
+        .args(["--quick", "--no-tests", "-o"])
+        .arg(&out)
+        .env("LOBELIGHT", env!("CARGO_BIN_EXE_lobelight"))
+        .output()
+        .expect("run benches/gpu-check.sh");
+    let log = String::from_utf8_lossy(&run.stderr);
+    assert!(run.status.success(), "gpu-check failed:\n{log}");
+    let text = std::fs::read_to_string(&out).expect("gpu-check wrote its JSON");
+    let v: serde_json::Value = serde_json::from_str(&text).expect("gpu-check's JSON parses");
+    let adapter = v["adapter"].as_str().unwrap_or_default();
+    assert!(!adapter.is_empty(), "no adapter: {v}");
+    let steps = v["steps"].as_object().expect("steps");
+    let reports = [
+        ("photons_cornell", "photons_per_s"),
+        ("em_cornell", "fits_per_s"),
+        ("frame_cornell", "frame_ms"),
+        ("scale", "growth"),
+    ];
+    for (step, key) in reports {
+        let s = &steps[step];
+        assert_eq!(s["status"], "ok", "{step}: {s}");
+        assert_eq!(s["report"]["adapter"], adapter, "{step}: {s}");
+        assert!(s["report"].get(key).is_some(), "{step} lacks {key}: {s}");
+    }
+    assert_eq!(steps.len(), reports.len(), "{:?}", steps.keys());
+}

@@ -38,9 +38,10 @@ fn cornell(
 }
 
 /// The device's deposits of the same photons are the mirror's: the same records in the same
-/// lists (integer sums, so the order the photons arrive in changes nothing), the same power
-/// and spread; split over buffers by splat ranges (as on a device whose storage bindings do
-/// not hold them all), they are the same again. The irradiance `em_share` gives every splat (with `em_coverage`'s share)
+/// lists (integer sums, so the order the photons arrive in changes nothing), the same power (to
+/// a division's rounding) and spread; split over buffers by splat ranges (as on a device whose
+/// storage bindings do not hold them all), they are the same records again, and the same
+/// spreads within 1e-5. The irradiance `em_share` gives every splat (with `em_coverage`'s share)
 /// agrees within 1e-5 on all but 1 % of the lit splats (measured: 125 of 34 k at 400 k
 /// photons; 643 at 100 k), and summed over them within 1e-5: a deposit's mean differs in its
 /// last bits (the device may fuse a multiply and an add), and a deposit of one photon, a
@@ -85,7 +86,30 @@ fn deposits_and_shared_light_on_the_device_equal_the_mirror() {
         .download(&paged)
         .unwrap()
     };
-    assert_eq!(split, on_gpu, "deposits split by splat ranges");
+    assert_eq!(
+        split.params, on_gpu.params,
+        "deposits split by splat ranges"
+    );
+    assert!(
+        split.bins == on_gpu.bins,
+        "split deposits: the records differ"
+    );
+    // The spreads are the same formula (a square root of a difference of means) compiled into
+    // the split and the whole pipelines, which a device may round apart (an H100 measured
+    // 5.6e-6 at worst; lavapipe bit for bit).
+    let flat = |v: &[[f32; 2]]| v.iter().flatten().copied().collect::<Vec<f32>>();
+    let (a, b) = (flat(&split.spread), flat(&on_gpu.spread));
+    let spread_apart = a
+        .iter()
+        .zip(&b)
+        .filter(|(x, y)| (*x - *y).abs() > 1e-5 * y.abs().max(1e-3))
+        .count();
+    assert_eq!(
+        spread_apart,
+        0,
+        "split deposits' spreads: {}",
+        common::apart(&a, &b)
+    );
     assert!(on_cpu.bins.len() > 10_000, "{} deposits", on_cpu.bins.len());
     assert_eq!(on_gpu.bins.cell_start, on_cpu.bins.cell_start);
     assert_eq!(on_gpu.bins.keys, on_cpu.bins.keys);
@@ -96,7 +120,14 @@ fn deposits_and_shared_light_on_the_device_equal_the_mirror() {
             Vec3::from(b.geom[k].position),
         );
         assert!((pa - pb).length() <= 1e-6, "deposit {k}: {pa} vs {pb}");
-        assert_eq!(a.power[k], b.power[k], "deposit {k}: power");
+        // The same integer sum over the same scale: a device's division may round 2.5 ulps off
+        // (Vulkan's bound; an H100's was 1 ulp off where lavapipe's is exact).
+        let ulps = |x: f32, y: f32| (x - y).abs() <= 3.0 * f32::EPSILON * x.abs().max(y.abs());
+        let (ea, eb) = (a.power[k], b.power[k]);
+        assert!(
+            ea.iter().zip(&eb).all(|(x, y)| ulps(*x, *y)),
+            "deposit {k}: power {ea:?} vs {eb:?}"
+        );
     }
     for (j, (a, b)) in on_cpu.spread.iter().zip(&on_gpu.spread).enumerate() {
         assert!(

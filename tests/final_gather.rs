@@ -42,6 +42,32 @@ fn agreeing(a: &[f32], b: &[f32]) -> usize {
         .count()
 }
 
+/// The least share of splats whose gathered irradiance agrees with the mirror's within 1e-3. A
+/// ray that grazes a disk's rim hits on one device and misses on the other, and changes its
+/// splat's mean of 64 samples by up to a few percent. Where the device rounds as the mirror
+/// does (lavapipe: 0.01 % of samples apart, 99.6 % of splats within 1e-3), 99 %; on a GPU
+/// whose directions and hits round apart more often (an H100: 0.19 % of samples apart, 94 %
+/// of splats within 1e-3), 90 %.
+fn agreeing_share(gpu: &lobelight::gpu::Gpu) -> f64 {
+    if common::rounds_like_the_mirror(gpu) {
+        0.99
+    } else {
+        0.90
+    }
+}
+
+/// The most any splat's gathered irradiance may differ from the mirror's, relatively: a few
+/// flipped rays of 64 (measured at worst 7e-3 on lavapipe, 1.8e-2 on an H100).
+const WORST_SPLAT: f32 = 3e-2;
+
+/// The largest relative difference between `a` and `b`'s values (1e-3 near zero).
+fn worst(a: &[f32], b: &[f32]) -> f32 {
+    a.iter()
+        .zip(b)
+        .map(|(x, y)| (x - y).abs() / y.abs().max(1e-3))
+        .fold(0.0, f32::max)
+}
+
 fn mean(v: &[f32]) -> f64 {
     v.iter().map(|&x| x as f64).sum::<f64>() / v.len() as f64
 }
@@ -78,8 +104,9 @@ fn gather<E: Executor>(
 
 /// The default scene's glossy block, baked on the CPU with 100 k photons, gathered by 8 × 8
 /// rays a splat on the device and by the mirror. Rays that graze a disk's rim may hit on one
-/// and miss on the other, so the tolerance counts splats: 99 % within 1e-3 of the mirror's
-/// irradiance, and the means within 1e-3. The gathered irradiance estimates what the photons
+/// and miss on the other, so the tolerance counts rays and splats: 99.5 % of the samples within
+/// 1e-3 of the mirror's, the splats' irradiance as `agreeing_share` and `WORST_SPLAT` say, and
+/// the means within 1e-3. The gathered irradiance estimates what the photons
 /// estimate, the indirect light arriving at each splat: over the block's splats their means
 /// agree within 5 % (measured −0.1 %). A ray that meets the area light brings nothing back
 /// (the light's own light is the direct bake's part): the block's top face looks at the light,
@@ -134,6 +161,17 @@ fn final_gather_matches_the_mirror_and_the_photons() {
         (&scene.materials, &scene.lights),
     );
     let (a, b) = (irradiance(&on_gpu, rays), irradiance(&on_cpu, rays));
+    let grey = |s: &[[f32; 4]]| s.iter().map(|v| v[0] + v[1] + v[2]).collect::<Vec<f32>>();
+    let (samples_gpu, samples_cpu) = (grey(&on_gpu), grey(&on_cpu));
+    eprintln!("samples: {}", common::apart(&samples_gpu, &samples_cpu));
+    eprintln!("splats: {}", common::apart(&a, &b));
+    // A sample is one ray's light: all but the few rays that graze a rim agree.
+    let samples_close = agreeing(&samples_gpu, &samples_cpu);
+    assert!(
+        samples_close as f64 >= 0.995 * samples_cpu.len() as f64,
+        "{samples_close} of {} samples within 1e-3",
+        samples_cpu.len()
+    );
     let close = agreeing(&a, &b);
     let photons: Vec<f32> = glossy
         .iter()
@@ -149,7 +187,12 @@ fn final_gather_matches_the_mirror_and_the_photons() {
         mean(&a),
         gathered
     );
-    assert!(close as f64 >= 0.99 * a.len() as f64);
+    assert!(close as f64 >= agreeing_share(&gpu) * a.len() as f64);
+    assert!(
+        worst(&a, &b) <= WORST_SPLAT,
+        "splats: {}",
+        common::apart(&a, &b)
+    );
     assert!((mean(&a) - gathered).abs() <= 1e-3 * gathered);
     let bias = shadow_bias(&scene.splats);
     let mut towards_light = 0;
@@ -188,8 +231,8 @@ fn final_gather_matches_the_mirror_and_the_photons() {
 /// 1e-4 of it), which is the samples' estimate, π / N Σ L. Over the fitted splats its mean
 /// is the photons' (with em_coverage's share at the faces' edges, as the gathering fit's photon
 /// pass makes it) within 1 % (measured −0.04 %; against the photon fit alone, which leaves the
-/// share out, it read +5 %). Device and mirror agree within 1e-3 on 99 % of the splats, and
-/// within 1e-3 on the mean.
+/// share out, it read +5 %). Device and mirror agree within 1e-3 on the share of splats
+/// `agreeing_share` names, every splat within `WORST_SPLAT`, and within 1e-3 on the mean.
 #[test]
 fn lobes_fitted_to_gathered_samples_match_the_mirror() {
     let gpu = common::gpu();
@@ -261,6 +304,12 @@ fn lobes_fitted_to_gathered_samples_match_the_mirror() {
         irradiance(&photons),
     );
     let close = agreeing(&a, &b);
+    eprintln!("fitted splats: {}", common::apart(&a, &b));
+    assert!(
+        worst(&a, &b) <= WORST_SPLAT,
+        "fitted splats: {}",
+        common::apart(&a, &b)
+    );
     eprintln!(
         "{close} of {} within 1e-3; means {:.5} {:.5}, photons {:.5}",
         a.len(),
@@ -268,7 +317,7 @@ fn lobes_fitted_to_gathered_samples_match_the_mirror() {
         mean(&b),
         mean(&p)
     );
-    assert!(close as f64 >= 0.99 * a.len() as f64);
+    assert!(close as f64 >= agreeing_share(&gpu) * a.len() as f64);
     assert!((mean(&a) - mean(&b)).abs() <= 1e-3 * mean(&b));
     assert!((mean(&b) / mean(&p) - 1.0).abs() <= 0.01);
 }

@@ -1,6 +1,8 @@
 //! Paged arrays (`shaders::Paging`): a device made to split its arrays into pages of a few
 //! hundred KiB, as a 10 M-splat scene splits them into pages of 128 MiB, builds the same grid,
-//! bakes the same lobes and draws the same images, bit for bit, as one that binds them whole.
+//! bakes the same lobes and draws the same images, bit for bit, as one that binds them whole
+//! (on a device that rounds alike in every pipeline; within f32 rounding on one that fuses
+//! multiply-adds per pipeline).
 
 mod common;
 
@@ -95,21 +97,56 @@ fn a_paged_bake_and_frame_equal_the_unpaged_ones() {
         "the lobes should page: {} bytes",
         lobes_a.len()
     );
-    assert!(lobes_a == lobes_b, "the lobes differ");
+    let (la, lb): (&[f32], &[f32]) = (
+        bytemuck::cast_slice(&lobes_a),
+        bytemuck::cast_slice(&lobes_b),
+    );
     let names = [
         "baked direct",
         "shadow rays",
         "compute splatter",
         "path tracer",
     ];
+    if common::rounds_like_the_mirror(&whole) {
+        assert!(
+            lobes_a == lobes_b,
+            "the lobes differ: {}",
+            common::apart(la, lb)
+        );
+        for ((a, b), name) in images_a.iter().zip(&images_b).zip(names) {
+            let same = a.iter().zip(b).filter(|(p, q)| p == q).count();
+            assert_eq!(
+                same,
+                a.len(),
+                "{name}: {} of {} pixels differ",
+                a.len() - same,
+                a.len()
+            );
+        }
+        return;
+    }
+    // A GPU may fuse the paged pipelines' multiply-adds apart from the whole ones' (an H100
+    // did), and the fit's EM iterations carry that rounding on: measured there, 84 % of the
+    // lobes' values bit for bit, 99.6 % within 1e-5, the worst 6e-3 apart, and every pixel of
+    // the four frames within 4.4e-6. A page read from the wrong place moves far more.
+    let within = |a: &[f32], b: &[f32], tol: f32| {
+        a.iter()
+            .zip(b)
+            .filter(|(x, y)| (*x - *y).abs() <= tol * y.abs().max(1e-6))
+            .count()
+    };
+    assert!(
+        within(la, lb, 1e-5) as f64 >= 0.99 * la.len() as f64 && within(la, lb, 2e-2) == la.len(),
+        "the lobes differ: {}",
+        common::apart(la, lb)
+    );
     for ((a, b), name) in images_a.iter().zip(&images_b).zip(names) {
-        let same = a.iter().zip(b).filter(|(p, q)| p == q).count();
+        let (a, b): (&[f32], &[f32]) = (bytemuck::cast_slice(a), bytemuck::cast_slice(b));
         assert_eq!(
-            same,
+            within(a, b, 2e-5),
             a.len(),
-            "{name}: {} of {} pixels differ",
-            a.len() - same,
-            a.len()
+            "{name}: {}",
+            common::apart(a, b)
         );
     }
 }

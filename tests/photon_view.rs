@@ -16,9 +16,13 @@ use lobelight::photons::{PhotonConfig, PhotonMap};
 use lobelight::scene::{self, Scene};
 use lobelight::types::Camera;
 
-/// Pixels whose sums may differ: a photon on a pixel's edge, or a visibility ray that grazes a
-/// disk's rim, can land apart on the two devices (their f32 rounding differs).
-const EXACT_PIXELS: f64 = 0.995;
+/// Pixels whose sums may differ by more than `PIXEL_ULPS`: a photon on a pixel's edge, or a
+/// visibility ray that grazes a disk's rim, can land apart on the two devices.
+const CLOSE_PIXELS: f64 = 0.995;
+/// How far a pixel's channels may lie apart, in units in the last place: the same photons'
+/// powers summed in the same order, each weighed by f32 arithmetic that a device may round
+/// apart (an H100 fuses multiply-adds: 10 % of pixels 1 ulp apart; lavapipe bit for bit).
+const PIXEL_ULPS: f32 = 4.0;
 /// And the image's total power.
 const TOTAL_RELATIVE: f64 = 0.005;
 
@@ -49,11 +53,22 @@ fn device_matches_the_cpu_mirror() {
     let hdr = photon_image(&gpu, &mut encoder, &on_gpu, &photons, &cam, scale).unwrap();
     gpu.submit_and_wait(encoder).unwrap();
     let theirs: Vec<[f32; 4]> = gpu.read(&hdr, ours.len()).unwrap();
-    let exact = ours.iter().zip(&theirs).filter(|(a, b)| a == b).count();
+    let close_channel =
+        |a: f32, b: f32| (a - b).abs() <= PIXEL_ULPS * f32::EPSILON * a.abs().max(b.abs());
+    let close = ours
+        .iter()
+        .zip(&theirs)
+        .filter(|(a, b)| a.iter().zip(b.iter()).all(|(x, y)| close_channel(*x, *y)))
+        .count();
     let lit = ours.iter().filter(|c| c[0] > 0.0).count();
     assert!(lit > ours.len() / 2, "only {lit} pixels saw a photon");
-    let share = exact as f64 / ours.len() as f64;
-    assert!(share >= EXACT_PIXELS, "{share:.4} of pixels identical");
+    let share = close as f64 / ours.len() as f64;
+    let (a, b): (&[f32], &[f32]) = (bytemuck::cast_slice(&theirs), bytemuck::cast_slice(&ours));
+    assert!(
+        share >= CLOSE_PIXELS,
+        "{share:.4} of pixels within {PIXEL_ULPS} ulps ({})",
+        common::apart(a, b)
+    );
     let (a, b) = (total(&ours), total(&theirs));
     assert!(
         ((a - b) / a).abs() <= TOTAL_RELATIVE,

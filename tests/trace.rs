@@ -187,6 +187,14 @@ fn traversal_finds_the_nearest_hit_of_brute_force() {
     }
 }
 
+/// How far apart two devices' f32 distances to one disk may lie: t = n·(c − o) / n·d, whose
+/// denominator keeps a relative precision of about ε / |cos| at incidence cos = n·d, so that a
+/// grazing ray's t moves with a device's rounding (an H100 measured 3.4e-5 relatively at
+/// cos 4e-4, where lavapipe agrees with the mirror bit for bit); 1e-5 elsewhere.
+fn t_tolerance(t: f32, cos: f32) -> f32 {
+    1e-5 * t.abs().max(1.0) + 4.0 * f32::EPSILON * t.abs() / cos.abs().max(1e-6)
+}
+
 #[test]
 fn gpu_trace_rays_equals_cpu_mirror() {
     let gpu = common::gpu();
@@ -196,15 +204,20 @@ fn gpu_trace_rays_equals_cpu_mirror() {
         let on_gpu = gpu_trace(&gpu, &splats, &[], &rays, ITERATION_BUDGET);
         let mut differ = 0;
         for (k, (a, b)) in on_gpu.iter().zip(&on_cpu).enumerate() {
-            let same = a.splat == b.splat
-                && a.aborted == b.aborted
-                && (a.t - b.t).abs() <= 1e-5 * b.t.abs().max(1.0);
+            let cos = splats.get(b.splat as usize).map_or(1.0, |s| {
+                Vec3::from(s.normal).dot(Vec3::from(rays[k].direction))
+            });
+            let near = (a.t - b.t).abs() <= t_tolerance(b.t, cos);
+            // Two disks crossing at the hit point: either is the nearest.
+            let tie = a.splat != NO_SPLAT && b.splat != NO_SPLAT && near;
+            let same = (a.splat == b.splat || tie) && a.aborted == b.aborted && near;
             if !same {
                 differ += 1;
-                eprintln!("{name}: ray {k}: GPU {a:?} vs CPU {b:?}");
+                eprintln!("{name}: ray {k}: GPU {a:?} vs CPU {b:?}; cos {cos:.4}");
             }
         }
-        // Float rounding may differ (FMA contraction), so a hit at a disk's rim can flip.
+        // Float rounding may differ (a device may fuse multiply-adds), so a hit at a disk's
+        // rim can flip.
         assert!(
             differ * 10_000 <= rays.len(),
             "{name}: {differ} of {} rays differ",

@@ -16,6 +16,15 @@ pub fn gpu() -> Gpu {
     }
 }
 
+/// Whether `gpu` rounds f32 arithmetic as the mirror does, in every pipeline alike: a software
+/// rasterizer (lavapipe, llvmpipe) compiles each multiply and add as written, so parity there is
+/// bit for bit where the formulas are the same. A GPU's compiler may fuse multiply-adds, and
+/// fuse them differently in two pipelines of the same formula (an H100's did): tests that
+/// assert equality there assert a named tolerance on other devices.
+pub fn rounds_like_the_mirror(gpu: &Gpu) -> bool {
+    gpu.info.device_type == wgpu::DeviceType::Cpu
+}
+
 /// Small deterministic generator for test data (SplitMix64).
 pub struct Rng(pub u64);
 
@@ -252,4 +261,26 @@ pub fn write_e57(
     let bytes = std::fs::read(&path).unwrap();
     std::fs::remove_file(&path).ok();
     bytes
+}
+
+/// How far apart two lists of floats are, relatively (1e-6 near zero): the share of elements
+/// within 1e-6, 1e-5, 1e-4 and 1e-3 and the largest difference, as one line for a failure's
+/// message or a test's log.
+pub fn apart(a: &[f32], b: &[f32]) -> String {
+    let rel: Vec<f32> = a
+        .iter()
+        .zip(b)
+        .map(|(x, y)| (x - y).abs() / y.abs().max(1e-6))
+        .collect();
+    let n = rel.len().max(1) as f64;
+    let share = |t: f32| rel.iter().filter(|&&r| r <= t).count() as f64 / n;
+    let worst = rel.iter().copied().fold(0.0f32, f32::max);
+    format!(
+        "{} values: within 1e-6 {:.4}, 1e-5 {:.4}, 1e-4 {:.4}, 1e-3 {:.4}; largest {worst:.3e}",
+        rel.len(),
+        share(1e-6),
+        share(1e-5),
+        share(1e-4),
+        share(1e-3)
+    )
 }
