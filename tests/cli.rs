@@ -1,6 +1,8 @@
 //! The `lobelight` binary: `info` on the shipped scenes, its JSON keys (a contract), the GL
 //! fallback, and one-line errors with a non-zero exit.
 
+mod common;
+
 use std::process::{Command, Output};
 
 fn lobelight(args: &[&str], env: &[(&str, &str)]) -> Output {
@@ -356,6 +358,11 @@ fn render_lobes_png_exr_and_cache() {
             "--json",
         ];
         args.extend_from_slice(extra);
+        // The device, also where it is a software rasterizer: the test compares it with the
+        // CPU mirror.
+        if !extra.contains(&"--cpu") {
+            args.push("--gpu");
+        }
         json(&args)
     };
     let cache = path("bake.cache");
@@ -496,6 +503,7 @@ fn an_image_beyond_the_device_is_refused_before_baking() {
         &[
             "render",
             "scenes/cornell.toml",
+            "--gpu",
             "--width",
             "16384",
             "--height",
@@ -767,4 +775,74 @@ fn the_gpu_check_runs_here() {
         assert!(s["report"].get(key).is_some(), "{step} lacks {key}: {s}");
     }
     assert_eq!(steps.len(), reports.len(), "{:?}", steps.keys());
+}
+
+/// Where the only adapter is a software rasterizer, `render` runs the bake and the image on the
+/// CPU mirror, which renders them faster, and says so in one line; `--gpu` and a backend named
+/// with `--backend` run them on the adapter. On a GPU, `render` runs on it.
+#[test]
+fn render_runs_the_faster_engine_and_says_which() {
+    let software = common::gpu().is_software();
+    let png = std::env::temp_dir()
+        .join(format!("lobelight-engine-{}.png", std::process::id()))
+        .display()
+        .to_string();
+    let render = |extra: &[&str]| {
+        let mut args = vec![
+            "render",
+            "scenes/diffuse.toml",
+            "--photons",
+            "20000",
+            "--width",
+            "24",
+            "--height",
+            "24",
+            "--spp",
+            "1",
+            "-o",
+            &png,
+            "--json",
+        ];
+        args.extend_from_slice(extra);
+        let out = lobelight(&args, &[]);
+        let err = String::from_utf8_lossy(&out.stderr).into_owned();
+        assert!(out.status.success(), "{extra:?}: {err}");
+        let v: serde_json::Value = serde_json::from_slice(&out.stdout).expect("render's JSON");
+        (v["backend"].as_str().unwrap_or_default().to_string(), err)
+    };
+    let (backend, err) = render(&[]);
+    let said: Vec<&str> = err
+        .lines()
+        .filter(|l| l.contains("software rasterizer"))
+        .collect();
+    if software {
+        assert_eq!(backend, "cpu", "{err}");
+        assert_eq!(said.len(), 1, "{err}");
+        assert!(
+            said[0].contains("CPU mirror") && said[0].contains("--gpu"),
+            "{err}"
+        );
+    } else {
+        assert_ne!(backend, "cpu", "{err}");
+        assert!(said.is_empty(), "{err}");
+    }
+    for forced in [&["--gpu"][..], &["--backend", "vulkan"][..]] {
+        let (backend, err) = render(forced);
+        assert_ne!(backend, "cpu", "{forced:?}: {err}");
+        assert!(!err.contains("software rasterizer"), "{forced:?}: {err}");
+    }
+    assert_eq!(render(&["--cpu"]).0, "cpu");
+    let both = lobelight(
+        &[
+            "render",
+            "scenes/diffuse.toml",
+            "--cpu",
+            "--gpu",
+            "-o",
+            &png,
+        ],
+        &[],
+    );
+    assert!(!both.status.success(), "--cpu with --gpu is refused");
+    std::fs::remove_file(&png).ok();
 }

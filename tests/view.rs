@@ -97,6 +97,7 @@ fn scripted_view(extra: &[&str], shot: &str) -> (Vec<[f32; 4]>, u32, u32) {
 fn offscreen(extra: &[&str], out: &str) -> Vec<[f32; 4]> {
     let render = Command::new(env!("CARGO_BIN_EXE_lobelight"))
         .arg("render")
+        .arg("--gpu") // the window's device, also where the CPU mirror is the faster engine
         .args(COMMON)
         .args(extra)
         .args(spp(extra))

@@ -43,6 +43,10 @@ struct DeviceArgs {
     /// Run the CPU mirror instead of the GPU.
     #[arg(long)]
     cpu: bool,
+    /// Run on the GPU adapter even where it is a software rasterizer (lavapipe, llvmpipe),
+    /// whose bake and still images the CPU mirror renders faster.
+    #[arg(long, conflicts_with = "cpu")]
+    gpu: bool,
     /// Graphics API (default: WGPU_BACKEND, else Vulkan, else GL).
     #[arg(long, value_enum, default_value_t = BackendChoice::Auto)]
     backend: BackendChoice,
@@ -74,6 +78,27 @@ impl DeviceArgs {
                 Ok(None)
             }
             Err(e) => Err(e),
+        }
+    }
+
+    /// The engine of a bake and of still images: the device, but where it is a software
+    /// rasterizer and neither `--gpu` nor `--backend` asks for it. There the CPU mirror renders
+    /// the same image in about half the time (docs/measurements.md, "Which engine renders"),
+    /// and one line on stderr says what runs where.
+    fn still_engine(&self) -> Result<Option<Gpu>> {
+        let gpu = self.gpu()?;
+        let asked = self.gpu || self.backend != BackendChoice::Auto;
+        match gpu {
+            Some(g) if g.is_software() && !asked => {
+                eprintln!(
+                    "lobelight: {} is a software rasterizer: the bake and the image run on the \
+                     CPU mirror ({} threads), faster here (--gpu runs them on it)",
+                    g.info.name,
+                    rayon::current_num_threads()
+                );
+                Ok(None)
+            }
+            other => Ok(other),
         }
     }
 }
@@ -454,7 +479,7 @@ fn run(cli: Cli) -> Result<()> {
                 Some(path) => scene::views::load(path, &scene.camera)?,
                 None => Vec::new(),
             };
-            let gpu = device.gpu()?;
+            let gpu = device.still_engine()?;
             let opts = render::Options {
                 views,
                 shard,

@@ -50,7 +50,7 @@ impl GpuLobes {
 /// loops); a subgroup reduction where subgroup operations are enabled and a subgroup always
 /// holds the whole workgroup.
 pub fn fit_shape(gpu: &Gpu) -> FitShape {
-    let loop_limited = gpu.info.device_type == wgpu::DeviceType::Cpu;
+    let loop_limited = gpu.is_software();
     FitShape {
         loop_limited,
         subgroup_reduce: gpu.subgroups

@@ -515,6 +515,12 @@ impl Gpu {
         self.page_bytes
     }
 
+    /// Whether the adapter is a software rasterizer (lavapipe, llvmpipe's GL), which runs the
+    /// stages on the CPU's cores.
+    pub fn is_software(&self) -> bool {
+        self.info.device_type == wgpu::DeviceType::Cpu
+    }
+
     /// Makes arrays of more than `bytes` bytes page (tests of paging on small scenes); at most
     /// the largest storage binding, at least 64 KiB (pages of records up to 64 bytes then start
     /// at multiples of 4 KiB, aligned for any device's binding offsets).

@@ -22,7 +22,7 @@ pub fn gpu() -> Gpu {
 /// fuse them differently in two pipelines of the same formula (an H100's did): tests that
 /// assert equality there assert a named tolerance on other devices.
 pub fn rounds_like_the_mirror(gpu: &Gpu) -> bool {
-    gpu.info.device_type == wgpu::DeviceType::Cpu
+    gpu.is_software()
 }
 
 /// Small deterministic generator for test data (SplitMix64).
