@@ -19,6 +19,7 @@ use crate::grid::check_cell_len;
 use crate::photons::{
     PhotonConfig, PhotonMap, PhotonStats, StoreAction, StorePlanner, first_capacity,
 };
+use crate::shaders::Stage;
 use crate::shaders::stage_shape;
 use crate::shared::bins::list_count;
 use crate::shared::dispatch::groups_for;
@@ -41,17 +42,12 @@ pub trait Executor {
     /// A uniform holding `value`.
     fn uniform<T: Pod>(&mut self, label: &'static str, value: &T) -> Result<Self::Buffer>;
     /// One dispatch of `stage` over `groups` workgroups, `bindings` in binding order.
-    fn dispatch(
-        &mut self,
-        stage: &'static str,
-        bindings: &[&Self::Buffer],
-        groups: u32,
-    ) -> Result<()>;
+    fn dispatch(&mut self, stage: Stage, bindings: &[&Self::Buffer], groups: u32) -> Result<()>;
     /// `dispatch` of a tracing stage, whose bind group 1 is the scene's geometry (splats and
     /// grid) that the executor was made with.
     fn dispatch_traced(
         &mut self,
-        stage: &'static str,
+        stage: Stage,
         bindings: &[&Self::Buffer],
         groups: u32,
     ) -> Result<()>;
@@ -59,7 +55,7 @@ pub trait Executor {
     /// (the mirrors read the same settings from the stage's parameters).
     fn dispatch_variant(
         &mut self,
-        stage: &'static str,
+        stage: Stage,
         defines: &[&'static str],
         constants: &[(&'static str, f64)],
         bindings: &[&Self::Buffer],
@@ -80,14 +76,14 @@ pub trait Executor {
 }
 
 /// Workgroups of `stage` that cover `n` values (its WGSL's workgroup size × items).
-pub fn groups(stage: &str, n: u32) -> Result<u32> {
+pub fn groups(stage: Stage, n: u32) -> Result<u32> {
     Ok(groups_for(n, stage_shape(stage)?.per_group(stage)?))
 }
 
 /// Exclusive scan of the first `len` values of `values` in place: `scan_reduce` writes one sum
 /// per block, the block sums are scanned recursively, and `scan_apply` finishes each block.
 pub fn exclusive_scan<E: Executor>(ex: &mut E, values: &E::Buffer, len: u32) -> Result<()> {
-    let blocks = groups("scan_reduce", len)?;
+    let blocks = groups(Stage::ScanReduce, len)?;
     let params = ScanParams {
         len,
         ..Default::default()
@@ -95,12 +91,12 @@ pub fn exclusive_scan<E: Executor>(ex: &mut E, values: &E::Buffer, len: u32) -> 
     let params = ex.uniform("scan params", &params)?;
     if blocks <= 1 {
         let zero = ex.upload("scan zero offset", &[0u32])?;
-        return ex.dispatch("scan_apply", &[&params, values, &zero], blocks);
+        return ex.dispatch(Stage::ScanApply, &[&params, values, &zero], blocks);
     }
     let block_sums = ex.zeroed("scan block sums", blocks as u64 * 4)?;
-    ex.dispatch("scan_reduce", &[&params, values, &block_sums], blocks)?;
+    ex.dispatch(Stage::ScanReduce, &[&params, values, &block_sums], blocks)?;
     exclusive_scan(ex, &block_sums, blocks)?;
-    ex.dispatch("scan_apply", &[&params, values, &block_sums], blocks)
+    ex.dispatch(Stage::ScanApply, &[&params, values, &block_sums], blocks)
 }
 
 /// A tone-mapped image where it was made.
@@ -120,20 +116,24 @@ pub fn tone_map<E: Executor>(
     cfg: &ToneConfig,
 ) -> Result<Toned<E::Buffer>> {
     cfg.validate()?;
-    let block = stage_shape("tonemap_reduce")?.per_group("tonemap_reduce")?;
+    let block = stage_shape(Stage::TonemapReduce)?.per_group(Stage::TonemapReduce)?;
     let mut sums_in = ex.zeroed("tone sums", 8)?;
     for (level, &count) in reduce_levels(pixels, block).iter().enumerate() {
         let blocks = groups_for(count, block).max(1);
         let sums_out = ex.zeroed("tone sums", blocks as u64 * 8)?;
         let params = ex.uniform("tone params", &cfg.params(count, level as u32))?;
         let bindings = [&params, hdr, &sums_in, &sums_out];
-        ex.dispatch("tonemap_reduce", &bindings, blocks)?;
+        ex.dispatch(Stage::TonemapReduce, &bindings, blocks)?;
         sums_in = sums_out;
     }
     let rgba = ex.zeroed("tone-mapped image", pixels.max(1) as u64 * 4)?;
     let params = ex.uniform("tone params", &cfg.params(pixels, 0))?;
     let bindings = [&params, hdr, &sums_in, &rgba];
-    ex.dispatch("tonemap_apply", &bindings, groups("tonemap_apply", pixels)?)?;
+    ex.dispatch(
+        Stage::TonemapApply,
+        &bindings,
+        groups(Stage::TonemapApply, pixels)?,
+    )?;
     Ok(Toned {
         rgba,
         log_sum: sums_in,
@@ -176,9 +176,9 @@ pub fn build_grid<E: Executor>(
     let cells = params.cell_count as u64;
     let cell_start = ex.zeroed("cell start", (cells + 1) * 4)?;
     let max_cell_len = ex.zeroed("grid max cell length", 4)?;
-    let splat_groups = groups("grid_count", params.splat_count)?;
+    let splat_groups = groups(Stage::GridCount, params.splat_count)?;
     let bindings = [&params_buf, splats, &cell_start, &max_cell_len];
-    ex.dispatch("grid_count", &bindings, splat_groups)?;
+    ex.dispatch(Stage::GridCount, &bindings, splat_groups)?;
     exclusive_scan(ex, &cell_start, params.cell_count + 1)?;
     // stats = [entry total (last scan value), longest cell list]
     let stats = ex.zeroed("grid stats", 8)?;
@@ -209,9 +209,9 @@ pub fn build_grid<E: Executor>(
         &scratch_cells,
     ];
     ex.dispatch(
-        "grid_scatter",
+        Stage::GridScatter,
         &bindings,
-        groups("grid_scatter", params.splat_count)?,
+        groups(Stage::GridScatter, params.splat_count)?,
     )?;
     let bindings = [
         &params_buf,
@@ -220,7 +220,11 @@ pub fn build_grid<E: Executor>(
         &scratch_cells,
         &cell_splats,
     ];
-    ex.dispatch("grid_rank", &bindings, groups("grid_rank", entries)?)?;
+    ex.dispatch(
+        Stage::GridRank,
+        &bindings,
+        groups(Stage::GridRank, entries)?,
+    )?;
     let cell_dist = distance_field(ex, &params_buf, &params, &cell_start)?;
     Ok(BuiltGrid {
         params,
@@ -241,7 +245,7 @@ fn distance_field<E: Executor>(
     let bytes = params.cell_count as u64 * 4;
     let a = ex.zeroed("cell distance", bytes)?;
     let b = ex.zeroed("cell distance scratch", bytes)?;
-    let groups = groups("grid_distance", params.cell_count)?;
+    let groups = groups(Stage::GridDistance, params.cell_count)?;
     let passes: [(u32, &E::Buffer, &E::Buffer); 3] =
         [(0, cell_start, &a), (1, &a, &b), (2, &b, &a)];
     for (axis, src, dst) in passes {
@@ -251,7 +255,7 @@ fn distance_field<E: Executor>(
         };
         let pass = ex.uniform("distance pass", &pass)?;
         ex.dispatch(
-            "grid_distance",
+            Stage::GridDistance,
             &[&pass, grid, cell_start, src, dst],
             groups,
         )?;
@@ -311,7 +315,7 @@ pub fn bin_photons<E: Executor>(
     let chunks = ex.zeroed("bin rank chunks", 4)?;
     for (&(page, count), uniform) in pages.iter().zip(&page_params) {
         let bindings = [uniform, page, &cell_start, &chunks];
-        ex.dispatch("bin_count", &bindings, groups("bin_count", count)?)?;
+        ex.dispatch(Stage::BinCount, &bindings, groups(Stage::BinCount, count)?)?;
     }
     exclusive_scan(ex, &cell_start, lists as u32 + 1)?;
 
@@ -334,7 +338,11 @@ pub fn bin_photons<E: Executor>(
             &scratch_power,
             splats,
         ];
-        ex.dispatch("bin_scatter", &bindings, groups("bin_scatter", count)?)?;
+        ex.dispatch(
+            Stage::BinScatter,
+            &bindings,
+            groups(Stage::BinScatter, count)?,
+        )?;
     }
     let rank_chunks = match ex.read::<u32>(&chunks, 1)?[..] {
         [c] => c,
@@ -353,7 +361,7 @@ pub fn bin_photons<E: Executor>(
         };
         let pass = ex.uniform("bin rank params", &pass)?;
         let bindings = [&pass, &cell_start, &scratch_keys, &scratch_cells, &slots];
-        ex.dispatch("bin_rank", &bindings, groups("bin_rank", n)?)?;
+        ex.dispatch(Stage::BinRank, &bindings, groups(Stage::BinRank, n)?)?;
     }
     let params_buf = ex.uniform("bin params", &params)?;
     let keys = ex.zeroed("binned keys", len * 8)?;
@@ -369,7 +377,7 @@ pub fn bin_photons<E: Executor>(
         &geom,
         &power,
     ];
-    ex.dispatch("bin_place", &bindings, groups("bin_place", n)?)?;
+    ex.dispatch(Stage::BinPlace, &bindings, groups(Stage::BinPlace, n)?)?;
     Ok(Bins {
         params,
         params_buf,
@@ -427,7 +435,11 @@ pub fn deposit_photons<E: Executor>(
             };
             let uniform = ex.uniform("deposit page params", &page_params)?;
             let bindings = [&uniform, page, splats, &deposits];
-            ex.dispatch("em_deposit", &bindings, groups("em_deposit", photons)?)?;
+            ex.dispatch(
+                Stage::EmDeposit,
+                &bindings,
+                groups(Stage::EmDeposit, photons)?,
+            )?;
         }
         let uniform = ex.uniform("deposit range params", &in_range)?;
         let records = (count as u64).min(stored).max(1);
@@ -435,9 +447,9 @@ pub fn deposit_photons<E: Executor>(
         let listed = ex.zeroed("deposits listed", 4)?;
         let bindings = [&uniform, splats, &deposits, &list, &spread, &listed];
         ex.dispatch(
-            "em_deposit_list",
+            Stage::EmDepositList,
             &bindings,
-            groups("em_deposit_list", count)?,
+            groups(Stage::EmDepositList, count)?,
         )?;
         lists.push((list, listed));
     }
@@ -567,7 +579,11 @@ pub fn fit_lobes<E: Executor>(
         &counters,
         &gather_list,
     ];
-    ex.dispatch("em_select", &bindings, groups("em_select", splat_count)?)?;
+    ex.dispatch(
+        Stage::EmSelect,
+        &bindings,
+        groups(Stage::EmSelect, splat_count)?,
+    )?;
     let (listed, max_candidates, fitted, gathered) = match ex.read::<u32>(&counters, 4)?[..] {
         [a, b, c, d] => (a, b, c, d),
         _ => return Err(Error::Gpu("em counters readback was short".into())),
@@ -594,7 +610,11 @@ pub fn fit_lobes<E: Executor>(
                 d.spread,
                 &light,
             ];
-            ex.dispatch("em_share", &bindings, groups("em_share", splat_count)?)?;
+            ex.dispatch(
+                Stage::EmShare,
+                &bindings,
+                groups(Stage::EmShare, splat_count)?,
+            )?;
         }
         None => {
             let gather = ex.uniform(
@@ -611,7 +631,11 @@ pub fn fit_lobes<E: Executor>(
                 input.power,
                 &light,
             ];
-            ex.dispatch("em_gather", &bindings, groups("em_gather", gathered)?)?;
+            ex.dispatch(
+                Stage::EmGather,
+                &bindings,
+                groups(Stage::EmGather, gathered)?,
+            )?;
         }
     }
     // A split point of its own, so that the gather's time and the fit's are told apart (one
@@ -691,8 +715,8 @@ pub fn fit_lobes<E: Executor>(
 /// executor must trace the scene's geometry.
 pub fn cover_light<E: Executor>(ex: &mut E, params: &EmParams, light: &E::Buffer) -> Result<()> {
     let uniform = ex.uniform("em coverage params", params)?;
-    let groups = groups("em_coverage", params.splat_count)?;
-    ex.dispatch_traced("em_coverage", &[&uniform, light], groups)
+    let groups = groups(Stage::EmCoverage, params.splat_count)?;
+    ex.dispatch_traced(Stage::EmCoverage, &[&uniform, light], groups)
 }
 
 /// What `fit_to_rays` takes of the photon fit: its `em_fit` buffers, its counters (read back
@@ -831,7 +855,7 @@ fn em_fit<E: Executor>(
             b.light,
         ];
         ex.dispatch_variant(
-            "em_fit",
+            Stage::EmFit,
             defines,
             &constants,
             &bindings,
@@ -865,7 +889,11 @@ pub fn photon_image<E: Executor>(
         };
         let params_buf = ex.uniform("photon view params", &params)?;
         let bindings = [&params_buf, &cam_buf, materials, page, &sums];
-        ex.dispatch_traced("photon_view", &bindings, groups("photon_view", count)?)?;
+        ex.dispatch_traced(
+            Stage::PhotonView,
+            &bindings,
+            groups(Stage::PhotonView, count)?,
+        )?;
     }
     let hdr = ex.zeroed("photon view", pixels.max(1) as u64 * 16)?;
     let params = PhotonViewParams {
@@ -877,9 +905,9 @@ pub fn photon_image<E: Executor>(
     let params = ex.uniform("photon resolve params", &params)?;
     let bindings = [&params, &sums, &hdr];
     ex.dispatch(
-        "photon_resolve",
+        Stage::PhotonResolve,
         &bindings,
-        groups("photon_resolve", pixels)?,
+        groups(Stage::PhotonResolve, pixels)?,
     )?;
     Ok(hdr)
 }
@@ -958,7 +986,11 @@ pub fn trace_photons<E: Executor>(
             &page.buffer,
             &counters_buf,
         ];
-        ex.dispatch_traced("photon_trace", &bindings, groups("photon_trace", paths)?)?;
+        ex.dispatch_traced(
+            Stage::PhotonTrace,
+            &bindings,
+            groups(Stage::PhotonTrace, paths)?,
+        )?;
         let counters = ex
             .read::<TraceCounters>(&counters_buf, 1)?
             .pop()
@@ -1070,8 +1102,8 @@ pub fn bake_direct<E: Executor>(
     )?;
     let uniform = ex.uniform("direct params", params)?;
     let bindings = [&uniform, lights, &direct, &visibility];
-    let groups = groups("direct_bake", params.splat_count)?;
-    ex.dispatch_traced("direct_bake", &bindings, groups)?;
+    let groups = groups(Stage::DirectBake, params.splat_count)?;
+    ex.dispatch_traced(Stage::DirectBake, &bindings, groups)?;
     Ok(Direct { direct, visibility })
 }
 
@@ -1098,7 +1130,11 @@ pub fn final_gather<E: Executor>(
     })?;
     let uniform = ex.uniform("gather params", params)?;
     let bindings = [&uniform, list, light, direct, samples, materials, lights];
-    ex.dispatch_traced("final_gather", &bindings, groups("final_gather", count)?)
+    ex.dispatch_traced(
+        Stage::FinalGather,
+        &bindings,
+        groups(Stage::FinalGather, count)?,
+    )
 }
 
 pub use crate::shared::splat::TILE;
@@ -1135,9 +1171,9 @@ pub fn bin_splat_tiles<E: Executor>(
     let tiles = params.tiles_x * params.tiles_y;
     let uniform = ex.uniform("tile params", &params)?;
     let start = ex.zeroed("tile starts", (tiles as u64 + 1) * 4)?;
-    let per_splat = groups("splat_tile_count", splat_count)?;
+    let per_splat = groups(Stage::SplatTileCount, splat_count)?;
     ex.dispatch(
-        "splat_tile_count",
+        Stage::SplatTileCount,
         &[cam_buf, &uniform, splats, &start],
         per_splat,
     )?;
@@ -1167,7 +1203,7 @@ pub fn bin_splat_tiles<E: Executor>(
         &scratch_splats,
         &scratch_tiles,
     ];
-    ex.dispatch("splat_tile_scatter", &bindings, per_splat)?;
+    ex.dispatch(Stage::SplatTileScatter, &bindings, per_splat)?;
     let rank = GridParams {
         entry_count: params.entry_count,
         ..Default::default()
@@ -1175,8 +1211,8 @@ pub fn bin_splat_tiles<E: Executor>(
     let rank = ex.uniform("tile rank params", &rank)?;
     let lists = ex.zeroed("tile lists", entries)?;
     let bindings = [&rank, &start, &scratch_splats, &scratch_tiles, &lists];
-    let groups = groups("grid_rank", params.entry_count)?;
-    ex.dispatch("grid_rank", &bindings, groups)?;
+    let groups = groups(Stage::GridRank, params.entry_count)?;
+    ex.dispatch(Stage::GridRank, &bindings, groups)?;
     Ok(TileLists {
         params,
         start,
@@ -1198,5 +1234,9 @@ pub fn path_sample<E: Executor>(
     let uniform = ex.uniform("path params", params)?;
     let bindings = [&uniform, cam, materials, lights, hdr];
     let pixels = params.width * params.height;
-    ex.dispatch_traced("path_trace", &bindings, groups("path_trace", pixels)?)
+    ex.dispatch_traced(
+        Stage::PathTrace,
+        &bindings,
+        groups(Stage::PathTrace, pixels)?,
+    )
 }

@@ -40,47 +40,92 @@ macro_rules! shared {
     };
 }
 
-/// Every stage shader (`wgsl/<name>.wgsl`): entry point `main` for compute stages, `vs_main`
-/// and `fs_main` for the splat raster passes. The stage table.
-pub const STAGES: &[WgslFile] = &[
-    stage!("grid_count"),
-    stage!("grid_scatter"),
-    stage!("grid_rank"),
-    stage!("grid_distance"),
-    stage!("trace_rays"),
-    stage!("photon_trace"),
-    stage!("bin_count"),
-    stage!("bin_scatter"),
-    stage!("bin_rank"),
-    stage!("bin_place"),
-    stage!("em_select"),
-    stage!("em_gather"),
-    stage!("em_deposit"),
-    stage!("em_deposit_list"),
-    stage!("em_share"),
-    stage!("em_fit"),
-    stage!("em_coverage"),
-    stage!("scan_reduce"),
-    stage!("scan_apply"),
-    stage!("tonemap_reduce"),
-    stage!("tonemap_apply"),
-    stage!("splat_visibility"),
-    stage!("splat_select"),
-    stage!("splat_list"),
-    stage!("splat_shade"),
-    stage!("splat_attributes"),
-    stage!("splat_tile_count"),
-    stage!("splat_tile_scatter"),
-    stage!("splat_compute"),
-    stage!("direct_bake"),
-    stage!("final_gather"),
-    stage!("shade"),
-    stage!("reference_gather"),
-    stage!("path_trace"),
-    stage!("present"),
-    stage!("photon_view"),
-    stage!("photon_resolve"),
-];
+/// Declares the stage table: the `Stage` enum, one variant a stage, and `STAGES`, the stages'
+/// WGSL files in the same order.
+macro_rules! stages {
+    ($($variant:ident => $name:literal,)*) => {
+        /// A shader stage (`wgsl/<name>.wgsl`): entry point `main` for compute stages, `vs_main`
+        /// and `fs_main` for the splat raster passes. The variant names what the host dispatches,
+        /// checked by the compiler; `name` is its file's stem.
+        #[derive(Clone, Copy, Debug, PartialEq, Eq, Hash, PartialOrd, Ord)]
+        pub enum Stage {
+            $($variant,)*
+        }
+
+        impl Stage {
+            /// Every stage, in the stage table's order.
+            pub const ALL: &[Stage] = &[$(Stage::$variant,)*];
+
+            /// The stage's file stem: `wgsl/<name>.wgsl`, `src/cpu/<name>.rs`.
+            pub const fn name(self) -> &'static str {
+                match self {
+                    $(Stage::$variant => $name,)*
+                }
+            }
+        }
+
+        /// Every stage's WGSL file, in `Stage::ALL`'s order. The stage table.
+        pub const STAGES: &[WgslFile] = &[$(stage!($name),)*];
+    };
+}
+
+stages! {
+    GridCount => "grid_count",
+    GridScatter => "grid_scatter",
+    GridRank => "grid_rank",
+    GridDistance => "grid_distance",
+    TraceRays => "trace_rays",
+    PhotonTrace => "photon_trace",
+    BinCount => "bin_count",
+    BinScatter => "bin_scatter",
+    BinRank => "bin_rank",
+    BinPlace => "bin_place",
+    EmSelect => "em_select",
+    EmGather => "em_gather",
+    EmDeposit => "em_deposit",
+    EmDepositList => "em_deposit_list",
+    EmShare => "em_share",
+    EmFit => "em_fit",
+    EmCoverage => "em_coverage",
+    ScanReduce => "scan_reduce",
+    ScanApply => "scan_apply",
+    TonemapReduce => "tonemap_reduce",
+    TonemapApply => "tonemap_apply",
+    SplatVisibility => "splat_visibility",
+    SplatSelect => "splat_select",
+    SplatList => "splat_list",
+    SplatShade => "splat_shade",
+    SplatAttributes => "splat_attributes",
+    SplatTileCount => "splat_tile_count",
+    SplatTileScatter => "splat_tile_scatter",
+    SplatCompute => "splat_compute",
+    DirectBake => "direct_bake",
+    FinalGather => "final_gather",
+    Shade => "shade",
+    ReferenceGather => "reference_gather",
+    PathTrace => "path_trace",
+    Present => "present",
+    PhotonView => "photon_view",
+    PhotonResolve => "photon_resolve",
+}
+
+impl Stage {
+    /// The stage whose file stem is `name`.
+    pub fn from_name(name: &str) -> Option<Stage> {
+        Stage::ALL.iter().copied().find(|s| s.name() == name)
+    }
+
+    /// The stage's WGSL file.
+    pub fn file(self) -> &'static WgslFile {
+        &STAGES[self as usize]
+    }
+}
+
+impl std::fmt::Display for Stage {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        f.write_str(self.name())
+    }
+}
 
 /// Every shared module (`wgsl/shared/<name>.wgsl`), importable by name.
 pub const SHARED: &[WgslFile] = &[
@@ -104,10 +149,6 @@ pub const SHARED: &[WgslFile] = &[
     shared!("drawn_clip"),
 ];
 
-pub fn stage(name: &str) -> Option<&'static WgslFile> {
-    STAGES.iter().find(|s| s.name == name)
-}
-
 /// What the host reads from a stage's WGSL instead of writing it a second time: the shape of
 /// its workgroups. The CPU mirrors keep their own constants (their loops need them), and a
 /// test checks those against this.
@@ -125,12 +166,12 @@ pub struct StageShape {
 
 impl StageShape {
     /// Values one workgroup covers: the unit a dispatch's group count is taken in.
-    pub fn per_group(&self, name: &str) -> Result<u32> {
+    pub fn per_group(&self, stage: Stage) -> Result<u32> {
         self.workgroup_size
             .map(|wg| wg * self.items)
             .ok_or_else(|| {
-                Error::Invalid(format!(
-                    "stage '{name}' has no fixed workgroup size in its WGSL"
+                Error::Internal(format!(
+                    "stage '{stage}' has no fixed workgroup size in its WGSL"
                 ))
             })
     }
@@ -144,16 +185,16 @@ struct Reflected {
 }
 
 /// A stage's WGSL read with naga, once per process.
-fn reflect(name: &str) -> Result<Arc<Reflected>> {
-    static REFLECTED: OnceLock<Mutex<HashMap<String, Arc<Reflected>>>> = OnceLock::new();
+fn reflect(stage: Stage) -> Result<Arc<Reflected>> {
+    static REFLECTED: OnceLock<Mutex<HashMap<Stage, Arc<Reflected>>>> = OnceLock::new();
     let cache = REFLECTED.get_or_init(Default::default);
-    if let Some(r) = cache.lock().ok().and_then(|m| m.get(name).cloned()) {
+    if let Some(r) = cache.lock().ok().and_then(|m| m.get(&stage).cloned()) {
         return Ok(r);
     }
-    let source = resolve_stage(name)?;
+    let source = resolve_stage(stage)?;
     let module = naga::front::wgsl::parse_str(&source).map_err(|e| {
         Error::parse(
-            Path::new(&format!("wgsl/{name}.wgsl")),
+            Path::new(&format!("wgsl/{stage}.wgsl")),
             "after import resolution",
             e.emit_to_string(&source),
         )
@@ -163,14 +204,14 @@ fn reflect(name: &str) -> Result<Arc<Reflected>> {
         paged: read_paged(&module),
     });
     if let Ok(mut m) = cache.lock() {
-        m.insert(name.to_owned(), reflected.clone());
+        m.insert(stage, reflected.clone());
     }
     Ok(reflected)
 }
 
 /// The shape of a stage, read once per process from its WGSL with naga.
-pub fn stage_shape(name: &str) -> Result<StageShape> {
-    reflect(name).map(|r| r.shape)
+pub fn stage_shape(stage: Stage) -> Result<StageShape> {
+    reflect(stage).map(|r| r.shape)
 }
 
 fn read_shape(module: &naga::Module) -> StageShape {
@@ -206,13 +247,13 @@ fn read_shape(module: &naga::Module) -> StageShape {
 }
 
 /// The full source of a stage with its imports resolved, nothing defined.
-pub fn resolve_stage(name: &str) -> Result<String> {
-    resolve_stage_with(name, &[])
+pub fn resolve_stage(stage: Stage) -> Result<String> {
+    resolve_stage_with(stage, &[])
 }
 
 /// The full source of a stage with its imports resolved and `defines` defined.
-pub fn resolve_stage_with(name: &str, defines: &[&str]) -> Result<String> {
-    resolve_stage_paged(name, defines, &Paging::default())
+pub fn resolve_stage_with(stage: Stage, defines: &[&str]) -> Result<String> {
+    resolve_stage_paged(stage, defines, &Paging::default())
 }
 
 /// Resolves `// #import` lines of `text` (named `path` in errors) using `lookup` for modules.
@@ -542,12 +583,10 @@ pub struct PagedBinding {
 }
 
 /// The full source of a stage with `defines` and its paged arrays laid out as `paging` says.
-pub fn resolve_stage_paged(name: &str, defines: &[&str], paging: &Paging) -> Result<String> {
-    let file =
-        stage(name).ok_or_else(|| Error::Invalid(format!("no shader stage named '{name}'")))?;
+pub fn resolve_stage_paged(stage: Stage, defines: &[&str], paging: &Paging) -> Result<String> {
     resolve_paged(
-        &format!("wgsl/{name}.wgsl"),
-        file.text,
+        &format!("wgsl/{stage}.wgsl"),
+        stage.file().text,
         &|m| SHARED.iter().find(|s| s.name == m).map(|s| s.text),
         defines,
         paging,
@@ -555,8 +594,8 @@ pub fn resolve_stage_paged(name: &str, defines: &[&str], paging: &Paging) -> Res
 }
 
 /// The paged arrays of a stage (those with a `NAME_at` accessor), read once per process.
-pub fn paged_bindings(name: &str) -> Result<Vec<PagedBinding>> {
-    reflect(name).map(|r| r.paged.clone())
+pub fn paged_bindings(stage: Stage) -> Result<Vec<PagedBinding>> {
+    reflect(stage).map(|r| r.paged.clone())
 }
 
 fn read_paged(module: &naga::Module) -> Vec<PagedBinding> {

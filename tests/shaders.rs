@@ -1,7 +1,7 @@
 //! Every WGSL file is registered, resolves its imports and passes naga's validation; the
 //! resolver's errors name the file and line. No GPU needed.
 
-use lobelight::shaders::{self, SHARED, STAGES};
+use lobelight::shaders::{self, SHARED, STAGES, Stage};
 
 fn names_in(dir: &str) -> Vec<String> {
     let mut names: Vec<String> = std::fs::read_dir(dir)
@@ -31,14 +31,14 @@ fn every_wgsl_file_is_registered() {
 
 #[test]
 fn every_stage_validates_with_naga() {
-    for stage in STAGES {
-        let source = shaders::resolve_stage(stage.name).unwrap();
-        let module = shaders::validate(stage.name, &source).unwrap_or_else(|e| panic!("{e}"));
+    for &stage in Stage::ALL {
+        let source = shaders::resolve_stage(stage).unwrap();
+        let module = shaders::validate(stage.name(), &source).unwrap_or_else(|e| panic!("{e}"));
         let has = |name: &str| module.entry_points.iter().any(|e| e.name == name);
         assert!(
             has("main") || (has("vs_main") && has("fs_main")),
             "{} has neither `main` nor `vs_main` and `fs_main`",
-            stage.name
+            stage.name()
         );
     }
 }
@@ -107,16 +107,16 @@ fn malformed_import_is_an_error() {
 #[test]
 fn every_subgroup_variant_validates_with_naga() {
     let mut variants = 0;
-    for stage in STAGES
+    for &stage in Stage::ALL
         .iter()
-        .filter(|s| s.text.contains("// #ifdef subgroups"))
+        .filter(|s| s.file().text.contains("// #ifdef subgroups"))
     {
-        let source = shaders::resolve_stage_with(stage.name, &["subgroups"]).unwrap();
-        shaders::validate_subgroups(stage.name, &source).unwrap_or_else(|e| panic!("{e}"));
+        let source = shaders::resolve_stage_with(stage, &["subgroups"]).unwrap();
+        shaders::validate_subgroups(stage.name(), &source).unwrap_or_else(|e| panic!("{e}"));
         assert!(
             source.contains("subgroup"),
             "{}: variant not taken",
-            stage.name
+            stage.name()
         );
         variants += 1;
     }
@@ -146,40 +146,44 @@ fn unbalanced_ifdef_names_file_and_line() {
 #[test]
 fn mirror_workgroup_shapes_match_the_wgsl() {
     use lobelight::cpu::*;
-    use lobelight::shaders::{STAGES, stage_shape};
-    let mirrors: &[(&str, u32, u32)] = &[
-        ("grid_count", grid_count::WG, 1),
-        ("grid_scatter", grid_scatter::WG, 1),
-        ("grid_rank", grid_rank::WG, 1),
-        ("grid_distance", grid_distance::WG, 1),
-        ("trace_rays", trace_rays::WG, 1),
-        ("photon_trace", photon_trace::WG, 1),
-        ("direct_bake", direct_bake::WG, 1),
-        ("final_gather", final_gather::WG, 1),
-        ("path_trace", path_trace::WG, 1),
-        ("splat_tile_count", splat_tiles::WG, 1),
-        ("splat_tile_scatter", splat_tiles::WG, 1),
-        ("splat_compute", splat_tiles::WG, 1),
-        ("splat_select", splat_select::WG, 1),
-        ("splat_list", splat_list::WG, 1),
-        ("splat_shade", splat_shade::WG, 1),
-        ("bin_count", bin_count::WG, 1),
-        ("bin_scatter", bin_scatter::WG, 1),
-        ("bin_rank", bin_rank::WG, 1),
-        ("bin_place", bin_place::WG, 1),
-        ("em_select", em_select::WG, 1),
-        ("em_gather", em_gather::WG, 1),
-        ("em_deposit", em_deposit::WG, 1),
-        ("em_deposit_list", em_deposit_list::WG, 1),
-        ("em_share", em_share::WG, 1),
-        ("em_coverage", em_coverage::WG, 1),
-        ("scan_reduce", scan_reduce::WG, scan_reduce::ITEMS),
-        ("scan_apply", scan_apply::WG, scan_apply::ITEMS),
-        ("tonemap_reduce", tonemap_reduce::WG, tonemap_reduce::ITEMS),
-        ("tonemap_apply", tonemap_apply::WG, 1),
-        ("shade", shade::WG, 1),
-        ("photon_view", photon_view::WG, 1),
-        ("photon_resolve", photon_resolve::WG, 1),
+    use lobelight::shaders::stage_shape;
+    let mirrors: &[(Stage, u32, u32)] = &[
+        (Stage::GridCount, grid_count::WG, 1),
+        (Stage::GridScatter, grid_scatter::WG, 1),
+        (Stage::GridRank, grid_rank::WG, 1),
+        (Stage::GridDistance, grid_distance::WG, 1),
+        (Stage::TraceRays, trace_rays::WG, 1),
+        (Stage::PhotonTrace, photon_trace::WG, 1),
+        (Stage::DirectBake, direct_bake::WG, 1),
+        (Stage::FinalGather, final_gather::WG, 1),
+        (Stage::PathTrace, path_trace::WG, 1),
+        (Stage::SplatTileCount, splat_tiles::WG, 1),
+        (Stage::SplatTileScatter, splat_tiles::WG, 1),
+        (Stage::SplatCompute, splat_tiles::WG, 1),
+        (Stage::SplatSelect, splat_select::WG, 1),
+        (Stage::SplatList, splat_list::WG, 1),
+        (Stage::SplatShade, splat_shade::WG, 1),
+        (Stage::BinCount, bin_count::WG, 1),
+        (Stage::BinScatter, bin_scatter::WG, 1),
+        (Stage::BinRank, bin_rank::WG, 1),
+        (Stage::BinPlace, bin_place::WG, 1),
+        (Stage::EmSelect, em_select::WG, 1),
+        (Stage::EmGather, em_gather::WG, 1),
+        (Stage::EmDeposit, em_deposit::WG, 1),
+        (Stage::EmDepositList, em_deposit_list::WG, 1),
+        (Stage::EmShare, em_share::WG, 1),
+        (Stage::EmCoverage, em_coverage::WG, 1),
+        (Stage::ScanReduce, scan_reduce::WG, scan_reduce::ITEMS),
+        (Stage::ScanApply, scan_apply::WG, scan_apply::ITEMS),
+        (
+            Stage::TonemapReduce,
+            tonemap_reduce::WG,
+            tonemap_reduce::ITEMS,
+        ),
+        (Stage::TonemapApply, tonemap_apply::WG, 1),
+        (Stage::Shade, shade::WG, 1),
+        (Stage::PhotonView, photon_view::WG, 1),
+        (Stage::PhotonResolve, photon_resolve::WG, 1),
     ];
     for &(name, wg, items) in mirrors {
         let shape = stage_shape(name).unwrap();
@@ -193,16 +197,17 @@ fn mirror_workgroup_shapes_match_the_wgsl() {
     );
     // em_fit's workgroup size is a pipeline constant (`em::workgroup_size`), and the splat
     // passes, the reference gather and present draw triangles: none has a fixed size.
-    for stage in STAGES {
-        let fixed = stage_shape(stage.name).unwrap().workgroup_size.is_some();
-        let listed = mirrors.iter().any(|m| m.0 == stage.name);
+    for &stage in Stage::ALL {
+        let fixed = stage_shape(stage).unwrap().workgroup_size.is_some();
+        let listed = mirrors.iter().any(|m| m.0 == stage);
         assert_eq!(
-            fixed, listed,
+            fixed,
+            listed,
             "{}: fixed workgroup size without a mirror listed",
-            stage.name
+            stage.name()
         );
     }
-    assert_eq!(stage_shape("em_fit").unwrap().workgroup_size, None);
+    assert_eq!(stage_shape(Stage::EmFit).unwrap().workgroup_size, None);
 }
 
 /// What the host and the mirrors bind is read from the WGSL too: each compute stage's
@@ -211,21 +216,21 @@ fn mirror_workgroup_shapes_match_the_wgsl() {
 /// group 1, the scene's geometry buffers (`GEOMETRY_BINDINGS`).
 #[test]
 fn stage_bindings_are_read_from_the_wgsl() {
-    use lobelight::shaders::{STAGES, resolve_stage, stage_shape};
+    use lobelight::shaders::{resolve_stage, stage_shape};
     let traced = [
-        "trace_rays",
-        "photon_trace",
-        "photon_view",
-        "direct_bake",
-        "em_coverage",
-        "final_gather",
-        "path_trace",
-        "shade",
-        "reference_gather",
+        Stage::TraceRays,
+        Stage::PhotonTrace,
+        Stage::PhotonView,
+        Stage::DirectBake,
+        Stage::EmCoverage,
+        Stage::FinalGather,
+        Stage::PathTrace,
+        Stage::Shade,
+        Stage::ReferenceGather,
     ];
-    for stage in STAGES {
-        let shape = stage_shape(stage.name).unwrap();
-        let module = naga::front::wgsl::parse_str(&resolve_stage(stage.name).unwrap()).unwrap();
+    for &stage in Stage::ALL {
+        let shape = stage_shape(stage).unwrap();
+        let module = naga::front::wgsl::parse_str(&resolve_stage(stage).unwrap()).unwrap();
         for group in 0..2u32 {
             let mut numbers: Vec<u32> = module
                 .global_variables
@@ -236,19 +241,19 @@ fn stage_bindings_are_read_from_the_wgsl() {
                 .collect();
             numbers.sort();
             let expected: Vec<u32> = (0..shape.bindings[group as usize]).collect();
-            assert_eq!(numbers, expected, "{} group {group}", stage.name);
+            assert_eq!(numbers, expected, "{} group {group}", stage.name());
         }
-        if traced.contains(&stage.name) {
+        if traced.contains(&stage) {
             assert_eq!(
                 shape.bindings[1] as usize,
                 lobelight::gpu::exec::GEOMETRY_BINDINGS,
                 "{}: the geometry group",
-                stage.name
+                stage.name()
             );
         } else {
-            assert_eq!(shape.bindings[1], 0, "{}: no geometry group", stage.name);
+            assert_eq!(shape.bindings[1], 0, "{}: no geometry group", stage.name());
         }
-        assert!(shape.bindings[0] > 0, "{}", stage.name);
+        assert!(shape.bindings[0] > 0, "{}", stage.name());
     }
 }
 
@@ -258,8 +263,8 @@ fn stage_bindings_are_read_from_the_wgsl() {
 fn every_paged_variant_validates_with_naga() {
     use lobelight::shaders::{PAGE_BINDING_STEP, PagedArray, Paging, paged_bindings};
     let mut paged_stages = 0;
-    for stage in STAGES {
-        let paged = paged_bindings(stage.name).unwrap();
+    for &stage in Stage::ALL {
+        let paged = paged_bindings(stage).unwrap();
         if paged.is_empty() {
             continue;
         }
@@ -274,8 +279,8 @@ fn every_paged_variant_validates_with_naga() {
                 })
                 .collect(),
         };
-        let source = shaders::resolve_stage_paged(stage.name, &[], &paging).unwrap();
-        let module = shaders::validate(stage.name, &source).unwrap_or_else(|e| panic!("{e}"));
+        let source = shaders::resolve_stage_paged(stage, &[], &paging).unwrap();
+        let module = shaders::validate(stage.name(), &source).unwrap_or_else(|e| panic!("{e}"));
         for p in &paged {
             for k in 0..3 {
                 let binding = p.binding + k * PAGE_BINDING_STEP;
@@ -287,7 +292,8 @@ fn every_paged_variant_validates_with_naga() {
                 assert!(
                     declared,
                     "{}: page {k} of {} is not at {binding}",
-                    stage.name, p.name
+                    stage.name(),
+                    p.name
                 );
             }
         }
@@ -329,7 +335,7 @@ fn wgsl_const_u32(source: &str, name: &str) -> u32 {
 #[test]
 fn splat_draw_constants_match_the_wgsl() {
     use lobelight::shared::splat::{SPLAT_CORNERS, SPLATS_PER_INSTANCE, instances};
-    for stage in ["splat_visibility", "splat_attributes"] {
+    for stage in [Stage::SplatVisibility, Stage::SplatAttributes] {
         let source = shaders::resolve_stage(stage).unwrap();
         assert_eq!(wgsl_const_u32(&source, "SPLAT_CORNERS"), SPLAT_CORNERS);
         assert_eq!(

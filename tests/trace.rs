@@ -12,6 +12,7 @@ use lobelight::gpu::grid::build_grid;
 use lobelight::gpu::scene::device_clips;
 use lobelight::grid::{GridConfig, SplatGrid, grid_params};
 use lobelight::photons::ITERATION_BUDGET;
+use lobelight::shaders::Stage;
 use lobelight::shared::trace::{Geometry, intersect_disk, trace_ray};
 use lobelight::types::{Hit, NO_SPLAT, Ray, Splat, SurfaceClip, TraceParams};
 
@@ -65,7 +66,7 @@ fn gpu_trace(
     let mut encoder = gpu.encoder("trace test");
     gpu.dispatch_groups(
         &mut encoder,
-        "trace_rays",
+        Stage::TraceRays,
         &[
             &[&params_buf, &ray_buf, &hit_buf],
             &[

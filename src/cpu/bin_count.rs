@@ -1,5 +1,7 @@
 //! Mirror of `wgsl/bin_count.wgsl`.
 
+use super::bindings::{Bindings, view};
+use crate::error::Result;
 use crate::shared::bins::{RANK_CHUNK, bin_of};
 use crate::types::{BinParams, Photon};
 use glam::Vec3;
@@ -27,4 +29,15 @@ pub fn bin_count(
             }
         }
     }
+}
+
+/// The executor's entry: `bin_count`'s bindings, unpacked in the order its WGSL declares them.
+pub fn dispatch(b: &Bindings, groups: u32) -> Result<()> {
+    let p = b.param(0)?;
+    let photons = b.get(1)?;
+    let mut cell_start = b.get_mut(2)?;
+    let mut chunks = b.get_mut(3)?;
+    let photons = view(&photons);
+    bin_count(&p, photons, &mut cell_start, &mut chunks[0], groups);
+    Ok(())
 }

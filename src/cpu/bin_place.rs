@@ -1,5 +1,7 @@
 //! Mirror of `wgsl/bin_place.wgsl`.
 
+use super::bindings::{Bindings, view, view_mut};
+use crate::error::Result;
 use crate::types::{BinParams, BinnedPhoton};
 
 pub const WG: u32 = 64;
@@ -28,4 +30,28 @@ pub fn bin_place(
             bin_power[slot] = scratch_power[e];
         }
     }
+}
+
+/// The executor's entry: `bin_place`'s bindings, unpacked in the order its WGSL declares them.
+pub fn dispatch(b: &Bindings, groups: u32) -> Result<()> {
+    let p = b.param(0)?;
+    let slots = b.get(1)?;
+    let keys = b.get(2)?;
+    let geom = b.get(3)?;
+    let power = b.get(4)?;
+    let mut out_keys = b.get_mut(5)?;
+    let mut out_geom = b.get_mut(6)?;
+    let mut out_power = b.get_mut(7)?;
+    bin_place(
+        &p,
+        &slots,
+        view(&keys),
+        view(&geom),
+        view(&power),
+        view_mut(&mut out_keys),
+        view_mut(&mut out_geom),
+        view_mut(&mut out_power),
+        groups,
+    );
+    Ok(())
 }

@@ -1,6 +1,8 @@
 //! Mirror of `wgsl/bin_rank.wgsl`; workgroups run in parallel (each entry writes only its own
 //! slot).
 
+use super::bindings::{Bindings, view};
+use crate::error::Result;
 use rayon::prelude::*;
 
 use crate::shared::bins::RANK_CHUNK;
@@ -45,4 +47,15 @@ pub fn bin_rank(
                 }
             }
         });
+}
+
+/// The executor's entry: `bin_rank`'s bindings, unpacked in the order its WGSL declares them.
+pub fn dispatch(b: &Bindings, groups: u32) -> Result<()> {
+    let p = b.param(0)?;
+    let cell_start = b.get(1)?;
+    let keys = b.get(2)?;
+    let cells = b.get(3)?;
+    let mut slots = b.get_mut(4)?;
+    bin_rank(&p, &cell_start, view(&keys), &cells, &mut slots, groups);
+    Ok(())
 }

@@ -1,6 +1,8 @@
 //! Mirror of `wgsl/bin_scatter.wgsl`. Sequential, so each cell's scratch list is in input
 //! order; the GPU's depends on scheduling until `bin_rank` and `bin_place`.
 
+use super::bindings::{Bindings, view, view_mut};
+use crate::error::Result;
 use crate::shared::bins::bin_of;
 use crate::shared::octahedral::{oct_encode, surface_encode};
 use crate::types::{BinParams, BinnedPhoton, Photon, Splat};
@@ -43,4 +45,30 @@ pub fn bin_scatter(
             scratch_power[slot] = [p.power[0], p.power[1], p.power[2], surface_encode(n)];
         }
     }
+}
+
+/// The executor's entry: `bin_scatter`'s bindings, unpacked in the order its WGSL declares them.
+pub fn dispatch(b: &Bindings, groups: u32) -> Result<()> {
+    let p = b.param(0)?;
+    let photons = b.get(1)?;
+    let cell_start = b.get(2)?;
+    let mut cursor = b.get_mut(3)?;
+    let mut keys = b.get_mut(4)?;
+    let mut cells = b.get_mut(5)?;
+    let mut geom = b.get_mut(6)?;
+    let mut power = b.get_mut(7)?;
+    let splats = b.get(8)?;
+    bin_scatter(
+        &p,
+        view(&photons),
+        &cell_start,
+        &mut cursor,
+        view_mut(&mut keys),
+        &mut cells,
+        view_mut(&mut geom),
+        view_mut(&mut power),
+        view(&splats),
+        groups,
+    );
+    Ok(())
 }

@@ -3,6 +3,8 @@
 // `!(x < y)` is meant: NaN must fail these tests, as it does in the WGSL twin.
 #![allow(clippy::neg_cmp_op_on_partial_ord)]
 
+use super::bindings::{Bindings, view, view_mut};
+use crate::error::Result;
 use glam::{Vec3, Vec4};
 use rayon::prelude::*;
 
@@ -73,4 +75,15 @@ pub fn direct_bake(
         direct[i] = e.to_array();
         visibility[i * lc..(i + 1) * lc].copy_from_slice(&seen_by);
     }
+}
+
+/// The executor's entry: `direct_bake`'s bindings, unpacked in the order its WGSL declares them.
+pub fn dispatch(b: &Bindings, geo: &Geometry, _groups: u32) -> Result<()> {
+    let p = b.param(0)?;
+    let lights = b.get(1)?;
+    let mut direct = b.get_mut(2)?;
+    let mut visibility = b.get_mut(3)?;
+    let (direct, visibility) = (view_mut(&mut direct), view_mut(&mut visibility));
+    direct_bake(&p, view(&lights), direct, visibility, geo);
+    Ok(())
 }

@@ -3,6 +3,8 @@
 // `!(x < y)` is meant: NaN must fail these tests, as it does in the WGSL twin.
 #![allow(clippy::neg_cmp_op_on_partial_ord)]
 
+use super::bindings::{Bindings, view_mut};
+use crate::error::Result;
 use glam::{IVec3, UVec3, Vec2, Vec3};
 use rayon::prelude::*;
 
@@ -123,4 +125,12 @@ pub fn em_coverage(em: &EmParams, light: &mut [SplatLight], geo: &Geometry, grou
                 l.irradiance = (Vec3::from(l.irradiance) / share).into();
             }
         });
+}
+
+/// The executor's entry: `em_coverage`'s bindings, unpacked in the order its WGSL declares them.
+pub fn dispatch(b: &Bindings, geo: &Geometry, groups: u32) -> Result<()> {
+    let em = b.param(0)?;
+    let mut light = b.get_mut(1)?;
+    em_coverage(&em, view_mut(&mut light), geo, groups);
+    Ok(())
 }

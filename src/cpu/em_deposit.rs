@@ -1,6 +1,8 @@
 //! Mirror of `wgsl/em_deposit.wgsl`: each photon adds itself to its splat's deposit, in 64-bit
 //! integer sums (added here as u64, which is what the device's carried words hold).
 
+use super::bindings::{Bindings, view};
+use crate::error::Result;
 use glam::Vec3;
 
 use crate::shared::deposits::{
@@ -45,4 +47,14 @@ pub fn em_deposit(
         let square = fixed(o.dot(o), DEPOSIT_POSITION_UNITS);
         add_wide(deposits, base + DEPOSIT_SQUARE_SUM as usize, square);
     }
+}
+
+/// The executor's entry: `em_deposit`'s bindings, unpacked in the order its WGSL declares them.
+pub fn dispatch(b: &Bindings, groups: u32) -> Result<()> {
+    let p = b.param(0)?;
+    let photons = b.get(1)?;
+    let splats = b.get(2)?;
+    let mut deposits = b.get_mut(3)?;
+    em_deposit(&p, view(&photons), view(&splats), &mut deposits, groups);
+    Ok(())
 }

@@ -3,6 +3,8 @@
 //! Sequential, so the list is in splat order (the device's is in any order; binning sorts both
 //! alike).
 
+use super::bindings::{Bindings, view, view_mut};
+use crate::error::Result;
 use glam::Vec3;
 
 use crate::shared::deposits::{
@@ -53,4 +55,27 @@ pub fn em_deposit_list(
         *listed += 1;
         spread[j as usize] = [rho, count as f32];
     }
+}
+
+/// The executor's entry: `em_deposit_list`'s bindings, unpacked in the order its WGSL declares them.
+pub fn dispatch(b: &Bindings, groups: u32) -> Result<()> {
+    let p = b.param(0)?;
+    let splats = b.get(1)?;
+    let deposits = b.get(2)?;
+    let mut list = b.get_mut(3)?;
+    let mut spread = b.get_mut(4)?;
+    let mut listed = b.get_mut(5)?;
+    let listed = listed
+        .first_mut()
+        .ok_or_else(|| b.internal("no list counter"))?;
+    em_deposit_list(
+        &p,
+        view(&splats),
+        &deposits,
+        view_mut(&mut list),
+        view_mut(&mut spread),
+        listed,
+        groups,
+    );
+    Ok(())
 }

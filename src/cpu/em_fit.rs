@@ -3,6 +3,8 @@
 //! in `Cache`; workgroups run in parallel (each writes only its own splat).
 //! `EM_SUBGROUP_REDUCE` in the flags selects the sum order of the `subgroups` variant.
 
+use super::bindings::{Bindings, view, view_mut};
+use crate::error::Result;
 use glam::Vec3;
 use rayon::prelude::*;
 
@@ -734,4 +736,30 @@ fn fit_splat(
         first_lobe: if fit { first } else { 0 },
     };
     Some((splat_index, first, fitted, Some(out)))
+}
+
+/// The executor's entry: `em_fit`'s bindings, unpacked in the order its WGSL declares them.
+pub fn dispatch(b: &Bindings, groups: u32) -> Result<()> {
+    let em = b.param(0)?;
+    let bins = b.param(1)?;
+    let splats = b.get(2)?;
+    let fit_list = b.get(3)?;
+    let cell_start = b.get(4)?;
+    let geom = b.get(5)?;
+    let power = b.get(6)?;
+    let mut lobes = b.get_mut(7)?;
+    let mut light = b.get_mut(8)?;
+    em_fit(
+        &em,
+        &bins,
+        view(&splats),
+        view(&fit_list),
+        &cell_start,
+        view(&geom),
+        view(&power),
+        view_mut(&mut lobes),
+        view_mut(&mut light),
+        groups,
+    );
+    Ok(())
 }

@@ -1,6 +1,8 @@
 //! Mirror of `wgsl/em_gather.wgsl`: the irradiance of each splat on the gather list, one
 //! invocation per splat, summed in the candidates' order.
 
+use super::bindings::{Bindings, view, view_mut};
+use crate::error::Result;
 use glam::Vec3;
 use rayon::prelude::*;
 
@@ -68,4 +70,28 @@ pub fn em_gather(
     for (i, out) in results {
         light[i as usize] = out;
     }
+}
+
+/// The executor's entry: `em_gather`'s bindings, unpacked in the order its WGSL declares them.
+pub fn dispatch(b: &Bindings, groups: u32) -> Result<()> {
+    let em = b.param(0)?;
+    let bins = b.param(1)?;
+    let splats = b.get(2)?;
+    let gather_list = b.get(3)?;
+    let cell_start = b.get(4)?;
+    let geom = b.get(5)?;
+    let power = b.get(6)?;
+    let mut light = b.get_mut(7)?;
+    em_gather(
+        &em,
+        &bins,
+        view(&splats),
+        &gather_list,
+        &cell_start,
+        view(&geom),
+        view(&power),
+        view_mut(&mut light),
+        groups,
+    );
+    Ok(())
 }

@@ -1,6 +1,8 @@
 //! Mirror of `wgsl/em_select.wgsl`. Sequential, so the list and the lobe slots are in splat
 //! order.
 
+use super::bindings::{Bindings, view, view_mut};
+use crate::error::Result;
 use glam::Vec3;
 
 use crate::shared::bins::{bin_box, bin_row, bin_row_count};
@@ -63,4 +65,33 @@ pub fn em_select(
             counters[1] = counters[1].max(candidates);
         }
     }
+}
+
+/// The executor's entry: `em_select`'s bindings, unpacked in the order its WGSL declares them.
+pub fn dispatch(b: &Bindings, groups: u32) -> Result<()> {
+    let em = b.param(0)?;
+    let bins = b.param(1)?;
+    let splats = b.get(2)?;
+    let materials = b.get(3)?;
+    let cell_start = b.get(4)?;
+    let mut active = b.get_mut(5)?;
+    let mut counters = b.get_mut(6)?;
+    let mut gather_list = b.get_mut(7)?;
+    let counters: &mut [u32; 4] = counters
+        .get_mut(..4)
+        .and_then(|c| c.try_into().ok())
+        .ok_or_else(|| b.internal("counters too short"))?;
+    let (splats, materials) = (view(&splats), view(&materials));
+    em_select(
+        &em,
+        &bins,
+        splats,
+        materials,
+        &cell_start,
+        view_mut(&mut active),
+        counters,
+        &mut gather_list,
+        groups,
+    );
+    Ok(())
 }

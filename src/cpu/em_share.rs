@@ -1,6 +1,8 @@
 //! Mirror of `wgsl/em_share.wgsl`: each splat's photon irradiance from the binned deposits
 //! around it, in the candidates' order, and the count of splats lit.
 
+use super::bindings::{Bindings, view, view_mut};
+use crate::error::Result;
 use glam::Vec3;
 use rayon::prelude::*;
 
@@ -89,4 +91,43 @@ pub fn em_share(
         .zip(splats)
         .filter(|(l, s)| l.photons > 0 && !fitted(s));
     counters[3] += lit.count() as u32;
+}
+
+/// The executor's entry: `em_share`'s bindings, unpacked in the order its WGSL declares them.
+pub fn dispatch(b: &Bindings, groups: u32) -> Result<()> {
+    let em = b.param(0)?;
+    let deposit = b.param(1)?;
+    let bins = b.param(2)?;
+    let splats = b.get(3)?;
+    let materials = b.get(4)?;
+    let mut counters = b.get_mut(5)?;
+    let cell_start = b.get(6)?;
+    let keys = b.get(7)?;
+    let geom = b.get(8)?;
+    let power = b.get(9)?;
+    let spread = b.get(10)?;
+    let mut light = b.get_mut(11)?;
+    let counters: &mut [u32; 4] = counters
+        .get_mut(..4)
+        .and_then(|c| c.try_into().ok())
+        .ok_or_else(|| b.internal("counters too short"))?;
+    let binned = BinnedDeposits {
+        cell_start: &cell_start,
+        keys: view(&keys),
+        geom: view(&geom),
+        power: view(&power),
+        spread: view(&spread),
+    };
+    em_share(
+        &em,
+        &deposit,
+        &bins,
+        view(&splats),
+        &binned,
+        view(&materials),
+        view_mut(&mut light),
+        counters,
+        groups,
+    );
+    Ok(())
 }

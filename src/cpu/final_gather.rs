@@ -2,6 +2,8 @@
 //! hemisphere, and the radiance of the surface each meets, as the bake knows it
 //! (`hit_albedo`).
 
+use super::bindings::{Bindings, view, view_mut};
+use crate::error::Result;
 use glam::{Vec3, Vec4};
 use rayon::prelude::*;
 
@@ -77,4 +79,20 @@ fn ray(
         }
     }
     radiance.extend(f32::from_bits(oct_encode(d))).to_array()
+}
+
+/// The executor's entry: `final_gather`'s bindings, unpacked in the order its WGSL declares them.
+pub fn dispatch(b: &Bindings, geo: &Geometry, _groups: u32) -> Result<()> {
+    let p = b.param(0)?;
+    let list = b.get(1)?;
+    let light = b.get(2)?;
+    let direct = b.get(3)?;
+    let mut samples = b.get_mut(4)?;
+    let materials = b.get(5)?;
+    let lights = b.get(6)?;
+    let (list, light, direct) = (view(&list), view(&light), view(&direct));
+    let (samples, materials) = (view_mut(&mut samples), view(&materials));
+    let lights = view(&lights);
+    final_gather(&p, list, light, direct, samples, materials, lights, geo);
+    Ok(())
 }

@@ -1,5 +1,7 @@
 //! Mirror of `wgsl/grid_count.wgsl`.
 
+use super::bindings::{Bindings, view};
+use crate::error::Result;
 use crate::grid::{cell_index, disk_cell_range};
 use crate::types::{GridParams, Splat};
 use glam::UVec3;
@@ -32,4 +34,14 @@ pub fn grid_count(
             }
         }
     }
+}
+
+/// The executor's entry: `grid_count`'s bindings, unpacked in the order its WGSL declares them.
+pub fn dispatch(b: &Bindings, groups: u32) -> Result<()> {
+    let p = b.param(0)?;
+    let splats = b.get(1)?;
+    let mut counts = b.get_mut(2)?;
+    let mut max_len = b.get_mut(3)?;
+    grid_count(&p, view(&splats), &mut counts, &mut max_len[0], groups);
+    Ok(())
 }

@@ -1,5 +1,7 @@
 //! Mirror of `wgsl/grid_distance.wgsl`: one axis pass of the capped Chebyshev distance field.
 
+use super::bindings::Bindings;
+use crate::error::Result;
 use crate::grid::DIST_CAP;
 use crate::types::{DistanceParams, GridParams};
 
@@ -48,4 +50,15 @@ pub fn grid_distance(
             dst[c as usize] = best;
         }
     }
+}
+
+/// The executor's entry: `grid_distance`'s bindings, unpacked in the order its WGSL declares them.
+pub fn dispatch(b: &Bindings, groups: u32) -> Result<()> {
+    let pass = b.param(0)?;
+    let grid = b.param(1)?;
+    let cell_start = b.get(2)?;
+    let src = b.get(3)?;
+    let mut dst = b.get_mut(4)?;
+    grid_distance(&pass, &grid, &cell_start, &src, &mut dst, groups);
+    Ok(())
 }

@@ -1,5 +1,7 @@
 //! Mirror of `wgsl/grid_rank.wgsl`: each entry's rank within its cell.
 
+use super::bindings::Bindings;
+use crate::error::Result;
 use crate::types::GridParams;
 
 pub const WG: u32 = 64;
@@ -28,4 +30,22 @@ pub fn grid_rank(
             cell_splats[begin + rank] = i;
         }
     }
+}
+
+/// The executor's entry: `grid_rank`'s bindings, unpacked in the order its WGSL declares them.
+pub fn dispatch(b: &Bindings, groups: u32) -> Result<()> {
+    let p = b.param(0)?;
+    let cell_start = b.get(1)?;
+    let scratch_splats = b.get(2)?;
+    let scratch_cells = b.get(3)?;
+    let mut cell_splats = b.get_mut(4)?;
+    grid_rank(
+        &p,
+        &cell_start,
+        &scratch_splats,
+        &scratch_cells,
+        &mut cell_splats,
+        groups,
+    );
+    Ok(())
 }

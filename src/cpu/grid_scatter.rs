@@ -1,6 +1,8 @@
 //! Mirror of `wgsl/grid_scatter.wgsl`. Sequential, so the scratch order is splat order; the
 //! GPU's depends on scheduling until `grid_rank`.
 
+use super::bindings::{Bindings, view};
+use crate::error::Result;
 use crate::grid::{cell_index, disk_cell_range};
 use crate::types::{GridParams, Splat};
 use glam::UVec3;
@@ -36,4 +38,24 @@ pub fn grid_scatter(
             }
         }
     }
+}
+
+/// The executor's entry: `grid_scatter`'s bindings, unpacked in the order its WGSL declares them.
+pub fn dispatch(b: &Bindings, groups: u32) -> Result<()> {
+    let p = b.param(0)?;
+    let splats = b.get(1)?;
+    let cell_start = b.get(2)?;
+    let mut cursor = b.get_mut(3)?;
+    let mut scratch_splats = b.get_mut(4)?;
+    let mut scratch_cells = b.get_mut(5)?;
+    grid_scatter(
+        &p,
+        view(&splats),
+        &cell_start,
+        &mut cursor,
+        &mut scratch_splats,
+        &mut scratch_cells,
+        groups,
+    );
+    Ok(())
 }

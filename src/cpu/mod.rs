@@ -8,6 +8,7 @@ pub mod bin_count;
 pub mod bin_place;
 pub mod bin_rank;
 pub mod bin_scatter;
+pub mod bindings;
 pub mod direct_bake;
 pub mod em_coverage;
 pub mod em_deposit;
@@ -45,5 +46,56 @@ pub mod tonemap_reduce;
 pub mod trace_rays;
 
 pub use crate::shared::dispatch::groups_for;
-pub use exec::{CpuBuffer, CpuExecutor};
+pub use bindings::CpuBuffer;
+pub use exec::CpuExecutor;
 pub use host::*;
+
+use crate::error::Result;
+use crate::shaders::Stage;
+use crate::shared::trace::Geometry;
+use bindings::Bindings;
+
+/// How the executor runs a stage's mirror: over the dispatch's bindings, or over them and the
+/// scene's geometry (a tracing stage's bind group 1).
+#[derive(Clone, Copy)]
+pub enum Mirror {
+    Plain(fn(&Bindings, u32) -> Result<()>),
+    Traced(fn(&Bindings, &Geometry, u32) -> Result<()>),
+}
+
+/// The mirror the executor runs for each stage it dispatches, one row a stage: each mirror's
+/// `dispatch` unpacks its own bindings beside its code. The stages without a row (the splat
+/// passes, `shade`, `present`, `reference_gather`, `trace_rays`) are called by their hosts
+/// directly (`frames`, the tests).
+pub fn mirror(stage: Stage) -> Option<Mirror> {
+    Some(match stage {
+        Stage::BinCount => Mirror::Plain(bin_count::dispatch),
+        Stage::BinPlace => Mirror::Plain(bin_place::dispatch),
+        Stage::BinRank => Mirror::Plain(bin_rank::dispatch),
+        Stage::BinScatter => Mirror::Plain(bin_scatter::dispatch),
+        Stage::DirectBake => Mirror::Traced(direct_bake::dispatch),
+        Stage::EmCoverage => Mirror::Traced(em_coverage::dispatch),
+        Stage::EmDeposit => Mirror::Plain(em_deposit::dispatch),
+        Stage::EmDepositList => Mirror::Plain(em_deposit_list::dispatch),
+        Stage::EmFit => Mirror::Plain(em_fit::dispatch),
+        Stage::EmGather => Mirror::Plain(em_gather::dispatch),
+        Stage::EmSelect => Mirror::Plain(em_select::dispatch),
+        Stage::EmShare => Mirror::Plain(em_share::dispatch),
+        Stage::FinalGather => Mirror::Traced(final_gather::dispatch),
+        Stage::GridCount => Mirror::Plain(grid_count::dispatch),
+        Stage::GridDistance => Mirror::Plain(grid_distance::dispatch),
+        Stage::GridRank => Mirror::Plain(grid_rank::dispatch),
+        Stage::GridScatter => Mirror::Plain(grid_scatter::dispatch),
+        Stage::PathTrace => Mirror::Traced(path_trace::dispatch),
+        Stage::PhotonResolve => Mirror::Plain(photon_resolve::dispatch),
+        Stage::PhotonTrace => Mirror::Traced(photon_trace::dispatch),
+        Stage::PhotonView => Mirror::Traced(photon_view::dispatch),
+        Stage::ScanApply => Mirror::Plain(scan_apply::dispatch),
+        Stage::ScanReduce => Mirror::Plain(scan_reduce::dispatch),
+        Stage::SplatTileCount => Mirror::Plain(splat_tiles::dispatch_tile_count),
+        Stage::SplatTileScatter => Mirror::Plain(splat_tiles::dispatch_tile_scatter),
+        Stage::TonemapApply => Mirror::Plain(tonemap_apply::dispatch),
+        Stage::TonemapReduce => Mirror::Plain(tonemap_reduce::dispatch),
+        _ => return None,
+    })
+}

@@ -3,6 +3,8 @@
 // `!(x < y)` is meant: NaN must fail these tests, as it does in the WGSL twin.
 #![allow(clippy::neg_cmp_op_on_partial_ord)]
 
+use super::bindings::{Bindings, view, view_mut};
+use crate::error::Result;
 use glam::{IVec3, Vec2, Vec3, Vec4};
 use rayon::prelude::*;
 
@@ -266,4 +268,16 @@ pub fn path_trace(
             }
             .to_array();
         });
+}
+
+/// The executor's entry: `path_trace`'s bindings, unpacked in the order its WGSL declares them.
+pub fn dispatch(b: &Bindings, geo: &Geometry, _groups: u32) -> Result<()> {
+    let p = b.param(0)?;
+    let cam = b.param(1)?;
+    let materials = b.get(2)?;
+    let lights = b.get(3)?;
+    let mut hdr = b.get_mut(4)?;
+    let (materials, lights) = (view(&materials), view(&lights));
+    path_trace(&p, &cam, materials, lights, view_mut(&mut hdr), geo);
+    Ok(())
 }

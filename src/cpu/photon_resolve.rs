@@ -1,5 +1,7 @@
 //! Mirror of `wgsl/photon_resolve.wgsl`: fixed-point sums to HDR pixels.
 
+use super::bindings::{Bindings, view_mut};
+use crate::error::Result;
 use crate::types::PhotonViewParams;
 
 pub const WG: u32 = 64;
@@ -14,4 +16,13 @@ pub fn photon_resolve(params: &PhotonViewParams, sums: &[u32], hdr: &mut [[f32; 
             1.0,
         ];
     }
+}
+
+/// The executor's entry: `photon_resolve`'s bindings, unpacked in the order its WGSL declares them.
+pub fn dispatch(b: &Bindings, _groups: u32) -> Result<()> {
+    let p = b.param(0)?;
+    let sums = b.get(1)?;
+    let mut hdr = b.get_mut(2)?;
+    photon_resolve(&p, &sums, view_mut(&mut hdr));
+    Ok(())
 }

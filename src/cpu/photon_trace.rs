@@ -4,6 +4,8 @@
 // `!(x < y)` is meant: NaN must fail these tests, as it does in the WGSL twin.
 #![allow(clippy::neg_cmp_op_on_partial_ord)]
 
+use super::bindings::{Bindings, view, view_mut};
+use crate::error::Result;
 use glam::Vec3;
 use rayon::prelude::*;
 
@@ -191,4 +193,20 @@ pub fn photon_trace(
         counters.depth_capped += ends[End::DepthCapped as usize];
         counters.aborted += ends[End::Aborted as usize];
     }
+}
+
+/// The executor's entry: `photon_trace`'s bindings, unpacked in the order its WGSL declares them.
+pub fn dispatch(b: &Bindings, geo: &Geometry, groups: u32) -> Result<()> {
+    let p = b.param(0)?;
+    let emitters = b.get(1)?;
+    let materials = b.get(2)?;
+    let mut store = b.get_mut(3)?;
+    let mut counters = b.get_mut(4)?;
+    let counters = view_mut(&mut counters)
+        .first_mut()
+        .ok_or_else(|| b.internal("counters too short"))?;
+    let (emitters, materials) = (view(&emitters), view(&materials));
+    let store = view_mut(&mut store);
+    photon_trace(&p, emitters, materials, store, counters, geo, groups);
+    Ok(())
 }

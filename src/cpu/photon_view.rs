@@ -1,6 +1,7 @@
 //! Mirror of `wgsl/photon_view.wgsl`: the photons the camera sees, summed in fixed point into
 //! their pixels (wrapping like the device's `atomicAdd`; the sum does not depend on order).
 
+use super::bindings::{Bindings, view};
 use glam::Vec3;
 use rayon::prelude::*;
 
@@ -86,4 +87,16 @@ pub fn photon_view(
             sums[at + c] = sums[at + c].wrapping_add(units[c]);
         }
     }
+}
+
+/// The executor's entry: `photon_view`'s bindings, unpacked in the order its WGSL declares them.
+pub fn dispatch(b: &Bindings, geo: &Geometry, _groups: u32) -> Result<()> {
+    let p = b.param(0)?;
+    let cam = b.param(1)?;
+    let materials = b.get(2)?;
+    let photons = b.get(3)?;
+    let mut sums = b.get_mut(4)?;
+    let (materials, photons) = (view(&materials), view(&photons));
+    photon_view(&p, &cam, materials, photons, &mut sums, geo);
+    Ok(())
 }

@@ -1,5 +1,7 @@
 //! Mirror of `wgsl/scan_apply.wgsl`: in-block exclusive scan plus the block's offset.
 
+use super::bindings::Bindings;
+use crate::error::Result;
 use crate::types::ScanParams;
 
 pub use super::scan_reduce::{BLOCK, ITEMS, WG};
@@ -45,4 +47,13 @@ pub fn scan_apply(params: &ScanParams, values: &mut [u32], block_offsets: &[u32]
             }
         }
     }
+}
+
+/// The executor's entry: `scan_apply`'s bindings, unpacked in the order its WGSL declares them.
+pub fn dispatch(b: &Bindings, groups: u32) -> Result<()> {
+    let p = b.param(0)?;
+    let mut values = b.get_mut(1)?;
+    let offsets = b.get(2)?;
+    scan_apply(&p, &mut values, &offsets, groups);
+    Ok(())
 }

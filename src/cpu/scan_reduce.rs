@@ -1,5 +1,7 @@
 //! Mirror of `wgsl/scan_reduce.wgsl`: per-block sums with the same tree order.
 
+use super::bindings::Bindings;
+use crate::error::Result;
 use crate::types::ScanParams;
 
 pub const WG: u32 = 256;
@@ -31,4 +33,13 @@ pub fn scan_reduce(params: &ScanParams, values: &[u32], block_sums: &mut [u32], 
         }
         block_sums[block as usize] = partial[0];
     }
+}
+
+/// The executor's entry: `scan_reduce`'s bindings, unpacked in the order its WGSL declares them.
+pub fn dispatch(b: &Bindings, groups: u32) -> Result<()> {
+    let p = b.param(0)?;
+    let values = b.get(1)?;
+    let mut sums = b.get_mut(2)?;
+    scan_reduce(&p, &values, &mut sums, groups);
+    Ok(())
 }

@@ -3,6 +3,8 @@
 //! tile pass itself, `splat_compute`, sums the same fragments in the same order as the raster
 //! passes, so its mirror is theirs (`splat_visibility`, `splat_attributes`).
 
+use super::bindings::{Bindings, view};
+use crate::error::Result;
 use crate::shared::splat::tile_rect;
 use crate::types::{Camera, Splat, TileParams};
 
@@ -44,4 +46,35 @@ pub fn splat_tile_scatter(
             scratch_tiles[e] = t;
         }
     }
+}
+
+/// The executor's entry: `splat_tile_count`'s bindings, unpacked in the order its WGSL declares them.
+pub fn dispatch_tile_count(b: &Bindings, _groups: u32) -> Result<()> {
+    let cam = b.param(0)?;
+    let p = b.param(1)?;
+    let splats = b.get(2)?;
+    let mut counts = b.get_mut(3)?;
+    splat_tile_count(&cam, &p, view(&splats), &mut counts);
+    Ok(())
+}
+
+/// The executor's entry: `splat_tile_scatter`'s bindings, unpacked in the order its WGSL declares them.
+pub fn dispatch_tile_scatter(b: &Bindings, _groups: u32) -> Result<()> {
+    let cam = b.param(0)?;
+    let p = b.param(1)?;
+    let splats = b.get(2)?;
+    let tile_start = b.get(3)?;
+    let mut cursor = b.get_mut(4)?;
+    let mut scratch_splats = b.get_mut(5)?;
+    let mut scratch_tiles = b.get_mut(6)?;
+    splat_tile_scatter(
+        &cam,
+        &p,
+        view(&splats),
+        &tile_start,
+        &mut cursor,
+        &mut scratch_splats,
+        &mut scratch_tiles,
+    );
+    Ok(())
 }

@@ -1,5 +1,7 @@
 //! Mirror of `wgsl/tonemap_reduce.wgsl`: per-block (Σ log(ε + Y), count) in the same order.
 
+use super::bindings::{Bindings, view, view_mut};
+use crate::error::Result;
 use glam::Vec2;
 
 use crate::shared::tone::log_luminance;
@@ -47,4 +49,15 @@ pub fn tonemap_reduce(
         }
         sums_out[block as usize] = partial[0].into();
     }
+}
+
+/// The executor's entry: `tonemap_reduce`'s bindings, unpacked in the order its WGSL declares them.
+pub fn dispatch(b: &Bindings, groups: u32) -> Result<()> {
+    let p = b.param(0)?;
+    let hdr = b.get(1)?;
+    let sums_in = b.get(2)?;
+    let mut sums_out = b.get_mut(3)?;
+    let out = view_mut(&mut sums_out);
+    tonemap_reduce(&p, view(&hdr), view(&sums_in), out, groups);
+    Ok(())
 }

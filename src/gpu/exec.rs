@@ -6,6 +6,7 @@ use bytemuck::Pod;
 use super::Gpu;
 use crate::error::Result;
 use crate::sequence::Executor;
+use crate::shaders::Stage;
 
 /// Buffers in bind group 1 of the tracing stages (`GpuScene::geometry`).
 pub const GEOMETRY_BINDINGS: usize = 6;
@@ -52,18 +53,13 @@ impl Executor for GpuExecutor<'_> {
         Ok(self.gpu.uniform(label, value))
     }
 
-    fn dispatch(
-        &mut self,
-        stage: &'static str,
-        bindings: &[&wgpu::Buffer],
-        groups: u32,
-    ) -> Result<()> {
+    fn dispatch(&mut self, stage: Stage, bindings: &[&wgpu::Buffer], groups: u32) -> Result<()> {
         self.gpu.dispatch(self.encoder, stage, bindings, groups)
     }
 
     fn dispatch_traced(
         &mut self,
-        stage: &'static str,
+        stage: Stage,
         bindings: &[&wgpu::Buffer],
         groups: u32,
     ) -> Result<()> {
@@ -76,7 +72,7 @@ impl Executor for GpuExecutor<'_> {
 
     fn dispatch_variant(
         &mut self,
-        stage: &'static str,
+        stage: Stage,
         defines: &[&'static str],
         constants: &[(&'static str, f64)],
         bindings: &[&wgpu::Buffer],

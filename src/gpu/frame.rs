@@ -15,6 +15,7 @@ use crate::error::{Error, Result};
 use crate::frame::{Direct as DirectMode, Splatter, Splatting};
 use crate::scene::Scene;
 use crate::sequence::{Direct, TileLists, bin_splat_tiles};
+use crate::shaders::Stage;
 use crate::shaders::{PAGE_BINDING_STEP, Paging};
 use crate::shared::splat::{SPLAT_CORNERS, SPLATS_PER_INSTANCE, instances};
 use crate::types::{Camera, DIRECT_BAKED, ShadeParams, SplatLod};
@@ -124,12 +125,17 @@ impl SplatPass {
         SplatPass::Shade,
     ];
 
-    pub fn name(self) -> &'static str {
+    /// The stage (WGSL file) the pass runs.
+    pub fn stage(self) -> Stage {
         match self {
-            SplatPass::Visibility => "splat_visibility",
-            SplatPass::Attributes => "splat_attributes",
-            SplatPass::Shade => "shade",
+            SplatPass::Visibility => Stage::SplatVisibility,
+            SplatPass::Attributes => Stage::SplatAttributes,
+            SplatPass::Shade => Stage::Shade,
         }
+    }
+
+    pub fn name(self) -> &'static str {
+        self.stage().name()
     }
 }
 
@@ -179,7 +185,7 @@ impl FrameScene {
             selected: gpu.storage_zeroed("selected splats", splats * 4)?,
             group_counts: gpu.storage_zeroed(
                 "selected per workgroup",
-                crate::sequence::groups("splat_select", splats as u32)? as u64 * 4,
+                crate::sequence::groups(Stage::SplatSelect, splats as u32)? as u64 * 4,
             )?,
             draw_args: gpu.device.create_buffer(&wgpu::BufferDescriptor {
                 label: Some("listed splats' draw"),
@@ -295,33 +301,33 @@ impl FrameTargets {
     }
 }
 
-fn module(gpu: &Gpu, name: &'static str, paging: &Paging) -> Result<wgpu::ShaderModule> {
-    let source = crate::shaders::resolve_stage_paged(name, &[], paging)?;
-    Ok(gpu.shader_module(name, source))
+fn module(gpu: &Gpu, stage: Stage, paging: &Paging) -> Result<wgpu::ShaderModule> {
+    let source = crate::shaders::resolve_stage_paged(stage, &[], paging)?;
+    Ok(gpu.shader_module(stage.name(), source))
 }
 
 pub(super) fn raster_pipeline(
     gpu: &Gpu,
-    name: &'static str,
+    stage: Stage,
     depth: Option<wgpu::DepthStencilState>,
     targets: &[Option<wgpu::ColorTargetState>],
 ) -> Result<wgpu::RenderPipeline> {
     let entries = ["vs_main", "fs_main"];
-    raster_pipeline_at(gpu, name, entries, depth, targets, &Paging::default(), &[])
+    raster_pipeline_at(gpu, stage, entries, depth, targets, &Paging::default(), &[])
 }
 
 /// `raster_pipeline` with the vertex and fragment entry points `[vertex, fragment]` and the
 /// shader's pipeline constants (`override`s) set to `constants`.
 pub(super) fn raster_pipeline_at(
     gpu: &Gpu,
-    name: &'static str,
+    stage: Stage,
     [vertex, fragment]: [&'static str; 2],
     depth: Option<wgpu::DepthStencilState>,
     targets: &[Option<wgpu::ColorTargetState>],
     paging: &Paging,
     constants: &[(&str, f64)],
 ) -> Result<wgpu::RenderPipeline> {
-    let module = module(gpu, name, paging)?;
+    let module = module(gpu, stage, paging)?;
     let compilation_options = wgpu::PipelineCompilationOptions {
         constants,
         ..Default::default()
@@ -329,7 +335,7 @@ pub(super) fn raster_pipeline_at(
     Ok(gpu
         .device
         .create_render_pipeline(&wgpu::RenderPipelineDescriptor {
-            label: Some(name),
+            label: Some(stage.name()),
             layout: None,
             vertex: wgpu::VertexState {
                 module: &module,
@@ -396,7 +402,7 @@ fn shade_layouts(gpu: &Gpu, paging: &Paging) -> Result<[wgpu::BindGroupLayout; 2
     frame.extend([buffer_entry(6, READ), buffer_entry(7, READ_WRITE)]);
     frame.extend([8, 9, 10].map(|binding| buffer_entry(binding, READ)));
     let mut geometry = vec![buffer_entry(0, UNIFORM)];
-    for p in crate::shaders::paged_bindings("shade")? {
+    for p in crate::shaders::paged_bindings(Stage::Shade)? {
         let pages = paging.of(&p.name).map_or(1, |l| l.pages);
         let more = (1..pages).map(|k| buffer_entry(p.binding + k * PAGE_BINDING_STEP, READ));
         match p.group {
@@ -408,7 +414,7 @@ fn shade_layouts(gpu: &Gpu, paging: &Paging) -> Result<[wgpu::BindGroupLayout; 2
     Ok([frame, geometry].map(|entries| {
         gpu.device
             .create_bind_group_layout(&wgpu::BindGroupLayoutDescriptor {
-                label: Some("shade"),
+                label: Some(Stage::Shade.name()),
                 entries: &entries,
             })
     }))
@@ -432,15 +438,15 @@ impl ShadePipeline {
         let layout = gpu
             .device
             .create_pipeline_layout(&wgpu::PipelineLayoutDescriptor {
-                label: Some("shade"),
+                label: Some(Stage::Shade.name()),
                 bind_group_layouts: &[Some(&layouts[0]), Some(&layouts[1])],
                 immediate_size: 0,
             });
-        let module = module(gpu, "shade", paging)?;
+        let module = module(gpu, Stage::Shade, paging)?;
         let pipeline = gpu
             .device
             .create_compute_pipeline(&wgpu::ComputePipelineDescriptor {
-                label: Some("shade"),
+                label: Some(Stage::Shade.name()),
                 layout: Some(&layout),
                 module: &module,
                 entry_point: Some("main"),
@@ -466,10 +472,10 @@ enum Raster {
 
 impl Raster {
     /// The stage (WGSL file) the pipeline is built from.
-    fn stage(self) -> &'static str {
+    fn stage(self) -> Stage {
         match self {
-            Raster::Visibility => SplatPass::Visibility.name(),
-            Raster::Attributes | Raster::AttributesBaked => SplatPass::Attributes.name(),
+            Raster::Visibility => SplatPass::Visibility.stage(),
+            Raster::Attributes | Raster::AttributesBaked => SplatPass::Attributes.stage(),
         }
     }
 
@@ -588,11 +594,11 @@ impl SplatPipelines {
         for direct in [DirectMode::Baked, DirectMode::Rays] {
             pipelines.shade_pipeline(gpu, &unpaged, direct)?;
         }
-        gpu.pipeline("splat_select")?;
-        gpu.pipeline("splat_list")?;
-        gpu.pipeline("splat_shade")?;
+        gpu.pipeline(Stage::SplatSelect)?;
+        gpu.pipeline(Stage::SplatList)?;
+        gpu.pipeline(Stage::SplatShade)?;
         if pipelines.splat_compute {
-            gpu.pipeline("splat_compute")?;
+            gpu.pipeline(Stage::SplatCompute)?;
         }
         gpu.check()?;
         Ok(pipelines)
@@ -800,8 +806,8 @@ impl SplatPipelines {
             lods,
             scene.drawn,
         ];
-        let groups = crate::sequence::groups("splat_select", scene.splat_count)?;
-        gpu.dispatch(encoder, "splat_select", &select, groups)?;
+        let groups = crate::sequence::groups(Stage::SplatSelect, scene.splat_count)?;
+        gpu.dispatch(encoder, Stage::SplatSelect, &select, groups)?;
         // One count a workgroup: `groups` is their number.
         super::scan::exclusive_scan(gpu, encoder, scene.group_counts, groups)?;
         let list = [
@@ -811,8 +817,8 @@ impl SplatPipelines {
             scene.selected,
             scene.draw_args,
         ];
-        let groups = crate::sequence::groups("splat_list", scene.splat_count)?;
-        gpu.dispatch(encoder, "splat_list", &list, groups)
+        let groups = crate::sequence::groups(Stage::SplatList, scene.splat_count)?;
+        gpu.dispatch(encoder, Stage::SplatList, &list, groups)
     }
 
     /// Records `splat_shade`: the radiance towards the eye of every splat `splat_select`
@@ -824,7 +830,7 @@ impl SplatPipelines {
         scene: &SceneBuffers,
         uniforms: &Uniforms,
     ) -> Result<()> {
-        let stage = "splat_shade";
+        let stage = Stage::SplatShade;
         let mut buffers = scene.shading(&uniforms.cam, &uniforms.params).to_vec();
         buffers.extend([scene.shaded, scene.selected_count, scene.selected]);
         let groups = crate::sequence::groups(stage, scene.splat_count)?;
@@ -857,14 +863,14 @@ impl SplatPipelines {
         let tile_params = gpu.uniform("tile params", &lists.params);
         let mut buffers = scene.shading(&uniforms.cam, &uniforms.params).to_vec();
         buffers.extend([&tile_params, &lists.start, &lists.splats, scene.shaded]);
-        let paging = gpu.paging("splat_compute", &[&buffers])?;
-        let pipeline = &gpu.variant_paged("splat_compute", &[], &[], &paging)?;
+        let paging = gpu.paging(Stage::SplatCompute, &[&buffers])?;
+        let pipeline = &gpu.variant_paged(Stage::SplatCompute, &[], &[], &paging)?;
         let mut bound: Vec<_> = (0u32..)
             .zip(buffers.iter().copied())
             .filter(|(b, _)| !DIRECT_BAKE_BINDINGS.contains(b))
             .collect();
         bound.push((COMPUTE_CLIP_BINDING, scene.clips));
-        let mut entries = gpu.paged_entries_at("splat_compute", 0, &bound, &paging)?;
+        let mut entries = gpu.paged_entries_at(Stage::SplatCompute, 0, &bound, &paging)?;
         entries.extend(
             out.sums
                 .iter()
@@ -875,14 +881,14 @@ impl SplatPipelines {
                 }),
         );
         let group = gpu.device.create_bind_group(&wgpu::BindGroupDescriptor {
-            label: Some("splat_compute"),
+            label: Some(Stage::SplatCompute.name()),
             layout: &pipeline.get_bind_group_layout(0),
             entries: &entries,
         });
         let tiles = lists.params.tiles_x * lists.params.tiles_y;
         let (x, y) = gpu.dispatch_dims(tiles)?;
         let mut pass = encoder.begin_compute_pass(&wgpu::ComputePassDescriptor {
-            label: Some("splat_compute"),
+            label: Some(Stage::SplatCompute.name()),
             timestamp_writes: None,
         });
         pass.set_pipeline(pipeline);
@@ -931,7 +937,7 @@ impl SplatPipelines {
                 });
             }
             let group = gpu.device.create_bind_group(&wgpu::BindGroupDescriptor {
-                label: Some(stage),
+                label: Some(stage.name()),
                 layout: &pipeline.get_bind_group_layout(0),
                 entries: &entries,
             });
@@ -967,7 +973,7 @@ impl SplatPipelines {
                 },
             });
             let mut pass = encoder.begin_render_pass(&wgpu::RenderPassDescriptor {
-                label: Some("splat_visibility"),
+                label: Some(Stage::SplatVisibility.name()),
                 color_attachments: &[front],
                 depth_stencil_attachment: depth_attachment(wgpu::LoadOp::Clear(0.0)),
                 timestamp_writes: None,
@@ -1014,7 +1020,7 @@ impl SplatPipelines {
                 color.truncate(2);
             }
             let mut pass = encoder.begin_render_pass(&wgpu::RenderPassDescriptor {
-                label: Some("splat_attributes"),
+                label: Some(Stage::SplatAttributes.name()),
                 color_attachments: &color,
                 depth_stencil_attachment: depth_attachment(wgpu::LoadOp::Load),
                 timestamp_writes: None,
@@ -1063,28 +1069,30 @@ impl SplatPipelines {
             (9, scene.direct),
             (10, scene.materials),
         ];
-        let paging = gpu.paging_by("shade", |group, binding| match group {
+        let paging = gpu.paging_by(Stage::Shade, |group, binding| match group {
             0 => hits.iter().find(|h| h.0 == binding).map(|h| h.1),
             _ => scene.geometry.get(binding as usize).copied(),
         })?;
-        frame_entries.extend(gpu.paged_entries_at("shade", 0, &hits, &paging)?);
+        frame_entries.extend(gpu.paged_entries_at(Stage::Shade, 0, &hits, &paging)?);
         let shade = self.shade_pipeline(gpu, &paging, DirectMode::of_code(uniforms.direct))?;
-        let geometry_entries = gpu.paged_entries("shade", 1, &scene.geometry, &paging)?;
+        let geometry_entries = gpu.paged_entries(Stage::Shade, 1, &scene.geometry, &paging)?;
         let groups = [frame_entries, geometry_entries]
             .iter()
             .zip(&shade.layouts)
             .map(|(entries, layout)| {
                 gpu.device.create_bind_group(&wgpu::BindGroupDescriptor {
-                    label: Some("shade"),
+                    label: Some(Stage::Shade.name()),
                     layout,
                     entries,
                 })
             })
             .collect::<Vec<_>>();
-        let (x, y) =
-            gpu.dispatch_dims(crate::sequence::groups("shade", out.width * out.height)?)?;
+        let (x, y) = gpu.dispatch_dims(crate::sequence::groups(
+            Stage::Shade,
+            out.width * out.height,
+        )?)?;
         let mut pass = encoder.begin_compute_pass(&wgpu::ComputePassDescriptor {
-            label: Some("shade"),
+            label: Some(Stage::Shade.name()),
             timestamp_writes: None,
         });
         pass.set_pipeline(&shade.pipeline);

@@ -22,6 +22,7 @@ use bytemuck::Pod;
 use wgpu::util::DeviceExt;
 
 use crate::error::{Error, Result};
+use crate::shaders::Stage;
 use crate::shaders::{MAX_PAGES, PAGE_BINDING_STEP, PagedArray, Paging};
 
 /// Which graphics API to run on.
@@ -229,40 +230,40 @@ impl Gpu {
     }
 
     /// The compiled pipeline of a stage of `shaders::STAGES`, compiled on first use.
-    pub fn pipeline(&self, name: &'static str) -> Result<wgpu::ComputePipeline> {
-        self.specialized(name, &[])
+    pub fn pipeline(&self, stage: Stage) -> Result<wgpu::ComputePipeline> {
+        self.specialized(stage, &[])
     }
 
     /// The pipeline of a stage with values for its pipeline-overridable constants (the
     /// compiler then sees them as literals: fixed loop counts unroll), compiled on first use.
     pub fn specialized(
         &self,
-        name: &'static str,
+        stage: Stage,
         constants: &[(&str, f64)],
     ) -> Result<wgpu::ComputePipeline> {
-        self.variant(name, &[], constants)
+        self.variant(stage, &[], constants)
     }
 
     /// `specialized`, from the stage's source with `defines` defined (see `shaders`).
     pub fn variant(
         &self,
-        name: &'static str,
+        stage: Stage,
         defines: &[&str],
         constants: &[(&str, f64)],
     ) -> Result<wgpu::ComputePipeline> {
-        self.variant_paged(name, defines, constants, &Paging::default())
+        self.variant_paged(stage, defines, constants, &Paging::default())
     }
 
     /// `variant`, with its paged arrays split as `paging` says (`Gpu::paging`).
     pub fn variant_paged(
         &self,
-        name: &'static str,
+        stage: Stage,
         defines: &[&str],
         constants: &[(&str, f64)],
         paging: &Paging,
     ) -> Result<wgpu::ComputePipeline> {
         let key = constants.iter().fold(
-            format!("{name} [{}]{}", defines.join(","), paging.key()),
+            format!("{stage} [{}]{}", defines.join(","), paging.key()),
             |k, (c, v)| format!("{k} {c}={v}"),
         );
         let mut cache = self
@@ -272,12 +273,12 @@ impl Gpu {
         if let Some(p) = cache.get(&key) {
             return Ok(p.clone());
         }
-        let source = crate::shaders::resolve_stage_paged(name, defines, paging)?;
-        let module = self.shader_module(name, source);
+        let source = crate::shaders::resolve_stage_paged(stage, defines, paging)?;
+        let module = self.shader_module(stage.name(), source);
         let pipeline = self
             .device
             .create_compute_pipeline(&wgpu::ComputePipelineDescriptor {
-                label: Some(name),
+                label: Some(stage.name()),
                 layout: None,
                 module: &module,
                 entry_point: Some("main"),
@@ -299,7 +300,7 @@ impl Gpu {
     pub fn dispatch(
         &self,
         encoder: &mut wgpu::CommandEncoder,
-        stage: &'static str,
+        stage: Stage,
         buffers: &[&wgpu::Buffer],
         groups: u32,
     ) -> Result<()> {
@@ -311,7 +312,7 @@ impl Gpu {
     pub fn dispatch_groups(
         &self,
         encoder: &mut wgpu::CommandEncoder,
-        stage: &'static str,
+        stage: Stage,
         bind_groups: &[&[&wgpu::Buffer]],
         groups: u32,
     ) -> Result<()> {
@@ -327,7 +328,7 @@ impl Gpu {
     pub fn dispatch_pipeline(
         &self,
         encoder: &mut wgpu::CommandEncoder,
-        stage: &'static str,
+        stage: Stage,
         pipeline: &wgpu::ComputePipeline,
         paging: &Paging,
         bind_groups: &[&[&wgpu::Buffer]],
@@ -340,7 +341,7 @@ impl Gpu {
         for (g, buffers) in bind_groups.iter().enumerate() {
             let entries = self.paged_entries(stage, g as u32, buffers, paging)?;
             made.push(self.device.create_bind_group(&wgpu::BindGroupDescriptor {
-                label: Some(stage),
+                label: Some(stage.name()),
                 layout: &pipeline.get_bind_group_layout(g as u32),
                 entries: &entries,
             }));
@@ -348,7 +349,7 @@ impl Gpu {
         let bind_groups = made;
         let (x, y) = self.dispatch_dims(groups)?;
         let mut pass = encoder.begin_compute_pass(&wgpu::ComputePassDescriptor {
-            label: Some(stage),
+            label: Some(stage.name()),
             timestamp_writes: None,
         });
         pass.set_pipeline(pipeline);
@@ -532,7 +533,7 @@ impl Gpu {
     /// How `stage`'s paged arrays split, bound to `bind_groups` (one buffer list per group, in
     /// binding order): an array larger than one page takes windows of 2^shift elements, the
     /// most that fit a page.
-    pub fn paging(&self, stage: &str, bind_groups: &[&[&wgpu::Buffer]]) -> Result<Paging> {
+    pub fn paging(&self, stage: Stage, bind_groups: &[&[&wgpu::Buffer]]) -> Result<Paging> {
         self.paging_by(stage, |group, binding| {
             bind_groups
                 .get(group as usize)?
@@ -544,7 +545,7 @@ impl Gpu {
     /// `paging` of a stage whose buffers `buffer(group, binding)` finds.
     pub fn paging_by<'b>(
         &self,
-        stage: &str,
+        stage: Stage,
         buffer: impl Fn(u32, u32) -> Option<&'b wgpu::Buffer>,
     ) -> Result<Paging> {
         let mut arrays = Vec::new();
@@ -581,7 +582,7 @@ impl Gpu {
     /// must fit one storage binding.
     pub fn paged_entries<'a>(
         &self,
-        stage: &str,
+        stage: Stage,
         group: u32,
         buffers: &[&'a wgpu::Buffer],
         paging: &Paging,
@@ -594,7 +595,7 @@ impl Gpu {
     /// binds some of its module's bindings.
     pub fn paged_entries_at<'a>(
         &self,
-        stage: &str,
+        stage: Stage,
         group: u32,
         buffers: &[(u32, &'a wgpu::Buffer)],
         paging: &Paging,

@@ -4,6 +4,7 @@
 use super::frame::raster_pipeline;
 use super::{Gpu, buffer_entries};
 use crate::error::Result;
+use crate::shaders::Stage;
 
 pub struct PresentPipeline {
     pipeline: wgpu::RenderPipeline,
@@ -18,7 +19,7 @@ impl PresentPipeline {
             blend: None,
             write_mask: wgpu::ColorWrites::ALL,
         });
-        let pipeline = raster_pipeline(gpu, "present", None, &[target])?;
+        let pipeline = raster_pipeline(gpu, Stage::Present, None, &[target])?;
         gpu.check()?;
         Ok(PresentPipeline {
             pipeline,
@@ -42,12 +43,12 @@ impl PresentPipeline {
     ) {
         let params = gpu.uniform("present params", &self.params(width, height));
         let group = gpu.device.create_bind_group(&wgpu::BindGroupDescriptor {
-            label: Some("present"),
+            label: Some(Stage::Present.name()),
             layout: &self.pipeline.get_bind_group_layout(0),
             entries: &buffer_entries(&[&params, rgba]),
         });
         let mut pass = encoder.begin_render_pass(&wgpu::RenderPassDescriptor {
-            label: Some("present"),
+            label: Some(Stage::Present.name()),
             color_attachments: &[Some(wgpu::RenderPassColorAttachment {
                 view,
                 depth_slice: None,

@@ -7,6 +7,7 @@ use super::bins::GpuBins;
 use super::frame::{FrameTargets, SceneBuffers, SplatPipelines, raster_pipeline};
 use super::{Gpu, buffer_entries};
 use crate::error::Result;
+use crate::shaders::Stage;
 use crate::types::{Camera, EmParams, ShadeParams};
 
 pub struct ReferencePipeline {
@@ -22,7 +23,7 @@ impl ReferencePipeline {
             write_mask: wgpu::ColorWrites::ALL,
         });
         let targets = [target.clone(), target.clone(), target.clone(), target];
-        let gather = raster_pipeline(gpu, "reference_gather", None, &targets)?;
+        let gather = raster_pipeline(gpu, Stage::ReferenceGather, None, &targets)?;
         gpu.check()?;
         Ok(ReferencePipeline { gather })
     }
@@ -53,7 +54,7 @@ impl ReferencePipeline {
             &bins.power,
         ];
         if !gpu
-            .paging("reference_gather", &[&own, &scene.geometry])?
+            .paging(Stage::ReferenceGather, &[&own, &scene.geometry])?
             .arrays
             .is_empty()
         {
@@ -68,7 +69,7 @@ impl ReferencePipeline {
             .enumerate()
             .map(|(g, entries)| {
                 gpu.device.create_bind_group(&wgpu::BindGroupDescriptor {
-                    label: Some("reference_gather"),
+                    label: Some(Stage::ReferenceGather.name()),
                     layout: &self.gather.get_bind_group_layout(g as u32),
                     entries,
                 })
@@ -77,7 +78,7 @@ impl ReferencePipeline {
         let color = out.cleared_sums();
         {
             let mut pass = encoder.begin_render_pass(&wgpu::RenderPassDescriptor {
-                label: Some("reference_gather"),
+                label: Some(Stage::ReferenceGather.name()),
                 color_attachments: &color,
                 depth_stencil_attachment: None,
                 timestamp_writes: None,
