@@ -83,7 +83,7 @@ impl PhotonBins {
 /// holds (`max_bytes`, over several bindings: `Gpu::max_array_bytes`).
 pub fn check_binned(photons: u64, max_bytes: u64) -> Result<()> {
     if photons * 16 > max_bytes {
-        return Err(Error::Invalid(format!(
+        return Err(Error::DeviceLimit(format!(
             "{photons} stored photons exceed what the binning's buffers hold on this device \
              ({} photons): emit fewer photons",
             max_bytes / 16

@@ -230,7 +230,7 @@ pub fn iterations_per_dispatch(
     let per_pass = visited.div_ceil(wg) * (1 + 4 * cfg.lobes as u64) + 200;
     let passes = LOOP_BUDGET.saturating_sub(irradiance) / per_pass;
     if passes < 3 {
-        return Err(Error::Invalid(format!(
+        return Err(Error::DeviceLimit(format!(
             "a splat has {max_candidates} candidate photons within the search radius, too many \
              for this software device's loop limit: lower the radius, the photon count or \
              fit_candidates"

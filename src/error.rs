@@ -20,6 +20,10 @@ pub enum Error {
     /// A well-formed input that asks for something impossible (NaN geometry, negative power…).
     #[error("{0}")]
     Invalid(String),
+    /// What this device cannot do or hold: a binding, a dispatch or a loop budget past its
+    /// limits. The input may be fine on another device; here a user can only ask for less.
+    #[error("{0}")]
+    DeviceLimit(String),
     #[error("{0}")]
     NoAdapter(String),
     #[error("GPU error: {0}")]

@@ -220,7 +220,7 @@ impl FrameRenderer {
         splatter: Splatter,
     ) -> Result<&wgpu::Buffer> {
         if params.direct == DIRECT_BAKED && self.direct_ms.is_none() {
-            return Err(Error::Invalid(
+            return Err(Error::Internal(
                 "baked direct light was asked for before the lights' direct bake".into(),
             ));
         }
@@ -266,7 +266,7 @@ impl FrameRenderer {
             self.reference = Some(ReferencePipeline::new(gpu, &self.pipelines)?);
         }
         let (Some(reference), Some(targets)) = (&self.reference, &self.targets) else {
-            return Err(Error::Invalid(
+            return Err(Error::Internal(
                 "the frame renderer has no targets yet".into(),
             ));
         };

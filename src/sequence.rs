@@ -653,7 +653,7 @@ pub fn fit_lobes<E: Executor>(
         (Some(g), _) if fitted > 0 => Some(g),
         (Some(_), _) => None,
         (None, _) => {
-            return Err(Error::Invalid(
+            return Err(Error::Internal(
                 "final gathering needs the scene's lights and geometry".into(),
             ));
         }
@@ -1008,7 +1008,7 @@ pub fn trace_photons<E: Executor>(
         match planner.after_overflow(page.count, page.capacity, need, paths, done) {
             StoreAction::HalveBatch if paths > 1 => batch = paths / 2,
             StoreAction::HalveBatch => {
-                return Err(Error::Invalid(format!(
+                return Err(Error::DeviceLimit(format!(
                     "one photon path stores more photons than the largest store page holds \
                      ({max_page})"
                 )));
@@ -1124,7 +1124,7 @@ pub fn final_gather<E: Executor>(
     let per_splat = (params.samples * params.samples) as u64;
     let rays = params.splat_count as u64 * per_splat;
     let count = u32::try_from(rays).map_err(|_| {
-        Error::Invalid(format!(
+        Error::DeviceLimit(format!(
             "final gathering: {rays} rays are more than one dispatch holds"
         ))
     })?;

@@ -355,3 +355,20 @@ fn extreme_light_powers_bake_and_draw_alike() {
         );
     }
 }
+
+/// What the device cannot hold is refused as a limit of the device (`Error::DeviceLimit`: the
+/// input may be fine elsewhere), not as bad input nor as a bug, and the message names what.
+#[test]
+fn what_the_device_cannot_hold_is_a_device_limit() {
+    let gpu = common::gpu();
+    let past = gpu.max_array_bytes(16) + (1 << 20);
+    match gpu.storage_zeroed("photon bins", past) {
+        Err(lobelight::Error::DeviceLimit(m)) => assert!(m.contains("photon bins"), "{m}"),
+        Err(e) => panic!("another kind of error: {e:?}"),
+        Ok(_) => panic!("{past} bytes were allocated"),
+    }
+    match lobelight::bins::check_binned(1 << 40, 1 << 20) {
+        Err(lobelight::Error::DeviceLimit(m)) => assert!(m.contains("emit fewer"), "{m}"),
+        other => panic!("{other:?}"),
+    }
+}

@@ -153,7 +153,7 @@ fn fit_on_device(
 ) -> Result<GpuLobes> {
     cfg.validate()?;
     if shape.subgroup_reduce && !fit_shape(gpu).subgroup_reduce {
-        return Err(Error::Invalid(
+        return Err(Error::DeviceLimit(
             "this device cannot reduce the fit's sums with subgroup operations".into(),
         ));
     }

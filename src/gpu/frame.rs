@@ -792,7 +792,7 @@ impl SplatPipelines {
             (Some(lods), _) => lods,
             (None, false) => scene.no_lods,
             (None, true) => {
-                return Err(Error::Invalid(
+                return Err(Error::Internal(
                     "a frame with the level of detail was drawn before its merge tree was built \
                      (FrameScene::ensure_lods)"
                         .into(),
@@ -856,7 +856,7 @@ impl SplatPipelines {
             return Ok(());
         }
         let (true, Some(lists)) = (self.splat_compute, &*uniforms.tiles.borrow()) else {
-            return Err(Error::Invalid(
+            return Err(Error::Internal(
                 "the compute splatter's tile pass ran before its binning".into(),
             ));
         };

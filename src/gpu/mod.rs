@@ -367,7 +367,7 @@ impl Gpu {
         let x = groups.min(max);
         let y = groups.div_ceil(x);
         if y > max {
-            return Err(Error::Invalid(format!(
+            return Err(Error::DeviceLimit(format!(
                 "dispatch of {groups} workgroups exceeds this device's {max}² limit"
             )));
         }
@@ -475,7 +475,7 @@ impl Gpu {
         let bytes = width as u64 * height as u64 * 16;
         let max = self.max_binding_bytes();
         if bytes > max {
-            return Err(Error::Invalid(format!(
+            return Err(Error::DeviceLimit(format!(
                 "a {width}×{height} image needs {bytes} bytes of HDR pixels, more than this \
                  device's largest storage binding ({max} bytes, about {} pixels): render \
                  smaller",
@@ -493,7 +493,7 @@ impl Gpu {
             .max_buffer_size
             .min(self.max_binding_bytes() * MAX_PAGES as u64);
         if bytes > max {
-            return Err(Error::Invalid(format!(
+            return Err(Error::DeviceLimit(format!(
                 "{label}: {bytes} bytes exceed the most this device holds in one array ({max} \
                  bytes: at most {MAX_PAGES} storage bindings of {} bytes, within its largest \
                  buffer)",
@@ -562,7 +562,7 @@ impl Gpu {
             let page = (p.stride as u64) << shift;
             let pages = size.div_ceil(page) as u32;
             if pages > MAX_PAGES {
-                return Err(Error::Invalid(format!(
+                return Err(Error::DeviceLimit(format!(
                     "{stage}: '{}' holds {size} bytes, more than the {MAX_PAGES} pages of \
                      {page} bytes a paged array is bound as on this device",
                     p.name
@@ -610,7 +610,7 @@ impl Gpu {
             let Some((layout, stride)) = name.and_then(|(n, s)| paging.of(n).map(|l| (l, s)))
             else {
                 if buffer.size() > self.max_binding_bytes() {
-                    return Err(Error::Invalid(format!(
+                    return Err(Error::DeviceLimit(format!(
                         "{stage}: binding {group}.{binding} holds {} bytes, more than this \
                          device's largest storage binding ({} bytes)",
                         buffer.size(),

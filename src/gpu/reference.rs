@@ -58,7 +58,7 @@ impl ReferencePipeline {
             .arrays
             .is_empty()
         {
-            return Err(crate::Error::Invalid(
+            return Err(crate::Error::DeviceLimit(
                 "the photon-map reference binds the scene's splats and grid whole; this scene's \
                  do not fit one storage binding (use --method path)"
                     .into(),
