@@ -7,8 +7,10 @@
 //! - `error`, `types` (the `#[repr(C)]` records shared with WGSL), `shared` (math shared by
 //!   the mirrors and the host), `shaders` (the WGSL sources, the stage table and what naga
 //!   reads of them);
-//! - `grid`, `photons`, `bins`, `em`, `tone`, `convolution` (each stage's settings, limits and
-//!   host-side data), `lod` (the level of detail's merge tree);
+//! - `grid`, `photons`, `bins`, `em`, `tone` (each stage's settings, limits and host-side
+//!   data), `lobe_norms` (the lobe-norm table every frame's shading divides by, and its
+//!   quadrature), `convolution` (the lobe × BRDF shading study), `lod` (the level of detail's
+//!   merge tree);
 //! - `scene` (the scene file, procedural shapes and model files) and `camera`;
 //! - `sequence` (each multi-dispatch stage's dispatches, written once), run by `cpu` (the
 //!   mirrors) and `gpu` (the device host); `frame` (what a frame draws); `objects` (which
@@ -41,6 +43,7 @@ pub mod error;
 pub mod frame;
 pub mod gpu;
 pub mod grid;
+pub mod lobe_norms;
 pub mod lod;
 pub mod objects;
 pub mod photons;

@@ -4,10 +4,10 @@
 //! build on these.
 
 use glam::DVec3;
-use lobelight::convolution::lobe_norms;
 use lobelight::convolution::{
     Case, Convention, Formula, Quality, Reference, case_error, errors, lobe_shape, summary, ward,
 };
+use lobelight::lobe_norms::lobe_norms;
 use lobelight::shared::lobes::ward_kappa;
 use std::f64::consts::PI;
 

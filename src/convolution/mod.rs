@@ -24,16 +24,15 @@
 
 use glam::DVec3;
 
+use crate::lobe_norms::{grid, half_vector, lobe_norm, lobe_norms, mirrored_axis, reflect, tan2};
 use crate::shared::lobe_brdf::{lobe_specular, norm_at, norm_lookup};
 use std::f64::consts::PI;
 
 pub mod errors;
-mod norms;
 
 pub use errors::{
     CaseError, Quality, Summary, ViewGrid, case_error, errors, study_grid, summary, thesis_grid,
 };
-pub use norms::lobe_norms;
 
 /// One light lobe of the thesis's (Ward-like) family on a surface of roughness `alpha`.
 #[derive(Clone, Copy, Debug, PartialEq)]
@@ -54,13 +53,8 @@ impl Case {
     /// The axis mirrored about the normal: the lobe's half-vectors are taken with it, and
     /// it is where a mirror would send the light.
     pub fn mirror(&self) -> DVec3 {
-        DVec3::new(-self.angle.sin(), 0.0, self.angle.cos())
+        mirrored_axis(self.angle)
     }
-}
-
-/// tan² of the angle between the normal (+z) and `h` (any length, h.z > 0).
-fn tan2(h: DVec3) -> f64 {
-    (h.x * h.x + h.y * h.y) / (h.z * h.z)
 }
 
 /// The renderer's Ward specular lobe without ρs (`shared::ward::ward_specular` in f64).
@@ -100,15 +94,6 @@ fn shape_about(mirror: DVec3, beta2: f64, w: DVec3) -> f64 {
     (-tan2(h) / beta2).exp() / (4.0 * PI * beta2)
 }
 
-/// A half-vector by Ward's map of the unit square: tan²θh = −w² ln(1 − u1), φ = 2π u2.
-fn half_vector(u1: f64, u2: f64, width2: f64) -> DVec3 {
-    let t2 = -width2 * (1.0 - u1).ln();
-    let c = 1.0 / (1.0 + t2).sqrt();
-    let s = t2.sqrt() * c;
-    let phi = 2.0 * PI * u2;
-    DVec3::new(s * phi.cos(), s * phi.sin(), c)
-}
-
 /// Density over directions of `reflect(about, h)` with `h` from `half_vector(·, ·, width2)`.
 fn reflected_pdf(w: DVec3, about: DVec3, width2: f64) -> f64 {
     let h = (w + about).normalize();
@@ -117,16 +102,6 @@ fn reflected_pdf(w: DVec3, about: DVec3, width2: f64) -> f64 {
         return 0.0;
     }
     (-tan2(h) / width2).exp() / (PI * width2 * h.z.powi(3) * 4.0 * hd)
-}
-
-fn reflect(about: DVec3, h: DVec3) -> DVec3 {
-    2.0 * h.dot(about) * h - about
-}
-
-/// Midpoints of an n × n grid over the unit square.
-fn grid(n: usize) -> impl Iterator<Item = (f64, f64)> {
-    let step = 1.0 / n as f64;
-    (0..n * n).map(move |k| (((k % n) as f64 + 0.5) * step, ((k / n) as f64 + 0.5) * step))
 }
 
 /// What the integral stands for.
@@ -157,25 +132,13 @@ impl Reference {
     }
 
     pub fn with(case: Case, convention: Convention, n: usize) -> Reference {
-        // Under the lobe's own map lobe_shape / pdf = cos³θh (h·L'): smooth, no weights.
         let mirror = case.mirror();
-        let sum: f64 = grid(n)
-            .map(|(u1, u2)| {
-                let h = half_vector(u1, u2, case.beta2);
-                let w = reflect(mirror, h);
-                if w.z > 0.0 {
-                    h.z.powi(3) * h.dot(mirror)
-                } else {
-                    0.0
-                }
-            })
-            .sum();
         Reference {
             case,
             convention,
             mirror,
             n,
-            norm: sum / (n * n) as f64,
+            norm: lobe_norm(mirror, case.beta2, n),
         }
     }
 

@@ -106,7 +106,7 @@ pub fn cpu_frame_into(
         params,
         splat_light: &lobes.light,
         lobes: &lobes.lobes,
-        lobe_norms: crate::convolution::lobe_norms(),
+        lobe_norms: crate::lobe_norms::lobe_norms(),
         baked: cpu::splat_shading::BakedDirect {
             lights: &scene.lights,
             direct: &direct.direct,

@@ -174,7 +174,7 @@ impl FrameScene {
         Ok(FrameScene {
             splat_light: gpu.storage("splat light", &lobes.light)?,
             lobes: gpu.storage("lobes", &lobes.lobes)?,
-            lobe_norms: gpu.storage("lobe norms", crate::convolution::lobe_norms())?,
+            lobe_norms: gpu.storage("lobe norms", crate::lobe_norms::lobe_norms())?,
             lights: gpu.storage("lights", &scene.lights)?,
             direct: Direct {
                 direct: gpu.storage_zeroed("direct light", splats * 16)?,
