@@ -8,9 +8,9 @@ use std::time::Instant;
 
 use crate::bins::{PhotonBins, bin_params};
 use crate::cpu;
+use crate::direct::direct_params;
 use crate::em::{EmConfig, FitShape, GatherSetup, LobeMap};
 use crate::error::{Error, Result};
-use crate::frame::direct_params;
 use crate::gpu::Gpu;
 use crate::gpu::bins::{GpuBins, GpuDeposits, bin_photons, deposit_photons};
 use crate::gpu::em::{fit_lobes_gathering, fit_lobes_to_deposits};

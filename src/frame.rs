@@ -1,16 +1,15 @@
 //! One frame of the baked scene (docs/design.md §7–8): what to show, the camera uniform, the
-//! shading settings and the uniforms of the direct bake and the path tracer. `gpu::frame`
+//! shading settings and the path tracer's uniform (the direct bake's are `direct`'s). `gpu::frame`
 //! records the splat passes on a device, `cpu::frames` runs them on the mirrors.
 
 use glam::{Vec2, Vec3};
 
 use crate::camera::View;
+use crate::direct::shadow_bias;
 use crate::em::LobeMap;
 use crate::error::{Error, Result};
 use crate::scene::Scene;
-use crate::types::{
-    Camera, DIRECT_BAKED, DIRECT_RAYS, DirectParams, PathParams, ShadeParams, Splat,
-};
+use crate::types::{Camera, DIRECT_BAKED, DIRECT_RAYS, PathParams, ShadeParams};
 
 /// Which light a frame shows: everything, or one part of it (the viewer's keys 1–5).
 #[derive(Clone, Copy, Debug, Default, PartialEq, Eq, serde::Serialize)]
@@ -254,38 +253,6 @@ impl SceneExtent {
             bounds: scene.bounds(),
             shadow_bias: shadow_bias(&scene.splats),
         }
-    }
-}
-
-/// Shadow rays start half a mean splat radius off the blended surface: enough to clear the
-/// blend's dip below a curved surface, little enough to keep contact shadows.
-pub fn shadow_bias(splats: &[Splat]) -> f32 {
-    let sum: f64 = splats.iter().map(|s| s.radius as f64).sum();
-    (0.5 * sum / splats.len().max(1) as f64) as f32
-}
-
-/// Area lights are sampled on a `DIRECT_SAMPLES`² jittered grid per splat by the direct bake:
-/// as many rays as a pixel's default shadow rays. 8² cost 3.4 times the time (1.37 s against
-/// 0.40 s for the bunny's 67 k splats on lavapipe) for a moving frame no closer to the still
-/// image (relMSE 0.00524 against 0.00534).
-pub const DIRECT_SAMPLES: u32 = 4;
-
-pub use crate::sequence::DirectMap;
-
-/// The direct bake's uniform for the scene's splats and lights.
-pub fn direct_params(scene: &Scene) -> DirectParams {
-    direct_params_biased(scene, shadow_bias(&scene.splats))
-}
-
-/// `direct_params` with the scene's shadow bias already known (`BakePlan`, `FrameRenderer`).
-pub fn direct_params_biased(scene: &Scene, shadow_bias: f32) -> DirectParams {
-    DirectParams {
-        splat_count: scene.splats.len() as u32,
-        light_count: scene.lights.len() as u32,
-        samples: DIRECT_SAMPLES,
-        seed: scene.bake.seed,
-        shadow_bias,
-        ..Default::default()
     }
 }
 

@@ -38,6 +38,7 @@ pub mod cache;
 pub mod camera;
 pub mod convolution;
 pub mod cpu;
+pub mod direct;
 pub mod em;
 pub mod error;
 pub mod frame;

@@ -3,9 +3,9 @@
 //! uniform, and the direct bake's uniform (with the shadow bias) that final gathering reads —
 //! so that no stage walks the splats again for them. `bake` derives one per bake.
 
+use crate::direct::direct_params;
 use crate::em::{EmConfig, GatherSetup, deposit_params};
 use crate::error::Result;
-use crate::frame::direct_params;
 use crate::photons::PhotonConfig;
 use crate::scene::Scene;
 use crate::types::{DepositParams, DirectParams};
@@ -17,7 +17,7 @@ pub struct BakePlan {
     /// The lobe fit's settings; `em.radius` is the photon search radius R.
     pub em: EmConfig,
     /// The direct bake's uniform, which final gathering's rays read; its shadow bias
-    /// (`frame::shadow_bias`) is where they start.
+    /// (`direct::shadow_bias`) is where they start.
     pub direct: DirectParams,
     /// The deposits' uniform, where the fit reads deposits (`EmConfig::uses_deposits`).
     pub deposits: Option<DepositParams>,

@@ -11,11 +11,12 @@ use std::sync::Arc;
 
 use crate::bake::{BakeDevice, Baked, Binned, Progress, bake, bins_gpu};
 use crate::camera::View;
+use crate::direct::{DirectMap, direct_params_biased};
 use crate::em::LobeMap;
 use crate::error::{Error, Result};
 use crate::frame::{
-    Direct, DirectMap, FrameConfig, SceneExtent, Splatter, Splatting, camera_uniform,
-    direct_params_biased, frame_camera, jitter, path_params, refinement, shade_params_for,
+    Direct, FrameConfig, SceneExtent, Splatter, Splatting, camera_uniform, frame_camera, jitter,
+    path_params, refinement, shade_params_for,
 };
 use crate::gpu::Gpu;
 use crate::gpu::bins::GpuBins;

@@ -526,7 +526,7 @@ pub struct PathParams {
     /// Which light terms to show (`shared::splat::SHOW_*` bits, split as path_trace.wgsl says).
     pub show: u32,
     /// How far next events' shadow rays start off the surface, along the hit disk's normal:
-    /// the renderer's `frame::shadow_bias`, so that both render one scene (design §10).
+    /// the renderer's `direct::shadow_bias`, so that both render one scene (design §10).
     pub shadow_bias: f32,
 }
 
@@ -540,7 +540,7 @@ pub struct GatherParams {
     /// Rays a splat: a `samples` × `samples` stratified grid over its cosine-weighted hemisphere.
     pub samples: u32,
     pub seed: u32,
-    /// How far off the splat's plane the rays start (`frame::shadow_bias`).
+    /// How far off the splat's plane the rays start (`direct::shadow_bias`).
     pub shadow_bias: f32,
     /// The batch's first fit-list entry: sample j of entry `first + k` is at k · samples² + j.
     pub first: u32,

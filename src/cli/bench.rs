@@ -13,9 +13,10 @@ use crate::cli::render::Method;
 use crate::cli::view::{ViewOptions, ViewReport};
 use crate::cpu;
 use crate::cpu::frames::{cpu_direct, cpu_frame_into};
+use crate::direct::DirectMap;
 use crate::em::{EmConfig, EmStats, FitShape, LobeFamily, LobeMap, deposit_params};
 use crate::error::Result;
-use crate::frame::{DirectMap, FrameConfig, Splatting, camera_uniform, shade_params};
+use crate::frame::{FrameConfig, Splatting, camera_uniform, shade_params};
 use crate::gpu::bins as gpu_bins;
 use crate::gpu::em as gpu_em;
 

@@ -4,11 +4,11 @@
 
 use crate::bins::PhotonBins;
 use crate::cpu;
+use crate::direct::{DirectMap, direct_params, shadow_bias};
 use crate::em::LobeMap;
 use crate::error::Result;
 use crate::frame::{
-    Direct, DirectMap, FrameConfig, Splatting, direct_params, frame_camera, jitter, path_params,
-    refinement, shade_params, shadow_bias,
+    Direct, FrameConfig, Splatting, frame_camera, jitter, path_params, refinement, shade_params,
 };
 use crate::grid::SplatGrid;
 use crate::scene::Scene;
