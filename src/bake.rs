@@ -261,11 +261,41 @@ fn binned_cpu(
     progress: &Progress,
 ) -> Result<Binned<PhotonBins>> {
     let map = traced_cpu(scene, plan, grid, progress)?;
+    binned_of(scene, plan, grid, &map, progress)
+}
+
+/// Bins photons traced on the CPU mirror.
+fn binned_of(
+    scene: &Scene,
+    plan: &BakePlan,
+    grid: &SplatGrid,
+    map: &PhotonMap,
+    progress: &Progress,
+) -> Result<Binned<PhotonBins>> {
     let (bins, ms) = progress.timed("binning", || {
         let params = bin_params(&grid.params, plan.em.radius, map.stats.stored)?;
         cpu::bin_photons(&params, &map.photons, &scene.splats)
     })?;
     Ok(binned(plan, scene.splats.len(), bins, &map.stats, ms))
+}
+
+/// The lobes of a bake on the CPU mirror, and its photons (for views that draw them): the
+/// viewer's bake where the CPU mirror outruns the window's software rasterizer.
+pub fn baked_on_mirror(
+    scene: &Scene,
+    plan: &BakePlan,
+    grid: &SplatGrid,
+    progress: &Progress,
+) -> Result<(LobeMap, PhotonMap)> {
+    let map = traced_cpu(scene, plan, grid, progress)?;
+    if plan.em.uses_deposits() {
+        let (deposits, _) = deposits_cpu(scene, plan, grid, &map, progress)?;
+        let binned = (&deposits.bins, Some(&deposits));
+        return Ok((fit_on_cpu(scene, plan, grid, binned, progress)?, map));
+    }
+    let b = binned_of(scene, plan, grid, &map, progress)?;
+    let lobes = fit_on_cpu(scene, plan, grid, (&b.bins, None), progress)?;
+    Ok((lobes, map))
 }
 
 /// Traces on the CPU mirror.

@@ -97,7 +97,8 @@ fn spp(extra: &[&str]) -> &'static [&'static str] {
 fn scripted_view(extra: &[&str], shot: &str) -> (Vec<[f32; 4]>, u32, u32) {
     let exe = env!("CARGO_BIN_EXE_lobelight");
     let view = in_xvfb(|c| {
-        c.args(["-a", "-s", "-screen 0 640x480x24", exe, "view"])
+        // The device's bake, as the offscreen render it is compared with.
+        c.args(["-a", "-s", "-screen 0 640x480x24", exe, "view", "--gpu"])
             .args(COMMON)
             .args(extra)
             .args(spp(extra))
@@ -358,7 +359,7 @@ fn a_moved_light_bakes_a_preview_then_in_full() {
     use std::sync::atomic::AtomicU64;
 
     use lobelight::bake::{BakeDevice, Progress, bake};
-    use lobelight::cli::view::baking::{BakeResult, Baking, spawn};
+    use lobelight::cli::view::baking::{BakeEngine, BakeResult, Baking, spawn};
     use lobelight::cli::view::{move_first_light, passes};
 
     let gpu = Arc::new(common::gpu());
@@ -386,8 +387,24 @@ fn a_moved_light_bakes_a_preview_then_in_full() {
     assert_eq!(plan[0].photons, 25_000);
     assert!(plan[0].iterations < plan[1].iterations);
     // An older bake, then a newer one at once: the older stops after its first pass at most.
-    let mut older = spawn(&gpu, &on_gpu, &moved, plan.clone(), None, &generation);
-    let mut newer = spawn(&gpu, &on_gpu, &moved, plan, None, &generation);
+    let mut older = spawn(
+        &gpu,
+        &on_gpu,
+        &BakeEngine::Device,
+        &moved,
+        plan.clone(),
+        None,
+        &generation,
+    );
+    let mut newer = spawn(
+        &gpu,
+        &on_gpu,
+        &BakeEngine::Device,
+        &moved,
+        plan,
+        None,
+        &generation,
+    );
     let results = wait(&mut newer);
     assert_eq!(results.len(), 2);
     assert!(results[0].preview && !results[1].preview);

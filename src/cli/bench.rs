@@ -673,6 +673,8 @@ pub fn window_frames(
         spp: 0,
         screenshot: None,
         cache: None,
+        // The frames are measured; the bake only has to come in.
+        gpu_bake: false,
     };
     crate::cli::view::view(scene.clone(), opts)
 }

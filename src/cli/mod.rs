@@ -357,6 +357,10 @@ enum Command {
         /// Graphics API (default: WGPU_BACKEND, else Vulkan, else GL).
         #[arg(long, value_enum, default_value_t = BackendChoice::Auto)]
         backend: BackendChoice,
+        /// Bake on the window's adapter even where it is a software rasterizer (lavapipe,
+        /// llvmpipe), whose bakes the CPU mirror runs faster; frames are drawn on it either way.
+        #[arg(long)]
+        gpu: bool,
     },
     /// Measure a stage: throughput and the figures that show it did the right work.
     Bench {
@@ -528,6 +532,7 @@ fn run(cli: Cli) -> Result<()> {
             bake,
             look,
             backend,
+            gpu,
         } => {
             let mut scene = scene::load(&scene)?;
             bake.apply(&mut scene)?;
@@ -545,6 +550,7 @@ fn run(cli: Cli) -> Result<()> {
                 screenshot,
                 cache,
                 spp,
+                gpu_bake: gpu,
             };
             opts.frame.validate()?;
             if method == render::Method::Path {

@@ -11,13 +11,14 @@ use std::sync::atomic::{AtomicU64, Ordering};
 use std::sync::mpsc::{Receiver, TryRecvError, channel};
 use std::time::Instant;
 
-use crate::bake::{Binned, Progress, fit_gpu, traced_gpu};
+use crate::bake::{Binned, Progress, baked_on_mirror, fit_gpu, traced_gpu};
 use crate::em::LobeMap;
 use crate::error::{Error, Result};
 use crate::gpu::Gpu;
 use crate::gpu::bins::GpuBins;
 use crate::gpu::photons::GpuPhotons;
 use crate::gpu::scene::GpuScene;
+use crate::grid::SplatGrid;
 use crate::plan::BakePlan;
 use crate::scene::{BakeDesc, Scene};
 use crate::timing::ms_since;
@@ -44,6 +45,15 @@ pub struct BakeResult {
     pub preview: bool,
     /// Time from the bake's start to this result.
     pub seconds: f64,
+}
+
+/// Where the viewer's bakes run: on the window's device, or on the CPU mirror (with the scene's
+/// grid built on the host), which bakes faster where the device is a software rasterizer; the
+/// lobes and photons go to the device either way.
+#[derive(Clone)]
+pub enum BakeEngine {
+    Device,
+    Mirror(Arc<SplatGrid>),
 }
 
 /// A bake running on its thread.
@@ -76,6 +86,7 @@ pub fn passes(full: &BakeDesc, preview: bool) -> Vec<BakeDesc> {
 pub fn spawn(
     gpu: &Arc<Gpu>,
     on_gpu: &Arc<GpuScene>,
+    engine: &BakeEngine,
     scene: &Arc<Scene>,
     passes: Vec<BakeDesc>,
     cache: Option<PathBuf>,
@@ -83,9 +94,10 @@ pub fn spawn(
 ) -> Baking {
     let (send, receive) = channel();
     let mine = generation.fetch_add(1, Ordering::SeqCst) + 1;
-    let (gpu, on_gpu, scene, generation) = (
+    let (gpu, on_gpu, engine, scene, generation) = (
         gpu.clone(),
         on_gpu.clone(),
+        engine.clone(),
         scene.clone(),
         generation.clone(),
     );
@@ -102,7 +114,7 @@ pub fn spawn(
             let mut pass = (*scene).clone();
             pass.bake = settings.clone();
             counter.store(0, Ordering::Relaxed);
-            let baked = bake_pass(&gpu, &on_gpu, &pass, k < last, started, &counter);
+            let baked = bake_pass(&gpu, &on_gpu, &engine, &pass, k < last, started, &counter);
             let baked = baked.and_then(|b| {
                 if let (Some(path), false) = (&cache, b.preview) {
                     crate::cache::save(path, crate::cache::bake_key(&scene), &b.lobes)?;
@@ -128,6 +140,7 @@ pub fn spawn(
 fn bake_pass(
     gpu: &Gpu,
     on_gpu: &GpuScene,
+    engine: &BakeEngine,
     scene: &Scene,
     preview: bool,
     started: Instant,
@@ -135,6 +148,17 @@ fn bake_pass(
 ) -> Result<BakeResult> {
     let progress = Progress::counting(traced.clone());
     let plan = BakePlan::new(scene)?;
+    if let BakeEngine::Mirror(grid) = engine {
+        let (lobes, map) = baked_on_mirror(scene, &plan, grid, &progress)?;
+        return Ok(BakeResult {
+            lobes,
+            emitted: map.stats.emitted,
+            photons: GpuPhotons::upload(gpu, &map)?,
+            binned: None,
+            preview,
+            seconds: ms_since(started) / 1e3,
+        });
+    }
     let photons = traced_gpu(scene, &plan, gpu, on_gpu, &progress)?;
     let (lobes, binned) = fit_gpu(scene, &plan, gpu, on_gpu, &photons, &progress)?;
     Ok(BakeResult {

@@ -37,7 +37,7 @@ use crate::renderer::FrameRenderer;
 use crate::scene::Scene;
 use crate::tone::ToneConfig;
 use crate::types::Camera;
-use baking::{BakeResult, Baking};
+use baking::{BakeEngine, BakeResult, Baking};
 pub use baking::{PREVIEW_FRACTION, passes};
 pub use orbit::Orbit;
 
@@ -65,6 +65,8 @@ pub struct ViewOptions {
     /// The bake cache: loaded at start when it matches the scene, else written once the first
     /// bake is in (`render --cache`'s file format).
     pub cache: Option<PathBuf>,
+    /// Bake on the window's device even where it is a software rasterizer (`--gpu`).
+    pub gpu_bake: bool,
 }
 
 /// What a scripted run measured.
@@ -119,6 +121,9 @@ struct State {
     orbit: Orbit,
     tone: ToneConfig,
     method: Method,
+    /// Where bakes run (the device, or the CPU mirror where the device is a software
+    /// rasterizer).
+    engine: BakeEngine,
     /// The bake under way, and the counter that tells an older one to stop.
     baking: Option<Baking>,
     generation: Arc<AtomicU64>,
@@ -197,6 +202,17 @@ impl App {
             None => None,
         };
         let generation = Arc::new(AtomicU64::new(0));
+        let engine = if gpu.is_software() && !self.opts.gpu_bake {
+            eprintln!(
+                "lobelight: {} is a software rasterizer: bakes run on the CPU mirror ({} \
+                 threads), faster here, and frames on it (--gpu bakes on it too)",
+                gpu.info.name,
+                rayon::current_num_threads()
+            );
+            BakeEngine::Mirror(Arc::new(crate::cpu::scene_grid(&self.scene)?))
+        } else {
+            BakeEngine::Device
+        };
         // A cached bake is in from the first frame; else direct light until the bake is.
         // The reference and photon views need the photons, which no cache holds.
         let (baking, bake_s) = match (&cached, self.opts.method) {
@@ -209,7 +225,7 @@ impl App {
                 };
                 let full = passes(&self.scene.bake, false);
                 let on_gpu = &renderer.on_gpu;
-                let b = baking::spawn(&gpu, on_gpu, &self.scene, full, save, &generation);
+                let b = baking::spawn(&gpu, on_gpu, &engine, &self.scene, full, save, &generation);
                 (Some(b), None)
             }
         };
@@ -228,6 +244,7 @@ impl App {
             orbit: Orbit::new(&self.scene.camera),
             tone: self.opts.tone,
             method: self.opts.method,
+            engine,
             baking,
             generation,
             bake_s,
@@ -283,6 +300,7 @@ impl State {
         let b = baking::spawn(
             &self.gpu,
             &self.renderer.on_gpu,
+            &self.engine,
             scene,
             counts,
             None,
