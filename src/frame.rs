@@ -232,7 +232,7 @@ pub fn camera_uniform(view: &View, bounds: (Vec3, Vec3), cfg: &FrameConfig) -> C
 /// direct light drawn by the raster passes, a moving camera's; refinement frames, frames of
 /// shadow rays and the compute splatter draw every splat as it is, so the still image is exact.
 pub fn frame_camera(cam: &Camera, params: &ShadeParams, splatting: Splatting) -> Camera {
-    let moving = params.direct == DIRECT_BAKED && splatting == Splatting::Raster;
+    let moving = Direct::of_code(params.direct) == Direct::Baked && splatting == Splatting::Raster;
     Camera {
         lod: if moving { cam.lod } else { 0.0 },
         ..*cam

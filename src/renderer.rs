@@ -28,7 +28,7 @@ use crate::gpu::tone::{GpuToned, tone_map};
 use crate::scene::Scene;
 use crate::sequence::path_sample;
 use crate::tone::ToneConfig;
-use crate::types::{Camera, DIRECT_BAKED, EmParams, Light, PathParams, ShadeParams};
+use crate::types::{Camera, EmParams, Light, PathParams, ShadeParams};
 
 pub struct FrameRenderer {
     /// The splats, materials and grid (shared with a bake on another thread).
@@ -220,7 +220,7 @@ impl FrameRenderer {
         params: &ShadeParams,
         splatter: Splatter,
     ) -> Result<&wgpu::Buffer> {
-        if params.direct == DIRECT_BAKED && self.direct_ms.is_none() {
+        if Direct::of_code(params.direct) == Direct::Baked && self.direct_ms.is_none() {
             return Err(Error::Internal(
                 "baked direct light was asked for before the lights' direct bake".into(),
             ));

@@ -13,7 +13,7 @@ use crate::frame::{
 use crate::grid::SplatGrid;
 use crate::scene::Scene;
 use crate::sequence::Executor;
-use crate::types::{Camera, DIRECT_BAKED, EmParams, PathParams, ShadeParams, SplatLod};
+use crate::types::{Camera, EmParams, PathParams, ShadeParams, SplatLod};
 
 /// The direct bake on the CPU mirror (`sequence::bake_direct`).
 pub fn cpu_direct(scene: &Scene, grid: &SplatGrid) -> Result<DirectMap> {
@@ -58,7 +58,8 @@ pub fn cpu_frame(
     cam: &Camera,
     params: &ShadeParams,
 ) -> Result<Vec<[f32; 4]>> {
-    let direct = match params.direct == DIRECT_BAKED || params.glossy_rays > 0 {
+    let baked = Direct::of_code(params.direct) == Direct::Baked;
+    let direct = match baked || params.glossy_rays > 0 {
         true => cpu_direct(scene, grid)?,
         false => DirectMap::default(),
     };
@@ -78,15 +79,16 @@ pub fn cpu_frame_into(
     hdr: &mut [[f32; 4]],
 ) {
     let cam = &frame_camera(cam, params, Splatting::Raster);
-    let selection = match params.direct {
-        DIRECT_BAKED => {
+    let baked = Direct::of_code(params.direct) == Direct::Baked;
+    let selection = match baked {
+        true => {
             let lods = match cam.lod > 0.0 {
                 true => crate::lod::splat_lods(&scene.splats),
                 false => vec![SplatLod::default(); scene.splats.len()],
             };
             Some(cpu::splat_select::selection(cam, &scene.splats, &lods))
         }
-        _ => None,
+        false => None,
     };
     let drawn = match (&selection, cam.lod > 0.0) {
         (Some(sel), true) => {
@@ -97,7 +99,7 @@ pub fn cpu_frame_into(
     let tiles = cpu::splat_visibility::bin_tiles(cam, &drawn);
     // Moving frames (baked direct light) draw disks as they are; still images end them where
     // their surfaces end (wgsl/shared/drawn_clip.wgsl).
-    let clips: &[crate::types::SurfaceClip] = match params.direct == crate::types::DIRECT_BAKED {
+    let clips: &[crate::types::SurfaceClip] = match baked {
         true => &[],
         false => &scene.clips,
     };

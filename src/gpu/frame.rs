@@ -18,7 +18,7 @@ use crate::sequence::{Direct, TileLists, bin_splat_tiles};
 use crate::shaders::Stage;
 use crate::shaders::{PAGE_BINDING_STEP, Paging};
 use crate::shared::splat::{SPLAT_CORNERS, SPLATS_PER_INSTANCE, instances};
-use crate::types::{Camera, DIRECT_BAKED, ShadeParams, SplatLod};
+use crate::types::{Camera, ShadeParams, SplatLod};
 
 /// The format of the blended targets: f32 where the device can blend it, else f16.
 pub fn accumulation_format(gpu: &Gpu) -> wgpu::TextureFormat {
@@ -907,7 +907,7 @@ impl SplatPipelines {
         pass: SplatPass,
     ) -> Result<()> {
         let (cam_buf, params_buf) = (&uniforms.cam, &uniforms.params);
-        let baked = uniforms.direct == DIRECT_BAKED;
+        let baked = DirectMode::of_code(uniforms.direct) == DirectMode::Baked;
         match pass {
             SplatPass::Visibility if baked => {
                 self.record_splat_select(gpu, encoder, scene, uniforms)?
