@@ -38,16 +38,41 @@ impl Show {
         Show::Lobes,
     ];
 
-    /// `ShadeParams::show` bits.
-    pub fn mask(self) -> u32 {
-        use crate::shared::splat::*;
+    /// The light terms this shows.
+    pub fn terms(self) -> Terms {
         match self {
-            Show::Full => SHOW_ALL,
-            Show::Direct => SHOW_DIRECT_DIFFUSE | SHOW_DIRECT_SPECULAR,
-            Show::Indirect => SHOW_INDIRECT_DIFFUSE | SHOW_INDIRECT_SPECULAR,
-            Show::Diffuse => SHOW_DIRECT_DIFFUSE | SHOW_INDIRECT_DIFFUSE,
-            Show::Lobes => SHOW_INDIRECT_SPECULAR,
+            Show::Full => Terms::ALL,
+            Show::Direct => Terms::DIRECT_DIFFUSE | Terms::DIRECT_SPECULAR,
+            Show::Indirect => Terms::INDIRECT_DIFFUSE | Terms::INDIRECT_SPECULAR,
+            Show::Diffuse => Terms::DIRECT_DIFFUSE | Terms::INDIRECT_DIFFUSE,
+            Show::Lobes => Terms::INDIRECT_SPECULAR,
         }
+    }
+}
+
+/// The light terms a frame shows, any set of the four: its uniforms carry them as the
+/// `shared::splat::SHOW_*` bits (`ShadeParams::show`, `PathParams::show`). `Show` names the
+/// sets the command line and the viewer's keys offer.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Hash)]
+pub struct Terms(u32);
+
+impl Terms {
+    pub const ALL: Terms = Terms(crate::shared::splat::SHOW_ALL);
+    pub const DIRECT_DIFFUSE: Terms = Terms(crate::shared::splat::SHOW_DIRECT_DIFFUSE);
+    pub const DIRECT_SPECULAR: Terms = Terms(crate::shared::splat::SHOW_DIRECT_SPECULAR);
+    pub const INDIRECT_DIFFUSE: Terms = Terms(crate::shared::splat::SHOW_INDIRECT_DIFFUSE);
+    pub const INDIRECT_SPECULAR: Terms = Terms(crate::shared::splat::SHOW_INDIRECT_SPECULAR);
+
+    /// The uniforms' `show` bits.
+    pub fn bits(self) -> u32 {
+        self.0
+    }
+}
+
+impl std::ops::BitOr for Terms {
+    type Output = Terms;
+    fn bitor(self, other: Terms) -> Terms {
+        Terms(self.0 | other.0)
     }
 }
 
@@ -138,8 +163,8 @@ pub struct FrameConfig {
     pub depth_tolerance: f32,
     /// Seed of the area-light jitter.
     pub seed: u32,
-    /// Which light terms to show (`shared::splat::SHOW_*` bits).
-    pub show: u32,
+    /// Which light terms to show.
+    pub show: Terms,
     /// Level of detail of moving frames, in pixels (`Camera::lod`; 0: off).
     pub lod: f32,
     /// Rays a pixel and refinement frame tracing the glossy surfaces' indirect light
@@ -155,7 +180,7 @@ impl Default for FrameConfig {
             splatter: Splatter::Auto,
             depth_tolerance: 1.0,
             seed: 1,
-            show: crate::shared::splat::SHOW_ALL,
+            show: Terms::ALL,
             lod: DEFAULT_LOD,
             glossy_rays: DEFAULT_GLOSSY_RAYS,
         }
@@ -259,7 +284,7 @@ impl SceneExtent {
 /// The path tracer's uniform for the first sample of an image `cam.size` (set `sample` for the
 /// others), with the bake's path length and seed, showing the light terms `show`
 /// (`FrameConfig::show`).
-pub fn path_params(scene: &Scene, cam: &Camera, show: u32, shadow_bias: f32) -> PathParams {
+pub fn path_params(scene: &Scene, cam: &Camera, show: Terms, shadow_bias: f32) -> PathParams {
     PathParams {
         width: cam.size[0] as u32,
         height: cam.size[1] as u32,
@@ -267,7 +292,7 @@ pub fn path_params(scene: &Scene, cam: &Camera, show: u32, shadow_bias: f32) -> 
         seed: scene.bake.seed,
         max_depth: scene.bake.max_depth,
         light_count: scene.lights.len() as u32,
-        show,
+        show: show.bits(),
         shadow_bias,
     }
 }
@@ -339,7 +364,7 @@ pub fn shade_params_for(
         area_samples: cfg.area_samples,
         shadow_bias,
         seed: cfg.seed,
-        show: cfg.show,
+        show: cfg.show.bits(),
         direct: cfg.direct.code(),
         area_first: 0,
         area_count: cfg.area_samples * cfg.area_samples,

@@ -15,8 +15,8 @@ use crate::direct::{DirectMap, direct_params_biased};
 use crate::em::LobeMap;
 use crate::error::{Error, Result};
 use crate::frame::{
-    Direct, FrameConfig, SceneExtent, Splatter, Splatting, camera_uniform, frame_camera, jitter,
-    path_params, refinement, shade_params_for,
+    Direct, FrameConfig, SceneExtent, Splatter, Splatting, Terms, camera_uniform, frame_camera,
+    jitter, path_params, refinement, shade_params_for,
 };
 use crate::gpu::Gpu;
 use crate::gpu::bins::GpuBins;
@@ -365,7 +365,7 @@ impl FrameRenderer {
         gpu: &Gpu,
         scene: &Scene,
         view: &View,
-        show: u32,
+        show: Terms,
         spp: u32,
         mut each: impl FnMut(u32),
     ) -> Result<&FrameTargets> {

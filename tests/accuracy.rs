@@ -47,7 +47,7 @@ fn objects_against_path_tracer(
         .iter()
         .map(|&show| {
             let cfg = FrameConfig {
-                show: show.mask(),
+                show: show.terms(),
                 ..FrameConfig::default()
             };
             let cam = camera_uniform(&view, scene.bounds(), &cfg);
@@ -58,7 +58,7 @@ fn objects_against_path_tracer(
                 Show::Direct => b.direct_spp,
                 _ => b.indirect_spp,
             };
-            let path = cpu_path(scene, &grid, &cam, show.mask(), spp).unwrap();
+            let path = cpu_path(scene, &grid, &cam, show.terms(), spp).unwrap();
             let ids = ids.get_or_insert_with(|| object_ids(scene, &grid, &cam, SAMPLES).unwrap());
             per_object(&still, &path, ids, &scene.surfaces).unwrap()
         })

@@ -33,7 +33,7 @@ fn cpu_bake(scene: &Scene) -> LobeMap {
 fn with(direct: Direct, show: Show) -> FrameConfig {
     FrameConfig {
         direct,
-        show: show.mask(),
+        show: show.terms(),
         lod: 0.0,
         ..FrameConfig::default()
     }
@@ -151,12 +151,12 @@ fn refined_still_matches_the_cpu_mirror() {
     let mut spheres = scene::load(Path::new("scenes/cornell_spheres.toml")).unwrap();
     spheres.bake.photons = 20_000;
     let specular = FrameConfig {
-        show: lobelight::shared::splat::SHOW_DIRECT_SPECULAR,
+        show: lobelight::frame::Terms::DIRECT_SPECULAR,
         ..Default::default()
     };
     refined_parity(&gpu, &spheres, &specular, "spheres, glossy direct light");
     let traced = FrameConfig {
-        show: lobelight::shared::splat::SHOW_INDIRECT_SPECULAR,
+        show: lobelight::frame::Terms::INDIRECT_SPECULAR,
         ..Default::default()
     };
     refined_parity(&gpu, &spheres, &traced, "spheres, glossy rays");

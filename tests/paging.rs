@@ -9,6 +9,7 @@ mod common;
 use lobelight::bake::{BakeDevice, Progress, bake};
 use lobelight::camera::View;
 use lobelight::cpu;
+use lobelight::frame::Terms;
 use lobelight::frame::{Direct, FrameConfig, Splatter};
 use lobelight::gpu::Gpu;
 use lobelight::gpu::grid::build_grid;
@@ -16,7 +17,6 @@ use lobelight::gpu::scene::GpuScene;
 use lobelight::grid::{GridConfig, grid_params};
 use lobelight::renderer::FrameRenderer;
 use lobelight::scene::Scene;
-use lobelight::shared::splat::SHOW_ALL;
 
 #[test]
 fn a_paged_grid_equals_the_cpu_grid() {
@@ -71,7 +71,7 @@ fn bake_and_draw(gpu: &Gpu, scene: &Scene) -> (Vec<u8>, Vec<Vec<[f32; 4]>>) {
         images.push(renderer.read_hdr(gpu).unwrap());
     }
     renderer
-        .draw_path(gpu, scene, &view, SHOW_ALL, 2, |_| {})
+        .draw_path(gpu, scene, &view, Terms::ALL, 2, |_| {})
         .unwrap();
     images.push(renderer.read_hdr(gpu).unwrap());
     (lobes, images)

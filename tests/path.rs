@@ -8,18 +8,15 @@ use std::path::Path;
 use glam::Vec3;
 use lobelight::camera::View;
 use lobelight::cpu::frames::cpu_path;
+use lobelight::frame::Terms;
 use lobelight::frame::{FrameConfig, camera_uniform};
 use lobelight::renderer::FrameRenderer;
 use lobelight::scene::{self, Scene};
-use lobelight::shared::splat::{
-    SHOW_ALL, SHOW_DIRECT_DIFFUSE, SHOW_DIRECT_SPECULAR, SHOW_INDIRECT_DIFFUSE,
-    SHOW_INDIRECT_SPECULAR,
-};
 
 fn gpu_path(gpu: &lobelight::gpu::Gpu, scene: &Scene, view: &View, spp: u32) -> Vec<[f32; 4]> {
     let mut renderer = FrameRenderer::new(gpu, scene).unwrap();
     renderer
-        .draw_path(gpu, scene, view, SHOW_ALL, spp, |_| {})
+        .draw_path(gpu, scene, view, Terms::ALL, spp, |_| {})
         .unwrap();
     renderer.read_hdr(gpu).unwrap()
 }
@@ -42,7 +39,7 @@ fn path_tracer_matches_its_cpu_mirror() {
         let view = View::new(&scene.camera, 48, 48);
         let cam = camera_uniform(&view, scene.bounds(), &FrameConfig::default());
         let a = gpu_path(&gpu, &scene, &view, 8);
-        let b = cpu_path(&scene, &grid, &cam, SHOW_ALL, 8).unwrap();
+        let b = cpu_path(&scene, &grid, &cam, Terms::ALL, 8).unwrap();
         let close = a
             .iter()
             .zip(&b)
@@ -129,9 +126,9 @@ fn path_tracer_parts_add_up_to_the_whole() {
     let grid = common::host_grid(&scene);
     let view = View::new(&scene.camera, 40, 40);
     let cam = camera_uniform(&view, scene.bounds(), &FrameConfig::default());
-    let part = |show: u32| cpu_path(&scene, &grid, &cam, show, 4).unwrap();
-    let full = part(SHOW_ALL);
-    let sum = |parts: &[u32]| {
+    let part = |show: Terms| cpu_path(&scene, &grid, &cam, show, 4).unwrap();
+    let full = part(Terms::ALL);
+    let sum = |parts: &[Terms]| {
         let images: Vec<_> = parts.iter().map(|&s| part(s)).collect();
         (0..full.len())
             .map(|i| {
@@ -143,7 +140,7 @@ fn path_tracer_parts_add_up_to_the_whole() {
             })
             .collect::<Vec<_>>()
     };
-    let split = |parts: &[u32], what: &str| {
+    let split = |parts: &[Terms], what: &str| {
         let s = sum(parts);
         let worst = full
             .iter()
@@ -154,25 +151,25 @@ fn path_tracer_parts_add_up_to_the_whole() {
         assert!(worst <= 1e-4, "{what}: {worst}");
     };
     split(
-        &[Show::Direct.mask(), Show::Indirect.mask()],
+        &[Show::Direct.terms(), Show::Indirect.terms()],
         "direct + indirect",
     );
-    let (dd, ds) = (SHOW_DIRECT_DIFFUSE, SHOW_DIRECT_SPECULAR);
-    let (id, is) = (SHOW_INDIRECT_DIFFUSE, SHOW_INDIRECT_SPECULAR);
+    let (dd, ds) = (Terms::DIRECT_DIFFUSE, Terms::DIRECT_SPECULAR);
+    let (id, is) = (Terms::INDIRECT_DIFFUSE, Terms::INDIRECT_SPECULAR);
     split(&[dd, ds, id, is], "the four terms");
     // Each part carries light: none of them is the whole or nothing. (Direct specular is all
     // but black here: no glossy face mirrors the ceiling light towards this camera.)
     for bits in [dd, id, is] {
         let mean = part(bits).iter().map(luminance).sum::<f64>() / full.len() as f64;
-        assert!(mean > 1e-4, "show bits {bits}: mean {mean}");
+        assert!(mean > 1e-4, "show {bits:?}: mean {mean}");
     }
     let gpu = common::gpu();
     let mut renderer = FrameRenderer::new(&gpu, &scene).unwrap();
     renderer
-        .draw_path(&gpu, &scene, &view, Show::Indirect.mask(), 4, |_| {})
+        .draw_path(&gpu, &scene, &view, Show::Indirect.terms(), 4, |_| {})
         .unwrap();
     let a = renderer.read_hdr(&gpu).unwrap();
-    let b = part(Show::Indirect.mask());
+    let b = part(Show::Indirect.terms());
     let mean = |v: &[[f32; 4]]| v.iter().map(luminance).sum::<f64>() / v.len() as f64;
     let (ma, mb) = (mean(&a), mean(&b));
     eprintln!("indirect on the device {ma:.5}, on the mirror {mb:.5}");

@@ -429,14 +429,14 @@ fn gpu_bake_and_frame_are_deterministic() {
 /// 1e-6 and 1e-5). The light seen directly counts with the direct diffuse term.
 #[test]
 fn shown_light_terms_add_up_to_the_full_frame() {
-    use lobelight::shared::splat::{SHOW_DIRECT_SPECULAR, SHOW_INDIRECT_SPECULAR};
+    use lobelight::frame::Terms;
     let gpu = common::gpu();
     let mut scene = scene::load(Path::new("scenes/cornell.toml")).unwrap();
     scene.bake.photons = 60_000;
     let grid = common::host_grid(&scene);
     let lobes = cpu_bake(&scene, &grid);
     let view = View::new(&scene.camera, 64, 64);
-    let with = |show: u32, direct: Direct| FrameConfig {
+    let with = |show: Terms, direct: Direct| FrameConfig {
         show,
         direct,
         ..FrameConfig::default()
@@ -447,29 +447,29 @@ fn shown_light_terms_add_up_to_the_full_frame() {
             .map(|(p, q)| [p[0] + q[0], p[1] + q[1], p[2] + q[2], 1.0])
             .collect()
     };
-    let specular = SHOW_DIRECT_SPECULAR | SHOW_INDIRECT_SPECULAR;
+    let specular = Terms::DIRECT_SPECULAR | Terms::INDIRECT_SPECULAR;
     let runs = [true, false].map(|g| [(g, Direct::Baked), (g, Direct::Rays)]);
     for (on_gpu, direct) in runs.into_iter().flatten() {
-        let frame = |show: u32| {
+        let frame = |show: Terms| {
             if on_gpu {
                 gpu_frame(&gpu, &scene, &lobes, &view, &with(show, direct))
             } else {
                 cpu_hdr(&scene, &grid, &lobes, &view, &with(show, direct))
             }
         };
-        let full = frame(Show::Full.mask());
+        let full = frame(Show::Full.terms());
         let splits = [
-            (Show::Direct.mask(), Show::Indirect.mask()),
-            (Show::Diffuse.mask(), specular),
+            (Show::Direct.terms(), Show::Indirect.terms()),
+            (Show::Diffuse.terms(), specular),
         ];
         for (a, b) in splits {
             let d = difference(&add(frame(a), frame(b)), &full).unwrap();
-            eprintln!("gpu {on_gpu}, {direct:?}, {a:#x} + {b:#x}: {d:?}");
+            eprintln!("gpu {on_gpu}, {direct:?}, {a:?} + {b:?}: {d:?}");
             assert!(d.mean_relative <= 1e-6, "{d:?}");
             assert!(d.max_relative <= 1e-5, "{d:?}");
         }
         // A part alone is not the whole: the split is real.
-        let direct = difference(&frame(Show::Direct.mask()), &full).unwrap();
+        let direct = difference(&frame(Show::Direct.terms()), &full).unwrap();
         assert!(direct.energy < -0.05, "{direct:?}");
     }
 }

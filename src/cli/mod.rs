@@ -230,7 +230,7 @@ impl LookArgs {
     fn frame(&self) -> FrameConfig {
         FrameConfig {
             area_samples: self.area_samples,
-            show: self.show.mask(),
+            show: self.show.terms(),
             direct: self.direct,
             splatter: self.splatter,
             lod: self.lod,

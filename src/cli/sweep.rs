@@ -28,13 +28,12 @@ use crate::cpu;
 use crate::cpu::frames::{cpu_path, cpu_refined};
 use crate::em::LobeFamily;
 use crate::error::{Error, Result};
-use crate::frame::{Direct, FrameConfig, camera_uniform, shade_params};
+use crate::frame::{Direct, FrameConfig, Terms, camera_uniform, shade_params};
 use crate::gpu::Gpu;
 use crate::objects::{SAMPLES, object_ids};
 use crate::renderer::FrameRenderer;
 use crate::scene::Scene;
 use crate::shared::rng::{pcg_hash, unit_float};
-use crate::shared::splat::SHOW_ALL;
 use crate::timing::ms_since;
 
 /// What a sweep varies, and around what.
@@ -369,13 +368,13 @@ impl Runner<'_> {
         match self {
             Runner::Gpu(gpu, slot) => {
                 let renderer = renderer_on(gpu, slot, scene)?;
-                renderer.draw_path(gpu, scene, view, SHOW_ALL, spp, |_| {})?;
+                renderer.draw_path(gpu, scene, view, Terms::ALL, spp, |_| {})?;
                 renderer.read_hdr(gpu)
             }
             Runner::Cpu => {
                 let cam = camera_uniform(view, scene.bounds(), &FrameConfig::default());
                 let grid = cpu::scene_grid(scene)?;
-                cpu_path(scene, &grid, &cam, SHOW_ALL, spp)
+                cpu_path(scene, &grid, &cam, Terms::ALL, spp)
             }
         }
     }

@@ -8,7 +8,8 @@ use crate::direct::{DirectMap, direct_params, shadow_bias};
 use crate::em::LobeMap;
 use crate::error::Result;
 use crate::frame::{
-    Direct, FrameConfig, Splatting, frame_camera, jitter, path_params, refinement, shade_params,
+    Direct, FrameConfig, Splatting, Terms, frame_camera, jitter, path_params, refinement,
+    shade_params,
 };
 use crate::grid::SplatGrid;
 use crate::scene::Scene;
@@ -31,7 +32,7 @@ pub fn cpu_path(
     scene: &Scene,
     grid: &SplatGrid,
     cam: &Camera,
-    show: u32,
+    show: Terms,
     spp: u32,
 ) -> Result<Vec<[f32; 4]>> {
     let geo = scene.geometry(grid);

@@ -27,7 +27,7 @@ use crate::camera::View;
 use crate::cli::render::Method;
 use crate::cpu::photon_view::scene_scale;
 use crate::error::{Error, Result};
-use crate::frame::{FrameConfig, Show, camera_uniform};
+use crate::frame::{FrameConfig, Show, Terms, camera_uniform};
 use crate::gpu::photon_view::photon_image;
 use crate::gpu::present::PresentPipeline;
 use crate::gpu::tone::tone_map;
@@ -139,7 +139,7 @@ struct State {
     lit_ms: Vec<f64>,
     /// What the last frame showed (camera, terms, method and light version): while it stays,
     /// the camera rests and frames refine the still image.
-    still: Option<(Camera, u32, Method, u64)>,
+    still: Option<(Camera, Terms, Method, u64)>,
     /// Refinement frames the HDR image holds (0: a moving frame), and the most it takes.
     samples: u32,
     spp: u32,
@@ -260,7 +260,7 @@ impl App {
             version: 0,
             show: Show::ALL
                 .into_iter()
-                .find(|s| s.mask() == self.opts.frame.show)
+                .find(|s| s.terms() == self.opts.frame.show)
                 .unwrap_or_default(),
         })
     }
@@ -413,7 +413,7 @@ impl State {
         };
         let start = Instant::now();
         let frame = FrameConfig {
-            show: self.show.mask(),
+            show: self.show.terms(),
             ..frame.clone()
         };
         let gpu = self.gpu.clone();
