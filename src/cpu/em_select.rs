@@ -77,10 +77,7 @@ pub fn dispatch(b: &Bindings, groups: u32) -> Result<()> {
     let mut active = b.get_mut(5)?;
     let mut counters = b.get_mut(6)?;
     let mut gather_list = b.get_mut(7)?;
-    let counters: &mut [u32; 4] = counters
-        .get_mut(..4)
-        .and_then(|c| c.try_into().ok())
-        .ok_or_else(|| b.internal("counters too short"))?;
+    let counters = b.counters::<4>(&mut counters)?;
     let (splats, materials) = (view(&splats), view(&materials));
     em_select(
         &em,

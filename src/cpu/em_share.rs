@@ -107,10 +107,7 @@ pub fn dispatch(b: &Bindings, groups: u32) -> Result<()> {
     let power = b.get(9)?;
     let spread = b.get(10)?;
     let mut light = b.get_mut(11)?;
-    let counters: &mut [u32; 4] = counters
-        .get_mut(..4)
-        .and_then(|c| c.try_into().ok())
-        .ok_or_else(|| b.internal("counters too short"))?;
+    let counters = b.counters::<4>(&mut counters)?;
     let binned = BinnedDeposits {
         cell_start: &cell_start,
         keys: view(&keys),
