@@ -114,8 +114,9 @@ write_report() {
   } >"$out"
 }
 
-adapter=$("$bin" info scenes/cornell.toml --json 2>"$work/info.err" | sed -n 's/^  "adapter": \(".*"\),$/\1/p')
-backend=$("$bin" info scenes/cornell.toml --json 2>/dev/null | sed -n 's/^  "backend": \(".*"\),$/\1/p')
+"$bin" info scenes/cornell.toml --json >"$work/info.json" 2>"$work/info.err"
+adapter=$(sed -n 's/^  "adapter": \(".*"\),$/\1/p' "$work/info.json")
+backend=$(sed -n 's/^  "backend": \(".*"\),$/\1/p' "$work/info.json")
 if [ -z "$adapter" ]; then
   echo "gpu-check: no adapter: $(cat "$work/info.err")" >&2
   exit 1
