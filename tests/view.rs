@@ -47,8 +47,18 @@ fn xvfb_run() -> Command {
 /// Runs the command `build` makes under a fresh `xvfb-run`, once more (up to three times in
 /// all) where the program could not reach the X server it was given: `xvfb-run` starts the
 /// server and the program without waiting for each other on a loaded machine, and that race,
-/// not lobelight, failed one run in a few.
+/// not lobelight, failed one run in a few. The program says so on its stderr.
 fn in_xvfb(build: impl Fn(&mut Command)) -> std::process::Output {
+    in_xvfb_said(build, |run| {
+        String::from_utf8_lossy(&run.stderr).into_owned()
+    })
+}
+
+/// `in_xvfb`, where `said` reads what the program said (its stderr, or a log it writes).
+fn in_xvfb_said(
+    build: impl Fn(&mut Command),
+    said: impl Fn(&std::process::Output) -> String,
+) -> std::process::Output {
     let mut out = None;
     for _ in 0..3 {
         let mut cmd = xvfb_run();
@@ -56,7 +66,7 @@ fn in_xvfb(build: impl Fn(&mut Command)) -> std::process::Output {
         let run = cmd
             .output()
             .expect("xvfb-run is missing: install the xvfb package (CI does)");
-        let unreached = String::from_utf8_lossy(&run.stderr).contains("connection to X server");
+        let unreached = said(&run).contains("connection to X server");
         out = Some(run);
         if !unreached {
             break;
@@ -473,24 +483,17 @@ wait $viewer
         log = dir.join("log.txt").display(),
         scene = concat!(env!("CARGO_MANIFEST_DIR"), "/scenes/cornell.toml"),
     );
-    // The viewer writes its own log: a run whose viewer could not reach the X server (see
-    // `in_xvfb`) is run again.
-    let mut log = String::new();
-    let mut out = None;
-    for _ in 0..3 {
-        let run = xvfb_run()
-            .args(["-a", "-s", "-screen 0 640x480x24", "bash", "-c", &script])
-            // Screenshots (P) land in the working directory.
-            .current_dir(&dir)
-            .output()
-            .expect("xvfb-run is missing: install the xvfb package (CI does)");
-        log = std::fs::read_to_string(dir.join("log.txt")).unwrap_or_default();
-        out = Some(run);
-        if !log.contains("connection to X server") {
-            break;
-        }
-    }
-    let out = out.expect("at least one run");
+    // The viewer writes its own log, where it says it could not reach the X server.
+    let read_log = || std::fs::read_to_string(dir.join("log.txt")).unwrap_or_default();
+    let out = in_xvfb_said(
+        |c| {
+            c.args(["-a", "-s", "-screen 0 640x480x24", "bash", "-c", &script])
+                // Screenshots (P) land in the working directory.
+                .current_dir(&dir);
+        },
+        |_| read_log(),
+    );
+    let log = read_log();
     assert!(
         out.status.success(),
         "{}\n{log}",
