@@ -279,23 +279,42 @@ fn binned_of(
     Ok(binned(plan, scene.splats.len(), bins, &map.stats, ms))
 }
 
-/// The lobes of a bake on the CPU mirror, and its photons (for views that draw them): the
-/// viewer's bake where the CPU mirror outruns the window's software rasterizer.
+/// A bake on the CPU mirror: its lobes, its photons (for views that draw them) and the
+/// reports of its tracing and of its binning or deposits.
+pub struct MirrorBake {
+    pub lobes: LobeMap,
+    pub map: PhotonMap,
+    pub photons: StageReport,
+    pub binning: StageReport,
+}
+
+/// Bakes on the CPU mirror: `bake`'s CPU path, and the viewer's bake where the CPU mirror
+/// outruns the window's software rasterizer.
 pub fn baked_on_mirror(
     scene: &Scene,
     plan: &BakePlan,
     grid: &SplatGrid,
     progress: &Progress,
-) -> Result<(LobeMap, PhotonMap)> {
+) -> Result<MirrorBake> {
     let map = traced_cpu(scene, plan, grid, progress)?;
     if plan.em.uses_deposits() {
-        let (deposits, _) = deposits_cpu(scene, plan, grid, &map, progress)?;
+        // The photons are deposited, not binned: the binning's report is the deposits'.
+        let (deposits, ms) = deposits_cpu(scene, plan, grid, &map, progress)?;
         let binned = (&deposits.bins, Some(&deposits));
-        return Ok((fit_on_cpu(scene, plan, grid, binned, progress)?, map));
+        return Ok(MirrorBake {
+            lobes: fit_on_cpu(scene, plan, grid, binned, progress)?,
+            photons: traced_report(&map.stats),
+            binning: StageReport::ran(ms),
+            map,
+        });
     }
     let b = binned_of(scene, plan, grid, &map, progress)?;
-    let lobes = fit_on_cpu(scene, plan, grid, (&b.bins, None), progress)?;
-    Ok((lobes, map))
+    Ok(MirrorBake {
+        lobes: fit_on_cpu(scene, plan, grid, (&b.bins, None), progress)?,
+        photons: b.photons,
+        binning: b.binning,
+        map,
+    })
 }
 
 /// Traces on the CPU mirror.
@@ -473,17 +492,9 @@ pub fn bake(scene: &Scene, device: BakeDevice, progress: &Progress) -> Result<Ba
             let lobes = fit_on_gpu(scene, &plan, gpu, on_gpu, (&b.bins, None), progress)?;
             (lobes, b.photons, b.binning)
         }
-        BakeDevice::Cpu(grid) if em_cfg.uses_deposits() => {
-            let map = traced_cpu(scene, &plan, grid, progress)?;
-            let (deposits, ms) = deposits_cpu(scene, &plan, grid, &map, progress)?;
-            let binned = (&deposits.bins, Some(&deposits));
-            let lobes = fit_on_cpu(scene, &plan, grid, binned, progress)?;
-            (lobes, traced_report(&map.stats), StageReport::ran(ms))
-        }
         BakeDevice::Cpu(grid) => {
-            let b = binned_cpu(scene, &plan, grid, progress)?;
-            let lobes = fit_on_cpu(scene, &plan, grid, (&b.bins, None), progress)?;
-            (lobes, b.photons, b.binning)
+            let b = baked_on_mirror(scene, &plan, grid, progress)?;
+            (b.lobes, b.photons, b.binning)
         }
     };
     let s = &lobes.stats;

@@ -149,11 +149,11 @@ fn bake_pass(
     let progress = Progress::counting(traced.clone());
     let plan = BakePlan::new(scene)?;
     if let BakeEngine::Mirror(grid) = engine {
-        let (lobes, map) = baked_on_mirror(scene, &plan, grid, &progress)?;
+        let baked = baked_on_mirror(scene, &plan, grid, &progress)?;
         return Ok(BakeResult {
-            lobes,
-            emitted: map.stats.emitted,
-            photons: GpuPhotons::upload(gpu, &map)?,
+            emitted: baked.map.stats.emitted,
+            photons: GpuPhotons::upload(gpu, &baked.map)?,
+            lobes: baked.lobes,
             binned: None,
             preview,
             seconds: ms_since(started) / 1e3,
