@@ -1,27 +1,28 @@
-//! The bake (docs/design.md §4–6): photons from the lights, binned, and the lobes fitted to them,
-//! on the device or on the CPU mirror, with a line of figures per stage. A frame needs only
+//! The bake (docs/design.md §4–6): photons from the lights, deposited or binned, and the lobes
+//! fitted to them, with a line of figures per stage. One sequence (`bake_on`), generic over
+//! the executor, runs it from one plan of the scene (`BakePlan`) on the device or on the CPU
+//! mirrors; `bake` and `bins_gpu` / `bins_cpu` only choose the executor. A frame needs only
 //! its result, so a camera change never bakes again.
 
 use std::sync::Arc;
 use std::sync::atomic::{AtomicU64, Ordering};
 use std::time::Instant;
 
-use crate::bins::{PhotonBins, bin_params};
-use crate::cpu;
+use crate::bins::{PhotonBins, bin_params, check_binned};
+use crate::cpu::{CpuBuffer, CpuExecutor};
 use crate::direct::direct_params;
 use crate::em::{EmConfig, FitShape, GatherSetup, LobeMap};
 use crate::error::{Error, Result};
 use crate::gpu::Gpu;
-use crate::gpu::bins::{GpuBins, GpuDeposits, bin_photons, deposit_photons};
-use crate::gpu::em::{fit_lobes_gathering, fit_lobes_to_deposits};
-use crate::gpu::photons::{GpuPhotons, trace_photons};
+use crate::gpu::exec::GpuExecutor;
 use crate::gpu::scene::GpuScene;
 use crate::grid::SplatGrid;
 use crate::photons::{PhotonMap, PhotonStats};
-use crate::plan::BakePlan;
+use crate::plan::{BakeLimits, BakePlan};
 use crate::scene::Scene;
+use crate::sequence::{self, Bins, DepositInput, Deposits, Executor, FitInput, Gathering, Traced};
 use crate::timing::ms_since;
-use crate::types::{DepositParams, EmParams};
+use crate::types::{EmParams, GridParams};
 
 /// One stage's line of `--stats` / `--json` (docs/cli.md).
 #[derive(Clone, Debug, Default, serde::Serialize)]
@@ -72,6 +73,16 @@ impl StageReport {
 pub enum BakeDevice<'a> {
     Gpu(&'a Gpu, &'a GpuScene),
     Cpu(&'a SplatGrid),
+}
+
+impl BakeDevice<'_> {
+    /// What this executor holds of a bake.
+    pub fn limits(&self) -> BakeLimits {
+        match self {
+            BakeDevice::Gpu(gpu, _) => gpu.bake_limits(),
+            BakeDevice::Cpu(_) => BakeLimits::host(),
+        }
+    }
 }
 
 pub struct Baked {
@@ -198,305 +209,162 @@ pub struct Binned<B> {
     pub binning: StageReport,
 }
 
-fn binned<B>(plan: &BakePlan, splats: usize, bins: B, stats: &PhotonStats, ms: f64) -> Binned<B> {
-    Binned {
-        bins,
-        em: plan.em.params(splats as u32, 0, FitShape::default()),
-        photons: traced_report(stats),
-        binning: StageReport::ran(ms),
-    }
+/// The scene where a bake runs: its splats and their materials in the executor's buffers,
+/// and the grid's box (the deposits are binned over it).
+pub struct SceneBuffers<'a, B> {
+    pub splats: &'a B,
+    pub materials: &'a B,
+    pub splat_count: u32,
+    pub grid: &'a GridParams,
 }
 
-/// The photon pass's report.
-fn traced_report(stats: &PhotonStats) -> StageReport {
-    StageReport {
-        emitted: Some(stats.emitted),
-        stored: Some(stats.stored),
-        ..StageReport::ran(stats.trace_ms)
-    }
+/// How far a bake goes: the photons binned (what the reference renderer reads), or the lobes
+/// fitted.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum BakeTo {
+    Bins,
+    Lobes,
 }
 
-/// Traces and bins on the device.
-pub fn bins_gpu(
-    scene: &Scene,
-    gpu: &Gpu,
-    on_gpu: &GpuScene,
-    progress: &Progress,
-) -> Result<Binned<GpuBins>> {
-    let plan = BakePlan::new(scene)?;
-    let traced = traced_gpu(scene, &plan, gpu, on_gpu, progress)?;
-    binned_gpu(scene, &plan, gpu, on_gpu, &traced, progress)
-}
-
-/// Bins photons traced on the device.
-pub fn binned_gpu(
-    scene: &Scene,
-    plan: &BakePlan,
-    gpu: &Gpu,
-    on_gpu: &GpuScene,
-    traced: &GpuPhotons,
-    progress: &Progress,
-) -> Result<Binned<GpuBins>> {
-    let stats = &traced.stats;
-    let (bins, ms) = progress.timed("binning", || {
-        let params = bin_params(&on_gpu.grid.params, plan.em.radius, stats.stored)?;
-        bin_photons(gpu, traced, &on_gpu.splats, &params)
-    })?;
-    Ok(binned(plan, scene.splats.len(), bins, stats, ms))
-}
-
-/// Traces and bins on the CPU mirror.
-pub fn bins_cpu(
-    scene: &Scene,
-    grid: &SplatGrid,
-    progress: &Progress,
-) -> Result<Binned<PhotonBins>> {
-    binned_cpu(scene, &BakePlan::new(scene)?, grid, progress)
-}
-
-fn binned_cpu(
-    scene: &Scene,
-    plan: &BakePlan,
-    grid: &SplatGrid,
-    progress: &Progress,
-) -> Result<Binned<PhotonBins>> {
-    let map = traced_cpu(scene, plan, grid, progress)?;
-    binned_of(scene, plan, grid, &map, progress)
-}
-
-/// Bins photons traced on the CPU mirror.
-fn binned_of(
-    scene: &Scene,
-    plan: &BakePlan,
-    grid: &SplatGrid,
-    map: &PhotonMap,
-    progress: &Progress,
-) -> Result<Binned<PhotonBins>> {
-    let (bins, ms) = progress.timed("binning", || {
-        let params = bin_params(&grid.params, plan.em.radius, map.stats.stored)?;
-        cpu::bin_photons(&params, &map.photons, &scene.splats)
-    })?;
-    Ok(binned(plan, scene.splats.len(), bins, &map.stats, ms))
-}
-
-/// A bake on the CPU mirror: its lobes, its photons (for views that draw them) and the
-/// reports of its tracing and of its binning or deposits.
-pub struct MirrorBake {
-    pub lobes: LobeMap,
-    pub map: PhotonMap,
+/// A bake where it ran: the photons traced, binned where the fit or the reference read bins
+/// (a fit over deposits bins none), the lobes in host memory where they were fitted, and the
+/// reports of the tracing and of the binning or deposits.
+pub struct BakeRun<B> {
+    pub traced: Traced<B>,
+    pub binned: Option<Binned<Bins<B>>>,
+    pub lobes: Option<LobeMap>,
     pub photons: StageReport,
     pub binning: StageReport,
 }
 
-/// Bakes on the CPU mirror: `bake`'s CPU path, and the viewer's bake where the CPU mirror
-/// outruns the window's software rasterizer.
-pub fn baked_on_mirror(
+impl<B> BakeRun<B> {
+    /// The lobes of a bake to the lobes.
+    pub fn take_lobes(&mut self) -> Result<LobeMap> {
+        self.lobes
+            .take()
+            .ok_or_else(|| Error::internal("a bake to the lobes came back without them"))
+    }
+
+    /// The bins of a bake to the bins.
+    pub fn take_binned(&mut self) -> Result<Binned<Bins<B>>> {
+        self.binned
+            .take()
+            .ok_or_else(|| Error::internal("a bake to the bins came back without them"))
+    }
+
+    /// What the host keeps of a bake to the lobes: the lobes and the tracing's and the
+    /// binning's reports.
+    fn kept(mut self) -> Result<(LobeMap, StageReport, StageReport)> {
+        Ok((self.take_lobes()?, self.photons, self.binning))
+    }
+}
+
+/// The bake: `trace` → `deposit` or `bin` → `fit` (which bakes the direct light its final
+/// gathering reads), on any executor, every figure from `plan`. Each stage ends in a split
+/// point, so that its time is its own.
+pub fn bake_on<E: Executor>(
+    ex: &mut E,
     scene: &Scene,
     plan: &BakePlan,
-    grid: &SplatGrid,
+    on: &SceneBuffers<E::Buffer>,
+    to: BakeTo,
     progress: &Progress,
-) -> Result<MirrorBake> {
-    let map = traced_cpu(scene, plan, grid, progress)?;
-    if plan.em.uses_deposits() {
+) -> Result<BakeRun<E::Buffer>> {
+    let traced = trace(ex, plan, on, progress)?;
+    let photons = traced_report(&traced.stats);
+    if to == BakeTo::Lobes && plan.em.uses_deposits() {
         // The photons are deposited, not binned: the binning's report is the deposits'.
-        let (deposits, ms) = deposits_cpu(scene, plan, grid, &map, progress)?;
-        let binned = (&deposits.bins, Some(&deposits));
-        return Ok(MirrorBake {
-            lobes: fit_on_cpu(scene, plan, grid, binned, progress)?,
-            photons: traced_report(&map.stats),
+        let (deposits, ms) = progress.timed("deposits", || deposit(ex, plan, on, &traced))?;
+        let lobes = fit(
+            ex,
+            scene,
+            plan,
+            on,
+            (&deposits.bins, Some(&deposits)),
+            progress,
+        )?;
+        return Ok(BakeRun {
+            traced,
+            binned: None,
+            lobes: Some(lobes),
+            photons,
             binning: StageReport::ran(ms),
-            map,
         });
     }
-    let b = binned_of(scene, plan, grid, &map, progress)?;
-    Ok(MirrorBake {
-        lobes: fit_on_cpu(scene, plan, grid, (&b.bins, None), progress)?,
-        photons: b.photons,
-        binning: b.binning,
-        map,
+    let binned = bin_traced(ex, plan, on, &traced, progress)?;
+    let lobes = match to {
+        BakeTo::Lobes => Some(fit(ex, scene, plan, on, (&binned.bins, None), progress)?),
+        BakeTo::Bins => None,
+    };
+    Ok(BakeRun {
+        traced,
+        lobes,
+        photons,
+        binning: binned.binning.clone(),
+        binned: Some(binned),
     })
 }
 
-/// Traces on the CPU mirror.
-fn traced_cpu(
-    scene: &Scene,
-    plan: &BakePlan,
-    grid: &SplatGrid,
-    progress: &Progress,
-) -> Result<PhotonMap> {
-    let bar = progress.bar(plan.photons.photons);
-    let mut on_batch = |done: u64, _total: u64| {
-        bar.set_position(done);
-        progress.traced(done);
+/// Runs `work` on the device's executor over the uploaded scene, then waits for the device.
+pub fn on_device<R>(
+    gpu: &Gpu,
+    on_gpu: &GpuScene,
+    splat_count: u32,
+    work: impl FnOnce(&mut GpuExecutor, &SceneBuffers<wgpu::Buffer>) -> Result<R>,
+) -> Result<R> {
+    let mut encoder = gpu.encoder("bake");
+    let mut ex = GpuExecutor::new(gpu, &mut encoder).tracing(on_gpu.geometry());
+    let on = SceneBuffers {
+        splats: &on_gpu.splats,
+        materials: &on_gpu.materials,
+        splat_count,
+        grid: &on_gpu.grid.params,
     };
-    let map = cpu::trace_photons(
-        &scene.lights,
-        &scene.materials,
-        &scene.geometry(grid),
-        &plan.photons,
-        &mut on_batch,
-    )?;
-    bar.finish_and_clear();
-    progress_photons(progress, &map.stats);
-    Ok(map)
+    let out = work(&mut ex, &on)?;
+    ex.finish()?;
+    Ok(out)
 }
 
-/// Traces on the device.
-pub fn traced_gpu(
+/// Runs `work` on the CPU mirrors' executor over the scene and its host `grid`.
+pub fn on_mirror<R>(
     scene: &Scene,
-    plan: &BakePlan,
-    gpu: &Gpu,
-    on_gpu: &GpuScene,
-    progress: &Progress,
-) -> Result<GpuPhotons> {
-    let bar = progress.bar(plan.photons.photons);
-    let mut on_batch = |done: u64, _total: u64| {
-        bar.set_position(done);
-        progress.traced(done);
-    };
-    let traced = trace_photons(gpu, scene, on_gpu, &plan.photons, &mut on_batch)?;
-    bar.finish_and_clear();
-    progress_photons(progress, &traced.stats);
-    Ok(traced)
-}
-
-/// The deposits' uniform of a plan whose fit reads deposits.
-fn planned_deposits(plan: &BakePlan) -> Result<&DepositParams> {
-    plan.deposits
-        .as_ref()
-        .ok_or_else(|| Error::internal("the bake's plan has no deposits for a fit that reads them"))
-}
-
-/// Photon deposits on the device, with their time as the binning's.
-fn deposits_gpu(
-    plan: &BakePlan,
-    gpu: &Gpu,
-    on_gpu: &GpuScene,
-    traced: &GpuPhotons,
-    progress: &Progress,
-) -> Result<(GpuDeposits, f64)> {
-    let params = planned_deposits(plan)?;
-    progress.timed("deposits", || {
-        deposit_photons(gpu, traced, &on_gpu.splats, params, &on_gpu.grid.params)
-    })
-}
-
-/// Photon deposits on the CPU mirror, with their time as the binning's.
-fn deposits_cpu(
-    scene: &Scene,
-    plan: &BakePlan,
     grid: &SplatGrid,
-    map: &PhotonMap,
-    progress: &Progress,
-) -> Result<(cpu::DepositBins, f64)> {
-    let params = planned_deposits(plan)?;
-    progress.timed("deposits", || {
-        cpu::deposit_photons(params, &map.photons, &scene.splats, &grid.params)
-    })
-}
-
-/// Fits the lobes on the device to the traced photons: over their deposits where the scene's
-/// estimate asks for them (`EmConfig::uses_deposits`), else over their bins, binned here and
-/// returned (the deposits need none: the reference view bins them when it is shown). The
-/// lobes come back to the host.
-pub fn fit_gpu(
-    scene: &Scene,
-    plan: &BakePlan,
-    gpu: &Gpu,
-    on_gpu: &GpuScene,
-    traced: &GpuPhotons,
-    progress: &Progress,
-) -> Result<(LobeMap, Option<Binned<GpuBins>>)> {
-    if plan.em.uses_deposits() {
-        let (deposits, _) = deposits_gpu(plan, gpu, on_gpu, traced, progress)?;
-        let binned = (&deposits.bins, Some(&deposits));
-        return Ok((
-            fit_on_gpu(scene, plan, gpu, on_gpu, binned, progress)?,
-            None,
-        ));
-    }
-    let binned = binned_gpu(scene, plan, gpu, on_gpu, traced, progress)?;
-    let lobes = fit_on_gpu(scene, plan, gpu, on_gpu, (&binned.bins, None), progress)?;
-    Ok((lobes, Some(binned)))
-}
-
-/// Fits the lobes on the device to binned photons, or with the irradiance from `deposits`
-/// where they are given.
-fn fit_on_gpu(
-    scene: &Scene,
-    plan: &BakePlan,
-    gpu: &Gpu,
-    on_gpu: &GpuScene,
-    (bins, deposits): (&GpuBins, Option<&GpuDeposits>),
-    progress: &Progress,
-) -> Result<LobeMap> {
-    let spin = progress.spinner("em");
-    let n = scene.splats.len() as u32;
-    let setup = plan.gather_setup(scene);
-    let fitted = match deposits {
-        Some(d) => fit_lobes_to_deposits(gpu, on_gpu, n, d, &plan.em, &setup)?,
-        None => fit_lobes_gathering(gpu, on_gpu, n, bins, &plan.em, &setup)?,
+    work: impl FnOnce(&mut CpuExecutor, &SceneBuffers<CpuBuffer>) -> Result<R>,
+) -> Result<R> {
+    let mut ex = CpuExecutor::tracing(scene.geometry(grid));
+    let splats = ex.upload("splats", &scene.splats)?;
+    let materials = ex.upload("materials", &scene.materials)?;
+    let on = SceneBuffers {
+        splats: &splats,
+        materials: &materials,
+        splat_count: splat_count(scene)?,
+        grid: &grid.params,
     };
-    let lobes = fitted.download(gpu)?;
-    spin.finish_and_clear();
-    Ok(lobes)
+    work(&mut ex, &on)
 }
 
-/// Fits the lobes on the CPU mirror to binned photons, or with the irradiance from
-/// `deposits` where they are given.
-fn fit_on_cpu(
-    scene: &Scene,
-    plan: &BakePlan,
-    grid: &SplatGrid,
-    (bins, deposits): (&PhotonBins, Option<&cpu::DepositBins>),
-    progress: &Progress,
-) -> Result<LobeMap> {
-    let spin = progress.spinner("em");
-    let (splats, materials) = (&scene.splats, &scene.materials);
-    let shape = FitShape::default();
-    let setup = plan.gather_setup(scene);
-    let gathering = Some((scene.geometry(grid), &setup));
-    let em = &plan.em;
-    let lobes = match deposits {
-        Some(d) => cpu::fit_lobes_to_deposits(em, d, splats, materials, shape, gathering),
-        None => cpu::fit_lobes_gathering(em, bins, splats, materials, shape, gathering),
-    }?;
-    spin.finish_and_clear();
-    Ok(lobes)
+/// The scene's splat count as the stages' uniforms hold it.
+fn splat_count(scene: &Scene) -> Result<u32> {
+    u32::try_from(scene.splats.len())
+        .map_err(|_| Error::DeviceLimit("more than 2³² splats in one scene".into()))
 }
 
-/// What final gathering reads of `scene` (`EmConfig::gather`): its lights, baked as frames
-/// bake them, and rays that start where shadow rays do.
-pub fn gather_setup(scene: &Scene) -> GatherSetup<'_> {
-    GatherSetup::new(&scene.lights, direct_params(scene))
-}
-
-/// Traces, then deposits or bins, and fits, from one plan of the scene (`BakePlan`); the lobes
-/// come back to the host (a few bytes per splat), from where a cache file or any device can
-/// take them.
+/// Traces, then deposits or bins, and fits, from one plan of the scene (`BakePlan`) on
+/// `device`; the lobes come back to the host (a few bytes per splat), from where a cache file
+/// or any device can take them.
 pub fn bake(scene: &Scene, device: BakeDevice, progress: &Progress) -> Result<Baked> {
-    let plan = BakePlan::new(scene)?;
-    let em_cfg = &plan.em;
+    let plan = BakePlan::new(scene, device.limits())?;
+    let n = splat_count(scene)?;
+    let to = BakeTo::Lobes;
     let (lobes, photons, binning) = match device {
-        // The photons are deposited, not binned: the binning's report is the deposits'.
-        BakeDevice::Gpu(gpu, on_gpu) if em_cfg.uses_deposits() => {
-            let traced = traced_gpu(scene, &plan, gpu, on_gpu, progress)?;
-            let (deposits, ms) = deposits_gpu(&plan, gpu, on_gpu, &traced, progress)?;
-            let binned = (&deposits.bins, Some(&deposits));
-            let lobes = fit_on_gpu(scene, &plan, gpu, on_gpu, binned, progress)?;
-            (lobes, traced_report(&traced.stats), StageReport::ran(ms))
-        }
-        BakeDevice::Gpu(gpu, on_gpu) => {
-            let traced = traced_gpu(scene, &plan, gpu, on_gpu, progress)?;
-            let b = binned_gpu(scene, &plan, gpu, on_gpu, &traced, progress)?;
-            let lobes = fit_on_gpu(scene, &plan, gpu, on_gpu, (&b.bins, None), progress)?;
-            (lobes, b.photons, b.binning)
-        }
-        BakeDevice::Cpu(grid) => {
-            let b = baked_on_mirror(scene, &plan, grid, progress)?;
-            (b.lobes, b.photons, b.binning)
-        }
+        BakeDevice::Gpu(gpu, on_gpu) => on_device(gpu, on_gpu, n, |ex, on| {
+            bake_on(ex, scene, &plan, on, to, progress)?.kept()
+        })?,
+        BakeDevice::Cpu(grid) => on_mirror(scene, grid, |ex, on| {
+            bake_on(ex, scene, &plan, on, to, progress)?.kept()
+        })?,
     };
+    let em_cfg = &plan.em;
     let s = &lobes.stats;
     progress.done(
         "em",
@@ -522,6 +390,204 @@ pub fn bake(scene: &Scene, device: BakeDevice, progress: &Progress) -> Result<Ba
         em,
         lobes,
     })
+}
+
+/// Traces and bins the scene's photons on the device, for the reference renderer (no lobes).
+pub fn bins_gpu(
+    scene: &Scene,
+    gpu: &Gpu,
+    on_gpu: &GpuScene,
+    progress: &Progress,
+) -> Result<Binned<Bins<wgpu::Buffer>>> {
+    let plan = BakePlan::new(scene, gpu.bake_limits())?;
+    let n = splat_count(scene)?;
+    on_device(gpu, on_gpu, n, |ex, on| {
+        bake_on(ex, scene, &plan, on, BakeTo::Bins, progress)?.take_binned()
+    })
+}
+
+/// Traces and bins the scene's photons on the CPU mirrors, for the reference renderer; the
+/// bins come back to the host.
+pub fn bins_cpu(
+    scene: &Scene,
+    grid: &SplatGrid,
+    progress: &Progress,
+) -> Result<Binned<PhotonBins>> {
+    let plan = BakePlan::new(scene, BakeLimits::host())?;
+    on_mirror(scene, grid, |ex, on| {
+        let binned = bake_on(ex, scene, &plan, on, BakeTo::Bins, progress)?.take_binned()?;
+        Ok(Binned {
+            bins: binned.bins.read_back(ex)?,
+            em: binned.em,
+            photons: binned.photons,
+            binning: binned.binning,
+        })
+    })
+}
+
+/// A bake on the CPU mirror: its lobes, its photons (for views that draw them) and the
+/// reports of its tracing and of its binning or deposits.
+pub struct MirrorBake {
+    pub lobes: LobeMap,
+    pub map: PhotonMap,
+    pub photons: StageReport,
+    pub binning: StageReport,
+}
+
+/// Bakes on the CPU mirror and reads the photons back too: the viewer's bake where the CPU
+/// mirror outruns the window's software rasterizer (its photon view draws them).
+pub fn baked_on_mirror(
+    scene: &Scene,
+    plan: &BakePlan,
+    grid: &SplatGrid,
+    progress: &Progress,
+) -> Result<MirrorBake> {
+    on_mirror(scene, grid, |ex, on| {
+        let mut run = bake_on(ex, scene, plan, on, BakeTo::Lobes, progress)?;
+        Ok(MirrorBake {
+            lobes: run.take_lobes()?,
+            map: run.traced.read_back(ex)?,
+            photons: run.photons,
+            binning: run.binning,
+        })
+    })
+}
+
+/// The photon pass (`sequence::trace_photons`) with its bar.
+fn trace<E: Executor>(
+    ex: &mut E,
+    plan: &BakePlan,
+    on: &SceneBuffers<E::Buffer>,
+    progress: &Progress,
+) -> Result<Traced<E::Buffer>> {
+    let bar = progress.bar(plan.photons.photons);
+    let mut on_batch = |done: u64, _total: u64| {
+        bar.set_position(done);
+        progress.traced(done);
+    };
+    let (emitters, cfg) = (&plan.emitters, &plan.photons);
+    let traced = sequence::trace_photons(
+        ex,
+        emitters,
+        on.materials,
+        cfg,
+        plan.photon_page,
+        &mut on_batch,
+    )?;
+    ex.finish()?;
+    bar.finish_and_clear();
+    progress_photons(progress, &traced.stats);
+    Ok(traced)
+}
+
+/// The pages of stored photons as the binning passes take them.
+fn pages<B>(traced: &Traced<B>) -> Vec<(&B, u32)> {
+    traced
+        .pages
+        .iter()
+        .map(|p| (&p.buffer, p.count as u32))
+        .collect()
+}
+
+/// Photon binning (`sequence::bin_photons`) of traced photons in cells of the search radius,
+/// with what the reference renderer reads beside the bins.
+pub fn bin_traced<E: Executor>(
+    ex: &mut E,
+    plan: &BakePlan,
+    on: &SceneBuffers<E::Buffer>,
+    traced: &Traced<E::Buffer>,
+    progress: &Progress,
+) -> Result<Binned<Bins<E::Buffer>>> {
+    let stored = traced.stats.stored;
+    let (bins, ms) = progress.timed("binning", || {
+        check_binned(stored, plan.limits.binned_bytes)?;
+        let params = bin_params(on.grid, plan.em.radius, stored)?;
+        let bins = sequence::bin_photons(ex, &pages(traced), on.splats, &params)?;
+        ex.finish()?;
+        Ok(bins)
+    })?;
+    Ok(Binned {
+        bins,
+        em: plan.em.params(on.splat_count, 0, FitShape::default()),
+        photons: traced_report(&traced.stats),
+        binning: StageReport::ran(ms),
+    })
+}
+
+/// Photon deposits (`sequence::deposit_photons`), as many splats' a buffer as the executor
+/// holds.
+fn deposit<E: Executor>(
+    ex: &mut E,
+    plan: &BakePlan,
+    on: &SceneBuffers<E::Buffer>,
+    traced: &Traced<E::Buffer>,
+) -> Result<Deposits<E::Buffer>> {
+    let params = plan.deposits.as_ref().ok_or_else(|| {
+        Error::internal("the bake's plan has no deposits for a fit that reads them")
+    })?;
+    let range = (on.grid, plan.limits.deposit_range);
+    let deposits = sequence::deposit_photons(ex, &pages(traced), on.splats, params, range)?;
+    ex.finish()?;
+    Ok(deposits)
+}
+
+/// The lobe fit (`sequence::fit_lobes`) over binned photons, or with every splat's irradiance
+/// from `deposits` where they are given, with final gathering through the scene; the lobes
+/// come back to the host.
+fn fit<E: Executor>(
+    ex: &mut E,
+    scene: &Scene,
+    plan: &BakePlan,
+    on: &SceneBuffers<E::Buffer>,
+    (bins, deposits): (&Bins<E::Buffer>, Option<&Deposits<E::Buffer>>),
+    progress: &Progress,
+) -> Result<LobeMap> {
+    let spin = progress.spinner("em");
+    let t = Instant::now();
+    let setup = plan.gather_setup(scene);
+    let lights = ex.upload("lights", &scene.lights)?;
+    let input = FitInput {
+        bin_params: &bins.params_buf,
+        cell_start: &bins.cell_start,
+        geom: &bins.geom,
+        power: &bins.power,
+        splats: on.splats,
+        materials: on.materials,
+        splat_count: on.splat_count,
+        gathering: Some(Gathering {
+            setup: &setup,
+            lights: &lights,
+            batch_bytes: plan.limits.gather_batch_bytes,
+        }),
+        deposits: deposits.map(|d| DepositInput {
+            reach: d.params.reach,
+            params: &d.params_buf,
+            keys: &d.bins.keys,
+            spread: &d.spread,
+        }),
+    };
+    let em = &plan.em;
+    let fitted = sequence::fit_lobes(ex, &input, em, plan.limits.fit_shape)?;
+    ex.finish()?;
+    let stats = fitted.stats(ms_since(t));
+    let lobes = fitted.read_back(ex, em.lobes, on.splat_count, stats)?;
+    spin.finish_and_clear();
+    Ok(lobes)
+}
+
+/// The photon pass's report.
+fn traced_report(stats: &PhotonStats) -> StageReport {
+    StageReport {
+        emitted: Some(stats.emitted),
+        stored: Some(stats.stored),
+        ..StageReport::ran(stats.trace_ms)
+    }
+}
+
+/// What final gathering reads of `scene` (`EmConfig::gather`): its lights, baked as frames
+/// bake them, and rays that start where shadow rays do.
+pub fn gather_setup(scene: &Scene) -> GatherSetup<'_> {
+    GatherSetup::new(&scene.lights, direct_params(scene))
 }
 
 /// What the lobe fit left out, and why: splats without photons cost nothing, diffuse ones

@@ -1,14 +1,48 @@
-//! The bake's plan (docs/design.md §4–6): what every bake stage takes of a scene, derived
-//! once — the photons' and the fit's settings with the photon search radius, the deposits'
-//! uniform, and the direct bake's uniform (with the shadow bias) that final gathering reads —
-//! so that no stage walks the splats again for them. `bake` derives one per bake.
+//! The bake's plan (docs/design.md §4–6): what every bake stage takes of a scene and of the
+//! executor it runs on, derived once — the photons' and the fit's settings with the photon
+//! search radius, the emitters, the deposits' uniform, the direct bake's uniform (with the
+//! shadow bias) that final gathering reads, and how the executor's limits page the work — so
+//! that no stage walks the splats again for them. `bake` derives one per bake.
 
 use crate::direct::direct_params;
-use crate::em::{EmConfig, GatherSetup, deposit_params};
+use crate::em::{EmConfig, FitShape, GatherSetup, deposit_params};
 use crate::error::Result;
-use crate::photons::PhotonConfig;
+use crate::photons::{PhotonConfig, emitters, page_photons};
 use crate::scene::Scene;
-use crate::types::{DepositParams, DirectParams};
+use crate::types::{DepositParams, DirectParams, Emitter};
+
+/// The most bytes of final gathering's samples a batch holds, on the CPU and at most on a
+/// device.
+pub const GATHER_BATCH_BYTES: u64 = 64 << 20;
+
+/// What the executor of a bake can hold and how it runs the fit: host memory holds anything
+/// (`host`); a device's bindings page the work (`Gpu::bake_limits`).
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct BakeLimits {
+    /// The most photons one store page holds.
+    pub photon_page: u64,
+    /// The most bytes each of the binning's arrays holds (16 bytes a photon).
+    pub binned_bytes: u64,
+    /// The most splats whose deposits one buffer holds.
+    pub deposit_range: u32,
+    /// The most bytes of final gathering's samples one batch of splats holds.
+    pub gather_batch_bytes: u64,
+    /// The fit's reduction on this executor.
+    pub fit_shape: FitShape,
+}
+
+impl BakeLimits {
+    /// The CPU mirror's: one page of everything, the fit in its default shape.
+    pub fn host() -> BakeLimits {
+        BakeLimits {
+            photon_page: u32::MAX as u64,
+            binned_bytes: u64::MAX,
+            deposit_range: u32::MAX,
+            gather_batch_bytes: GATHER_BATCH_BYTES,
+            fit_shape: FitShape::default(),
+        }
+    }
+}
 
 /// What the bake of one scene needs besides its splats, lights and materials.
 #[derive(Clone, Debug)]
@@ -21,14 +55,23 @@ pub struct BakePlan {
     pub direct: DirectParams,
     /// The deposits' uniform, where the fit reads deposits (`EmConfig::uses_deposits`).
     pub deposits: Option<DepositParams>,
+    /// The lights' share of the photons (`photons::emitters`).
+    pub emitters: Vec<Emitter>,
+    /// The executor's limits, and the most photons a store page holds under them and the
+    /// scene's `page_limit`.
+    pub limits: BakeLimits,
+    pub photon_page: u64,
 }
 
 impl BakePlan {
-    /// The plan of `scene`'s bake: each figure computed once, the splats walked at most three
-    /// times (bounds where the scene names no radius, shadow bias, the largest radius of the
-    /// deposits' reach).
-    pub fn new(scene: &Scene) -> Result<BakePlan> {
+    /// The plan of `scene`'s bake on an executor with `limits`: each figure computed once, the
+    /// splats walked at most three times (bounds where the scene names no radius, shadow bias,
+    /// the largest radius of the deposits' reach).
+    pub fn new(scene: &Scene, limits: BakeLimits) -> Result<BakePlan> {
         let em = EmConfig::from_scene(scene);
+        let photons = PhotonConfig::from_scene(scene);
+        photons.validate()?;
+        em.validate()?;
         let deposits = match em.uses_deposits() {
             true => Some(deposit_params(
                 &scene.lights,
@@ -39,10 +82,13 @@ impl BakePlan {
             false => None,
         };
         Ok(BakePlan {
-            photons: PhotonConfig::from_scene(scene),
+            emitters: emitters(&scene.lights, photons.photons)?,
+            photon_page: page_photons(&photons, limits.photon_page),
+            photons,
             em,
             direct: direct_params(scene),
             deposits,
+            limits,
         })
     }
 

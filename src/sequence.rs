@@ -11,7 +11,8 @@ use bytemuck::Pod;
 
 use crate::bins::PhotonBins;
 use crate::em::{
-    EmConfig, FitShape, GatherSetup, dispatch_ranges, iterations_per_dispatch, workgroup_size,
+    EmConfig, EmStats, FitShape, GatherSetup, LobeMap, dispatch_ranges, iterations_per_dispatch,
+    workgroup_size,
 };
 use crate::error::{Error, Result};
 use crate::grid::SplatGrid;
@@ -28,8 +29,8 @@ use crate::timing::ms_since;
 use crate::tone::{ToneConfig, reduce_levels};
 use crate::types::{
     BinParams, Camera, DepositParams, DirectParams, DistanceParams, EmParams, Emitter,
-    GatherParams, GridParams, PathParams, Photon, PhotonViewParams, ScanParams, TileParams,
-    TraceCounters,
+    GatherParams, GridParams, Lobe, PathParams, Photon, PhotonViewParams, ScanParams, SplatLight,
+    TileParams, TraceCounters,
 };
 
 /// Where a sequence runs: buffers, uniforms, dispatches by stage name, copies and readbacks.
@@ -73,6 +74,9 @@ pub trait Executor {
     /// A split point: what is recorded runs, then the first `count` values of `buffer` come
     /// back.
     fn read<T: Pod>(&mut self, buffer: &Self::Buffer, count: usize) -> Result<Vec<T>>;
+    /// A split point with nothing read: what is recorded runs, and is done when this returns
+    /// (a stage's time ends here).
+    fn finish(&mut self) -> Result<()>;
 }
 
 /// Workgroups of `stage` that cover `n` values (its WGSL's workgroup size × items).
@@ -528,6 +532,43 @@ pub struct Fit<B> {
     pub gather_ms: f64,
     pub fit_ms: f64,
     pub final_gather_ms: f64,
+}
+
+impl<B> Fit<B> {
+    /// The fit's figures, `ms` its wall time (`photons` is summed when its lobes are read).
+    pub fn stats(&self, ms: f64) -> EmStats {
+        EmStats {
+            listed: self.listed + self.gathered,
+            fitted: self.fitted,
+            max_candidates: self.max_candidates,
+            photons: 0,
+            dispatches: self.dispatches,
+            ms,
+            select_ms: self.select_ms,
+            gather_ms: self.gather_ms,
+            fit_ms: self.fit_ms,
+            final_gather_ms: self.final_gather_ms,
+        }
+    }
+
+    /// The fit of `splat_count` splats, `per_splat` lobe slots each, in host memory with its
+    /// lobes packed (`LobeMap::pack`); with nothing fitted no lobe is read.
+    pub fn read_back<E: Executor<Buffer = B>>(
+        &self,
+        ex: &mut E,
+        per_splat: u32,
+        splat_count: u32,
+        stats: EmStats,
+    ) -> Result<LobeMap> {
+        let dense = match self.fitted {
+            0 => Vec::new(),
+            n => ex.read::<Lobe>(&self.lobes, n as usize * per_splat as usize)?,
+        };
+        let light = ex.read::<SplatLight>(&self.light, splat_count as usize)?;
+        let mut map = LobeMap::pack(per_splat, &dense, light, stats);
+        map.stats.photons = map.fitted().map(|l| l.photons as u64).sum();
+        Ok(map)
+    }
 }
 
 /// The lobe fit: `em_select` lists the splats with photons near them, in two lists → (split:

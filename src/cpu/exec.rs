@@ -106,6 +106,11 @@ impl Executor for CpuExecutor<'_> {
             .map(<[T]>::to_vec)
             .ok_or_else(|| Error::Internal("readback past the end of a buffer".into()))
     }
+
+    /// Each dispatch ran when it was made: nothing is left to wait for.
+    fn finish(&mut self) -> Result<()> {
+        Ok(())
+    }
 }
 
 /// Runs `stage`'s mirror over `groups` workgroups with the dispatch's bindings, `geometry` as

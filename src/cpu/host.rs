@@ -5,13 +5,14 @@
 use std::time::Instant;
 
 use crate::bins::PhotonBins;
-use crate::em::{EmConfig, EmStats, FitShape, GatherSetup, LobeMap};
+use crate::em::{EmConfig, FitShape, GatherSetup, LobeMap};
 use crate::error::{Error, Result};
 use crate::grid::SplatGrid;
 use crate::photons::{PhotonConfig, PhotonMap, emitters};
+use crate::plan::GATHER_BATCH_BYTES;
 use crate::shared::trace::Geometry;
 use crate::timing::ms_since;
-use crate::types::{BinParams, DepositParams, GridParams, Lobe, Splat, SplatLight};
+use crate::types::{BinParams, DepositParams, GridParams, Splat};
 use crate::types::{Light, Material, Photon};
 
 use super::exec::CpuExecutor;
@@ -119,10 +120,6 @@ pub fn bin_photons(params: &BinParams, photons: &[Photon], splats: &[Splat]) -> 
     let splats = ex.upload("splats", splats)?;
     sequence::bin_photons(&mut ex, &[(&page, n)], &splats, params)?.read_back(&mut ex)
 }
-
-/// The most bytes of final gathering's samples a batch holds, on the CPU and at most on a
-/// device.
-pub const GATHER_BATCH_BYTES: u64 = 64 << 20;
 
 /// The lobe fit on the CPU: `em_select`, then `em_fit` over the same dispatch ranges and
 /// with the same sum order as the GPU path on a device of the given shape.
@@ -250,22 +247,5 @@ fn fit_binned(
             }),
     };
     let fit = sequence::fit_lobes(&mut ex, &input, cfg, shape)?;
-    let n = splats.len();
-    let dense = ex.read::<Lobe>(&fit.lobes, fit.fitted as usize * cfg.lobes as usize)?;
-    let light = ex.read::<SplatLight>(&fit.light, n)?;
-    let stats = EmStats {
-        listed: fit.listed + fit.gathered,
-        fitted: fit.fitted,
-        max_candidates: fit.max_candidates,
-        dispatches: fit.dispatches,
-        ms: ms_since(t),
-        select_ms: fit.select_ms,
-        gather_ms: fit.gather_ms,
-        fit_ms: fit.fit_ms,
-        final_gather_ms: fit.final_gather_ms,
-        ..Default::default()
-    };
-    let mut map = LobeMap::pack(cfg.lobes, &dense, light, stats);
-    map.stats.photons = map.fitted().map(|l| l.photons as u64).sum();
-    Ok(map)
+    fit.read_back(&mut ex, cfg.lobes, splat_count, fit.stats(ms_since(t)))
 }

@@ -43,7 +43,7 @@ pub fn bin_photons(
     params: &BinParams,
 ) -> Result<GpuBins> {
     let total: u64 = photons.pages.iter().map(|p| p.count).sum();
-    check_binned(total, gpu.max_array_bytes(16))?;
+    check_binned(total, gpu.bake_limits().binned_bytes)?;
     let pages: Vec<(&wgpu::Buffer, u32)> = photons
         .pages
         .iter()
@@ -80,9 +80,7 @@ pub fn deposit_photons(
     params: &DepositParams,
     grid: &GridParams,
 ) -> Result<GpuDeposits> {
-    // The splats whose deposits one buffer holds.
-    let words = crate::shared::deposits::DEPOSIT_WORDS as u64;
-    let range = (gpu.page_bytes() / (words * 4)).clamp(1, u32::MAX as u64) as u32;
+    let range = gpu.bake_limits().deposit_range;
     let pages: Vec<(&wgpu::Buffer, u32)> = photons
         .pages
         .iter()

@@ -7,9 +7,9 @@ use super::Gpu;
 use super::bins::{GpuBins, GpuDeposits};
 use super::exec::GpuExecutor;
 use super::scene::GpuScene;
-use crate::cpu::GATHER_BATCH_BYTES;
 use crate::em::{EmConfig, EmStats, FitShape, GatherSetup, LobeMap, workgroup_size};
 use crate::error::{Error, Result};
+use crate::plan::{BakeLimits, GATHER_BATCH_BYTES};
 use crate::sequence::{self, DepositInput, FitInput, Gathering};
 use crate::timing::ms_since;
 use crate::types::{Lobe, SplatLight};
@@ -55,6 +55,23 @@ pub fn fit_shape(gpu: &Gpu) -> FitShape {
         loop_limited,
         subgroup_reduce: gpu.subgroups
             && gpu.info.subgroup_min_size >= workgroup_size(loop_limited),
+    }
+}
+
+impl Gpu {
+    /// What this device holds of a bake (`plan::BakeLimits`): photon pages and deposit
+    /// buffers of one binding, the binning's arrays paged, gathering batches of one page, and
+    /// the fit in the device's shape.
+    pub fn bake_limits(&self) -> BakeLimits {
+        let photon = std::mem::size_of::<crate::types::Photon>() as u64;
+        let deposit = crate::shared::deposits::DEPOSIT_WORDS as u64 * 4;
+        BakeLimits {
+            photon_page: self.max_binding_bytes() / photon,
+            binned_bytes: self.max_array_bytes(16),
+            deposit_range: (self.page_bytes() / deposit).clamp(1, u32::MAX as u64) as u32,
+            gather_batch_bytes: self.page_bytes().min(GATHER_BATCH_BYTES),
+            fit_shape: fit_shape(self),
+        }
     }
 }
 
@@ -176,7 +193,7 @@ fn fit_on_device(
             .map(|((_, setup), lights)| Gathering {
                 setup,
                 lights,
-                batch_bytes: gpu.page_bytes().min(GATHER_BATCH_BYTES),
+                batch_bytes: gpu.bake_limits().gather_batch_bytes,
             }),
         deposits: deposits.map(|d| DepositInput {
             reach: d.params.reach,

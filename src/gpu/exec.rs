@@ -102,4 +102,9 @@ impl Executor for GpuExecutor<'_> {
         self.gpu.submit_and_wait(recorded)?;
         self.gpu.read(buffer, count)
     }
+
+    fn finish(&mut self) -> Result<()> {
+        let recorded = std::mem::replace(self.encoder, self.gpu.encoder("after a split point"));
+        self.gpu.submit_and_wait(recorded)
+    }
 }

@@ -9,9 +9,6 @@ use crate::error::Result;
 use crate::photons::{PhotonConfig, PhotonMap, emitters, page_photons};
 use crate::scene::Scene;
 use crate::sequence;
-use crate::types::Photon;
-
-const PHOTON_BYTES: u64 = std::mem::size_of::<Photon>() as u64;
 
 /// One store buffer on the device and how many photons it holds.
 pub type PhotonPage = sequence::Page<wgpu::Buffer>;
@@ -55,7 +52,7 @@ pub fn trace_photons(
 ) -> Result<GpuPhotons> {
     cfg.validate()?;
     let emitters = emitters(&scene.lights, cfg.photons)?;
-    let max_page = page_photons(cfg, gpu.max_binding_bytes() / PHOTON_BYTES);
+    let max_page = page_photons(cfg, gpu.bake_limits().photon_page);
     let mut encoder = gpu.encoder("photon trace");
     let mut ex = GpuExecutor::new(gpu, &mut encoder).tracing(on_gpu.geometry());
     let traced = sequence::trace_photons(

@@ -11,7 +11,7 @@ use std::sync::atomic::{AtomicU64, Ordering};
 use std::sync::mpsc::{Receiver, TryRecvError, channel};
 use std::time::Instant;
 
-use crate::bake::{Binned, Progress, baked_on_mirror, fit_gpu, traced_gpu};
+use crate::bake::{BakeTo, Binned, Progress, bake_on, baked_on_mirror, on_device};
 use crate::em::LobeMap;
 use crate::error::{Error, Result};
 use crate::gpu::Gpu;
@@ -19,7 +19,7 @@ use crate::gpu::bins::GpuBins;
 use crate::gpu::photons::GpuPhotons;
 use crate::gpu::scene::GpuScene;
 use crate::grid::SplatGrid;
-use crate::plan::BakePlan;
+use crate::plan::{BakeLimits, BakePlan};
 use crate::scene::{BakeDesc, Scene};
 use crate::timing::ms_since;
 
@@ -147,8 +147,8 @@ fn bake_pass(
     traced: &Arc<AtomicU64>,
 ) -> Result<BakeResult> {
     let progress = Progress::counting(traced.clone());
-    let plan = BakePlan::new(scene)?;
     if let BakeEngine::Mirror(grid) = engine {
+        let plan = BakePlan::new(scene, BakeLimits::host())?;
         let baked = baked_on_mirror(scene, &plan, grid, &progress)?;
         return Ok(BakeResult {
             emitted: baked.map.stats.emitted,
@@ -159,13 +159,16 @@ fn bake_pass(
             seconds: ms_since(started) / 1e3,
         });
     }
-    let photons = traced_gpu(scene, &plan, gpu, on_gpu, &progress)?;
-    let (lobes, binned) = fit_gpu(scene, &plan, gpu, on_gpu, &photons, &progress)?;
+    let plan = BakePlan::new(scene, gpu.bake_limits())?;
+    let n = scene.splats.len() as u32;
+    let mut run = on_device(gpu, on_gpu, n, |ex, on| {
+        bake_on(ex, scene, &plan, on, BakeTo::Lobes, &progress)
+    })?;
     Ok(BakeResult {
-        lobes,
-        emitted: photons.stats.emitted,
-        photons,
-        binned,
+        lobes: run.take_lobes()?,
+        emitted: run.traced.stats.emitted,
+        photons: run.traced,
+        binned: run.binned,
         preview,
         seconds: ms_since(started) / 1e3,
     })

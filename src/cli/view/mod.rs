@@ -22,7 +22,7 @@ use winit::event_loop::{ActiveEventLoop, EventLoop, OwnedDisplayHandle};
 use winit::keyboard::{Key, NamedKey};
 use winit::window::{Window, WindowId};
 
-use crate::bake::{Progress, binned_gpu};
+use crate::bake::{Progress, bin_traced, on_device};
 use crate::camera::View;
 use crate::cli::render::Method;
 use crate::cpu::photon_view::scene_scale;
@@ -351,8 +351,11 @@ impl State {
                     Some(b) => b,
                     None => {
                         let (on_gpu, quiet) = (&self.renderer.on_gpu, Progress::new(false));
-                        let plan = BakePlan::new(scene)?;
-                        binned_gpu(scene, &plan, gpu, on_gpu, &baked.photons, &quiet)?
+                        let plan = BakePlan::new(scene, gpu.bake_limits())?;
+                        let n = scene.splats.len() as u32;
+                        on_device(gpu, on_gpu, n, |ex, on| {
+                            bin_traced(ex, &plan, on, &baked.photons, &quiet)
+                        })?
                     }
                 };
                 let binned = baked.binned.insert(binned);
