@@ -10,8 +10,7 @@ use std::time::Instant;
 
 use crate::bins::{PhotonBins, bin_params, check_binned};
 use crate::cpu::{CpuBuffer, CpuExecutor};
-use crate::direct::direct_params;
-use crate::em::{EmConfig, FitShape, GatherSetup, LobeMap};
+use crate::em::{EmConfig, FitShape, LobeMap};
 use crate::error::{Error, Result};
 use crate::gpu::Gpu;
 use crate::gpu::exec::GpuExecutor;
@@ -274,7 +273,7 @@ pub fn bake_on<E: Executor>(
     let photons = traced_report(&traced.stats);
     if to == BakeTo::Lobes && plan.em.uses_deposits() {
         // The photons are deposited, not binned: the binning's report is the deposits'.
-        let (deposits, ms) = progress.timed("deposits", || deposit(ex, plan, on, &traced))?;
+        let (deposits, binning) = deposit_traced(ex, plan, on, &traced, progress)?;
         let lobes = fit(
             ex,
             scene,
@@ -288,7 +287,7 @@ pub fn bake_on<E: Executor>(
             binned: None,
             lobes: Some(lobes),
             photons,
-            binning: StageReport::ran(ms),
+            binning,
         });
     }
     let binned = bin_traced(ex, plan, on, &traced, progress)?;
@@ -454,7 +453,7 @@ pub fn baked_on_mirror(
 }
 
 /// The photon pass (`sequence::trace_photons`) with its bar.
-fn trace<E: Executor>(
+pub fn trace<E: Executor>(
     ex: &mut E,
     plan: &BakePlan,
     on: &SceneBuffers<E::Buffer>,
@@ -514,27 +513,31 @@ pub fn bin_traced<E: Executor>(
     })
 }
 
-/// Photon deposits (`sequence::deposit_photons`), as many splats' a buffer as the executor
-/// holds.
-fn deposit<E: Executor>(
+/// Photon deposits (`sequence::deposit_photons`) of traced photons, as many splats' a buffer
+/// as the executor holds, with their report.
+pub fn deposit_traced<E: Executor>(
     ex: &mut E,
     plan: &BakePlan,
     on: &SceneBuffers<E::Buffer>,
     traced: &Traced<E::Buffer>,
-) -> Result<Deposits<E::Buffer>> {
+    progress: &Progress,
+) -> Result<(Deposits<E::Buffer>, StageReport)> {
     let params = plan.deposits.as_ref().ok_or_else(|| {
         Error::internal("the bake's plan has no deposits for a fit that reads them")
     })?;
-    let range = (on.grid, plan.limits.deposit_range);
-    let deposits = sequence::deposit_photons(ex, &pages(traced), on.splats, params, range)?;
-    ex.finish()?;
-    Ok(deposits)
+    let (deposits, ms) = progress.timed("deposits", || {
+        let range = (on.grid, plan.limits.deposit_range);
+        let deposits = sequence::deposit_photons(ex, &pages(traced), on.splats, params, range)?;
+        ex.finish()?;
+        Ok(deposits)
+    })?;
+    Ok((deposits, StageReport::ran(ms)))
 }
 
 /// The lobe fit (`sequence::fit_lobes`) over binned photons, or with every splat's irradiance
 /// from `deposits` where they are given, with final gathering through the scene; the lobes
 /// come back to the host.
-fn fit<E: Executor>(
+pub fn fit<E: Executor>(
     ex: &mut E,
     scene: &Scene,
     plan: &BakePlan,
@@ -582,12 +585,6 @@ fn traced_report(stats: &PhotonStats) -> StageReport {
         stored: Some(stats.stored),
         ..StageReport::ran(stats.trace_ms)
     }
-}
-
-/// What final gathering reads of `scene` (`EmConfig::gather`): its lights, baked as frames
-/// bake them, and rays that start where shadow rays do.
-pub fn gather_setup(scene: &Scene) -> GatherSetup<'_> {
-    GatherSetup::new(&scene.lights, direct_params(scene))
 }
 
 /// What the lobe fit left out, and why: splats without photons cost nothing, diffuse ones

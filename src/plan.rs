@@ -58,7 +58,7 @@ pub struct BakePlan {
     /// The lights' share of the photons (`photons::emitters`).
     pub emitters: Vec<Emitter>,
     /// The executor's limits, and the most photons a store page holds under them and the
-    /// scene's `page_limit`.
+    /// photon settings' `page_limit`.
     pub limits: BakeLimits,
     pub photon_page: u64,
 }
@@ -68,14 +68,23 @@ impl BakePlan {
     /// splats walked at most three times (bounds where the scene names no radius, shadow bias,
     /// the largest radius of the deposits' reach).
     pub fn new(scene: &Scene, limits: BakeLimits) -> Result<BakePlan> {
-        let em = EmConfig::from_scene(scene);
         let photons = PhotonConfig::from_scene(scene);
+        BakePlan::of(scene, photons, EmConfig::from_scene(scene), limits)
+    }
+
+    /// The plan of `scene`'s bake with other photon and fit settings (`bench`, `sweep`).
+    pub fn of(
+        scene: &Scene,
+        photons: PhotonConfig,
+        em: EmConfig,
+        limits: BakeLimits,
+    ) -> Result<BakePlan> {
         photons.validate()?;
         em.validate()?;
         let deposits = match em.uses_deposits() {
             true => Some(deposit_params(
                 &scene.lights,
-                scene.bake.photons,
+                photons.photons,
                 &scene.splats,
                 em.radius,
             )?),

@@ -7,15 +7,16 @@ mod common;
 use std::path::Path;
 
 use glam::Vec3;
+use lobelight::bake::{self, Progress, on_device};
 use lobelight::bins::bin_params;
 use lobelight::cpu::{self, DepositBins};
 use lobelight::em::{EmConfig, FitShape, deposit_params};
 use lobelight::gpu::bins::deposit_photons;
-use lobelight::gpu::em::fit_lobes_to_deposits;
 use lobelight::gpu::photons::GpuPhotons;
 use lobelight::gpu::scene::GpuScene;
 use lobelight::grid::{GridConfig, grid_params};
 use lobelight::photons::PhotonMap;
+use lobelight::plan::BakePlan;
 use lobelight::shared::deposits::{DEPOSIT_POSITION_UNITS, disk_share};
 use lobelight::types::{Photon, Splat, SplatLight};
 
@@ -165,15 +166,16 @@ fn deposits_and_shared_light_on_the_device_equal_the_mirror() {
         assert_eq!(a[1], b[1], "splat {j}: count");
     }
 
-    let cfg = EmConfig::from_scene(&scene);
+    let plan = BakePlan::new(&scene, gpu.bake_limits()).unwrap();
+    let (cfg, setup) = (plan.em.clone(), plan.gather_setup(&scene));
     assert!(cfg.uses_deposits());
-    let setup = lobelight::bake::gather_setup(&scene);
-    let n = scene.splats.len() as u32;
-    let lit_gpu = fit_lobes_to_deposits(&gpu, &on_gpu_scene, n, &deposits, &cfg, &setup)
-        .unwrap()
-        .download(&gpu)
-        .unwrap();
-    let shape = lobelight::gpu::em::fit_shape(&gpu);
+    let (n, quiet) = (scene.splats.len() as u32, Progress::new(false));
+    let lit_gpu = on_device(&gpu, &on_gpu_scene, n, |ex, on| {
+        let input = (&deposits.bins, Some(&deposits));
+        bake::fit(ex, &scene, &plan, on, input, &quiet)
+    })
+    .unwrap();
+    let shape = plan.limits.fit_shape;
     let gathering = Some((scene.geometry(&grid), &setup));
     let (splats, materials) = (&scene.splats, &scene.materials);
     let lit_cpu =

@@ -7,7 +7,7 @@ use std::path::Path;
 
 use glam::Vec3;
 
-use lobelight::bake::{BakeDevice, Progress, bake, bins_cpu, gather_setup};
+use lobelight::bake::{self, BakeDevice, Progress, bake, bins_cpu, on_device};
 use lobelight::cpu;
 use lobelight::cpu::CpuExecutor;
 use lobelight::cpu::em_select::FIT_BIT;
@@ -15,9 +15,9 @@ use lobelight::cpu::frames::cpu_direct;
 use lobelight::direct::shadow_bias;
 use lobelight::em::{EmConfig, LobeMap};
 use lobelight::gpu::bins::GpuBins;
-use lobelight::gpu::em::{fit_lobes_gathering, fit_shape};
 use lobelight::gpu::exec::GpuExecutor;
 use lobelight::gpu::scene::GpuScene;
+use lobelight::plan::BakePlan;
 use lobelight::sequence::{Executor, cover_light, final_gather};
 use lobelight::shared::lights::area_light_hit;
 use lobelight::shared::octahedral::oct_decode;
@@ -241,17 +241,17 @@ fn lobes_fitted_to_gathered_samples_match_the_mirror() {
     scene.bake.gather = 8;
     let grid = common::host_grid(&scene);
     let bins = bins_cpu(&scene, &grid, &Progress::new(false)).unwrap().bins;
-    let cfg = EmConfig::from_scene(&scene);
-    let setup = gather_setup(&scene);
-    let shape = fit_shape(&gpu);
+    let plan = BakePlan::new(&scene, gpu.bake_limits()).unwrap();
+    let (cfg, setup) = (plan.em.clone(), plan.gather_setup(&scene));
+    let shape = plan.limits.fit_shape;
     let on_gpu = {
         let on_gpu = GpuScene::upload(&gpu, &scene).unwrap();
         let uploaded = GpuBins::upload(&gpu, &bins).unwrap();
-        let n = scene.splats.len() as u32;
-        fit_lobes_gathering(&gpu, &on_gpu, n, &uploaded, &cfg, &setup)
-            .unwrap()
-            .download(&gpu)
-            .unwrap()
+        let (n, quiet) = (scene.splats.len() as u32, Progress::new(false));
+        on_device(&gpu, &on_gpu, n, |ex, on| {
+            bake::fit(ex, &scene, &plan, on, (&uploaded, None), &quiet)
+        })
+        .unwrap()
     };
     let (splats, materials) = (&scene.splats, &scene.materials);
     let gathering = Some((scene.geometry(&grid), &setup));

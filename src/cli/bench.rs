@@ -4,8 +4,10 @@ use std::time::Instant;
 
 use serde::Serialize;
 
-use crate::bake::{BakeDevice, Progress, bake, gather_setup};
-use crate::bins::bin_params;
+use crate::bake::{
+    self, BakeDevice, Progress, SceneBuffers, bake, bin_traced, deposit_traced, on_device,
+    on_mirror,
+};
 use crate::camera::View;
 use crate::cli::compare::difference;
 use crate::cli::measure::median;
@@ -14,11 +16,9 @@ use crate::cli::view::{ViewOptions, ViewReport};
 use crate::cpu;
 use crate::cpu::frames::{cpu_direct, cpu_frame_into};
 use crate::direct::DirectMap;
-use crate::em::{EmConfig, EmStats, FitShape, LobeFamily, LobeMap, deposit_params};
+use crate::em::{EmConfig, EmStats, LobeFamily, LobeMap};
 use crate::error::Result;
 use crate::frame::{FrameConfig, Splatting, camera_uniform, shade_params};
-use crate::gpu::bins as gpu_bins;
-use crate::gpu::em as gpu_em;
 
 use crate::gpu::photons::trace_photons;
 use crate::gpu::present::PresentPipeline;
@@ -26,8 +26,10 @@ use crate::gpu::scene::GpuScene;
 
 use crate::gpu::{BackendChoice, Gpu};
 use crate::photons::{PhotonConfig, PhotonMap, PhotonStats, photons_within};
+use crate::plan::{BakeLimits, BakePlan};
 use crate::renderer::FrameRenderer;
 use crate::scene::Scene;
+use crate::sequence::Executor;
 use crate::timing::ms_since;
 use crate::tone::ToneConfig;
 
@@ -252,101 +254,38 @@ pub fn em(
         prune: false,
         ..skip_cfg.clone()
     };
-    let setup = gather_setup(scene);
-    let deposit_cfg = skip_cfg
-        .uses_deposits()
-        .then(|| deposit_params(&scene.lights, photons.photons, &scene.splats, cfg.radius));
-    let deposit_cfg = deposit_cfg.transpose()?;
-    let mut deposits_ms = None;
-    let ([map, skipping, fixed], traced_stats, binning_ms, adapter, backend) = match gpu {
+    let cfgs = [&cfg, &skip_cfg, &fixed_cfg];
+    let n = scene.splats.len() as u32;
+    let (fits, adapter, backend) = match gpu {
         Some(gpu) => {
+            let plan = BakePlan::of(scene, photons.clone(), skip_cfg.clone(), gpu.bake_limits())?;
             let on_gpu = GpuScene::upload(gpu, scene)?;
-            let traced = trace_photons(gpu, scene, &on_gpu, photons, &mut |_, _| {})?;
-            let traced_stats = traced.stats.clone();
-            let params = bin_params(&on_gpu.grid.params, cfg.radius, traced.stats.stored)?;
-            let t = Instant::now();
-            let bins = gpu_bins::bin_photons(gpu, &traced, &on_gpu.splats, &params)?;
-            let binning_ms = ms_since(t);
-            let t = Instant::now();
-            let deposits = match &deposit_cfg {
-                Some(d) => Some(gpu_bins::deposit_photons(
-                    gpu,
-                    &traced,
-                    &on_gpu.splats,
-                    d,
-                    &on_gpu.grid.params,
-                )?),
-                None => None,
-            };
-            if deposits.is_some() {
-                deposits_ms = Some(ms_since(t));
-            }
-            drop(traced);
-            let n = scene.splats.len() as u32;
-            // The fit of every splat (the thesis's timing) reads the photons; the render's
-            // fits read what its estimate reads.
-            let fit = |c: &EmConfig| gpu_em::fit_lobes_gathering(gpu, &on_gpu, n, &bins, c, &setup);
-            let fit_as_rendered = |c: &EmConfig| match &deposits {
-                Some(d) => gpu_em::fit_lobes_to_deposits(gpu, &on_gpu, n, d, c, &setup),
-                None => fit(c),
-            };
-            fit(&EmConfig {
-                iterations: 1,
-                ..cfg.clone()
+            let fits = on_device(gpu, &on_gpu, n, |ex, on| {
+                em_fits(ex, scene, &plan, on, cfgs, true)
             })?;
-            fit_as_rendered(&EmConfig {
-                iterations: 1,
-                ..skip_cfg.clone()
-            })?;
-            let map = fit(&cfg)?.download(gpu)?;
-            let skipping = fit_as_rendered(&skip_cfg)?.download(gpu)?;
-            let fixed = fit_as_rendered(&fixed_cfg)?.download(gpu)?;
-            let name = gpu.info.name.clone();
             let backend = gpu.backend_name().to_string();
-            (
-                [map, skipping, fixed],
-                traced_stats,
-                binning_ms,
-                name,
-                backend,
-            )
+            (fits, gpu.info.name.clone(), backend)
         }
         None => {
-            let (traced, grid, _) = cpu::trace_scene(scene, photons, &mut |_, _| {})?;
-            let params = bin_params(&grid.params, cfg.radius, traced.stats.stored)?;
-            let t = Instant::now();
-            let bins = cpu::bin_photons(&params, &traced.photons, &scene.splats)?;
-            let binning_ms = ms_since(t);
-            let t = Instant::now();
-            let deposits = match &deposit_cfg {
-                Some(d) => Some(cpu::deposit_photons(
-                    d,
-                    &traced.photons,
-                    &scene.splats,
-                    &grid.params,
-                )?),
-                None => None,
-            };
-            if deposits.is_some() {
-                deposits_ms = Some(ms_since(t));
-            }
-            let parts = (scene.splats.as_slice(), scene.materials.as_slice());
-            let fit = |c: &EmConfig| {
-                let gathering = Some((scene.geometry(&grid), &setup));
-                let shape = FitShape::default();
-                match &deposits {
-                    Some(d) if !c.fit_all => {
-                        cpu::fit_lobes_to_deposits(c, d, parts.0, parts.1, shape, gathering)
-                    }
-                    _ => cpu::fit_lobes_gathering(c, &bins, parts.0, parts.1, shape, gathering),
-                }
-            };
-            let fits = [fit(&cfg)?, fit(&skip_cfg)?, fit(&fixed_cfg)?];
+            let plan = BakePlan::of(scene, photons.clone(), skip_cfg.clone(), BakeLimits::host())?;
+            let grid = cpu::scene_grid(scene)?;
+            let fits = on_mirror(scene, &grid, |ex, on| {
+                em_fits(ex, scene, &plan, on, cfgs, false)
+            })?;
             let threads = rayon::current_num_threads();
-            let adapter = format!("CPU mirror ({threads} threads)");
-            (fits, traced.stats, binning_ms, adapter, "cpu".into())
+            (
+                fits,
+                format!("CPU mirror ({threads} threads)"),
+                "cpu".into(),
+            )
         }
     };
+    let EmFits {
+        fits: [map, skipping, fixed],
+        traced: traced_stats,
+        binning_ms,
+        deposits_ms,
+    } = fits;
     let s = &map.stats;
     Ok(EmBench {
         scene: scene.path.display().to_string(),
@@ -387,6 +326,68 @@ pub fn em(
             fixed_lobes: fixed.lobes.len() as u64,
             fixed_nll: fixed.nll(),
         },
+    })
+}
+
+/// What `em` times: the fit of every splat over the photons (the thesis's), the fit as a
+/// render runs it, and that fit with a fixed lobe count; with the photons' figures and the
+/// binning's and deposits' times.
+struct EmFits {
+    fits: [LobeMap; 3],
+    traced: PhotonStats,
+    binning_ms: f64,
+    deposits_ms: Option<f64>,
+}
+
+/// Traces, bins, deposits where the fit as rendered reads deposits, and fits with each of
+/// `cfgs` (every splat over the photons; as rendered; as rendered with a fixed lobe count) on
+/// one executor. With `warm`, fits of one iteration compile the pipelines first.
+fn em_fits<E: Executor>(
+    ex: &mut E,
+    scene: &Scene,
+    plan: &BakePlan,
+    on: &SceneBuffers<E::Buffer>,
+    [all, rendered, fixed]: [&EmConfig; 3],
+    warm: bool,
+) -> Result<EmFits> {
+    let quiet = Progress::new(false);
+    let traced = bake::trace(ex, plan, on, &quiet)?;
+    let binned = bin_traced(ex, plan, on, &traced, &quiet)?;
+    let deposits = match plan.deposits {
+        Some(_) => Some(deposit_traced(ex, plan, on, &traced, &quiet)?),
+        None => None,
+    };
+    let stats = traced.stats.clone();
+    drop(traced);
+    // The fit of every splat reads the photons; the render's fits read what its estimate reads.
+    let fit = |ex: &mut E, em: &EmConfig, as_rendered: bool| {
+        let input = match (&deposits, as_rendered) {
+            (Some((d, _)), true) => (&d.bins, Some(d)),
+            _ => (&binned.bins, None),
+        };
+        let plan = BakePlan {
+            em: em.clone(),
+            ..plan.clone()
+        };
+        bake::fit(ex, scene, &plan, on, input, &quiet)
+    };
+    if warm {
+        let once = |em: &EmConfig| EmConfig {
+            iterations: 1,
+            ..em.clone()
+        };
+        fit(ex, &once(all), false)?;
+        fit(ex, &once(rendered), true)?;
+    }
+    Ok(EmFits {
+        fits: [
+            fit(ex, all, false)?,
+            fit(ex, rendered, true)?,
+            fit(ex, fixed, true)?,
+        ],
+        traced: stats,
+        binning_ms: binned.binning.ms.unwrap_or_default(),
+        deposits_ms: deposits.and_then(|d| d.1.ms),
     })
 }
 

@@ -4,13 +4,12 @@
 use std::time::Instant;
 
 use super::Gpu;
-use super::bins::{GpuBins, GpuDeposits};
+use super::bins::GpuBins;
 use super::exec::GpuExecutor;
-use super::scene::GpuScene;
-use crate::em::{EmConfig, EmStats, FitShape, GatherSetup, LobeMap, workgroup_size};
+use crate::em::{EmConfig, EmStats, FitShape, LobeMap, workgroup_size};
 use crate::error::{Error, Result};
 use crate::plan::{BakeLimits, GATHER_BATCH_BYTES};
-use crate::sequence::{self, DepositInput, FitInput, Gathering};
+use crate::sequence::{self, FitInput};
 use crate::timing::ms_since;
 use crate::types::{Lobe, SplatLight};
 
@@ -76,8 +75,8 @@ impl Gpu {
 }
 
 /// Fits lobes to the binned photons around each of the `splat_count` splats in `splats`
-/// (with their `materials`), in the device's shape: the photon fit (`cfg.gather` 0; final
-/// gathering needs the scene, `fit_lobes_gathering`).
+/// (with their `materials`), in the device's shape: the photon fit (`cfg.gather` 0; the
+/// bake's fit, with final gathering through the scene, is `bake::fit`).
 pub fn fit_lobes(
     gpu: &Gpu,
     splats: &wgpu::Buffer,
@@ -97,47 +96,6 @@ pub fn fit_lobes(
     )
 }
 
-/// `fit_lobes` over the scene on the device, with final gathering where `cfg.gather` asks for
-/// it.
-pub fn fit_lobes_gathering(
-    gpu: &Gpu,
-    on_gpu: &GpuScene,
-    splat_count: u32,
-    bins: &GpuBins,
-    cfg: &EmConfig,
-    setup: &GatherSetup,
-) -> Result<GpuLobes> {
-    fit_scene(gpu, (on_gpu, splat_count), (bins, None), cfg, setup)
-}
-
-/// The lobe fit over the scene on the device with every splat's irradiance from `deposits`
-/// (`em_share`) and the fitted splats' lobes from final gathering.
-pub fn fit_lobes_to_deposits(
-    gpu: &Gpu,
-    on_gpu: &GpuScene,
-    splat_count: u32,
-    deposits: &GpuDeposits,
-    cfg: &EmConfig,
-    setup: &GatherSetup,
-) -> Result<GpuLobes> {
-    let binned = (&deposits.bins, Some(deposits));
-    fit_scene(gpu, (on_gpu, splat_count), binned, cfg, setup)
-}
-
-/// The fit of the scene's first `splat_count` splats, in the device's shape, with final
-/// gathering where `cfg.gather` asks for it.
-fn fit_scene(
-    gpu: &Gpu,
-    (on_gpu, splat_count): (&GpuScene, u32),
-    binned: (&GpuBins, Option<&GpuDeposits>),
-    cfg: &EmConfig,
-    setup: &GatherSetup,
-) -> Result<GpuLobes> {
-    let splats = (&on_gpu.splats, &on_gpu.materials, splat_count);
-    let gathering = Some((on_gpu, setup));
-    fit_on_device(gpu, splats, binned, cfg, fit_shape(gpu), gathering)
-}
-
 /// `fit_lobes` in a given shape (tests run both reductions on one device).
 pub fn fit_lobes_shaped(
     gpu: &Gpu,
@@ -148,25 +106,17 @@ pub fn fit_lobes_shaped(
     cfg: &EmConfig,
     shape: FitShape,
 ) -> Result<GpuLobes> {
-    fit_on_device(
-        gpu,
-        (splats, materials, splat_count),
-        (bins, None),
-        cfg,
-        shape,
-        None,
-    )
+    fit_on_device(gpu, (splats, materials, splat_count), bins, cfg, shape)
 }
 
-/// The fit of `splats` (their buffer, their materials', their count), with final gathering
-/// through the scene where `gathering` is given.
+/// The photon fit of `splats` (their buffer, their materials', their count); the bake's fit,
+/// with final gathering, is `bake::fit`.
 fn fit_on_device(
     gpu: &Gpu,
     (splats, materials, splat_count): (&wgpu::Buffer, &wgpu::Buffer, u32),
-    (bins, deposits): (&GpuBins, Option<&GpuDeposits>),
+    bins: &GpuBins,
     cfg: &EmConfig,
     shape: FitShape,
-    gathering: Option<(&GpuScene, &GatherSetup)>,
 ) -> Result<GpuLobes> {
     cfg.validate()?;
     if shape.subgroup_reduce && !fit_shape(gpu).subgroup_reduce {
@@ -175,10 +125,6 @@ fn fit_on_device(
         ));
     }
     let t = Instant::now();
-    let lights = match gathering {
-        Some((_, g)) => Some(gpu.storage("lights", g.lights)?),
-        None => None,
-    };
     let input = FitInput {
         bin_params: &bins.params_buf,
         cell_start: &bins.cell_start,
@@ -187,44 +133,18 @@ fn fit_on_device(
         splats,
         materials,
         splat_count,
-        // Batches of one binding, one page: a stage that binds them has bindings to spare.
-        gathering: gathering
-            .zip(lights.as_ref())
-            .map(|((_, setup), lights)| Gathering {
-                setup,
-                lights,
-                batch_bytes: gpu.bake_limits().gather_batch_bytes,
-            }),
-        deposits: deposits.map(|d| DepositInput {
-            reach: d.params.reach,
-            params: &d.params_buf,
-            keys: &d.bins.keys,
-            spread: &d.spread,
-        }),
+        gathering: None,
+        deposits: None,
     };
     let mut encoder = gpu.encoder("lobe fit");
     let mut ex = GpuExecutor::new(gpu, &mut encoder);
-    if let Some((on_gpu, _)) = gathering {
-        ex = ex.tracing(on_gpu.geometry());
-    }
     let fit = sequence::fit_lobes(&mut ex, &input, cfg, shape)?;
     gpu.submit_and_wait(encoder)?;
     Ok(GpuLobes {
         lobes_per_splat: cfg.lobes,
+        splat_count,
+        stats: fit.stats(ms_since(t)),
         lobes: fit.lobes,
         light: fit.light,
-        splat_count,
-        stats: EmStats {
-            listed: fit.listed + fit.gathered,
-            fitted: fit.fitted,
-            max_candidates: fit.max_candidates,
-            photons: 0,
-            dispatches: fit.dispatches,
-            ms: ms_since(t),
-            select_ms: fit.select_ms,
-            gather_ms: fit.gather_ms,
-            fit_ms: fit.fit_ms,
-            final_gather_ms: fit.final_gather_ms,
-        },
     })
 }
