@@ -64,9 +64,10 @@ pub enum Mirror {
 }
 
 /// The mirror the executor runs for each stage it dispatches, one row a stage: each mirror's
-/// `dispatch` unpacks its own bindings beside its code. The stages without a row (the splat
-/// passes, `shade`, `present`, `reference_gather`, `trace_rays`) are called by their hosts
-/// directly (`frames`, the tests).
+/// `dispatch` unpacks its own bindings beside its code. The match names every stage, so that a
+/// new one does not compile without its row; the stages whose row is `None` (the splat passes,
+/// `shade`, `present`, `reference_gather`, `trace_rays`) are called by their hosts directly
+/// (`frames`, the tests).
 pub fn mirror(stage: Stage) -> Option<Mirror> {
     Some(match stage {
         Stage::BinCount => Mirror::Plain(bin_count::dispatch),
@@ -96,6 +97,15 @@ pub fn mirror(stage: Stage) -> Option<Mirror> {
         Stage::SplatTileScatter => Mirror::Plain(splat_tiles::dispatch_tile_scatter),
         Stage::TonemapApply => Mirror::Plain(tonemap_apply::dispatch),
         Stage::TonemapReduce => Mirror::Plain(tonemap_reduce::dispatch),
-        _ => return None,
+        Stage::TraceRays
+        | Stage::SplatVisibility
+        | Stage::SplatSelect
+        | Stage::SplatList
+        | Stage::SplatShade
+        | Stage::SplatAttributes
+        | Stage::SplatCompute
+        | Stage::Shade
+        | Stage::ReferenceGather
+        | Stage::Present => return None,
     })
 }
