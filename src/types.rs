@@ -150,6 +150,13 @@ pub mod light_kind {
     pub const DIRECTIONAL: u32 = 3;
 }
 
+/// Bits of `Light::flags`.
+pub mod light_flags {
+    /// An area light whose front reflects as a surface does (it carries a material): rays and
+    /// photons that meet it go on to the splats of its surface, just behind its emitting face.
+    pub const REFLECTS: u32 = 1;
+}
+
 /// One light. Which fields matter depends on `kind`:
 /// point: position, power; spot: also direction and the cosines of the cone;
 /// area: position is a corner, `edge_u`/`edge_v` span the rectangle (`edge_u × edge_v` points
@@ -157,6 +164,7 @@ pub mod light_kind {
 /// directional: direction (the way light travels); photons start on a disk of area `area`
 /// centred at `position`, perpendicular to the direction, that covers the scene's bounds.
 /// `power` is total emitted RGB power (W) for every kind; emission sampling shares photons by it.
+/// `flags`: `light_flags`.
 #[repr(C)]
 #[derive(Clone, Copy, Debug, Default, PartialEq, Pod, Zeroable)]
 pub struct Light {
@@ -169,7 +177,7 @@ pub struct Light {
     pub edge_u: [f32; 3],
     pub area: f32,
     pub edge_v: [f32; 3],
-    pub _pad: u32,
+    pub flags: u32,
 }
 
 /// A stored photon: where it landed (on splat `splat`), the direction it came from (pointing

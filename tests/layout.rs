@@ -55,7 +55,7 @@ fn rust_layouts() -> Vec<RustLayout> {
             edge_u,
             area,
             edge_v,
-            _pad
+            flags
         }),
         layout!(Photon {
             position,

@@ -11,12 +11,14 @@ use lobelight::scene;
 
 /// The Cornell box at 48²: its seven surfaces (five walls, two blocks) each own pixels, the
 /// tall block owns the pixel at its centre, no pixel is empty (the box fills the view, and
-/// the light is on the ceiling's far side of every ray), and edges are a minority.
+/// the light is on the ceiling's far side of every ray), and edges are a minority. The eighth
+/// surface is the light's own (it reflects), hidden behind its face.
 #[test]
 fn cornell_box_pixels_name_their_surfaces() {
     let scene = scene::load(Path::new("scenes/cornell.toml")).unwrap();
-    assert_eq!(scene.surfaces.len(), 7);
+    assert_eq!(scene.surfaces.len(), 8);
     assert_eq!(scene.surfaces[6], "#3 box (glossy)");
+    assert_eq!(scene.surfaces[7], "light 1");
     let grid = lobelight::cpu::scene_grid(&scene).unwrap();
     let view = View::new(&scene.camera, 48, 48);
     let cam = camera_uniform(&view, scene.bounds(), &FrameConfig::default());

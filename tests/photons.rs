@@ -404,6 +404,52 @@ fn photons_end_at_the_light_they_meet() {
     }
 }
 
+/// A light that carries a material reflects as Mitsuba's lights do: a photon that meets its
+/// face lands on the light's own surface just behind it (stored, and bounced by its material)
+/// rather than ending there, and still none reaches the ceiling behind it; on the device and
+/// the mirror alike (the light a millimetre under the ceiling, as in
+/// `photons_end_at_the_light_they_meet`). The light's surface is the scene's last object
+/// ("light 1").
+#[test]
+fn photons_land_on_a_light_that_reflects() {
+    let gpu = common::gpu();
+    let light = "[[light]]\ntype = \"area\"\ncenter = [0.0, 0.999, 0.0]\nsize = [0.6, 0.6]\n\
+                 normal = [0.0, -1.0, 0.0]\npower = 10.0\nmaterial = \"wall\"\nspacing = 0.05";
+    let scene = parse(&closed_box("diffuse = 0.8", light));
+    let body = scene.surfaces.iter().position(|s| s == "light 1").unwrap() as u32;
+    let body_splats: Vec<u32> = (0..scene.splats.len() as u32)
+        .filter(|&i| scene.splats[i as usize].object == body)
+        .collect();
+    assert_eq!(body_splats.len(), 144, "a 0.6 square at spacing 0.05");
+    assert!(body_splats.iter().all(|&i| {
+        let s = &scene.splats[i as usize];
+        s.normal == [0.0, -1.0, 0.0] && s.center[1] > 0.999 && s.center[1] < 0.9996
+    }));
+    let cfg = config(&scene, 40_000, StoreRange::All);
+    for (what, map) in [
+        ("GPU", on_gpu(&gpu, &scene, &cfg)),
+        ("CPU", on_cpu(&scene, &cfg)),
+    ] {
+        check_closed(&map, what);
+        let on_body = map
+            .photons
+            .iter()
+            .filter(|p| scene.splats[p.splat as usize].object == body)
+            .count();
+        let behind = map
+            .photons
+            .iter()
+            .filter(|p| p.position[1] > 0.9998)
+            .filter(|p| p.position[0].abs() < 0.2 && p.position[2].abs() < 0.2)
+            .count();
+        assert!(
+            on_body > 100,
+            "{what}: {on_body} photons on the light's surface"
+        );
+        assert_eq!(behind, 0, "{what}: photons behind the light");
+    }
+}
+
 /// A directional light emits from a disk covering the scene: a target of area A receives
 /// E·A, up to the binomial error of how many photons hit it. The target is one disk, whose
 /// area is exact (a quad of splats overhangs its edges by about a splat radius).

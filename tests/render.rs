@@ -345,6 +345,35 @@ fn area_light_is_seen_directly() {
     assert_eq!(hdr[0][..3], [0.0; 3]);
 }
 
+/// An area light with a material shows its radiance added to what its own surface reflects:
+/// here a point light above it lights that surface to ρ/π × E = 1 at the centre, so the centre
+/// pixel reads the light's radiance plus one in every channel (within 1 %), where without a
+/// material it reads the radiance alone.
+#[test]
+fn a_light_that_reflects_shows_its_surface_too() {
+    let point = "[[light]]\ntype = \"point\"\nposition = [0.0, 1.5, 0.0]\npower = 19.7392088";
+    let area = "[[light]]\ntype = \"area\"\ncenter = [0.0, 1.0, 0.0]\nsize = [0.5, 0.5]\n\
+                normal = [0.0, 1.0, 0.0]\nradiance = [1.0, 2.0, 3.0]";
+    let centre = |reflects: bool| {
+        let material = if reflects {
+            "\nmaterial = \"grey\"\nspacing = 0.05"
+        } else {
+            ""
+        };
+        let scene = plane_scene(&format!("{point}\n\n{area}{material}"));
+        let grid = common::host_grid(&scene);
+        let lobes = cpu_bake(&scene, &grid);
+        let view = View::new(&scene.camera, 33, 33);
+        cpu_hdr(&scene, &grid, &lobes, &view, &FrameConfig::default())[16 * 33 + 16]
+    };
+    let rel = |a: f32, b: f32| ((a - b) / b).abs();
+    let (plain, reflecting) = (centre(false), centre(true));
+    for (c, want) in [(0, 1.0), (1, 2.0), (2, 3.0)] {
+        assert!(rel(plain[c], want) < 1e-4, "{plain:?}");
+        assert!(rel(reflecting[c], want + 1.0) < 1e-2, "{reflecting:?}");
+    }
+}
+
 #[test]
 fn cache_key_follows_the_bake_not_the_view() {
     use lobelight::cache::{Miss, bake_key, load, save};

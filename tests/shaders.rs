@@ -348,3 +348,34 @@ fn splat_draw_constants_match_the_wgsl() {
     assert_eq!(instances(SPLATS_PER_INSTANCE), 1);
     assert_eq!(instances(SPLATS_PER_INSTANCE + 1), 2);
 }
+
+/// Lights' kinds and flags are one set of numbers in Rust and WGSL: a light that reflects on
+/// the host must reflect in every stage.
+#[test]
+fn light_constants_match_the_wgsl() {
+    use lobelight::types::{light_flags, light_kind};
+    let source = shaders::resolve_stage(Stage::Shade).unwrap();
+    for (name, value) in [
+        ("LIGHT_POINT", light_kind::POINT),
+        ("LIGHT_SPOT", light_kind::SPOT),
+        ("LIGHT_AREA", light_kind::AREA),
+        ("LIGHT_DIRECTIONAL", light_kind::DIRECTIONAL),
+        ("LIGHT_REFLECTS", light_flags::REFLECTS),
+    ] {
+        assert_eq!(wgsl_const_u32(&source, name), value, "{name}");
+    }
+}
+
+/// The shade pass and its mirror let a reflecting light stand the same distance in front of
+/// its own surface.
+#[test]
+fn reflecting_light_slack_matches_the_wgsl() {
+    let source = shaders::resolve_stage(Stage::Shade).unwrap();
+    let decl = "const REFLECTING_LIGHT_SLACK: f32 = ";
+    let value: f32 = source
+        .lines()
+        .find_map(|l| l.trim().strip_prefix(decl))
+        .and_then(|v| v.trim_end_matches(';').parse().ok())
+        .expect("REFLECTING_LIGHT_SLACK in shade.wgsl");
+    assert_eq!(value, lobelight::cpu::shade::REFLECTING_LIGHT_SLACK);
+}

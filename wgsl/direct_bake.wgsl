@@ -50,7 +50,8 @@ fn main(@builtin(workgroup_id) wg: vec3<u32>, @builtin(num_workgroups) num_wg: v
             let e = ls.e * cos_i;
             unshadowed += e;
             var budget = SHADOW_RAY_BUDGET;
-            let hit = trace_ray(o, ls.wi, i, ls.dist - params.shadow_bias, &budget);
+            let reach = shadow_reach(l, o, ls.wi, ls.dist, params.shadow_bias);
+            let hit = trace_ray(o, ls.wi, i, reach, &budget);
             if hit.splat == NO_SPLAT {
                 open += e;
             }

@@ -137,7 +137,8 @@ fn main(@builtin(workgroup_id) wg: vec3<u32>, @builtin(num_workgroups) num_wg: v
         var budget = SHADOW_RAY_BUDGET;
         let hit = trace_ray(o, d, skip, FAR, &budget);
         let t_surface = select(hit.t, FAR, hit.splat == NO_SPLAT);
-        // An area light in front of the surface ends the path with its radiance.
+        // An area light in front of the surface adds its radiance and ends the path, unless it
+        // reflects.
         var light_t = t_surface;
         var seen = NO_SPLAT;
         for (var li = 0u; li < params.light_count; li++) {
@@ -155,7 +156,10 @@ fn main(@builtin(workgroup_id) wg: vec3<u32>, @builtin(num_workgroups) num_wg: v
                 w = power_heuristic(pdf_brdf, pdf_light);
             }
             radiance += throughput * (l.power / (PI * l.area)) * (w * hit_shown);
-            break;
+            // A light that reflects goes on to its own surface, just behind its face.
+            if (l.flags & LIGHT_REFLECTS) == 0u {
+                break;
+            }
         }
         if hit.splat == NO_SPLAT || hit.aborted != 0u || depth == params.max_depth {
             break;
@@ -184,8 +188,9 @@ fn main(@builtin(workgroup_id) wg: vec3<u32>, @builtin(num_workgroups) num_wg: v
             }
             var shadow_budget = SHADOW_RAY_BUDGET;
             // Off the surface as the renderer's shadow rays start (design section 10).
-            let blocked = trace_ray(p + params.shadow_bias * n, ls.wi, hit.splat,
-                                    ls.dist - params.shadow_bias, &shadow_budget);
+            let o_shadow = p + params.shadow_bias * n;
+            let reach = shadow_reach(l, o_shadow, ls.wi, ls.dist, params.shadow_bias);
+            let blocked = trace_ray(o_shadow, ls.wi, hit.splat, reach, &shadow_budget);
             if blocked.splat != NO_SPLAT {
                 continue;
             }

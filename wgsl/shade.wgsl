@@ -55,14 +55,15 @@ struct Surface {
 
 // Reflected radiance of one light sample, if nothing shadows it, its specular part weighted by
 // `spec_weight` (multiple importance sampling against the BRDF's samples).
-fn shade_sample(sf: Surface, ls: LightSample, spec_weight: f32) -> vec3<f32> {
+fn shade_sample(sf: Surface, l: Light, ls: LightSample, spec_weight: f32) -> vec3<f32> {
     let cos_i = dot(sf.n, ls.wi);
     if !(cos_i > 0.0) || all(ls.e <= vec3<f32>(0.0)) {
         return vec3<f32>(0.0);
     }
     let o = sf.p + params.shadow_bias * sf.n;
     var budget = SHADOW_RAY_BUDGET;
-    let hit = trace_ray(o, ls.wi, NO_SPLAT, ls.dist - params.shadow_bias, &budget);
+    let reach = shadow_reach(l, o, ls.wi, ls.dist, params.shadow_bias);
+    let hit = trace_ray(o, ls.wi, NO_SPLAT, reach, &budget);
     if hit.splat != NO_SPLAT {
         return vec3<f32>(0.0);
     }
@@ -126,7 +127,7 @@ fn direct(sf: Surface, pixel: u32) -> vec3<f32> {
     for (var li = 0u; li < params.light_count; li++) {
         let l = lights[li];
         if l.kind != LIGHT_AREA {
-                sum += shade_sample(sf, sample_light(l, sf.p, 0.0, 0.0), 1.0);
+                sum += shade_sample(sf, l, sample_light(l, sf.p, 0.0, 0.0), 1.0);
             continue;
         }
         // This frame's strata of the n x n grid: all of them, or a refinement frame's share;
@@ -150,7 +151,7 @@ fn direct(sf: Surface, pixel: u32) -> vec3<f32> {
                 let pdf_brdf = ward_pdf(sf.n, sf.wo, ls.wi, sf.alpha);
                 w = power_heuristic(area_pdf(l, ls.wi, ls.dist, count), pdf_brdf);
             }
-            area_sum += shade_sample(sf, ls, w);
+            area_sum += shade_sample(sf, l, ls, w);
         }
         sum += area_sum * (1.0 / count);
         if glossy {
@@ -195,16 +196,27 @@ fn glossy_indirect(sf: Surface, shift: vec2<u32>) -> vec3<f32> {
     return sf.rho_s * sum * (1.0 / f32(params.glossy_rays));
 }
 
-// The radiance of the nearest area light the view ray meets before t_surface, or -1.
-fn emitted(d: vec3<f32>, t_surface: f32) -> vec3<f32> {
-    var out = vec3<f32>(-1.0);
+// How far past the blended surface, relative to its distance, a reflecting light still counts
+// as in front of it (src/cpu/shade.rs has the same).
+const REFLECTING_LIGHT_SLACK: f32 = 0.01;
+
+// The radiance of the nearest area light the view ray meets before t_surface, in xyz; w is 1
+// where the light reflects (its own surface, just behind its face, shows too), 0 where it hides
+// what lies behind it, and -1 where the ray meets no light.
+fn emitted(d: vec3<f32>, t_surface: f32) -> vec4<f32> {
+    var out = vec4<f32>(0.0, 0.0, 0.0, -1.0);
     var t_near = t_surface;
     for (var li = 0u; li < params.light_count; li++) {
         let l = lights[li];
         let t = area_light_hit(l, cam.eye, d);
-        if t > 0.0 && t < t_near {
+        let reflects = (l.flags & LIGHT_REFLECTS) != 0u;
+        // A light that reflects lies in front of its own surface by less than the depth
+        // targets round (f16 where the device cannot blend f32): within REFLECTING_LIGHT_SLACK
+        // of the surface's distance, that surface counts as the light's own.
+        let limit = select(t_near, t_near * (1.0 + REFLECTING_LIGHT_SLACK), reflects);
+        if t > 0.0 && t < limit {
             t_near = t;
-            out = l.power / (PI * l.area);
+            out = vec4<f32>(l.power / (PI * l.area), select(0.0, 1.0, reflects));
         }
     }
     return out;
@@ -251,11 +263,18 @@ fn main(@builtin(workgroup_id) wg: vec3<u32>, @builtin(num_workgroups) num_wg: v
             color += glossy_indirect(g, r2_shift(pcg_hash(pcg_hash(params.seed ^ GLOSSY_SALT) + i)));
         }
     }
-    // A light seen directly hides what lies behind it; its radiance counts with the direct
-    // diffuse term, so that the parts a frame can show add up to the whole.
+    // A light seen directly hides what lies behind it, or adds to its own surface where it
+    // reflects; its radiance counts with the direct diffuse term, so that the parts a frame
+    // can show add up to the whole.
     let seen = emitted(d, t_surface);
-    let light = select(vec3<f32>(0.0), seen, (params.show & SHOW_DIRECT_DIFFUSE) != 0u);
-    let out = vec4<f32>(select(color, light, seen.x >= 0.0), 1.0);
+    let light = select(vec3<f32>(0.0), seen.xyz, (params.show & SHOW_DIRECT_DIFFUSE) != 0u);
+    var shown_color = color;
+    if seen.w > 0.0 {
+        shown_color = color + light;
+    } else if seen.w == 0.0 {
+        shown_color = light;
+    }
+    let out = vec4<f32>(shown_color, 1.0);
     // Refinement: the running mean of this frame and the `sample` frames before it.
     if params.sample == 0u {
         hdr[i] = out;

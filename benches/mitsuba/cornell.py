@@ -15,7 +15,9 @@ Figures come from `lobelight compare --json` (relMSE, SMAPE, FLIP). Usage:
     cargo build --release
     python3 benches/mitsuba/cornell.py --size 256 --spp 1024 -o mitsuba-out
 
-It prints one JSON object on stdout; images and figures go to the output folder.
+It prints one JSON object on stdout; images and figures go to the output folder, with
+objects.md: each object's mean against Mitsuba's, for the renderer at its defaults and for
+lobelight's path tracer (`--path-spp`), the table docs/measurements.md shows.
 """
 
 import argparse
@@ -62,6 +64,22 @@ def compare(a, b):
     return {k: d[k] for k in ("rel_mse", "smape", "flip", "mean_relative", "energy")}
 
 
+def objects(ours, converged, ids):
+    """Each object's mean against Mitsuba's (relative bias), by lobelight's object IDs."""
+    d = lobelight("compare", ours, converged, "--objects", ids, "--json")
+    return {o["name"]: o["bias"] for o in d["objects"]}
+
+
+def table(rows):
+    """A markdown table: one row per image, one column per object, bias in percent."""
+    names = list(next(iter(rows.values())).keys())
+    lines = ["| against Mitsuba | " + " | ".join(names) + " |",
+             "| --- |" + " ---: |" * len(names)]
+    for label, row in rows.items():
+        lines.append(f"| {label} | " + " | ".join(f"{100 * row[n]:+.2f} %" for n in names) + " |")
+    return "\n".join(lines) + "\n"
+
+
 def main():
     p = argparse.ArgumentParser(description=__doc__.split("\n")[0])
     p.add_argument("--size", type=int, default=256, help="image side in pixels")
@@ -71,6 +89,8 @@ def main():
                         "equal-time Mitsuba image each")
     p.add_argument("--variant", default="scalar_rgb", help="Mitsuba variant (llvm_ad_rgb is faster)")
     p.add_argument("-o", "--output", type=Path, default=Path("mitsuba-out"))
+    p.add_argument("--path-spp", type=int, default=512,
+                   help="samples per pixel of lobelight's own path tracer in the per-object table")
     p.add_argument("--max-depth", type=int, default=8,
                    help="lobelight's photon path length (scene [bake] max_depth); Mitsuba gets one "
                         "more, as its depth counts the emitter vertex")
@@ -118,8 +138,24 @@ def main():
             },
         })
 
+    # Per object: the renderer at its defaults and lobelight's path tracer against Mitsuba's
+    # converged image, by the object IDs of lobelight's view (objects.md, in the output folder).
+    ids = out / "ids.png"
+    lobes = out / "lobelight_default.exr"
+    path = out / "lobelight_path.exr"
+    lobelight("render", SCENE, "-o", lobes, "--width", args.size, "--height", args.size,
+              "--object-ids", ids)
+    lobelight("render", SCENE, "-o", path, "--width", args.size, "--height", args.size,
+              "--method", "path", "--spp", args.path_spp)
+    per_object = {
+        "renderer (defaults)": objects(lobes, converged, ids),
+        f"path tracer ({args.path_spp} spp)": objects(path, converged, ids),
+    }
+    (out / "objects.md").write_text(table(per_object))
+
     result = {
         "size": args.size,
+        "objects": per_object,
         "max_depth_lobelight": args.max_depth,
         "max_depth_mitsuba": depth,
         "mitsuba_converged": {"spp": args.spp, "seconds": converged_seconds, "variant": args.variant},

@@ -8,7 +8,7 @@ use crate::error::Result;
 use glam::{Vec3, Vec4};
 use rayon::prelude::*;
 
-use crate::shared::lights::{area_point, sample_light};
+use crate::shared::lights::{area_point, sample_light, shadow_reach};
 use crate::shared::rng::pcg_hash;
 use crate::shared::splat::SHADOW_RAY_BUDGET;
 use crate::shared::trace::{Geometry, trace_ray};
@@ -54,7 +54,7 @@ pub fn direct_bake(
                     let e = ls.e * cos_i;
                     unshadowed += e;
                     let mut budget = SHADOW_RAY_BUDGET;
-                    let t_max = ls.dist - params.shadow_bias;
+                    let t_max = shadow_reach(l, o, ls.wi, ls.dist, params.shadow_bias);
                     let hit = trace_ray(geo, o, ls.wi, i, t_max, &mut budget);
                     if hit.splat == NO_SPLAT {
                         open += e;

@@ -9,7 +9,7 @@ use glam::{IVec3, Vec2, Vec3, Vec4};
 use rayon::prelude::*;
 
 use crate::grid::{cell_index, point_cell};
-use crate::shared::lights::{MIN_ALPHA, area_light_hit, sample_light};
+use crate::shared::lights::{MIN_ALPHA, area_light_hit, sample_light, shadow_reach};
 use crate::shared::rng::{
     RNG_BOUNCE_U, RNG_BOUNCE_V, RNG_EMIT_POS_U, RNG_EMIT_POS_V, RNG_ROULETTE, path_key, pcg_hash,
     rand,
@@ -22,7 +22,7 @@ use crate::shared::splat::{
 };
 use crate::shared::trace::{FAR, Geometry, trace_ray};
 use crate::shared::ward::{mean3, sample_bounce, ward_pdf, ward_specular};
-use crate::types::{Camera, Hit, Light, Material, NO_SPLAT, PathParams, light_kind};
+use crate::types::{Camera, Hit, Light, Material, NO_SPLAT, PathParams, light_flags, light_kind};
 
 pub const WG: u32 = 64;
 pub const RNG_LIGHT_U: u32 = 7;
@@ -154,7 +154,10 @@ fn sample(
                 w = power_heuristic(pdf_brdf, pdf_light);
             }
             radiance += throughput * (Vec3::from(l.power) / (PI * l.area)) * (w * hit_shown);
-            break;
+            // A light that reflects goes on to its own surface, just behind its face.
+            if l.flags & light_flags::REFLECTS == 0 {
+                break;
+            }
         }
         if hit.splat == NO_SPLAT || hit.aborted != 0 || depth == params.max_depth {
             break;
@@ -183,14 +186,9 @@ fn sample(
             }
             let mut shadow_budget = SHADOW_RAY_BUDGET;
             // Off the surface as the renderer's shadow rays start (design §10).
-            let blocked = trace_ray(
-                geo,
-                p + params.shadow_bias * n,
-                ls.wi,
-                hit.splat,
-                ls.dist - params.shadow_bias,
-                &mut shadow_budget,
-            );
+            let o_shadow = p + params.shadow_bias * n;
+            let reach = shadow_reach(l, o_shadow, ls.wi, ls.dist, params.shadow_bias);
+            let blocked = trace_ray(geo, o_shadow, ls.wi, hit.splat, reach, &mut shadow_budget);
             if blocked.splat != NO_SPLAT {
                 continue;
             }

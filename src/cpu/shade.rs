@@ -8,7 +8,7 @@ use glam::{Vec2, Vec3, Vec4};
 use rayon::prelude::*;
 
 use crate::shared::lights::{
-    LightSample, MIN_ALPHA, area_light_hit, area_point, light_first, sample_light,
+    LightSample, MIN_ALPHA, area_light_hit, area_point, light_first, sample_light, shadow_reach,
 };
 use crate::shared::rng::{pcg_hash, r2_point, r2_shift};
 use crate::shared::sampling::{PI, frame_of, power_heuristic};
@@ -19,7 +19,8 @@ use crate::shared::splat::{
 use crate::shared::trace::{FAR, Geometry, trace_ray};
 use crate::shared::ward::{ward_pdf, ward_sample, ward_specular};
 use crate::types::{
-    Camera, DIRECT_RAYS, Light, Material, NO_SPLAT, ShadeParams, SplatLight, light_kind,
+    Camera, DIRECT_RAYS, Light, Material, NO_SPLAT, ShadeParams, SplatLight, light_flags,
+    light_kind,
 };
 
 use super::splat_attributes::Attributes;
@@ -38,6 +39,7 @@ fn shade_sample(
     params: &ShadeParams,
     geo: &Geometry,
     sf: &Surface,
+    l: &Light,
     ls: &LightSample,
     spec_weight: f32,
 ) -> Vec3 {
@@ -52,7 +54,7 @@ fn shade_sample(
         o,
         ls.wi,
         NO_SPLAT,
-        ls.dist - params.shadow_bias,
+        shadow_reach(l, o, ls.wi, ls.dist, params.shadow_bias),
         &mut budget,
     );
     if hit.splat != NO_SPLAT {
@@ -127,7 +129,7 @@ fn direct(
     let key = pcg_hash(pcg_hash(params.seed).wrapping_add(pixel));
     for (li, l) in lights.iter().enumerate().take(params.light_count as usize) {
         if l.kind != light_kind::AREA {
-            sum += shade_sample(params, geo, sf, &sample_light(l, sf.p, 0.0, 0.0), 1.0);
+            sum += shade_sample(params, geo, sf, l, &sample_light(l, sf.p, 0.0, 0.0), 1.0);
             continue;
         }
         // This frame's strata of the n × n grid: all of them, or a refinement frame's share;
@@ -150,7 +152,7 @@ fn direct(
                 let pdf_brdf = ward_pdf(sf.n, sf.wo, ls.wi, sf.alpha);
                 w = power_heuristic(area_pdf(l, ls.wi, ls.dist, count), pdf_brdf);
             }
-            area_sum += shade_sample(params, geo, sf, &ls, w);
+            area_sum += shade_sample(params, geo, sf, l, &ls, w);
         }
         sum += area_sum * (1.0 / count);
         if glossy {
@@ -216,21 +218,36 @@ fn glossy_indirect(
     sf.rho_s * sum * (1.0 / params.glossy_rays as f32)
 }
 
+/// How far past the blended surface, relative to its distance, a reflecting light still counts
+/// as in front of it (the WGSL's `REFLECTING_LIGHT_SLACK`).
+pub const REFLECTING_LIGHT_SLACK: f32 = 0.01;
+
+/// The radiance of the nearest area light the view ray meets before `t_surface`, and whether
+/// it reflects (its own surface, just behind its face, then shows too).
 fn emitted(
     cam: &Camera,
     params: &ShadeParams,
     lights: &[Light],
     d: Vec3,
     t_surface: f32,
-) -> Option<Vec3> {
+) -> Option<(Vec3, bool)> {
     let eye = Vec3::from(cam.eye);
     let mut out = None;
     let mut t_near = t_surface;
     for l in lights.iter().take(params.light_count as usize) {
         let t = area_light_hit(l, eye, d);
-        if t > 0.0 && t < t_near {
+        let reflects = l.flags & light_flags::REFLECTS != 0;
+        // A light that reflects lies in front of its own surface by less than the depth
+        // targets round: within `REFLECTING_LIGHT_SLACK` of the surface's distance, that
+        // surface counts as the light's own.
+        let limit = if reflects {
+            t_near * (1.0 + REFLECTING_LIGHT_SLACK)
+        } else {
+            t_near
+        };
+        if t > 0.0 && t < limit {
             t_near = t;
-            out = Some(Vec3::from(l.power) / (PI * l.area));
+            out = Some((Vec3::from(l.power) / (PI * l.area), reflects));
         }
     }
     out
@@ -297,11 +314,14 @@ pub fn shade(
                 color += glossy_indirect(params, geo, lights, baked, &g, shift);
             }
         }
-        // A light seen directly hides what lies behind it; its radiance counts with the
-        // direct diffuse term, so that the parts a frame can show add up to the whole.
-        let c = emitted(cam, params, lights, d, t_surface)
-            .map(|light| shown(SHOW_DIRECT_DIFFUSE, light))
-            .unwrap_or(color);
+        // A light seen directly hides what lies behind it, or adds to its own surface where
+        // it reflects; its radiance counts with the direct diffuse term, so that the parts a
+        // frame can show add up to the whole.
+        let c = match emitted(cam, params, lights, d, t_surface) {
+            Some((light, false)) => shown(SHOW_DIRECT_DIFFUSE, light),
+            Some((light, true)) => color + shown(SHOW_DIRECT_DIFFUSE, light),
+            None => color,
+        };
         let c = c.extend(1.0);
         // Refinement: the running mean of this frame and the `sample` frames before it.
         *out = if params.sample == 0 {

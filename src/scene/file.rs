@@ -204,6 +204,11 @@ pub enum LightDesc {
         u_axis: Option<Vec3>,
         radiance: Option<Rgb>,
         power: Option<Rgb>,
+        /// The material its front reflects with, as a surface of splats just behind its face
+        /// (Mitsuba's lights reflect so); none: it reflects nothing.
+        material: Option<String>,
+        /// The spacing of that surface's splats (default: `DEFAULT_SPACING`).
+        spacing: Option<f32>,
     },
     /// Parallel light travelling along `direction`, irradiance in W/m² across the beam.
     Directional { direction: Vec3, irradiance: Rgb },

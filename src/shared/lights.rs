@@ -9,7 +9,7 @@ use glam::{Vec2, Vec3};
 use crate::shared::rng::{pcg_hash, unit_float};
 use crate::shared::sampling::{PI, smoothstep};
 use crate::shared::trace::FAR;
-use crate::types::{Light, light_kind};
+use crate::types::{Light, light_flags, light_kind};
 
 /// Roughness below this gives no direct highlight (a mirror needs the lobes, not a sample).
 pub const MIN_ALPHA: f32 = 1e-3;
@@ -76,10 +76,28 @@ pub fn area_point(j: u32, n: u32, r: u32, jitter: bool) -> Vec2 {
     (Vec2::new((j % n) as f32, (j / n) as f32) + o) * inv_n
 }
 
-/// Whether ray `(o, d)` meets area light `l` before distance `t` (a surface's hit).
+/// Whether ray `(o, d)` meets area light `l` before distance `t` (a surface's hit) and ends
+/// there. A light that reflects (`light_flags::REFLECTS`) ends nothing: the ray goes on to its
+/// surface's splats just behind its face, which reflect as any surface does.
 pub fn light_first(l: &Light, o: Vec3, d: Vec3, t: f32) -> bool {
+    if l.flags & light_flags::REFLECTS != 0 {
+        return false;
+    }
     let tl = area_light_hit(l, o, d);
     tl > 0.0 && tl < t
+}
+
+/// How far a shadow ray from `o` (its surface point lifted by `bias`) towards a sample of light
+/// `l` at `dist` from that point looks for what shadows it: `dist - bias`, and for a light that
+/// reflects no farther than its face, so that its own surface just behind that face never
+/// shadows it (the lifted ray can cross the face before `dist - bias`).
+pub fn shadow_reach(l: &Light, o: Vec3, wi: Vec3, dist: f32, bias: f32) -> f32 {
+    let reach = dist - bias;
+    if l.flags & light_flags::REFLECTS == 0 {
+        return reach;
+    }
+    let t = area_light_hit(l, o, wi);
+    if t > 0.0 { reach.min(t) } else { reach }
 }
 
 /// Where ray `(o, d)` meets area light `l`'s emitting face: `t > 0`, or -1 when it misses it.

@@ -69,10 +69,28 @@ fn area_point(j: u32, n: u32, r: u32, jitter: bool) -> vec2<f32> {
     return (vec2<f32>(f32(j % n), f32(j / n)) + o) * inv_n;
 }
 
-// Whether the ray (o, d) meets area light l before distance t (a surface's hit).
+// Whether the ray (o, d) meets area light l before distance t (a surface's hit) and ends
+// there. A light that reflects (LIGHT_REFLECTS) ends nothing: the ray goes on to its surface's
+// splats just behind its face, which reflect as any surface does.
 fn light_first(l: Light, o: vec3<f32>, d: vec3<f32>, t: f32) -> bool {
+    if (l.flags & LIGHT_REFLECTS) != 0u {
+        return false;
+    }
     let tl = area_light_hit(l, o, d);
     return tl > 0.0 && tl < t;
+}
+
+// How far a shadow ray from o (its surface point lifted by bias) towards a sample of light l
+// at dist from that point looks for what shadows it: dist - bias, and for a light that
+// reflects no farther than its face, so that its own surface just behind that face never
+// shadows it (the lifted ray can cross the face before dist - bias).
+fn shadow_reach(l: Light, o: vec3<f32>, wi: vec3<f32>, dist: f32, bias: f32) -> f32 {
+    let reach = dist - bias;
+    if (l.flags & LIGHT_REFLECTS) == 0u {
+        return reach;
+    }
+    let t = area_light_hit(l, o, wi);
+    return select(reach, min(reach, t), t > 0.0);
 }
 
 // Where ray (o, d) meets area light l's emitting face: t > 0, or -1 when it misses it (or

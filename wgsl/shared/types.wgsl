@@ -76,6 +76,8 @@ const LIGHT_POINT: u32 = 0u;
 const LIGHT_SPOT: u32 = 1u;
 const LIGHT_AREA: u32 = 2u;
 const LIGHT_DIRECTIONAL: u32 = 3u;
+// Light.flags: an area light whose front reflects as a surface does (light_flags::REFLECTS).
+const LIGHT_REFLECTS: u32 = 1u;
 
 // A distance beyond everything: a ray without end, a directional light's.
 const FAR: f32 = 3.0e38;
@@ -90,7 +92,7 @@ struct Light {
     edge_u: vec3<f32>,
     area: f32,
     edge_v: vec3<f32>,
-    _pad: u32,
+    flags: u32,
 }
 
 struct Photon {

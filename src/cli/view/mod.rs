@@ -543,6 +543,8 @@ pub fn move_first_light(scene: &Scene, dx: f32, dz: f32) -> Option<Scene> {
     let mut light = *first;
     light.position[0] += dx * step;
     light.position[2] += dz * step;
+    // Its surface's splats stay where the scene put them: the moved light reflects nothing.
+    light.flags &= !crate::types::light_flags::REFLECTS;
     moved.lights[0] = light;
     Some(moved)
 }
