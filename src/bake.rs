@@ -304,11 +304,12 @@ pub fn bake_on<E: Executor>(
     })
 }
 
-/// Runs `work` on the device's executor over the uploaded scene, then waits for the device.
+/// Runs `work` on the device's executor over `scene` as uploaded (`on_gpu`), then waits for
+/// the device.
 pub fn on_device<R>(
+    scene: &Scene,
     gpu: &Gpu,
     on_gpu: &GpuScene,
-    splat_count: u32,
     work: impl FnOnce(&mut GpuExecutor, &SceneBuffers<wgpu::Buffer>) -> Result<R>,
 ) -> Result<R> {
     let mut encoder = gpu.encoder("bake");
@@ -316,7 +317,7 @@ pub fn on_device<R>(
     let on = SceneBuffers {
         splats: &on_gpu.splats,
         materials: &on_gpu.materials,
-        splat_count,
+        splat_count: splat_count(scene)?,
         grid: &on_gpu.grid.params,
     };
     let out = work(&mut ex, &on)?;
@@ -353,10 +354,9 @@ fn splat_count(scene: &Scene) -> Result<u32> {
 /// or any device can take them.
 pub fn bake(scene: &Scene, device: BakeDevice, progress: &Progress) -> Result<Baked> {
     let plan = BakePlan::new(scene, device.limits())?;
-    let n = splat_count(scene)?;
     let to = BakeTo::Lobes;
     let (lobes, photons, binning) = match device {
-        BakeDevice::Gpu(gpu, on_gpu) => on_device(gpu, on_gpu, n, |ex, on| {
+        BakeDevice::Gpu(gpu, on_gpu) => on_device(scene, gpu, on_gpu, |ex, on| {
             bake_on(ex, scene, &plan, on, to, progress)?.kept()
         })?,
         BakeDevice::Cpu(grid) => on_mirror(scene, grid, |ex, on| {
@@ -399,8 +399,7 @@ pub fn bins_gpu(
     progress: &Progress,
 ) -> Result<Binned<Bins<wgpu::Buffer>>> {
     let plan = BakePlan::new(scene, gpu.bake_limits())?;
-    let n = splat_count(scene)?;
-    on_device(gpu, on_gpu, n, |ex, on| {
+    on_device(scene, gpu, on_gpu, |ex, on| {
         bake_on(ex, scene, &plan, on, BakeTo::Bins, progress)?.take_binned()
     })
 }

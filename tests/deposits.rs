@@ -169,8 +169,8 @@ fn deposits_and_shared_light_on_the_device_equal_the_mirror() {
     let plan = BakePlan::new(&scene, gpu.bake_limits()).unwrap();
     let (cfg, setup) = (plan.em.clone(), plan.gather_setup(&scene));
     assert!(cfg.uses_deposits());
-    let (n, quiet) = (scene.splats.len() as u32, Progress::new(false));
-    let lit_gpu = on_device(&gpu, &on_gpu_scene, n, |ex, on| {
+    let quiet = Progress::new(false);
+    let lit_gpu = on_device(&scene, &gpu, &on_gpu_scene, |ex, on| {
         let input = (&deposits.bins, Some(&deposits));
         bake::fit(ex, &scene, &plan, on, input, &quiet)
     })

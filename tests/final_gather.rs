@@ -250,8 +250,8 @@ fn lobes_fitted_to_gathered_samples_match_the_mirror() {
     let on_gpu = {
         let on_gpu = GpuScene::upload(&gpu, &scene).unwrap();
         let uploaded = GpuBins::upload(&gpu, &bins).unwrap();
-        let (n, quiet) = (scene.splats.len() as u32, Progress::new(false));
-        on_device(&gpu, &on_gpu, n, |ex, on| {
+        let quiet = Progress::new(false);
+        on_device(&scene, &gpu, &on_gpu, |ex, on| {
             bake::fit(ex, &scene, &plan, on, (&uploaded, None), &quiet)
         })
         .unwrap()

@@ -255,12 +255,11 @@ pub fn em(
         ..skip_cfg.clone()
     };
     let cfgs = [&cfg, &skip_cfg, &fixed_cfg];
-    let n = scene.splats.len() as u32;
     let (fits, adapter, backend) = match gpu {
         Some(gpu) => {
             let plan = BakePlan::of(scene, photons.clone(), skip_cfg.clone(), gpu.bake_limits())?;
             let on_gpu = GpuScene::upload(gpu, scene)?;
-            let fits = on_device(gpu, &on_gpu, n, |ex, on| {
+            let fits = on_device(scene, gpu, &on_gpu, |ex, on| {
                 em_fits(ex, scene, &plan, on, cfgs, true)
             })?;
             let backend = gpu.backend_name().to_string();

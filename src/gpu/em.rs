@@ -11,37 +11,23 @@ use crate::error::{Error, Result};
 use crate::plan::{BakeLimits, GATHER_BATCH_BYTES};
 use crate::sequence::{self, FitInput};
 use crate::timing::ms_since;
-use crate::types::{Lobe, SplatLight};
 
 /// The fit's output on the device.
 pub struct GpuLobes {
     pub lobes_per_splat: u32,
-    pub lobes: wgpu::Buffer,
-    pub light: wgpu::Buffer,
+    pub fit: sequence::Fit<wgpu::Buffer>,
     pub splat_count: u32,
     pub stats: EmStats,
 }
 
 impl GpuLobes {
-    /// The fit on the host, its lobes packed (`LobeMap::pack`); with nothing fitted no lobe
-    /// is read back.
+    /// The fit on the host, its lobes packed (`sequence::Fit::read_back`).
     pub fn download(&self, gpu: &Gpu) -> Result<LobeMap> {
-        let n = self.splat_count as usize;
-        let dense = if self.stats.fitted == 0 {
-            Vec::new()
-        } else {
-            let fitted = self.stats.fitted as usize;
-            gpu.read::<Lobe>(&self.lobes, fitted * self.lobes_per_splat as usize)?
-        };
-        let light = gpu.read::<SplatLight>(&self.light, n)?;
-        let per_splat = if dense.is_empty() {
-            0
-        } else {
-            self.lobes_per_splat
-        };
-        let mut map = LobeMap::pack(per_splat, &dense, light, self.stats.clone());
-        map.stats.photons = map.fitted().map(|l| l.photons as u64).sum();
-        Ok(map)
+        let mut encoder = gpu.encoder("lobes download");
+        let mut ex = GpuExecutor::new(gpu, &mut encoder);
+        let (per_splat, n) = (self.lobes_per_splat, self.splat_count);
+        self.fit
+            .read_back(&mut ex, per_splat, n, self.stats.clone())
     }
 }
 
@@ -144,7 +130,6 @@ fn fit_on_device(
         lobes_per_splat: cfg.lobes,
         splat_count,
         stats: fit.stats(ms_since(t)),
-        lobes: fit.lobes,
-        light: fit.light,
+        fit,
     })
 }

@@ -252,21 +252,23 @@ pub fn parse(path: &Path, text: &str) -> Result<Scene> {
         let Some((mat, spacing)) = *body else {
             continue;
         };
-        let sides =
-            [light.edge_u, light.edge_v].map(|e| (Vec3::from(e).length() / spacing).round());
-        if sides[0] * sides[1] > MAX_OBJECT_SPLATS as f32 {
+        let (frame, size) = light_body(light, spacing);
+        let planned = shapes::quad_count(&frame, size, spacing);
+        if planned > MAX_OBJECT_SPLATS as f64 {
             let span = file.lights[k].span();
             return Err(at_line(
                 span,
                 format!(
-                    "light #{}: its surface at spacing {spacing} would make {:.3e} splats, more \
-                     than the {MAX_OBJECT_SPLATS} one object may have: raise `spacing`",
+                    "light #{}: its surface at spacing {spacing} would make {planned:.3e} \
+                     splats, more than the {MAX_OBJECT_SPLATS} one object may have: raise \
+                     `spacing`",
                     k + 1,
-                    sides[0] * sides[1]
                 ),
             ));
         }
-        let (disks, clip) = light_body(light, spacing);
+        let mut disks = Vec::new();
+        shapes::quad(&frame, size, spacing, &mut disks);
+        let clip = shapes::quad_clip(&frame, size, spacing);
         let object = surfaces.len() as u32;
         surfaces.push(format!("light {}", k + 1));
         clips.push(clip);
@@ -306,24 +308,20 @@ pub fn parse(path: &Path, text: &str) -> Result<Scene> {
 /// surface's underside at 256², and GL and Vulkan split some of its pixels differently.
 const LIGHT_BODY_OFFSET: f32 = 1e-3;
 
-/// The surface of an area light that reflects: a rectangle of splats just behind its emitting
-/// face, facing the way it emits (so that rays meeting the light's front hit them), clipped to
-/// the light's rectangle, with its clip.
-fn light_body(l: &Light, spacing: f32) -> (Vec<Disk>, SurfaceClip) {
+/// Where the surface of an area light that reflects lies, as a `quad` object's transform and
+/// size: the light's rectangle a little behind its emitting face, facing the way it emits (so
+/// that rays meeting the light's front hit it).
+fn light_body(l: &Light, spacing: f32) -> (Affine3A, [f32; 2]) {
     let (eu, ev) = (Vec3::from(l.edge_u), Vec3::from(l.edge_v));
     let n = Vec3::from(l.direction);
-    let corner = Vec3::from(l.position) - n * (LIGHT_BODY_OFFSET * spacing);
-    let mut disks = Vec::new();
-    shapes::parallelogram(corner, eu, ev, n, spacing, &mut disks);
-    let centre = corner + 0.5 * (eu + ev);
+    let centre = Vec3::from(l.position) + 0.5 * (eu + ev) - n * (LIGHT_BODY_OFFSET * spacing);
     let frame = Affine3A::from_cols(
         eu.normalize().into(),
         ev.normalize().into(),
         n.into(),
         centre.into(),
     );
-    let clip = shapes::quad_clip(&frame, [eu.length(), ev.length()], spacing);
-    (disks, clip)
+    (frame, [eu.length(), ev.length()])
 }
 
 fn finite3(v: [f32; 3]) -> bool {

@@ -160,8 +160,7 @@ fn bake_pass(
         });
     }
     let plan = BakePlan::new(scene, gpu.bake_limits())?;
-    let n = scene.splats.len() as u32;
-    let mut run = on_device(gpu, on_gpu, n, |ex, on| {
+    let mut run = on_device(scene, gpu, on_gpu, |ex, on| {
         bake_on(ex, scene, &plan, on, BakeTo::Lobes, &progress)
     })?;
     Ok(BakeResult {

@@ -352,8 +352,7 @@ impl State {
                     None => {
                         let (on_gpu, quiet) = (&self.renderer.on_gpu, Progress::new(false));
                         let plan = BakePlan::new(scene, gpu.bake_limits())?;
-                        let n = scene.splats.len() as u32;
-                        on_device(gpu, on_gpu, n, |ex, on| {
+                        on_device(scene, gpu, on_gpu, |ex, on| {
                             bin_traced(ex, &plan, on, &baked.photons, &quiet)
                         })?
                     }
