@@ -19,7 +19,9 @@ use crate::grid::SplatGrid;
 use crate::photons::{PhotonMap, PhotonStats};
 use crate::plan::{BakeLimits, BakePlan};
 use crate::scene::Scene;
-use crate::sequence::{self, Bins, DepositInput, Deposits, Executor, FitInput, Gathering, Traced};
+use crate::sequence::{
+    self, Bins, DepositInput, Deposits, Executor, FitInput, Gathering, GroupInput, Traced,
+};
 use crate::timing::ms_since;
 use crate::types::{EmParams, GridParams};
 
@@ -39,6 +41,12 @@ pub struct StageReport {
     /// EM: splats with photons near them (their irradiance was gathered).
     #[serde(skip_serializing_if = "Option::is_none")]
     pub splats_lit: Option<u32>,
+    /// EM: glossy splats served by another's fit (shared fits), besides those fitted.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub splats_served: Option<u32>,
+    /// EM: final gathering's rays.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub rays: Option<u64>,
     /// EM: lobes kept, and what the fitted splats would keep without pruning.
     #[serde(skip_serializing_if = "Option::is_none")]
     pub lobes_kept: Option<u64>,
@@ -369,15 +377,22 @@ pub fn bake(scene: &Scene, device: BakeDevice, progress: &Progress) -> Result<Ba
         "em",
         s.ms,
         &format!(
-            "{} of {} splats with photons fitted ({:.0} fits/s)",
+            "{} of {} splats with photons fitted{} ({:.0} fits/s, {:.2} M rays/s)",
             s.fitted,
-            s.listed,
-            s.fitted as f64 / (s.ms / 1e3).max(1e-9)
+            s.listed + s.served,
+            match s.served {
+                0 => String::new(),
+                n => format!(", {n} more served by their fits"),
+            },
+            s.fitted as f64 / (s.ms / 1e3).max(1e-9),
+            s.rays as f64 / (s.final_gather_ms * 1e3).max(1e-9),
         ),
     );
     let em = StageReport {
         splats_fitted: Some(s.fitted),
-        splats_lit: Some(s.listed),
+        splats_lit: Some(s.listed + s.served),
+        splats_served: Some(s.served),
+        rays: Some(s.rays),
         lobes_kept: Some(lobes.lobes.len() as u64),
         lobes_fitted: Some(s.fitted as u64 * em_cfg.lobes as u64),
         skipped_reason: Some(em_skipped(&lobes, em_cfg, scene.splats.len())),
@@ -567,12 +582,33 @@ pub fn fit<E: Executor>(
             keys: &d.bins.keys,
             spread: &d.spread,
         }),
+        groups: None,
     };
     let em = &plan.em;
+    let words = match &plan.groups {
+        Some(g) => Some(ex.upload("fit groups", &g.words)?),
+        None => None,
+    };
+    let input = FitInput {
+        groups: plan
+            .groups
+            .as_ref()
+            .zip(words.as_ref())
+            .map(|(g, words)| GroupInput {
+                words,
+                starts_at: g.starts_at(),
+                members_at: g.members_at(),
+            }),
+        ..input
+    };
     let fitted = sequence::fit_lobes(ex, &input, em, plan.limits.fit_shape)?;
     ex.finish()?;
     let stats = fitted.stats(ms_since(t));
-    let lobes = fitted.read_back(ex, em.lobes, on.splat_count, stats)?;
+    let mut lobes = fitted.read_back(ex, em.lobes, on.splat_count, stats)?;
+    if let Some(g) = &plan.groups {
+        lobes.stats.served = g.serve(&mut lobes);
+    }
+    lobes.stats.rays = lobes.stats.fitted as u64 * em.gather as u64 * em.gather as u64;
     spin.finish_and_clear();
     Ok(lobes)
 }
@@ -591,7 +627,11 @@ fn traced_report(stats: &PhotonStats) -> StageReport {
 /// pruning drops the lobes the photons do not need.
 fn em_skipped(map: &LobeMap, cfg: &EmConfig, splats: usize) -> String {
     let s = &map.stats;
-    let dark = splats.saturating_sub(s.listed as usize);
+    let dark = splats.saturating_sub(s.listed as usize + s.served as usize);
+    let served = match s.served {
+        0 => String::new(),
+        n => format!(" ({n} more glossy splats served by their groups' fits)"),
+    };
     if s.fitted == 0 {
         format!(
             "no EM and no lobes kept: no glossy splat has photons (irradiance gathered on {} \
@@ -600,8 +640,8 @@ fn em_skipped(map: &LobeMap, cfg: &EmConfig, splats: usize) -> String {
         )
     } else {
         format!(
-            "EM on {} glossy splats only: {} diffuse splats gathered irradiance only, {dark} \
-             without photons skipped{}",
+            "EM on {} glossy splats only{served}: {} diffuse splats gathered irradiance only, \
+             {dark} without photons skipped{}",
             s.fitted,
             s.listed - s.fitted,
             if cfg.prune {

@@ -37,8 +37,9 @@ impl Fnv {
 /// Raised whenever the bake's result changes for the same scene and settings (an estimator
 /// mended, a stage added), so that caches baked before are stale rather than silently loaded:
 /// 1: photons end at the lights they meet; 2: a box's and a quad's disks end at its edges;
-/// 3: the splats' irradiance from photon deposits; 4: the covered share on every path.
-const BAKE_REVISION: u32 = 4;
+/// 3: the splats' irradiance from photon deposits; 4: the covered share on every path; 5:
+/// shared fits.
+const BAKE_REVISION: u32 = 5;
 
 /// The hash of what the bake depends on.
 pub fn bake_key(scene: &Scene) -> u64 {

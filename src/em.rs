@@ -77,6 +77,9 @@ pub struct EmConfig {
     pub gather: u32,
     /// Where the splats' photon irradiance comes from.
     pub estimate: Estimate,
+    /// Shared fits (`fit_groups`): fitted splats within one cell of this many search radii,
+    /// facing alike, share one fit (0: each fits its own).
+    pub share: f32,
 }
 
 impl EmConfig {
@@ -97,6 +100,7 @@ impl EmConfig {
             }
             check_radius(self.radius)?;
             check_slab(self.slab)?;
+            check_share(self.share)?;
             check_gather(self.gather)
         };
         check().map_err(Error::Invalid)
@@ -165,6 +169,15 @@ pub fn check_slab(slab: f32) -> std::result::Result<(), String> {
     Ok(())
 }
 
+pub fn check_share(share: f32) -> std::result::Result<(), String> {
+    if !(share.is_finite() && (0.0..=MAX_SHARE).contains(&share)) {
+        return Err(format!(
+            "share must be within 0..={MAX_SHARE} search radii (0: no shared fits), got {share}"
+        ));
+    }
+    Ok(())
+}
+
 pub fn check_gather(gather: u32) -> std::result::Result<(), String> {
     if gather > MAX_GATHER {
         return Err(format!(
@@ -177,6 +190,14 @@ pub fn check_gather(gather: u32) -> std::result::Result<(), String> {
 /// `EmConfig::gather` unless a scene or the command line says otherwise: 16² rays a glossy
 /// splat (docs/measurements.md, "Final gathering").
 pub const DEFAULT_GATHER: u32 = 16;
+
+/// `EmConfig::share` unless a scene or the command line says otherwise (docs/measurements.md,
+/// "Shared fits").
+pub const DEFAULT_SHARE: f32 = 1.0;
+
+/// Largest cell of a shared fit, in search radii: past it one fit would stand for light that
+/// the photons resolve apart.
+pub const MAX_SHARE: f32 = 4.0;
 
 /// Most rays a side of final gathering: 64² = 4,096 rays a splat.
 pub const MAX_GATHER: u32 = 64;
@@ -273,6 +294,10 @@ pub struct EmStats {
     pub fit_ms: f64,
     /// With final gathering: the direct bake and the rays (`final_gather`).
     pub final_gather_ms: f64,
+    /// Final gathering's rays (`fitted` × gather²).
+    pub rays: u64,
+    /// Splats served by another's fit (shared fits), besides the `fitted`.
+    pub served: u32,
 }
 
 /// What final gathering reads of the scene besides the photons and the splats

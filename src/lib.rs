@@ -8,7 +8,7 @@
 //!   the mirrors and the host), `shaders` (the WGSL sources, the stage table and what naga
 //!   reads of them);
 //! - `grid`, `photons`, `bins`, `em`, `tone` (each stage's settings, limits and host-side
-//!   data), `lobe_norms` (the lobe-norm table every frame's shading divides by, and its
+//!   data), `fit_groups` (the splats that share a lobe fit), `lobe_norms` (the lobe-norm table every frame's shading divides by, and its
 //!   quadrature), `convolution` (the lobe × BRDF shading study), `lod` (the level of detail's
 //!   merge tree);
 //! - `scene` (the scene file, procedural shapes and model files) and `camera`;
@@ -41,6 +41,7 @@ pub mod cpu;
 pub mod direct;
 pub mod em;
 pub mod error;
+pub mod fit_groups;
 pub mod frame;
 pub mod gpu;
 pub mod grid;

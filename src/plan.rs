@@ -7,6 +7,7 @@
 use crate::direct::direct_params;
 use crate::em::{EmConfig, FitShape, GatherSetup, deposit_params};
 use crate::error::Result;
+use crate::fit_groups::FitGroups;
 use crate::photons::{PhotonConfig, emitters, page_photons};
 use crate::scene::Scene;
 use crate::types::{DepositParams, DirectParams, Emitter};
@@ -61,12 +62,14 @@ pub struct BakePlan {
     /// photon settings' `page_limit`.
     pub limits: BakeLimits,
     pub photon_page: u64,
+    /// Shared fits' groups (`EmConfig::share` > 0).
+    pub groups: Option<FitGroups>,
 }
 
 impl BakePlan {
     /// The plan of `scene`'s bake on an executor with `limits`: each figure computed once, the
-    /// splats walked at most three times (bounds where the scene names no radius, shadow bias,
-    /// the largest radius of the deposits' reach).
+    /// splats walked at most four times (bounds where the scene names no radius, shadow bias,
+    /// the largest radius of the deposits' reach, the shared fits' groups).
     pub fn new(scene: &Scene, limits: BakeLimits) -> Result<BakePlan> {
         let photons = PhotonConfig::from_scene(scene);
         BakePlan::of(scene, photons, EmConfig::from_scene(scene), limits)
@@ -90,7 +93,17 @@ impl BakePlan {
             )?),
             false => None,
         };
+        let groups = match em.share > 0.0 {
+            true => Some(FitGroups::new(
+                &scene.splats,
+                &scene.materials,
+                em.fit_all,
+                em.share * em.radius,
+            )?),
+            false => None,
+        };
         Ok(BakePlan {
+            groups,
             emitters: emitters(&scene.lights, photons.photons)?,
             photon_page: page_photons(&photons, limits.photon_page),
             photons,

@@ -24,7 +24,7 @@ use crate::shaders::Stage;
 use crate::shaders::stage_shape;
 use crate::shared::bins::list_count;
 use crate::shared::dispatch::groups_for;
-use crate::shared::lobes::{EM_DEFER_FIT, EM_SHARE};
+use crate::shared::lobes::{EM_DEFER_FIT, EM_GROUPS, EM_SHARE};
 use crate::timing::ms_since;
 use crate::tone::{ToneConfig, reduce_levels};
 use crate::types::{
@@ -501,6 +501,16 @@ pub struct FitInput<'a, B> {
     /// The bins hold deposits, not photons: every splat's irradiance comes from `em_share`
     /// (which needs final gathering: the deposits carry no photon directions to fit).
     pub deposits: Option<DepositInput<'a, B>>,
+    /// Shared fits: only the groups' leaders are fitted, from their members' rays.
+    pub groups: Option<GroupInput<'a, B>>,
+}
+
+/// The shared fits' groups in the executor's memory (`fit_groups::FitGroups::words`), with
+/// where their starts and members lie in it.
+pub struct GroupInput<'a, B> {
+    pub words: &'a B,
+    pub starts_at: u32,
+    pub members_at: u32,
 }
 
 /// What final gathering needs besides the photons: its setup (`em::GatherSetup`), with the
@@ -548,6 +558,8 @@ impl<B> Fit<B> {
             gather_ms: self.gather_ms,
             fit_ms: self.fit_ms,
             final_gather_ms: self.final_gather_ms,
+            rays: 0,
+            served: 0,
         }
     }
 
@@ -604,10 +616,16 @@ pub fn fit_lobes<E: Executor>(
     let fit_list = ex.zeroed("fit list", n.max(1) * 8)?;
     let gather_list = ex.zeroed("gather list", n.max(1) * 4)?;
     let counters = ex.zeroed("em counters", 16)?;
+    // Without shared fits a word stands in for the groups (no stage reads it).
+    let no_groups = ex.zeroed("no fit groups", 4)?;
+    let fit_groups = input.groups.as_ref().map_or(&no_groups, |g| g.words);
     let mut select_params = cfg.params(splat_count, 0, shape);
     if let Some(d) = &input.deposits {
         select_params.radius = d.reach;
         select_params.flags |= EM_SHARE;
+    }
+    if input.groups.is_some() {
+        select_params.flags |= EM_GROUPS;
     }
     let select = ex.uniform("em select params", &select_params)?;
     let bindings = [
@@ -619,6 +637,7 @@ pub fn fit_lobes<E: Executor>(
         &fit_list,
         &counters,
         &gather_list,
+        fit_groups,
     ];
     ex.dispatch(
         Stage::EmSelect,
@@ -729,6 +748,7 @@ pub fn fit_lobes<E: Executor>(
             fit_input,
             counters: &counters,
             listed,
+            groups: fit_groups,
         };
         let (more, gather_rays_ms, refit_ms) = fit_to_rays(ex, cfg, shape, g, &refit)?;
         dispatches += more;
@@ -766,6 +786,8 @@ struct Refit<'a, B> {
     fit_input: EmFitInput<'a, B>,
     counters: &'a B,
     listed: u32,
+    /// The shared fits' groups (a word where there are none).
+    groups: &'a B,
 }
 
 /// Final gathering and the fit to it (design §6), after the photon fit gave every splat its
@@ -810,6 +832,10 @@ fn fit_to_rays<E: Executor>(
     for first in (0..listed).step_by(batch as usize) {
         let t = std::time::Instant::now();
         let count = batch.min(listed - first);
+        let (group_starts, group_members) = input
+            .groups
+            .as_ref()
+            .map_or((0, 0), |g| (g.starts_at, g.members_at));
         let gather = GatherParams {
             splat_count: count,
             samples: cfg.gather,
@@ -817,13 +843,14 @@ fn fit_to_rays<E: Executor>(
             shadow_bias: g.setup.shadow_bias,
             first,
             light_count: g.setup.direct.light_count,
-            ..Default::default()
+            group_starts,
+            group_members,
         };
         let baked = (&photon_light, &direct.direct);
         final_gather(
             ex,
             &gather,
-            fit_input.fit_list,
+            (fit_input.fit_list, refit.groups),
             baked,
             &samples,
             (input.materials, g.lights),
@@ -1149,7 +1176,8 @@ pub fn bake_direct<E: Executor>(
 }
 
 /// Final gathering (`final_gather.wgsl`): `samples²` rays from each fitted splat of the fit
-/// list `list`'s entries `first..first + splat_count` (`params`) over its hemisphere, with the
+/// list `list`'s entries `first..first + splat_count` (`params`) over its hemisphere (with
+/// shared fits, from its group's members in turn, as `groups` lists them), with the
 /// radiance each brings back from the surfaces' baked light (`light`: their photon irradiance;
 /// `direct`: the direct bake), their `materials` and the scene's `lights` (a ray that meets an
 /// area light first brings none), into `samples`: `[radiance, direction bits]`, `samples²` an
@@ -1157,7 +1185,7 @@ pub fn bake_direct<E: Executor>(
 pub fn final_gather<E: Executor>(
     ex: &mut E,
     params: &GatherParams,
-    list: &E::Buffer,
+    (list, fit_groups): (&E::Buffer, &E::Buffer),
     (light, direct): (&E::Buffer, &E::Buffer),
     samples: &E::Buffer,
     (materials, lights): (&E::Buffer, &E::Buffer),
@@ -1170,7 +1198,9 @@ pub fn final_gather<E: Executor>(
         ))
     })?;
     let uniform = ex.uniform("gather params", params)?;
-    let bindings = [&uniform, list, light, direct, samples, materials, lights];
+    let bindings = [
+        &uniform, list, light, direct, samples, materials, lights, fit_groups,
+    ];
     ex.dispatch_traced(
         Stage::FinalGather,
         &bindings,

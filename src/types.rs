@@ -554,8 +554,10 @@ pub struct GatherParams {
     pub first: u32,
     /// Lights bound: a ray that meets an area light before a surface brings none back.
     pub light_count: u32,
-    pub _pad1: u32,
-    pub _pad2: u32,
+    /// Where the shared fits' group starts and members lie in the groups' words
+    /// (`fit_groups::FitGroups`); `group_members` 0: no groups, each splat casts its own rays.
+    pub group_starts: u32,
+    pub group_members: u32,
 }
 
 /// Uniform of `direct_bake`: every splat's direct light from every light, shadowed.

@@ -416,5 +416,6 @@ fn test_config() -> EmConfig {
         fit_candidates: 0,
         gather: 8,
         estimate: lobelight::em::Estimate::Deposits,
+        share: 0.0,
     }
 }

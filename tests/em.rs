@@ -98,6 +98,7 @@ fn config(family: LobeFamily, lobes: u32, iterations: u32) -> EmConfig {
         fit_candidates: 0,
         gather: 0,
         estimate: lobelight::em::Estimate::Photons,
+        share: 0.0,
     }
 }
 

@@ -185,8 +185,8 @@ fn rust_layouts() -> Vec<RustLayout> {
             shadow_bias,
             first,
             light_count,
-            _pad1,
-            _pad2
+            group_starts,
+            group_members
         }),
         layout!(Camera {
             eye,

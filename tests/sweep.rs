@@ -23,6 +23,7 @@ fn small_plan() -> SweepPlan {
         splat_fractions: vec![0.5],
         families: vec![LobeFamily::Vmf],
         prune: vec![false],
+        shares: vec![0.0],
         frames: 1,
     }
 }

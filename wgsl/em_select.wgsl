@@ -8,7 +8,8 @@
 // depend on scheduling, but each em_fit workgroup writes only its own splat's light and slot,
 // and the host packs the lobes in splat order (LobeMap::pack), so the results do not.
 // counters = [fit-list splats, most candidate photons of a fit-list splat, splats fitted,
-// gather-list splats]. With deposits (EM_SHARE) em_share lights every splat, and only the
+// gather-list splats]. With shared fits (EM_GROUPS) only each group's leader is listed among
+// the fitted splats. With deposits (EM_SHARE) em_share lights every splat, and only the
 // fitted splats are listed (on the fit list), without a look at the others' candidates.
 // CPU mirror: src/cpu/em_select.rs.
 
@@ -26,6 +27,9 @@
 @group(0) @binding(5) var<storage, read_write> fit_list: array<vec2<u32>>;
 @group(0) @binding(6) var<storage, read_write> counters: array<atomic<u32>, 4>;
 @group(0) @binding(7) var<storage, read_write> gather_list: array<u32>;
+// With EM_GROUPS, the shared fits' groups (src/fit_groups.rs): a splat's word is
+// FOLLOWER_BIT | leader where another splat's fit serves it.
+@group(0) @binding(8) var<storage, read> groups: array<u32>;
 
 const WG: u32 = 64u;
 
@@ -38,7 +42,9 @@ fn main(@builtin(workgroup_id) wg: vec3<u32>, @builtin(num_workgroups) num_wg: v
     }
     let s = splats_at(i);
     let glossy = any(materials[s.material].specular > vec3<f32>(0.0));
-    let fit = glossy || (em.flags & EM_FIT_ALL) != 0u;
+    // A splat another's fit serves (EM_GROUPS) is lit as a diffuse splat is, not fitted.
+    let served = (em.flags & EM_GROUPS) != 0u && (groups[i] & FOLLOWER_BIT) != 0u;
+    let fit = (glossy || (em.flags & EM_FIT_ALL) != 0u) && !served;
     // With deposits em_share lights every splat; only the fitted ones are listed.
     if (em.flags & EM_SHARE) != 0u && !fit {
         return;

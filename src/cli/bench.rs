@@ -229,6 +229,11 @@ pub struct EmSkipping {
     /// With final gathering: the direct bake and the rays (their fit is in `fit_ms`).
     pub final_gather_ms: f64,
     pub splats_fitted: u32,
+    /// Glossy splats served by another's fit (shared fits), and final gathering's rays.
+    pub splats_served: u32,
+    pub rays: u64,
+    /// The shared fits' cell in search radii (0: none).
+    pub share: f32,
     /// Bytes of lobes the bake keeps, skipping and fitting every splat.
     pub lobe_bytes: u64,
     pub lobe_bytes_fit_all: u64,
@@ -313,6 +318,9 @@ pub fn em(
             fit_ms: skipping.stats.fit_ms,
             final_gather_ms: skipping.stats.final_gather_ms,
             splats_fitted: skipping.stats.fitted,
+            splats_served: skipping.stats.served,
+            rays: skipping.stats.rays,
+            share: skip_cfg.share,
             lobe_bytes: lobe_bytes(&skipping),
             lobe_bytes_fit_all: lobe_bytes(&map),
         },
@@ -364,8 +372,11 @@ fn em_fits<E: Executor>(
             (Some((d, _)), true) => (&d.bins, Some(d)),
             _ => (&binned.bins, None),
         };
+        // The fit of every splat is the thesis's, each splat its own (the plan's groups hold
+        // the glossy splats alone).
         let plan = BakePlan {
             em: em.clone(),
+            groups: plan.groups.clone().filter(|_| !em.fit_all),
             ..plan.clone()
         };
         bake::fit(ex, scene, &plan, on, input, &quiet)
@@ -430,6 +441,14 @@ impl std::fmt::Display for EmBench {
             k.lobe_bytes as f64 / 1e6,
             k.lobe_bytes_fit_all as f64 / 1e6
         )?;
+        if k.share > 0.0 {
+            write!(
+                f,
+                "\nshared fits  cells of {} R: {} fits serve {} more glossy splats, {} rays \
+                 (rays {:.1} ms, fit {:.1} ms)",
+                k.share, k.splats_fitted, k.splats_served, k.rays, k.final_gather_ms, k.fit_ms
+            )?;
+        }
         let p = &self.pruning;
         write!(
             f,

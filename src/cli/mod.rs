@@ -147,6 +147,10 @@ struct BakeArgs {
     /// search radius.
     #[arg(long, value_enum)]
     estimate: Option<Estimate>,
+    /// Shared fits: fitted splats within one cell of this many search radii, facing alike,
+    /// share one lobe fit whose rays all of them cast (0: each splat fits its own lobes).
+    #[arg(long, value_name = "RADII")]
+    share: Option<f32>,
 }
 
 impl BakeArgs {
@@ -180,6 +184,9 @@ impl BakeArgs {
         }
         if let Some(e) = self.estimate {
             scene.bake.estimate = e;
+        }
+        if let Some(r) = self.share {
+            scene.bake.share = r;
         }
         scene.bake.sparse |= self.sparse;
         scene.bake.prune &= !self.fixed_lobes;

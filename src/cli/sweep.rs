@@ -61,6 +61,8 @@ pub struct SweepPlan {
     pub families: Vec<LobeFamily>,
     /// Lobe pruning on and off.
     pub prune: Vec<bool>,
+    /// Shared fits' cells, in search radii (0: each splat its own fit).
+    pub shares: Vec<f32>,
     /// Timed frames per setting (after one untimed); the median is reported.
     pub frames: u32,
 }
@@ -80,6 +82,7 @@ impl Default for SweepPlan {
             splat_fractions: vec![0.25, 0.5, 1.0],
             families: vec![LobeFamily::Ward, LobeFamily::Vmf],
             prune: vec![true, false],
+            shares: vec![0.0, 0.5, 1.0, 2.0, 4.0],
             frames: 3,
         }
     }
@@ -95,10 +98,11 @@ enum Setting {
     Splats(f32),
     Family(LobeFamily),
     Prune(bool),
+    Share(f32),
 }
 
 /// The knobs a sweep can turn, by name.
-pub const KNOBS: [&str; 8] = [
+pub const KNOBS: [&str; 9] = [
     "path",
     "photons",
     "iterations",
@@ -107,6 +111,7 @@ pub const KNOBS: [&str; 8] = [
     "splats",
     "family",
     "prune",
+    "share",
 ];
 
 impl Setting {
@@ -119,6 +124,7 @@ impl Setting {
             Setting::Splats(_) => "splats",
             Setting::Family(_) => "family",
             Setting::Prune(_) => "prune",
+            Setting::Share(_) => "share",
         }
     }
 
@@ -131,6 +137,7 @@ impl Setting {
             Setting::Splats(f) => format!("{}%", f * 100.0),
             Setting::Family(f) => format!("{f:?}").to_lowercase(),
             Setting::Prune(on) => if on { "on" } else { "off" }.into(),
+            Setting::Share(r) => format!("{r}R"),
         }
     }
 }
@@ -144,6 +151,7 @@ impl SweepPlan {
         out.extend(self.splat_fractions.iter().map(|&f| Setting::Splats(f)));
         out.extend(self.families.iter().map(|&f| Setting::Family(f)));
         out.extend(self.prune.iter().map(|&on| Setting::Prune(on)));
+        out.extend(self.shares.iter().map(|&r| Setting::Share(r)));
         out
     }
 
@@ -168,6 +176,7 @@ impl SweepPlan {
         keep(&mut self.splat_fractions, turned("splats"));
         keep(&mut self.families, turned("family"));
         keep(&mut self.prune, turned("prune"));
+        keep(&mut self.shares, turned("share"));
         keep(&mut self.path_spp, turned("path"));
         Ok(self)
     }
@@ -210,6 +219,7 @@ fn apply(base: &Scene, setting: Setting, radius: f32) -> Scene {
         Setting::Lobes(n) => scene.bake.lobes = n,
         Setting::Family(f) => scene.bake.family = f,
         Setting::Prune(on) => scene.bake.prune = on,
+        Setting::Share(r) => scene.bake.share = r,
         Setting::Splats(_) => {}
     }
     scene

@@ -6,7 +6,7 @@ use crate::error::Result;
 use glam::Vec3;
 
 use crate::shared::bins::{bin_box, bin_row, bin_row_count};
-use crate::shared::lobes::{EM_FIT_ALL, EM_SHARE, GATHER_MAX};
+use crate::shared::lobes::{EM_FIT_ALL, EM_GROUPS, EM_SHARE, FOLLOWER_BIT, GATHER_MAX};
 use crate::types::{BinParams, EmParams, Material, Splat};
 
 pub const WG: u32 = 64;
@@ -23,6 +23,7 @@ pub fn em_select(
     active: &mut [[u32; 2]],
     counters: &mut [u32; 4],
     gather_list: &mut [u32],
+    fit_groups: &[u32],
     groups: u32,
 ) {
     for wg in 0..groups {
@@ -36,7 +37,10 @@ pub fn em_select(
                 .specular
                 .iter()
                 .any(|&x| x > 0.0);
-            let fit = glossy || em.flags & EM_FIT_ALL != 0;
+            // A splat another's fit serves (EM_GROUPS) is lit as a diffuse splat is, not
+            // fitted.
+            let served = em.flags & EM_GROUPS != 0 && fit_groups[i as usize] & FOLLOWER_BIT != 0;
+            let fit = (glossy || em.flags & EM_FIT_ALL != 0) && !served;
             if em.flags & EM_SHARE != 0 && !fit {
                 continue;
             }
@@ -77,6 +81,7 @@ pub fn dispatch(b: &Bindings, groups: u32) -> Result<()> {
     let mut active = b.get_mut(5)?;
     let mut counters = b.get_mut(6)?;
     let mut gather_list = b.get_mut(7)?;
+    let fit_groups = b.get(8)?;
     let counters = b.counters::<4>(&mut counters)?;
     let (splats, materials) = (view(&splats), view(&materials));
     em_select(
@@ -88,6 +93,7 @@ pub fn dispatch(b: &Bindings, groups: u32) -> Result<()> {
         view_mut(&mut active),
         counters,
         &mut gather_list,
+        &fit_groups,
         groups,
     );
     Ok(())

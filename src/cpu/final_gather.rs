@@ -1,5 +1,5 @@
 //! Mirror of `wgsl/final_gather.wgsl`: rays over each fitted splat's cosine-weighted
-//! hemisphere, and the radiance of the surface each meets, as the bake knows it
+//! hemisphere (with shared fits, over its group's members' in turn), and the radiance of the surface each meets, as the bake knows it
 //! (`hit_albedo`).
 
 use super::bindings::{Bindings, view, view_mut};
@@ -29,6 +29,7 @@ pub fn final_gather(
     samples: &mut [[f32; 4]],
     materials: &[Material],
     lights: &[Light],
+    groups: &[u32],
     geo: &Geometry,
 ) {
     let lights = &lights[..params.light_count as usize];
@@ -42,16 +43,30 @@ pub fn final_gather(
         .for_each(|(out, [entry, _])| {
             let i = entry & !FIT_BIT;
             for (j, sample) in (0u32..).zip(out) {
-                *sample = ray(params, i, j, light, direct, materials, lights, geo);
+                let from = ray_origin(params, groups, i, j);
+                *sample = ray(params, (i, from), j, light, direct, materials, lights, geo);
             }
         });
 }
 
-/// Ray `j` of splat `i`: the radiance it brings back, and its direction's bits.
+/// The splat ray `j` of fitted splat `i` starts from: with shared fits, member j mod n of the n
+/// in `i`'s group (the leader first); else `i` itself.
+fn ray_origin(params: &GatherParams, groups: &[u32], i: u32, j: u32) -> u32 {
+    if params.group_members == 0 {
+        return i;
+    }
+    let group = groups[i as usize];
+    let first = groups[(params.group_starts + group) as usize];
+    let count = groups[(params.group_starts + group + 1) as usize] - first;
+    groups[(params.group_members + first + j % count) as usize]
+}
+
+/// Ray `j` of fitted splat `i`, cast from splat `from`: the radiance it brings back, and its
+/// direction's bits.
 #[allow(clippy::too_many_arguments)]
 fn ray(
     params: &GatherParams,
-    i: u32,
+    (i, from): (u32, u32),
     j: u32,
     light: &[SplatLight],
     direct: &[[f32; 4]],
@@ -59,14 +74,14 @@ fn ray(
     lights: &[Light],
     geo: &Geometry,
 ) -> [f32; 4] {
-    let s = &geo.splats[i as usize];
+    let s = &geo.splats[from as usize];
     let (centre, normal) = (Vec3::from(s.center), Vec3::from(s.normal));
     let key = pcg_hash(pcg_hash(params.seed).wrapping_add(i)).wrapping_add(2 * j);
     let uv = area_point(j, params.samples, key, true);
     let d = to_world(&frame_of(normal), sample_cosine(uv.x, uv.y));
     let o = centre + params.shadow_bias * normal;
     let mut budget = SHADOW_RAY_BUDGET;
-    let hit = trace_ray(geo, o, d, i, FAR, &mut budget);
+    let hit = trace_ray(geo, o, d, from, FAR, &mut budget);
     let mut radiance = Vec3::ZERO;
     let lit = lights.iter().any(|l| light_first(l, o, d, hit.t));
     if hit.splat != NO_SPLAT && !lit {
@@ -90,9 +105,12 @@ pub fn dispatch(b: &Bindings, geo: &Geometry, _groups: u32) -> Result<()> {
     let mut samples = b.get_mut(4)?;
     let materials = b.get(5)?;
     let lights = b.get(6)?;
+    let groups = b.get(7)?;
     let (list, light, direct) = (view(&list), view(&light), view(&direct));
     let (samples, materials) = (view_mut(&mut samples), view(&materials));
     let lights = view(&lights);
-    final_gather(&p, list, light, direct, samples, materials, lights, geo);
+    final_gather(
+        &p, list, light, direct, samples, materials, lights, &groups, geo,
+    );
     Ok(())
 }

@@ -121,6 +121,7 @@ fn fit_on_device(
         splat_count,
         gathering: None,
         deposits: None,
+        groups: None,
     };
     let mut encoder = gpu.encoder("lobe fit");
     let mut ex = GpuExecutor::new(gpu, &mut encoder);

@@ -128,6 +128,9 @@ pub struct BakeDesc {
     /// Where the splats' photon irradiance comes from: "deposits" (default; time bounded by
     /// splats, with final gathering) or "photons" (every photon within the search radius).
     pub estimate: crate::em::Estimate,
+    /// Shared fits: fitted splats within one cell of this many search radii, facing alike,
+    /// share one lobe fit, whose rays all of them cast (0: each splat fits its own lobes).
+    pub share: f32,
 }
 
 impl Default for BakeDesc {
@@ -147,6 +150,7 @@ impl Default for BakeDesc {
             fit_candidates: crate::em::DEFAULT_FIT_CANDIDATES,
             gather: crate::em::DEFAULT_GATHER,
             estimate: crate::em::Estimate::Deposits,
+            share: crate::em::DEFAULT_SHARE,
         }
     }
 }

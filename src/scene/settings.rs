@@ -36,6 +36,7 @@ impl EmConfig {
             fit_candidates: b.fit_candidates,
             gather: b.gather,
             estimate: b.estimate,
+            share: b.share,
         }
     }
 }

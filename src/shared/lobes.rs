@@ -21,6 +21,11 @@ pub const EM_DEFER_FIT: u32 = 16;
 /// The bins hold deposits: `em_share` lights every splat, and `em_select` lists only the
 /// fitted splats (on the fit list).
 pub const EM_SHARE: u32 = 32;
+/// The fitted splats share fits in groups (`fit_groups`): `em_select` lists the groups'
+/// leaders alone, and `final_gather` casts a group's rays from its members.
+pub const EM_GROUPS: u32 = 64;
+/// A splat's word in the groups when another splat's fit serves it (`fit_groups`).
+pub const FOLLOWER_BIT: u32 = 0x8000_0000;
 /// Most candidate photons of a splat `em_gather` sums in one invocation.
 pub const GATHER_MAX: u32 = 16384;
 

@@ -29,6 +29,11 @@ const EM_DEFER_FIT: u32 = 16u;
 // The bins hold deposits: em_share lights every splat, and em_select lists only the fitted
 // splats (on the fit list).
 const EM_SHARE: u32 = 32u;
+// The fitted splats share fits in groups (src/fit_groups.rs): em_select lists the groups'
+// leaders alone, and final_gather casts a group's rays from its members.
+const EM_GROUPS: u32 = 64u;
+// A splat's word in the groups when another splat's fit serves it.
+const FOLLOWER_BIT: u32 = 0x80000000u;
 
 // A fit-list entry is a splat index with this bit set when the splat's lobes are fitted.
 const FIT_BIT: u32 = 0x80000000u;

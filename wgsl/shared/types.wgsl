@@ -293,8 +293,8 @@ struct GatherParams {
     shadow_bias: f32,
     first: u32,
     light_count: u32,
-    _pad1: u32,
-    _pad2: u32,
+    group_starts: u32,
+    group_members: u32,
 }
 
 struct DirectParams {
