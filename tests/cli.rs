@@ -736,6 +736,31 @@ fn bench_scale_reports_each_size() {
             "{key}: {v}"
         );
     }
+    assert_eq!(v["material"], "diffuse");
+    assert!(rows.iter().all(|r| r["splats_fitted"] == 0), "{v}");
+    // A glossy cloud fits lobes, most of its splats served by shared fits; its scene file
+    // beside the diffuse one's, over the same points.
+    let g = json(&[
+        "bench",
+        "scale",
+        "--sizes",
+        "4000",
+        "--material",
+        "glossy",
+        "-o",
+        &out,
+        "--photons",
+        "1000",
+        "--json",
+    ]);
+    assert_eq!(g["material"], "glossy");
+    let row = &g["rows"][0];
+    let (fitted, served) = (
+        row["splats_fitted"].as_u64().unwrap(),
+        row["splats_served"].as_u64().unwrap(),
+    );
+    assert!(fitted > 0 && served > fitted, "{row}");
+    assert!(dir.join("terrain_4000_glossy.toml").is_file());
     let bad = lobelight(&["bench", "scale", "--sizes", "0", "-o", &out], &[]);
     assert!(!bad.status.success());
     assert!(String::from_utf8_lossy(&bad.stderr).contains("above 0"));

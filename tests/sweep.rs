@@ -35,7 +35,9 @@ fn a_small_sweep_writes_its_tables_and_charts() {
     let dir = std::env::temp_dir().join(format!("lobelight-sweep-{}", std::process::id()));
     let plan = small_plan();
     let r = sweep(&[("cornell".into(), scene)], Some(&gpu), &plan, &dir).unwrap();
-    assert_eq!(r.rows.len(), 12);
+    assert_eq!(r.rows.len(), 13);
+    let share = r.rows.iter().find(|row| row.knob == "share").unwrap();
+    assert_eq!(share.value, "0R");
     let path = r.rows.iter().find(|row| row.knob == "path").unwrap();
     assert_eq!(path.value, "4 spp");
     assert_eq!(r.references[0].spp, 64);
@@ -61,7 +63,7 @@ fn a_small_sweep_writes_its_tables_and_charts() {
     assert!(by("photons", "200k") < by("photons", "30k"), "{:?}", r.rows);
     let csv = std::fs::read_to_string(dir.join("sweep.csv")).unwrap();
     assert!(csv.starts_with("scene,knob,value,photons"));
-    assert_eq!(csv.lines().count(), 13);
+    assert_eq!(csv.lines().count(), 14);
     assert!(csv.lines().next().unwrap().ends_with(",prune,lobes_kept"));
     let md = std::fs::read_to_string(dir.join("sweep.md")).unwrap();
     assert!(md.contains("| iterations | 10 |"), "{md}");

@@ -392,13 +392,16 @@ enum Command {
         /// one scene), the figures under the key `window`.
         #[arg(long)]
         window: bool,
-        /// `sweep` only: turn only these knobs (photons, iterations, radius, lobes, splats,
-        /// family, prune), comma-separated; default all.
+        /// `sweep` only: turn only these knobs (path, photons, iterations, radius, lobes,
+        /// splats, family, prune, share), comma-separated; default all.
         #[arg(long, value_delimiter = ',')]
         knobs: Vec<String>,
         /// `scale` only: the splat counts of the generated clouds, comma-separated.
         #[arg(long, value_delimiter = ',', default_values_t = scale::DEFAULT_SIZES)]
         sizes: Vec<u64>,
+        /// `scale` only: the generated clouds' material.
+        #[arg(long, value_enum, default_value_t = scale::Material::Diffuse)]
+        material: scale::Material,
     },
 }
 
@@ -656,6 +659,7 @@ fn run(cli: Cli) -> Result<()> {
             device,
             json,
             sizes,
+            material,
             ..
         } => {
             let Some(gpu) = device.gpu()? else {
@@ -665,7 +669,9 @@ fn run(cli: Cli) -> Result<()> {
                         .into(),
                 ));
             };
-            let r = scale::scale(&gpu, &sizes, &output, &|scene| bake.apply(scene))?;
+            let r = scale::scale(&gpu, (&sizes, material), &output, &|scene| {
+                bake.apply(scene)
+            })?;
             print_report(json, &r)?;
         }
         Command::Bench {

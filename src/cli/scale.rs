@@ -24,6 +24,35 @@ use crate::timing::ms_since;
 /// The splat counts `bench scale` measures unless told.
 pub const DEFAULT_SIZES: [u64; 3] = [1_000_000, 3_000_000, 10_000_000];
 
+/// The generated clouds' material.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize, clap::ValueEnum)]
+#[serde(rename_all = "lowercase")]
+pub enum Material {
+    /// Diffuse ground: the fit gathers irradiance alone (a lidar scan's case).
+    Diffuse,
+    /// Glossy Ward ground (specular 0.3, roughness 0.15): every splat's light needs lobes.
+    Glossy,
+}
+
+impl Material {
+    fn name(self) -> &'static str {
+        match self {
+            Material::Diffuse => "diffuse",
+            Material::Glossy => "glossy",
+        }
+    }
+
+    /// The scene file's material table.
+    fn table(self) -> &'static str {
+        match self {
+            Material::Diffuse => "[materials.ground]\ndiffuse = [0.6, 0.55, 0.5]\n",
+            Material::Glossy => {
+                "[materials.ground]\ndiffuse = [0.4, 0.37, 0.33]\nspecular = 0.3\nroughness = 0.15\n"
+            }
+        }
+    }
+}
+
 /// Moving frames timed per size (after one untimed frame), at `FRAME_SIZE`.
 const TIMED_FRAMES: usize = 3;
 const FRAME_SIZE: (u32, u32) = (512, 512);
@@ -32,6 +61,7 @@ const FRAME_SIZE: (u32, u32) = (512, 512);
 pub struct ScaleBench {
     pub adapter: String,
     pub backend: String,
+    pub material: Material,
     pub rows: Vec<ScaleRow>,
     /// How each time grows with the splat count from the smallest size to the largest: the
     /// exponent k in time ∝ splats^k (1 is linear).
@@ -57,6 +87,9 @@ pub struct ScaleRow {
     pub photons_ms: f64,
     pub binning_ms: f64,
     pub em_ms: f64,
+    /// Splats whose lobes were fitted, and glossy splats their shared fits served.
+    pub splats_fitted: u32,
+    pub splats_served: u32,
     /// The direct bake: each splat's visibility of each light.
     pub direct_ms: f64,
     /// Photons, binning, EM and the direct bake.
@@ -73,6 +106,8 @@ pub struct Growth {
     pub load: f64,
     pub grid: f64,
     pub bake: f64,
+    /// The lobe fit (EM) alone.
+    pub em: f64,
     pub frame: f64,
     pub peak_rss: Option<f64>,
 }
@@ -80,8 +115,14 @@ pub struct Growth {
 /// Bake settings from the command line, applied to each generated scene.
 pub type Settings<'a> = &'a dyn Fn(&mut crate::scene::Scene) -> Result<()>;
 
-/// Runs the scale benchmark on `gpu` for clouds of `sizes` splats, writing them to `dir`.
-pub fn scale(gpu: &Gpu, sizes: &[u64], dir: &Path, settings: Settings) -> Result<ScaleBench> {
+/// Runs the scale benchmark on `gpu` for clouds of `sizes` splats of `material`, writing them
+/// to `dir`.
+pub fn scale(
+    gpu: &Gpu,
+    (sizes, material): (&[u64], Material),
+    dir: &Path,
+    settings: Settings,
+) -> Result<ScaleBench> {
     if sizes.is_empty() || sizes.contains(&0) {
         return Err(Error::Invalid(
             "bench scale needs splat counts above 0 (--sizes 1000000,3000000)".into(),
@@ -92,14 +133,15 @@ pub fn scale(gpu: &Gpu, sizes: &[u64], dir: &Path, settings: Settings) -> Result
     sizes.sort_unstable();
     let mut rows = Vec::new();
     for &n in &sizes {
-        eprintln!("bench scale: {n} splats");
-        let scene_path = write_terrain(dir, n)?;
+        eprintln!("bench scale: {n} {} splats", material.name());
+        let scene_path = write_terrain(dir, n, material)?;
         rows.push(measure(gpu, &scene_path, n, settings)?);
     }
     let growth = growth(&rows);
     Ok(ScaleBench {
         adapter: gpu.info.name.clone(),
         backend: gpu.backend_name().into(),
+        material,
         rows,
         growth,
     })
@@ -150,6 +192,8 @@ fn measure(gpu: &Gpu, scene_path: &Path, n: u64, settings: Settings) -> Result<S
         photons_ms,
         binning_ms,
         em_ms,
+        splats_fitted: baked.em.splats_fitted.unwrap_or(0),
+        splats_served: baked.em.splats_served.unwrap_or(0),
         direct_ms,
         bake_ms: photons_ms + binning_ms + em_ms + direct_ms,
         frame_ms: median(times[1..].to_vec()),
@@ -172,6 +216,7 @@ fn growth(rows: &[ScaleRow]) -> Growth {
         load: k(a.load_ms, b.load_ms),
         grid: k(a.grid_ms, b.grid_ms),
         bake: k(a.bake_ms, b.bake_ms),
+        em: k(a.em_ms, b.em_ms),
         frame: k(a.frame_ms, b.frame_ms),
         peak_rss: match (a.peak_rss_bytes, b.peak_rss_bytes) {
             (Some(x), Some(y)) => Some(k(x as f64, y as f64)),
@@ -193,8 +238,9 @@ fn height(x: f32, z: f32) -> (f32, f32, f32) {
 }
 
 /// Writes the terrain of `n` points (a binary PLY with normals, unless one of that size is
-/// already there) and its scene file; returns the scene file's path.
-fn write_terrain(dir: &Path, n: u64) -> Result<PathBuf> {
+/// already there) and its scene file in `material` (`terrain_N.toml`, glossy
+/// `terrain_N_glossy.toml`); returns the scene file's path.
+fn write_terrain(dir: &Path, n: u64, material: Material) -> Result<PathBuf> {
     let ply = terrain_file(dir, n);
     let header = format!(
         "ply\nformat binary_little_endian 1.0\nelement vertex {n}\nproperty float x\n\
@@ -223,14 +269,19 @@ fn write_terrain(dir: &Path, n: u64) -> Result<PathBuf> {
         }
         out.flush().map_err(io)?;
     }
-    let scene = dir.join(format!("terrain_{n}.toml"));
+    let scene = match material {
+        Material::Diffuse => dir.join(format!("terrain_{n}.toml")),
+        Material::Glossy => dir.join(format!("terrain_{n}_glossy.toml")),
+    };
     let text = format!(
-        "# A generated terrain of {n} points (lobelight bench scale).\n\n\
+        "# A generated {} terrain of {n} points (lobelight bench scale).\n\n\
          [camera]\neye = [0.0, 1.6, 2.2]\ntarget = [0.0, 0.0, 0.0]\nfov = 45\n\
-         resolution = [512, 512]\n\n[materials.ground]\ndiffuse = [0.6, 0.55, 0.5]\n\n\
+         resolution = [512, 512]\n\n{}\n\
          [[light]]\ntype = \"directional\"\ndirection = [-0.6, -1.0, -0.4]\n\
          irradiance = [2.0, 1.9, 1.7]\n\n[[object]]\nshape = \"model\"\n\
-         path = \"terrain_{n}.ply\"\nmaterial = \"ground\"\n"
+         path = \"terrain_{n}.ply\"\nmaterial = \"ground\"\n",
+        material.name(),
+        material.table()
     );
     std::fs::write(&scene, text).map_err(|e| Error::io(&scene, e))?;
     Ok(scene)
@@ -242,10 +293,16 @@ fn mib(bytes: u64) -> String {
 
 impl std::fmt::Display for ScaleBench {
     fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
-        writeln!(f, "device {} ({})", self.adapter, self.backend)?;
         writeln!(
             f,
-            "{:>10} {:>8} {:>8} {:>8} {:>8} {:>9} {:>8} {:>8} {:>9} {:>9} {:>9}",
+            "device {} ({}), {} clouds",
+            self.adapter,
+            self.backend,
+            self.material.name()
+        )?;
+        writeln!(
+            f,
+            "{:>10} {:>8} {:>8} {:>8} {:>8} {:>9} {:>8} {:>8} {:>8} {:>9} {:>9} {:>9}",
             "splats",
             "read ms",
             "MB/s",
@@ -254,6 +311,7 @@ impl std::fmt::Display for ScaleBench {
             "photons",
             "binning",
             "EM ms",
+            "fits",
             "direct ms",
             "frame ms",
             "peak"
@@ -261,7 +319,7 @@ impl std::fmt::Display for ScaleBench {
         for r in &self.rows {
             writeln!(
                 f,
-                "{:>10} {:>8.0} {:>8.0} {:>8.0} {:>8.0} {:>9.0} {:>8.0} {:>8.0} {:>9.0} {:>9.0} {:>9}",
+                "{:>10} {:>8.0} {:>8.0} {:>8.0} {:>8.0} {:>9.0} {:>8.0} {:>8.0} {:>8} {:>9.0} {:>9.0} {:>9}",
                 r.splats,
                 r.read_ms,
                 r.read_mb_per_s,
@@ -270,6 +328,7 @@ impl std::fmt::Display for ScaleBench {
                 r.photons_ms,
                 r.binning_ms,
                 r.em_ms,
+                r.splats_fitted,
                 r.direct_ms,
                 r.frame_ms,
                 r.peak_rss_bytes.map_or("-".into(), mib)
@@ -278,8 +337,8 @@ impl std::fmt::Display for ScaleBench {
         let g = &self.growth;
         write!(
             f,
-            "growth (time ∝ splats^k): load {:.2}, grid {:.2}, bake {:.2}, frame {:.2}",
-            g.load, g.grid, g.bake, g.frame
+            "growth (time ∝ splats^k): load {:.2}, grid {:.2}, bake {:.2} (EM {:.2}), frame {:.2}",
+            g.load, g.grid, g.bake, g.em, g.frame
         )?;
         if let Some(m) = g.peak_rss {
             write!(f, ", peak memory {m:.2}")?;
