@@ -10,7 +10,7 @@ use std::time::Instant;
 
 use crate::bins::{PhotonBins, bin_params, check_binned};
 use crate::cpu::{CpuBuffer, CpuExecutor};
-use crate::em::{EmConfig, FitShape, LobeMap};
+use crate::em::{EmConfig, EmStats, FitShape, LobeMap};
 use crate::error::{Error, Result};
 use crate::gpu::Gpu;
 use crate::gpu::exec::GpuExecutor;
@@ -373,13 +373,14 @@ pub fn bake(scene: &Scene, device: BakeDevice, progress: &Progress) -> Result<Ba
     };
     let em_cfg = &plan.em;
     let s = &lobes.stats;
+    let lit = lit(s, em_cfg);
     progress.done(
         "em",
         s.ms,
         &format!(
             "{} of {} splats with photons fitted{} ({:.0} fits/s, {:.2} M rays/s)",
             s.fitted,
-            s.listed + s.served,
+            lit,
             match s.served {
                 0 => String::new(),
                 n => format!(", {n} more served by their fits"),
@@ -390,7 +391,7 @@ pub fn bake(scene: &Scene, device: BakeDevice, progress: &Progress) -> Result<Ba
     );
     let em = StageReport {
         splats_fitted: Some(s.fitted),
-        splats_lit: Some(s.listed + s.served),
+        splats_lit: Some(lit),
         splats_served: Some(s.served),
         rays: Some(s.rays),
         lobes_kept: Some(lobes.lobes.len() as u64),
@@ -613,6 +614,13 @@ pub fn fit<E: Executor>(
     Ok(lobes)
 }
 
+/// Splats with photons near them: those the fit listed, and with deposits the glossy splats
+/// served by shared fits, which `em_share` lit and no list holds (the photons' estimate lists
+/// them for their irradiance).
+fn lit(s: &EmStats, cfg: &EmConfig) -> u32 {
+    s.listed + if cfg.uses_deposits() { s.served } else { 0 }
+}
+
 /// The photon pass's report.
 fn traced_report(stats: &PhotonStats) -> StageReport {
     StageReport {
@@ -627,7 +635,8 @@ fn traced_report(stats: &PhotonStats) -> StageReport {
 /// pruning drops the lobes the photons do not need.
 fn em_skipped(map: &LobeMap, cfg: &EmConfig, splats: usize) -> String {
     let s = &map.stats;
-    let dark = splats.saturating_sub(s.listed as usize + s.served as usize);
+    let lit = lit(s, cfg);
+    let dark = splats.saturating_sub(lit as usize);
     let served = match s.served {
         0 => String::new(),
         n => format!(" ({n} more glossy splats served by their groups' fits)"),
@@ -643,7 +652,7 @@ fn em_skipped(map: &LobeMap, cfg: &EmConfig, splats: usize) -> String {
             "EM on {} glossy splats only{served}: {} diffuse splats gathered irradiance only, \
              {dark} without photons skipped{}",
             s.fitted,
-            s.listed - s.fitted,
+            lit.saturating_sub(s.fitted + s.served),
             if cfg.prune {
                 format!(
                     "; {} of {} lobes kept, the rest pruned",
