@@ -564,6 +564,10 @@ pub fn fit<E: Executor>(
     let t = Instant::now();
     let setup = plan.gather_setup(scene);
     let lights = ex.upload("lights", &scene.lights)?;
+    let words = match &plan.groups {
+        Some(g) => Some((g, ex.upload("fit groups", &g.words)?)),
+        None => None,
+    };
     let input = FitInput {
         bin_params: &bins.params_buf,
         cell_start: &bins.cell_start,
@@ -583,25 +587,13 @@ pub fn fit<E: Executor>(
             keys: &d.bins.keys,
             spread: &d.spread,
         }),
-        groups: None,
+        groups: words.as_ref().map(|(g, words)| GroupInput {
+            words,
+            starts_at: g.starts_at(),
+            members_at: g.members_at(),
+        }),
     };
     let em = &plan.em;
-    let words = match &plan.groups {
-        Some(g) => Some(ex.upload("fit groups", &g.words)?),
-        None => None,
-    };
-    let input = FitInput {
-        groups: plan
-            .groups
-            .as_ref()
-            .zip(words.as_ref())
-            .map(|(g, words)| GroupInput {
-                words,
-                starts_at: g.starts_at(),
-                members_at: g.members_at(),
-            }),
-        ..input
-    };
     let fitted = sequence::fit_lobes(ex, &input, em, plan.limits.fit_shape)?;
     ex.finish()?;
     let stats = fitted.stats(ms_since(t));

@@ -43,8 +43,8 @@ pub struct FitGroups {
 }
 
 impl FitGroups {
-    /// Groups of `cell` scene units over the splats that `fitted` says are fitted (their
-    /// materials glossy, or every splat with `fit_all`).
+    /// Groups in cells of `cell` scene units over the fitted splats: those of a glossy
+    /// material, or every splat with `fit_all`.
     pub fn new(
         splats: &[Splat],
         materials: &[Material],
@@ -67,8 +67,7 @@ impl FitGroups {
         // Each cell's leaders, in splat order.
         let mut cells: HashMap<[i32; 3], Vec<u32>> = HashMap::new();
         let mut words = vec![UNGROUPED; splats.len()];
-        let mut leaders: Vec<u32> = Vec::new();
-        let mut followers = 0u32;
+        let (mut groups, mut followers) = (0u32, 0u32);
         for (i, s) in (0u32..).zip(splats) {
             if !fitted(s) {
                 continue;
@@ -86,14 +85,14 @@ impl FitGroups {
                     followers += 1;
                 }
                 None => {
-                    words[i as usize] = leaders.len() as u32;
-                    leaders.push(i);
+                    words[i as usize] = groups;
+                    groups += 1;
                     list.push(i);
                 }
             }
         }
         // Members by group: counts, starts, then each group's leader and its followers.
-        let g = leaders.len();
+        let g = groups as usize;
         let mut starts = vec![0u32; g + 1];
         for &w in &words {
             if let Some(group) = group_of(&words, w) {
@@ -116,7 +115,7 @@ impl FitGroups {
         Ok(FitGroups {
             words,
             splats: n,
-            groups: g as u32,
+            groups,
             followers,
         })
     }
@@ -137,22 +136,16 @@ impl FitGroups {
         (w != UNGROUPED && w & FOLLOWER_BIT != 0).then_some((w & !FOLLOWER_BIT) as usize)
     }
 
-    /// Gives every follower its leader's lobes and fit figures (it keeps its own irradiance,
-    /// which its own photons resolve finer than the group's rays); returns how many were
-    /// served lobes.
+    /// Gives every follower its leader's light whole: its lobes (aliased: stored once per
+    /// group), its fit figures and its irradiance, the group's ray estimate, which on a curved
+    /// surface reads closer to the path tracer than the follower's own photon estimate
+    /// (design §6, "Shared fits"); returns how many were served lobes.
     pub fn serve(&self, map: &mut LobeMap) -> u32 {
         let mut served = 0;
         for i in 0..map.light.len().min(self.splats as usize) {
             let Some(l) = self.leader(i) else { continue };
-            let lead = map.light[l];
-            let own = &mut map.light[i];
-            own.irradiance = lead.irradiance;
-            own.lobes = lead.lobes;
-            own.first_lobe = lead.first_lobe;
-            own.photons = lead.photons;
-            own.log_likelihood = lead.log_likelihood;
-            own.weight = lead.weight;
-            served += u32::from(lead.lobes > 0);
+            map.light[i] = map.light[l];
+            served += u32::from(map.light[l].lobes > 0);
         }
         served
     }

@@ -1,6 +1,6 @@
 //! Mirror of `wgsl/final_gather.wgsl`: rays over each fitted splat's cosine-weighted
-//! hemisphere (with shared fits, over its group's members' in turn), and the radiance of the surface each meets, as the bake knows it
-//! (`hit_albedo`).
+//! hemisphere (with shared fits, over its group's members' in turn), and the radiance of the
+//! surface each meets, as the bake knows it (`hit_albedo`).
 
 use super::bindings::{Bindings, view, view_mut};
 use crate::error::Result;
