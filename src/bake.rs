@@ -12,6 +12,7 @@ use crate::bins::{PhotonBins, bin_params, check_binned};
 use crate::cpu::{CpuBuffer, CpuExecutor};
 use crate::em::{EmConfig, EmStats, FitShape, LobeMap};
 use crate::error::{Error, Result};
+use crate::fit_groups::CoverGroups;
 use crate::gpu::Gpu;
 use crate::gpu::exec::GpuExecutor;
 use crate::gpu::scene::GpuScene;
@@ -20,7 +21,8 @@ use crate::photons::{PhotonMap, PhotonStats};
 use crate::plan::{BakeLimits, BakePlan};
 use crate::scene::Scene;
 use crate::sequence::{
-    self, Bins, DepositInput, Deposits, Executor, FitInput, Gathering, GroupInput, Traced,
+    self, Bins, CoverInput, DepositInput, Deposits, Executor, FitInput, Gathering, GroupInput,
+    Traced,
 };
 use crate::timing::ms_since;
 use crate::types::{EmParams, GridParams};
@@ -47,6 +49,10 @@ pub struct StageReport {
     /// EM: final gathering's rays.
     #[serde(skip_serializing_if = "Option::is_none")]
     pub rays: Option<u64>,
+    /// EM: measures of a gather disk's covered share, one a coverage group (shared by the
+    /// splats of a cell of R/16 that face alike).
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub coverages: Option<u32>,
     /// EM: lobes kept, and what the fitted splats would keep without pruning.
     #[serde(skip_serializing_if = "Option::is_none")]
     pub lobes_kept: Option<u64>,
@@ -394,6 +400,7 @@ pub fn bake(scene: &Scene, device: BakeDevice, progress: &Progress) -> Result<Ba
         splats_lit: Some(lit),
         splats_served: Some(s.served),
         rays: Some(s.rays),
+        coverages: Some(s.coverages),
         lobes_kept: Some(lobes.lobes.len() as u64),
         lobes_fitted: Some(s.fitted as u64 * em_cfg.lobes as u64),
         skipped_reason: Some(em_skipped(&lobes, em_cfg, scene.splats.len())),
@@ -568,6 +575,8 @@ pub fn fit<E: Executor>(
         Some(g) => Some((g, ex.upload("fit groups", &g.words)?)),
         None => None,
     };
+    let cover = CoverGroups::new(&scene.splats, plan.em.radius)?;
+    let cover_words = ex.upload("coverage groups", &cover.words)?;
     let input = FitInput {
         bin_params: &bins.params_buf,
         cell_start: &bins.cell_start,
@@ -592,6 +601,10 @@ pub fn fit<E: Executor>(
             starts_at: g.starts_at(),
             members_at: g.members_at(),
         }),
+        cover: Some(CoverInput {
+            words: &cover_words,
+            groups: cover.groups,
+        }),
     };
     let em = &plan.em;
     let fitted = sequence::fit_lobes(ex, &input, em, plan.limits.fit_shape)?;
@@ -602,6 +615,7 @@ pub fn fit<E: Executor>(
         lobes.stats.served = g.serve(&mut lobes);
     }
     lobes.stats.rays = lobes.stats.fitted as u64 * em.gather as u64 * em.gather as u64;
+    lobes.stats.coverages = cover.groups;
     spin.finish_and_clear();
     Ok(lobes)
 }
@@ -633,10 +647,16 @@ fn em_skipped(map: &LobeMap, cfg: &EmConfig, splats: usize) -> String {
         0 => String::new(),
         n => format!(" ({n} more glossy splats served by their groups' fits)"),
     };
+    // Where coverage groups hold several splats (a dense scan), say how many measures served.
+    let covered = match s.coverages as usize {
+        0 => String::new(),
+        n if n >= splats => String::new(),
+        n => format!("; coverage measured {n} times for {splats} splats"),
+    };
     if s.fitted == 0 {
         format!(
             "no EM and no lobes kept: no glossy splat has photons (irradiance gathered on {} \
-             splats; {dark} without photons skipped)",
+             splats; {dark} without photons skipped{covered})",
             s.listed
         )
     } else {
@@ -653,7 +673,7 @@ fn em_skipped(map: &LobeMap, cfg: &EmConfig, splats: usize) -> String {
                 )
             } else {
                 String::new()
-            }
+            } + &covered
         )
     }
 }

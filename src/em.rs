@@ -298,6 +298,8 @@ pub struct EmStats {
     pub rays: u64,
     /// Splats served by another's fit (shared fits), besides the `fitted`.
     pub served: u32,
+    /// Measures of the covered share of a gather disk (`em_coverage`): one a coverage group.
+    pub coverages: u32,
 }
 
 /// What final gathering reads of the scene besides the photons and the splats

@@ -10,11 +10,15 @@
 //! that both executors read the same groups and the result does not depend on scheduling.
 //! They travel as one array of words (`FitGroups::words`), which `em_select` and
 //! `final_gather` read: one word a splat (`FOLLOWER_BIT | leader` for a splat that uses
-//! another's fit, its group's index for a leader, all ones for a splat not fitted), then each group's first member, then the members.
-
-use std::collections::HashMap;
+//! another's fit, its group's index for a leader, all ones for a splat not fitted), then each
+//! group's first member, then the members.
+//!
+//! The covered share of a splat's gather disk (`em_coverage`) is shared the same way, in
+//! smaller cells (`CoverGroups`): a dense scan's every search radius holds thousands of splats,
+//! whose shares differ by little.
 
 use glam::Vec3;
+use rayon::prelude::*;
 
 use crate::em::LobeMap;
 use crate::error::{Error, Result};
@@ -51,65 +55,41 @@ impl FitGroups {
         fit_all: bool,
         cell: f32,
     ) -> Result<FitGroups> {
-        if !(cell.is_finite() && cell > 0.0) {
-            return Err(Error::Invalid(format!(
-                "a shared fit's cell must be a positive length, got {cell}"
-            )));
-        }
-        let n = u32::try_from(splats.len())
-            .map_err(|_| Error::DeviceLimit("more than 2³² splats in one scene".into()))?;
         let fitted = |s: &Splat| {
             fit_all
                 || materials
                     .get(s.material as usize)
                     .is_some_and(|m| m.specular.iter().any(|&x| x > 0.0))
         };
-        // Each cell's leaders, in splat order.
-        let mut cells: HashMap<[i32; 3], Vec<u32>> = HashMap::new();
-        let mut words = vec![UNGROUPED; splats.len()];
-        let (mut groups, mut followers) = (0u32, 0u32);
-        for (i, s) in (0u32..).zip(splats) {
-            if !fitted(s) {
-                continue;
-            }
-            let key = (Vec3::from(s.center) / cell).floor().as_ivec3().to_array();
-            let normal = Vec3::from(s.normal);
-            let list = cells.entry(key).or_default();
-            let joined = list
-                .iter()
-                .copied()
-                .find(|&l| Vec3::from(splats[l as usize].normal).dot(normal) >= GROUP_COS_MIN);
-            match joined {
-                Some(l) => {
-                    words[i as usize] = FOLLOWER_BIT | l;
-                    followers += 1;
-                }
-                None => {
-                    words[i as usize] = groups;
-                    groups += 1;
-                    list.push(i);
-                }
-            }
-        }
+        let cells = CellGroups::new(splats, fitted, cell, GROUP_COS_MIN)?;
+        let n = cells.group.len() as u32;
+        let groups = cells.leaders.len() as u32;
+        // One word a splat: its group for a leader, its leader for a follower.
+        let mut words: Vec<u32> = (0..n)
+            .map(|i| match cells.group[i as usize] {
+                UNGROUPED => UNGROUPED,
+                g if cells.leaders[g as usize] == i => g,
+                g => FOLLOWER_BIT | cells.leaders[g as usize],
+            })
+            .collect();
         // Members by group: counts, starts, then each group's leader and its followers.
         let g = groups as usize;
         let mut starts = vec![0u32; g + 1];
-        for &w in &words {
-            if let Some(group) = group_of(&words, w) {
-                starts[group as usize + 1] += 1;
-            }
+        for &group in cells.group.iter().filter(|&&k| k != UNGROUPED) {
+            starts[group as usize + 1] += 1;
         }
         for k in 0..g {
             starts[k + 1] += starts[k];
         }
         let mut members = vec![0u32; starts[g] as usize];
         let mut next = starts.clone();
-        for (i, &w) in words.iter().enumerate() {
-            if let Some(group) = group_of(&words, w) {
-                members[next[group as usize] as usize] = i as u32;
+        for (i, &group) in (0u32..).zip(&cells.group) {
+            if group != UNGROUPED {
+                members[next[group as usize] as usize] = i;
                 next[group as usize] += 1;
             }
         }
+        let followers = starts[g] - groups;
         words.extend_from_slice(&starts);
         words.extend_from_slice(&members);
         Ok(FitGroups {
@@ -151,12 +131,108 @@ impl FitGroups {
     }
 }
 
-/// The group of a splat with word `w`: its own for a leader, its leader's for a follower,
-/// `None` for a splat that is not fitted.
-fn group_of(words: &[u32], w: u32) -> Option<u32> {
-    match w {
-        UNGROUPED => None,
-        w if w & FOLLOWER_BIT != 0 => Some(words[(w & !FOLLOWER_BIT) as usize]),
-        w => Some(w),
+/// Splats share the covered share of their gather disk (`em_coverage`) within cells of this
+/// many search radii: the share moves by at most about 0.64 per radius the centre moves (the
+/// disk's widest chord over its area), so by a few hundredths within a cell, where a dense
+/// scan's cell of R/16 holds tens of splats.
+pub const COVER_CELL: f32 = 1.0 / 16.0;
+
+/// Splats share a coverage only where their normals lie within about 11°: the share is
+/// measured in the tangent plane, which on a curved surface turns with the normal.
+pub const COVER_COS_MIN: f32 = 0.98;
+
+/// Every splat in a group that shares one measure of its gather disk's coverage
+/// (`wgsl/em_coverage.wgsl`).
+#[derive(Clone, Debug, Default, PartialEq)]
+pub struct CoverGroups {
+    /// `splats` words, each splat's group, then `groups` words, each group's leader.
+    pub words: Vec<u32>,
+    pub splats: u32,
+    pub groups: u32,
+}
+
+impl CoverGroups {
+    /// Groups in cells of `COVER_CELL` × `radius`, the photons' search radius.
+    pub fn new(splats: &[Splat], radius: f32) -> Result<CoverGroups> {
+        let cells = CellGroups::new(splats, |_| true, COVER_CELL * radius, COVER_COS_MIN)?;
+        let (splats, groups) = (cells.group.len() as u32, cells.leaders.len() as u32);
+        let mut words = cells.group;
+        words.extend_from_slice(&cells.leaders);
+        Ok(CoverGroups {
+            words,
+            splats,
+            groups,
+        })
+    }
+}
+
+/// Splats grouped by cell and facing: each splat that `include` takes joins the first group of
+/// its cell (in a grid of `cell` scene units), in splat order, whose first splat faces within
+/// `cos_min` of it, else leads a new one. Groups are numbered in their leaders' splat order,
+/// so the grouping depends on the splats alone.
+#[derive(Clone, Debug, Default, PartialEq)]
+pub struct CellGroups {
+    /// Each splat's group (`UNGROUPED` where `include` left it out).
+    pub group: Vec<u32>,
+    /// Each group's first splat, its leader.
+    pub leaders: Vec<u32>,
+}
+
+impl CellGroups {
+    pub fn new(
+        splats: &[Splat],
+        include: impl Fn(&Splat) -> bool + Sync,
+        cell: f32,
+        cos_min: f32,
+    ) -> Result<CellGroups> {
+        if !(cell.is_finite() && cell > 0.0) {
+            return Err(Error::Invalid(format!(
+                "a group's cell must be a positive length, got {cell}"
+            )));
+        }
+        let n = u32::try_from(splats.len())
+            .map_err(|_| Error::DeviceLimit("more than 2³² splats in one scene".into()))?;
+        // The included splats by cell, each cell's in splat order (a sort, not a map of
+        // lists: ten million splats are ten million cells where the cells are small).
+        let mut keyed: Vec<([i32; 3], u32)> = (0..n)
+            .into_par_iter()
+            .filter(|&i| include(&splats[i as usize]))
+            .map(|i| {
+                let c = Vec3::from(splats[i as usize].center) / cell;
+                (c.floor().as_ivec3().to_array(), i)
+            })
+            .collect();
+        keyed.par_sort_unstable();
+        // Each splat's leader, cell by cell.
+        let mut leader_of = vec![UNGROUPED; splats.len()];
+        let mut leaders: Vec<u32> = Vec::new();
+        for run in keyed.chunk_by(|a, b| a.0 == b.0) {
+            leaders.clear();
+            for &(_, i) in run {
+                let normal = Vec3::from(splats[i as usize].normal);
+                let joined = leaders
+                    .iter()
+                    .copied()
+                    .find(|&l| Vec3::from(splats[l as usize].normal).dot(normal) >= cos_min);
+                leader_of[i as usize] = joined.unwrap_or_else(|| {
+                    leaders.push(i);
+                    i
+                });
+            }
+        }
+        // Groups numbered in their leaders' splat order.
+        let mut group = vec![UNGROUPED; splats.len()];
+        let mut leaders = Vec::new();
+        for i in 0..splats.len() {
+            let l = leader_of[i];
+            if l == i as u32 {
+                group[i] = leaders.len() as u32;
+                leaders.push(l);
+            } else if l != UNGROUPED {
+                // A leader comes before its followers, so its group is numbered already.
+                group[i] = group[l as usize];
+            }
+        }
+        Ok(CellGroups { group, leaders })
     }
 }

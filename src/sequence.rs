@@ -24,7 +24,7 @@ use crate::shaders::Stage;
 use crate::shaders::stage_shape;
 use crate::shared::bins::list_count;
 use crate::shared::dispatch::groups_for;
-use crate::shared::lobes::{EM_DEFER_FIT, EM_GROUPS, EM_SHARE};
+use crate::shared::lobes::{EM_COVER_APPLY, EM_DEFER_FIT, EM_GROUPS, EM_SHARE};
 use crate::timing::ms_since;
 use crate::tone::{ToneConfig, reduce_levels};
 use crate::types::{
@@ -503,6 +503,14 @@ pub struct FitInput<'a, B> {
     pub deposits: Option<DepositInput<'a, B>>,
     /// Shared fits: only the groups' leaders are fitted, from their members' rays.
     pub groups: Option<GroupInput<'a, B>>,
+    /// Shared coverage: `em_coverage` measures once a group (else once a splat).
+    pub cover: Option<CoverInput<'a, B>>,
+}
+
+/// The coverage groups in the executor's memory (`fit_groups::CoverGroups::words`).
+pub struct CoverInput<'a, B> {
+    pub words: &'a B,
+    pub groups: u32,
 }
 
 /// The shared fits' groups in the executor's memory (`fit_groups::FitGroups::words`), with
@@ -560,6 +568,7 @@ impl<B> Fit<B> {
             final_gather_ms: self.final_gather_ms,
             rays: 0,
             served: 0,
+            coverages: 0,
         }
     }
 
@@ -738,7 +747,8 @@ pub fn fit_lobes<E: Executor>(
     // the scene's geometry: before final gathering's rays read it, and where no fit follows
     // (an all-diffuse scene fits nothing, yet its edges darkened as the glossy scene's did).
     if input.gathering.is_some() {
-        cover_light(ex, &cfg.params(splat_count, splat_count, shape), &light)?;
+        let params = cfg.params(splat_count, splat_count, shape);
+        cover_light(ex, &params, &light, input.cover.as_ref())?;
     }
     ex.read::<u32>(&counters, 1)?;
     let mut fit_ms = ms_since(t) - select_ms - gather_ms;
@@ -771,13 +781,48 @@ pub fn fit_lobes<E: Executor>(
 }
 
 /// `em_coverage`: each of `params.splat_count` splats' photon irradiance in `light` divided by
-/// the share of its gather disk (radius and slab from `params`) that its surface covers; a
-/// splat whose lobes the photon fit wrote keeps its light (the lobes carry their own). The
-/// executor must trace the scene's geometry.
-pub fn cover_light<E: Executor>(ex: &mut E, params: &EmParams, light: &E::Buffer) -> Result<()> {
-    let uniform = ex.uniform("em coverage params", params)?;
+/// the share of its gather disk (radius and slab from `params`) that its surface covers,
+/// measured once a group of `cover` (once a splat without); a splat whose lobes the photon fit
+/// wrote keeps its light (the lobes carry their own). The executor must trace the scene's
+/// geometry.
+pub fn cover_light<E: Executor>(
+    ex: &mut E,
+    params: &EmParams,
+    light: &E::Buffer,
+    cover: Option<&CoverInput<'_, E::Buffer>>,
+) -> Result<()> {
+    let own;
+    let (words, count) = match cover {
+        Some(c) => (c.words, c.groups),
+        // Each splat its own group, and its own leader.
+        None => {
+            let n = params.splat_count;
+            let words: Vec<u32> = (0..n).chain(0..n).collect();
+            own = ex.upload("coverage groups", &words)?;
+            (&own, n)
+        }
+    };
+    let shares = ex.zeroed("coverage shares", count.max(1) as u64 * 4)?;
+    let measure = EmParams {
+        active_count: count,
+        flags: params.flags & !EM_COVER_APPLY,
+        ..*params
+    };
+    let uniform = ex.uniform("em coverage params", &measure)?;
+    let bindings = [&uniform, light, words, &shares];
+    ex.dispatch_traced(
+        Stage::EmCoverage,
+        &bindings,
+        groups(Stage::EmCoverage, count)?,
+    )?;
+    let apply = EmParams {
+        flags: params.flags | EM_COVER_APPLY,
+        ..*params
+    };
+    let uniform = ex.uniform("em coverage params", &apply)?;
+    let bindings = [&uniform, light, words, &shares];
     let groups = groups(Stage::EmCoverage, params.splat_count)?;
-    ex.dispatch_traced(Stage::EmCoverage, &[&uniform, light], groups)
+    ex.dispatch_traced(Stage::EmCoverage, &bindings, groups)
 }
 
 /// What `fit_to_rays` takes of the photon fit: its `em_fit` buffers, its counters (read back

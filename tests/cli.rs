@@ -760,6 +760,9 @@ fn bench_scale_reports_each_size() {
         row["splats_served"].as_u64().unwrap(),
     );
     assert!(fitted > 0 && served > fitted, "{row}");
+    // One coverage measure a group, no more than a splat each.
+    let coverages = row["coverages"].as_u64().unwrap();
+    assert!((1..=4000).contains(&coverages), "{row}");
     assert!(dir.join("terrain_4000_glossy.toml").is_file());
     let bad = lobelight(&["bench", "scale", "--sizes", "0", "-o", &out], &[]);
     assert!(!bad.status.success());

@@ -279,7 +279,7 @@ fn lobes_fitted_to_gathered_samples_match_the_mirror() {
             .map(|l| SplatLight { lobes: 0, ..*l })
             .collect();
         let light = ex.upload("light", &irradiance_alone).unwrap();
-        cover_light(&mut ex, &cfg.params(n, n, shape), &light).unwrap();
+        cover_light(&mut ex, &cfg.params(n, n, shape), &light, None).unwrap();
         ex.read(&light, n as usize).unwrap()
     };
     let grey = |e: [f32; 3]| (e[0] + e[1] + e[2]) / 3.0;

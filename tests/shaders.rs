@@ -323,10 +323,11 @@ fn wgsl_const_u32(source: &str, name: &str) -> u32 {
         .lines()
         .find_map(|l| l.trim().strip_prefix(decl.as_str()))
         .unwrap_or_else(|| panic!("no `{decl}` in the WGSL"));
-    line.trim_end_matches(';')
-        .trim_end_matches('u')
-        .parse()
-        .unwrap()
+    let digits = line.trim_end_matches(';').trim_end_matches('u');
+    match digits.strip_prefix("0x") {
+        Some(hex) => u32::from_str_radix(hex, 16).unwrap(),
+        None => digits.parse().unwrap(),
+    }
 }
 
 /// The host draws the splats' triangles by instances of several splats, and the vertex
@@ -378,4 +379,25 @@ fn reflecting_light_slack_matches_the_wgsl() {
         .and_then(|v| v.trim_end_matches(';').parse().ok())
         .expect("REFLECTING_LIGHT_SLACK in shade.wgsl");
     assert_eq!(value, lobelight::cpu::shade::REFLECTING_LIGHT_SLACK);
+}
+
+/// The lobe fit's flags and words are one set of numbers in Rust and WGSL: a flag the host
+/// sets must select the same pass in every stage and its mirror.
+#[test]
+fn em_flags_match_the_wgsl() {
+    use lobelight::shared::lobes::*;
+    let source = shaders::resolve_stage(Stage::EmCoverage).unwrap();
+    for (name, value) in [
+        ("EM_SPARSE", EM_SPARSE),
+        ("EM_PRIORS", EM_PRIORS),
+        ("EM_FIT_ALL", EM_FIT_ALL),
+        ("EM_SUBGROUP_REDUCE", EM_SUBGROUP_REDUCE),
+        ("EM_DEFER_FIT", EM_DEFER_FIT),
+        ("EM_SHARE", EM_SHARE),
+        ("EM_GROUPS", EM_GROUPS),
+        ("EM_COVER_APPLY", EM_COVER_APPLY),
+        ("FOLLOWER_BIT", FOLLOWER_BIT),
+    ] {
+        assert_eq!(wgsl_const_u32(&source, name), value, "{name}");
+    }
 }

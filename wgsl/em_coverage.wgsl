@@ -1,26 +1,38 @@
 // Lobe fit, after the photon pass, on every path (docs/design.md section 6): where a
 // splat's gather disk leaves its surface (an edge, a corner), its photons land on part of the
 // disk but the estimate divides their power by all of it, pi R^2: the faces' light darkens
-// towards their edges. Per splat with photons, the share of the gather disk that its surface
-// covers, at the points of a COVERAGE_GRID^2 grid over the disk in the splat's plane that lie
-// within R: a point is covered where a disk of the same surface (its normal within
-// SURFACE_COS_MIN of the splat's, as the photons' test) lies within the photons' slab of it
-// and reaches over it where its surface keeps it (SurfaceClip: photons pass a box's disks
-// past its edges). The splat's irradiance is divided by that share (at least COVERAGE_MIN).
-// The points are searched in the splat grid's cell that holds them. Eight of
-// them, near the rim (COVERAGE_PROBES), are tested first: a splat whose probes are all covered
-// lies inside its face and keeps its estimate, so that a dense scan's splats, nearly all inside,
-// cost 8 point tests and not 69. One invocation per splat. CPU mirror: src/cpu/em_coverage.rs.
+// towards their edges. The share of the gather disk that the surface covers is measured at the
+// points of a COVERAGE_GRID^2 grid over the disk in the splat's plane that lie within R: a
+// point is covered where a disk of the same surface (its normal within SURFACE_COS_MIN of the
+// splat's, as the photons' test) lies within the photons' slab of it and reaches over it where
+// its surface keeps it (SurfaceClip: photons pass a box's disks past its edges). The splat's
+// irradiance is divided by that share (at least COVERAGE_MIN).
+// The points are searched in the splat grid's cell that holds them. Eight of them, near the
+// rim (COVERAGE_PROBES), are tested first: a splat whose probes are all covered lies inside its
+// face and keeps its estimate (8 point tests, not 69).
+// The share changes little over a small part of R (at most about 0.64 per R the centre moves),
+// so splats share it in groups (src/fit_groups.rs, CoverGroups: cells of R/16, facing within
+// 11 degrees): a dense scan, whose every R holds thousands of splats, measures it once a group,
+// not once a splat. Two passes of this stage: the first (EM_COVER_APPLY unset), one invocation
+// per group, measures the share at the group's leader; the second, one per splat with photons,
+// divides its irradiance by its group's share. CPU mirror: src/cpu/em_coverage.rs.
 
 // #import types
 // #import dispatch
 // #import bins
 // #import sampling
 // #import trace
+// #import lobes
 
 @group(0) @binding(0) var<uniform> em: EmParams;
 // #paged
 @group(0) @binding(1) var<storage, read_write> light: array<SplatLight>;
+// Each splat's group, then each group's leader (CoverGroups::words).
+// #paged
+@group(0) @binding(2) var<storage, read> cover: array<u32>;
+// Each group's share of its gather disk covered (the first pass writes it).
+// #paged
+@group(0) @binding(3) var<storage, read_write> shares: array<f32>;
 
 const WG: u32 = 64u;
 // Points a side of the grid over the gather disk (69 of its 81 lie within R).
@@ -92,19 +104,8 @@ fn covered(q: vec3<f32>, n: vec3<f32>, slab: f32, budget: ptr<function, u32>) ->
     return false;
 }
 
-@compute @workgroup_size(64)
-fn main(@builtin(workgroup_id) wg: vec3<u32>, @builtin(num_workgroups) num_wg: vec3<u32>,
-        @builtin(local_invocation_index) lid: u32) {
-    let i = linear_workgroup(wg, num_wg) * WG + lid;
-    if i >= em.splat_count {
-        return;
-    }
-    var l = light_at(i);
-    // Lobes the photon fit wrote carry their own irradiance: correcting the total alone would
-    // split the splat's diffuse light from its glossy light.
-    if l.photons == 0u || l.lobes > 0u {
-        return;
-    }
+// The share of splat i's gather disk its surface covers, 1 where the search was cut short.
+fn share_of(i: u32) -> f32 {
     let s = splats_at(i);
     let f = frame_of(s.normal);
     let slab = em.slab * s.radius;
@@ -117,7 +118,7 @@ fn main(@builtin(workgroup_id) wg: vec3<u32>, @builtin(num_workgroups) num_wg: v
         }
     }
     if probes == PROBE_COUNT {
-        return;
+        return 1.0;
     }
     var inside = 0u;
     var hits = 0u;
@@ -135,9 +136,31 @@ fn main(@builtin(workgroup_id) wg: vec3<u32>, @builtin(num_workgroups) num_wg: v
     }
     // A search cut short corrects nothing.
     if budget == 0u {
+        return 1.0;
+    }
+    return max(f32(hits) / f32(inside), COVERAGE_MIN);
+}
+
+@compute @workgroup_size(64)
+fn main(@builtin(workgroup_id) wg: vec3<u32>, @builtin(num_workgroups) num_wg: vec3<u32>,
+        @builtin(local_invocation_index) lid: u32) {
+    let i = linear_workgroup(wg, num_wg) * WG + lid;
+    // First pass: group i's share, at its leader (em.active_count groups).
+    if (em.flags & EM_COVER_APPLY) == 0u {
+        if i < em.active_count {
+            shares_put(i, share_of(cover_at(em.splat_count + i)));
+        }
         return;
     }
-    let share = max(f32(hits) / f32(inside), COVERAGE_MIN);
-    l.irradiance = l.irradiance / share;
+    if i >= em.splat_count {
+        return;
+    }
+    var l = light_at(i);
+    // Lobes the photon fit wrote carry their own irradiance: correcting the total alone would
+    // split the splat's diffuse light from its glossy light.
+    if l.photons == 0u || l.lobes > 0u {
+        return;
+    }
+    l.irradiance = l.irradiance / shares_at(cover_at(i));
     light_put(i, l);
 }

@@ -232,6 +232,8 @@ pub struct EmSkipping {
     /// Glossy splats served by another's fit (shared fits), and final gathering's rays.
     pub splats_served: u32,
     pub rays: u64,
+    /// Measures of a gather disk's covered share (one a coverage group).
+    pub coverages: u32,
     /// The shared fits' cell in search radii (0: none).
     pub share: f32,
     /// Bytes of lobes the bake keeps, skipping and fitting every splat.
@@ -320,6 +322,7 @@ pub fn em(
             splats_fitted: skipping.stats.fitted,
             splats_served: skipping.stats.served,
             rays: skipping.stats.rays,
+            coverages: skipping.stats.coverages,
             share: skip_cfg.share,
             lobe_bytes: lobe_bytes(&skipping),
             lobe_bytes_fit_all: lobe_bytes(&map),

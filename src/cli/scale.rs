@@ -90,6 +90,8 @@ pub struct ScaleRow {
     /// Splats whose lobes were fitted, and glossy splats their shared fits served.
     pub splats_fitted: u32,
     pub splats_served: u32,
+    /// Measures of a gather disk's covered share (one a coverage group of splats).
+    pub coverages: u32,
     /// The direct bake: each splat's visibility of each light.
     pub direct_ms: f64,
     /// Photons, binning, EM and the direct bake.
@@ -194,6 +196,7 @@ fn measure(gpu: &Gpu, scene_path: &Path, n: u64, settings: Settings) -> Result<S
         em_ms,
         splats_fitted: baked.em.splats_fitted.unwrap_or(0),
         splats_served: baked.em.splats_served.unwrap_or(0),
+        coverages: baked.em.coverages.unwrap_or(0),
         direct_ms,
         bake_ms: photons_ms + binning_ms + em_ms + direct_ms,
         frame_ms: median(times[1..].to_vec()),

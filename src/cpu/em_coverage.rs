@@ -1,15 +1,17 @@
-//! Mirror of `wgsl/em_coverage.wgsl`: per splat with photons, the share of its gather disk its
-//! surface covers, and its photon irradiance divided by it.
+//! Mirror of `wgsl/em_coverage.wgsl`: the share of its gather disk a group's leader's surface
+//! covers (first pass, one invocation a group), and each splat's photon irradiance divided by
+//! its group's share (second pass, `EM_COVER_APPLY`).
 // `!(x < y)` is meant: NaN must fail these tests, as it does in the WGSL twin.
 #![allow(clippy::neg_cmp_op_on_partial_ord)]
 
-use super::bindings::{Bindings, view_mut};
+use super::bindings::{Bindings, view, view_mut};
 use crate::error::Result;
 use glam::{IVec3, UVec3, Vec2, Vec3};
 use rayon::prelude::*;
 
 use crate::grid::{cell_index, point_cell};
 use crate::shared::bins::SURFACE_COS_MIN;
+use crate::shared::lobes::EM_COVER_APPLY;
 use crate::shared::sampling::frame_of;
 use crate::shared::trace::Geometry;
 use crate::types::{EmParams, SplatLight};
@@ -80,9 +82,8 @@ fn covered(geo: &Geometry, q: Vec3, n: Vec3, slab: f32, budget: &mut u32) -> boo
     }
 }
 
-/// The share of splat `i`'s gather disk its surface covers, or `None` where the search was cut
-/// short.
-fn share(em: &EmParams, geo: &Geometry, i: usize) -> Option<f32> {
+/// The share of splat `i`'s gather disk its surface covers, 1 where the search was cut short.
+fn share(em: &EmParams, geo: &Geometry, i: usize) -> f32 {
     let s = &geo.splats[i];
     let (centre, normal) = (Vec3::from(s.center), Vec3::from(s.normal));
     let f = frame_of(normal);
@@ -94,7 +95,7 @@ fn share(em: &EmParams, geo: &Geometry, i: usize) -> Option<f32> {
         .filter(|&&(a, b)| covered(geo, point(grid_point(a, b)), normal, slab, &mut budget))
         .count();
     if probes == COVERAGE_PROBES.len() {
-        return Some(1.0);
+        return 1.0;
     }
     let (mut inside, mut hits) = (0u32, 0u32);
     for a in 0..COVERAGE_GRID {
@@ -109,21 +110,42 @@ fn share(em: &EmParams, geo: &Geometry, i: usize) -> Option<f32> {
             }
         }
     }
-    (budget > 0).then(|| (hits as f32 / inside as f32).max(COVERAGE_MIN))
+    // A search cut short corrects nothing.
+    if budget == 0 {
+        return 1.0;
+    }
+    (hits as f32 / inside as f32).max(COVERAGE_MIN)
 }
 
-pub fn em_coverage(em: &EmParams, light: &mut [SplatLight], geo: &Geometry, groups: u32) {
-    let count = (groups * WG).min(em.splat_count) as usize;
+/// The first pass: each of `em.active_count` groups' share, at its leader (`cover`'s words
+/// after the splats'); the second (`EM_COVER_APPLY`): each splat's irradiance divided by its
+/// group's share.
+pub fn em_coverage(
+    em: &EmParams,
+    light: &mut [SplatLight],
+    (cover, shares): (&[u32], &mut [f32]),
+    geo: &Geometry,
+    groups: u32,
+) {
+    let invocations = (groups * WG) as usize;
+    if em.flags & EM_COVER_APPLY == 0 {
+        let count = invocations.min(em.active_count as usize);
+        let leaders = &cover[em.splat_count as usize..];
+        shares[..count]
+            .par_iter_mut()
+            .zip(&leaders[..count])
+            .for_each(|(share_out, &leader)| *share_out = share(em, geo, leader as usize));
+        return;
+    }
+    let count = invocations.min(em.splat_count as usize);
     light[..count]
         .par_iter_mut()
-        .enumerate()
-        .for_each(|(i, l)| {
+        .zip(&cover[..count])
+        .for_each(|(l, &group)| {
             if l.photons == 0 || l.lobes > 0 {
                 return;
             }
-            if let Some(share) = share(em, geo, i) {
-                l.irradiance = (Vec3::from(l.irradiance) / share).into();
-            }
+            l.irradiance = (Vec3::from(l.irradiance) / shares[group as usize]).into();
         });
 }
 
@@ -131,6 +153,14 @@ pub fn em_coverage(em: &EmParams, light: &mut [SplatLight], geo: &Geometry, grou
 pub fn dispatch(b: &Bindings, geo: &Geometry, groups: u32) -> Result<()> {
     let em = b.param(0)?;
     let mut light = b.get_mut(1)?;
-    em_coverage(&em, view_mut(&mut light), geo, groups);
+    let cover = b.get(2)?;
+    let mut shares = b.get_mut(3)?;
+    em_coverage(
+        &em,
+        view_mut(&mut light),
+        (view(&cover), view_mut(&mut shares)),
+        geo,
+        groups,
+    );
     Ok(())
 }

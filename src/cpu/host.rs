@@ -246,6 +246,7 @@ fn fit_binned(
                 spread,
             }),
         groups: None,
+        cover: None,
     };
     let fit = sequence::fit_lobes(&mut ex, &input, cfg, shape)?;
     fit.read_back(&mut ex, cfg.lobes, splat_count, fit.stats(ms_since(t)))

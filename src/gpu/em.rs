@@ -122,6 +122,7 @@ fn fit_on_device(
         gathering: None,
         deposits: None,
         groups: None,
+        cover: None,
     };
     let mut encoder = gpu.encoder("lobe fit");
     let mut ex = GpuExecutor::new(gpu, &mut encoder);

@@ -24,6 +24,9 @@ pub const EM_SHARE: u32 = 32;
 /// The fitted splats share fits in groups (`fit_groups`): `em_select` lists the groups'
 /// leaders alone, and `final_gather` casts a group's rays from its members.
 pub const EM_GROUPS: u32 = 64;
+/// `em_coverage`'s second pass: each splat's irradiance divided by its group's share (the
+/// first measures the share once a group, `fit_groups::CoverGroups`).
+pub const EM_COVER_APPLY: u32 = 128;
 /// A splat's word in the groups when another splat's fit serves it (`fit_groups`).
 pub const FOLLOWER_BIT: u32 = 0x8000_0000;
 /// Most candidate photons of a splat `em_gather` sums in one invocation.

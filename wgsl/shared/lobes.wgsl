@@ -32,6 +32,8 @@ const EM_SHARE: u32 = 32u;
 // The fitted splats share fits in groups (src/fit_groups.rs): em_select lists the groups'
 // leaders alone, and final_gather casts a group's rays from its members.
 const EM_GROUPS: u32 = 64u;
+// em_coverage's second pass: each splat's irradiance divided by its group's share.
+const EM_COVER_APPLY: u32 = 128u;
 // A splat's word in the groups when another splat's fit serves it.
 const FOLLOWER_BIT: u32 = 0x80000000u;
 
