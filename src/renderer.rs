@@ -132,6 +132,24 @@ impl FrameRenderer {
         Ok(ms)
     }
 
+    /// Draws with a direct bake of the current lights made elsewhere (the CPU mirror's,
+    /// `cpu::frames::cpu_direct`), which took `ms`.
+    pub fn set_direct(
+        &mut self,
+        gpu: &Gpu,
+        scene: &Scene,
+        baked: &DirectMap,
+        ms: f64,
+    ) -> Result<()> {
+        self.set_lights(gpu, scene)?;
+        self.frame_scene.direct = crate::sequence::Direct {
+            direct: gpu.storage("direct light", &baked.direct)?,
+            visibility: gpu.storage("light visibility", &baked.visibility)?,
+        };
+        self.direct_ms = Some(ms);
+        Ok(())
+    }
+
     /// The scene's bounds and shadow bias, as the frames read them.
     pub fn extent(&self) -> SceneExtent {
         self.extent

@@ -754,6 +754,12 @@ fn bench_scale_reports_each_size() {
         "--json",
     ]);
     assert_eq!(g["material"], "glossy");
+    // The bake runs where still images do: on the mirror beside a software rasterizer.
+    let software = g["adapter"]
+        .as_str()
+        .is_some_and(|a| a.contains("llvmpipe"));
+    let engine = if software { "mirror" } else { "device" };
+    assert_eq!(g["bake_engine"], engine, "{g}");
     let row = &g["rows"][0];
     let (fitted, served) = (
         row["splats_fitted"].as_u64().unwrap(),
@@ -767,6 +773,58 @@ fn bench_scale_reports_each_size() {
     let bad = lobelight(&["bench", "scale", "--sizes", "0", "-o", &out], &[]);
     assert!(!bad.status.success());
     assert!(String::from_utf8_lossy(&bad.stderr).contains("above 0"));
+}
+
+/// `bench cluster` writes the room with a block and the room with a dense cloud and bakes
+/// both: the cloud's object holds the splats asked for and crowds the splat grid's cells more
+/// than the block, both rates are positive, and the slowdowns are their ratios. No cloud is
+/// a clear error.
+#[test]
+fn bench_cluster_reports_both_rooms() {
+    let dir = std::env::temp_dir().join("lobelight-bench-cluster");
+    let _ = std::fs::remove_dir_all(&dir);
+    let out = dir.display().to_string();
+    let v = json(&[
+        "bench",
+        "cluster",
+        "--cluster-splats",
+        "3000",
+        "--photons",
+        "4000",
+        "--gather",
+        "4",
+        "-o",
+        &out,
+        "--json",
+    ]);
+    let rows = v["rows"].as_array().unwrap();
+    assert_eq!(rows.len(), 2, "{v}");
+    let (block, cloud) = (&rows[0], &rows[1]);
+    assert_eq!(cloud["object_splats"], 3000, "{v}");
+    assert!(
+        cloud["max_cell_len"].as_u64() > block["max_cell_len"].as_u64(),
+        "{v}"
+    );
+    let rate = |r: &serde_json::Value, k: &str| r[k].as_f64().unwrap();
+    for r in rows {
+        assert!(
+            rate(r, "photons_per_s") > 0.0 && rate(r, "gather_rays_per_s") > 0.0,
+            "{r}"
+        );
+        assert!(r["rays"].as_u64().unwrap() > 0, "{r}");
+    }
+    let ratio = rate(block, "photons_per_s") / rate(cloud, "photons_per_s");
+    assert!(
+        (rate(&v, "photons_slowdown") - ratio).abs() < 1e-9 * ratio,
+        "{v}"
+    );
+    assert!(dir.join("cluster_3000.ply").is_file() && dir.join("cluster_block.toml").is_file());
+    let bad = lobelight(
+        &["bench", "cluster", "--cluster-splats", "0", "-o", &out],
+        &[],
+    );
+    assert!(!bad.status.success());
+    assert!(String::from_utf8_lossy(&bad.stderr).contains("at least one splat"));
 }
 
 /// `benches/gpu-check.sh`, the script a session lent a GPU runs, works on this device too: in

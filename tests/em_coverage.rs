@@ -58,29 +58,16 @@ fn nearest(scene: &Scene, p: Vec3) -> usize {
         .unwrap()
 }
 
-/// A 1 × 1 quad of splats 0.025 apart, gather radius 0.1. A splat inside covers all its disk
-/// (its irradiance unchanged); one on the middle of an edge a little more than half of it, the
-/// disks' rims past the edge included (measured 0.565, 39 of the 69 points); one at a corner
-/// about a third (0.319). Device and mirror agree splat by splat.
-#[test]
-fn coverage_of_a_quad_is_whole_inside_half_at_an_edge() {
-    let gpu = common::gpu();
-    let text = r#"
-[camera]
-eye = [0.0, 0.0, 3.0]
-target = [0.0, 0.0, 0.0]
-[materials.white]
-diffuse = [0.5, 0.5, 0.5]
-[[light]]
-type = "point"
-position = [0.0, 0.0, 1.0]
-intensity = [1.0, 1.0, 1.0]
-[[object]]
-shape = "quad"
-material = "white"
-"#;
-    let scene = scene::parse(Path::new("quad.toml"), text).unwrap();
-    let radius = 0.1f32;
+/// A quad lit from above, of the given `size` and `spacing` lines (empty: the defaults), and
+/// the coverage pass's parameters for gather radius `radius`.
+fn lit_quad(object_lines: &str, radius: f32) -> (Scene, EmParams) {
+    let text = format!(
+        "[camera]\neye = [0.0, 0.0, 3.0]\ntarget = [0.0, 0.0, 0.0]\n\
+         [materials.white]\ndiffuse = [0.5, 0.5, 0.5]\n\
+         [[light]]\ntype = \"point\"\nposition = [0.0, 0.0, 1.0]\nintensity = [1.0, 1.0, 1.0]\n\
+         [[object]]\nshape = \"quad\"\nmaterial = \"white\"\n{object_lines}"
+    );
+    let scene = scene::parse(Path::new("quad.toml"), &text).unwrap();
     let em = EmParams {
         radius,
         radius2: radius * radius,
@@ -88,6 +75,17 @@ material = "white"
         splat_count: scene.splats.len() as u32,
         ..Default::default()
     };
+    (scene, em)
+}
+
+/// A 1 × 1 quad of splats 0.025 apart, gather radius 0.1. A splat inside covers all its disk
+/// (its irradiance unchanged); one on the middle of an edge a little more than half of it, the
+/// disks' rims past the edge included (measured 0.565, 39 of the 69 points); one at a corner
+/// about a third (0.319). Device and mirror agree splat by splat.
+#[test]
+fn coverage_of_a_quad_is_whole_inside_half_at_an_edge() {
+    let gpu = common::gpu();
+    let (scene, em) = lit_quad("", 0.1);
     let grid = common::host_grid(&scene);
     let geometry = scene.geometry(&grid);
     let on_cpu = covered(&mut CpuExecutor::tracing(geometry), &scene, &em);
@@ -121,32 +119,9 @@ material = "white"
 #[test]
 fn a_dense_quad_shares_its_coverage_within_the_bound() {
     let gpu = common::gpu();
-    let text = r#"
-[camera]
-eye = [0.0, 0.0, 3.0]
-target = [0.0, 0.0, 0.0]
-[materials.white]
-diffuse = [0.5, 0.5, 0.5]
-[[light]]
-type = "point"
-position = [0.0, 0.0, 1.0]
-intensity = [1.0, 1.0, 1.0]
-[[object]]
-shape = "quad"
-size = [0.4, 0.4]
-spacing = 0.003
-material = "white"
-"#;
-    let scene = scene::parse(Path::new("dense.toml"), text).unwrap();
-    let n = scene.splats.len();
     let radius = 0.1f32;
-    let em = EmParams {
-        radius,
-        radius2: radius * radius,
-        slab: scene.bake.slab,
-        splat_count: n as u32,
-        ..Default::default()
-    };
+    let (scene, em) = lit_quad("size = [0.4, 0.4]\nspacing = 0.003\n", radius);
+    let n = scene.splats.len();
     let groups = CoverGroups::new(&scene.splats, radius).unwrap();
     assert!(
         groups.groups as usize * 4 <= n,

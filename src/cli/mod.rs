@@ -3,6 +3,7 @@
 //! scripts and benchmarks (docs/cli.md): extend them, never rename them.
 
 pub mod bench;
+pub mod cluster;
 pub mod compare;
 pub mod convolution;
 pub mod info;
@@ -86,10 +87,8 @@ impl DeviceArgs {
     /// the same image in about half the time (docs/measurements.md, "Which engine renders"),
     /// and one line on stderr says what runs where.
     fn still_engine(&self) -> Result<Option<Gpu>> {
-        let gpu = self.gpu()?;
-        let asked = self.gpu || self.backend != BackendChoice::Auto;
-        match gpu {
-            Some(g) if g.is_software() && !asked => {
+        match self.gpu()? {
+            Some(g) if self.prefers_mirror(&g) => {
                 eprintln!(
                     "lobelight: {} is a software rasterizer: the bake and the image run on the \
                      CPU mirror ({} threads), faster here (--gpu runs them on it)",
@@ -100,6 +99,12 @@ impl DeviceArgs {
             }
             other => Ok(other),
         }
+    }
+
+    /// Whether bakes and still images run on the CPU mirror beside `gpu`: where it is a
+    /// software rasterizer and neither `--gpu` nor `--backend` asks for it.
+    fn prefers_mirror(&self, gpu: &Gpu) -> bool {
+        gpu.is_software() && !self.gpu && self.backend == BackendChoice::Auto
     }
 }
 
@@ -402,6 +407,9 @@ enum Command {
         /// `scale` only: the generated clouds' material.
         #[arg(long, value_enum, default_value_t = scale::Material::Diffuse)]
         material: scale::Material,
+        /// `cluster` only: the dense cloud's splat count.
+        #[arg(long, value_name = "N", default_value_t = cluster::DEFAULT_CLUSTER)]
+        cluster_splats: u64,
     },
 }
 
@@ -426,6 +434,11 @@ enum BenchKind {
     /// written as PLY to the output folder: load, grid, bake and frame time, peak memory and
     /// how each grows with the splat count (no scene).
     Scale,
+    /// Rays through a small dense cloud (`--cluster-splats`, default 200 k, in 1 % of the
+    /// room) against rays through the room with an ordinary block: photons/s, gathering
+    /// rays/s and how many times slower the cloud's are (no scene; written to the output
+    /// folder).
+    Cluster,
 }
 
 fn to_json<T: serde::Serialize>(value: &T) -> Result<serde_json::Value> {
@@ -664,12 +677,32 @@ fn run(cli: Cli) -> Result<()> {
         } => {
             let Some(gpu) = device.gpu()? else {
                 return Err(Error::Invalid(
-                    "bench scale measures the device's path and needs a GPU adapter (lavapipe will \
-                     do): the CPU mirror would take hours at these sizes"
+                    "bench scale draws its frames on a device and needs a GPU adapter (lavapipe \
+                     will do; where it is one, the bake runs on the CPU mirror)"
                         .into(),
                 ));
             };
-            let r = scale::scale(&gpu, (&sizes, material), &output, &|scene| {
+            // The bake where still images bake: on the mirror beside a software rasterizer.
+            let engine = match device.prefers_mirror(&gpu) {
+                true => scale::BakeEngine::Mirror,
+                false => scale::BakeEngine::Device,
+            };
+            let r = scale::scale(&gpu, engine, (&sizes, material), &output, &|scene| {
+                bake.apply(scene)
+            })?;
+            print_report(json, &r)?;
+        }
+        Command::Bench {
+            what: BenchKind::Cluster,
+            output,
+            bake,
+            device,
+            json,
+            cluster_splats,
+            ..
+        } => {
+            let gpu = device.still_engine()?;
+            let r = cluster::cluster(gpu.as_ref(), cluster_splats, &output, &|scene| {
                 bake.apply(scene)
             })?;
             print_report(json, &r)?;
@@ -728,7 +761,12 @@ fn run(cli: Cli) -> Result<()> {
                         .into(),
                 ));
             }
-            let gpu = device.gpu()?;
+            // Moving frames run on the device, a software rasterizer included (faster there
+            // than the mirror); photons, the fit and re-bakes where still images run.
+            let gpu = match what {
+                BenchKind::Frame => device.gpu()?,
+                _ => device.still_engine()?,
+            };
             let mut reports = Vec::new();
             for path in &scenes {
                 let mut scene = scene::load(path)?;
@@ -758,7 +796,10 @@ fn run(cli: Cli) -> Result<()> {
                         let r = bench::em(&scene, gpu.as_ref(), &photons, &em)?;
                         (r.to_string(), to_json(&r)?)
                     }
-                    BenchKind::Convolution | BenchKind::Sweep | BenchKind::Scale => {
+                    BenchKind::Convolution
+                    | BenchKind::Sweep
+                    | BenchKind::Scale
+                    | BenchKind::Cluster => {
                         unreachable!("handled above")
                     }
                 };

@@ -11,9 +11,11 @@ use std::time::Instant;
 
 use serde::Serialize;
 
-use crate::bake::Progress;
+use crate::bake::{BakeDevice, Progress, bake};
 use crate::camera::View;
 use crate::cli::measure::median;
+use crate::cpu;
+use crate::cpu::frames::cpu_direct;
 use crate::error::{Error, Result};
 use crate::frame::FrameConfig;
 use crate::gpu::Gpu;
@@ -57,10 +59,21 @@ impl Material {
 const TIMED_FRAMES: usize = 3;
 const FRAME_SIZE: (u32, u32) = (512, 512);
 
+/// Where the bake runs; the frames run on the device.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize)]
+#[serde(rename_all = "lowercase")]
+pub enum BakeEngine {
+    Device,
+    /// The CPU mirror, beside a software rasterizer (faster there).
+    Mirror,
+}
+
 #[derive(Debug, Serialize)]
 pub struct ScaleBench {
     pub adapter: String,
     pub backend: String,
+    /// Where the bake ran (`device` or `mirror`).
+    pub bake_engine: BakeEngine,
     pub material: Material,
     pub rows: Vec<ScaleRow>,
     /// How each time grows with the splat count from the smallest size to the largest: the
@@ -80,8 +93,10 @@ pub struct ScaleRow {
     /// The whole scene load: the read, then disks of the points (radii from the neighbour
     /// spacing, a k-d tree query per point) placed in the scene.
     pub load_ms: f64,
-    /// Uploading the splats and building the splat grid.
+    /// Uploading the splats and building the splat grid on the device.
     pub grid_ms: f64,
+    /// Building the mirror's splat grid, where the bake runs there (0 on the device).
+    pub mirror_grid_ms: f64,
     /// Photons emitted by the bake (1 M, or `--photons`).
     pub photons: u64,
     pub photons_ms: f64,
@@ -117,10 +132,11 @@ pub struct Growth {
 /// Bake settings from the command line, applied to each generated scene.
 pub type Settings<'a> = &'a dyn Fn(&mut crate::scene::Scene) -> Result<()>;
 
-/// Runs the scale benchmark on `gpu` for clouds of `sizes` splats of `material`, writing them
-/// to `dir`.
+/// Runs the scale benchmark for clouds of `sizes` splats of `material`, writing them to `dir`:
+/// the bake on `engine`, the frames on `gpu`.
 pub fn scale(
     gpu: &Gpu,
+    engine: BakeEngine,
     (sizes, material): (&[u64], Material),
     dir: &Path,
     settings: Settings,
@@ -137,19 +153,26 @@ pub fn scale(
     for &n in &sizes {
         eprintln!("bench scale: {n} {} splats", material.name());
         let scene_path = write_terrain(dir, n, material)?;
-        rows.push(measure(gpu, &scene_path, n, settings)?);
+        rows.push(measure(gpu, engine, &scene_path, n, settings)?);
     }
     let growth = growth(&rows);
     Ok(ScaleBench {
         adapter: gpu.info.name.clone(),
         backend: gpu.backend_name().into(),
+        bake_engine: engine,
         material,
         rows,
         growth,
     })
 }
 
-fn measure(gpu: &Gpu, scene_path: &Path, n: u64, settings: Settings) -> Result<ScaleRow> {
+fn measure(
+    gpu: &Gpu,
+    engine: BakeEngine,
+    scene_path: &Path,
+    n: u64,
+    settings: Settings,
+) -> Result<ScaleRow> {
     let ply = terrain_file(scene_path.parent().unwrap_or(Path::new(".")), n);
     let file_bytes = std::fs::metadata(&ply)
         .map_err(|e| Error::io(&ply, e))?
@@ -164,8 +187,25 @@ fn measure(gpu: &Gpu, scene_path: &Path, n: u64, settings: Settings) -> Result<S
     settings(&mut scene)?;
     let mut renderer = FrameRenderer::new(gpu, &scene)?;
     let grid_ms = renderer.on_gpu.grid_ms;
-    let baked = renderer.bake(gpu, &scene, &Progress::new(true))?;
-    let direct_ms = renderer.bake_direct(gpu, &scene)?;
+    let progress = Progress::new(true);
+    let (baked, direct_ms, mirror_grid_ms) = match engine {
+        BakeEngine::Device => {
+            let baked = renderer.bake(gpu, &scene, &progress)?;
+            (baked, renderer.bake_direct(gpu, &scene)?, 0.0)
+        }
+        BakeEngine::Mirror => {
+            let t = Instant::now();
+            let grid = cpu::scene_grid(&scene)?;
+            let grid_ms = ms_since(t);
+            let baked = bake(&scene, BakeDevice::Cpu(&grid), &progress)?;
+            renderer.set_lobes(gpu, &scene, &baked.lobes)?;
+            let t = Instant::now();
+            let direct = cpu_direct(&scene, &grid)?;
+            let direct_ms = ms_since(t);
+            renderer.set_direct(gpu, &scene, &direct, direct_ms)?;
+            (baked, direct_ms, grid_ms)
+        }
+    };
     let stage = |r: &crate::bake::StageReport| r.ms.unwrap_or(0.0);
     let (photons_ms, binning_ms, em_ms) = (
         stage(&baked.photons),
@@ -190,6 +230,7 @@ fn measure(gpu: &Gpu, scene_path: &Path, n: u64, settings: Settings) -> Result<S
         read_mb_per_s: file_bytes as f64 / 1e6 / (read_ms / 1e3).max(1e-9),
         load_ms,
         grid_ms,
+        mirror_grid_ms,
         photons: scene.bake.photons,
         photons_ms,
         binning_ms,
@@ -298,10 +339,14 @@ impl std::fmt::Display for ScaleBench {
     fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
         writeln!(
             f,
-            "device {} ({}), {} clouds",
+            "device {} ({}), {} clouds, the bake on {}",
             self.adapter,
             self.backend,
-            self.material.name()
+            self.material.name(),
+            match self.bake_engine {
+                BakeEngine::Device => "the device",
+                BakeEngine::Mirror => "the CPU mirror",
+            }
         )?;
         writeln!(
             f,
