@@ -10,6 +10,7 @@ use std::time::Instant;
 
 use crate::bins::{PhotonBins, bin_params, check_binned};
 use crate::cpu::{CpuBuffer, CpuExecutor};
+use crate::direct::DirectMap;
 use crate::em::{EmConfig, EmStats, FitShape, LobeMap};
 use crate::error::{Error, Result};
 use crate::fit_groups::CoverGroups;
@@ -100,6 +101,9 @@ impl BakeDevice<'_> {
 
 pub struct Baked {
     pub lobes: LobeMap,
+    /// The direct bake final gathering made (`None` where none ran, or from a cache): every
+    /// splat's direct light of the scene's lights, as the frames bake it, so they take it.
+    pub direct: Option<DirectMap>,
     pub photons: StageReport,
     pub binning: StageReport,
     pub em: StageReport,
@@ -246,6 +250,8 @@ pub struct BakeRun<B> {
     pub traced: Traced<B>,
     pub binned: Option<Binned<Bins<B>>>,
     pub lobes: Option<LobeMap>,
+    /// The direct bake of the fit's final gathering, in host memory.
+    pub direct: Option<DirectMap>,
     pub photons: StageReport,
     pub binning: StageReport,
 }
@@ -265,10 +271,10 @@ impl<B> BakeRun<B> {
             .ok_or_else(|| Error::internal("a bake to the bins came back without them"))
     }
 
-    /// What the host keeps of a bake to the lobes: the lobes and the tracing's and the
-    /// binning's reports.
-    fn kept(mut self) -> Result<(LobeMap, StageReport, StageReport)> {
-        Ok((self.take_lobes()?, self.photons, self.binning))
+    /// What the host keeps of a bake to the lobes: the lobes, the direct bake final
+    /// gathering made, and the tracing's and the binning's reports.
+    fn kept(mut self) -> Result<(LobeMap, Option<DirectMap>, StageReport, StageReport)> {
+        Ok((self.take_lobes()?, self.direct, self.photons, self.binning))
     }
 }
 
@@ -288,7 +294,7 @@ pub fn bake_on<E: Executor>(
     if to == BakeTo::Lobes && plan.em.uses_deposits() {
         // The photons are deposited, not binned: the binning's report is the deposits'.
         let (deposits, binning) = deposit_traced(ex, plan, on, &traced, progress)?;
-        let lobes = fit(
+        let (lobes, direct) = fit(
             ex,
             scene,
             plan,
@@ -300,18 +306,23 @@ pub fn bake_on<E: Executor>(
             traced,
             binned: None,
             lobes: Some(lobes),
+            direct,
             photons,
             binning,
         });
     }
     let binned = bin_traced(ex, plan, on, &traced, progress)?;
-    let lobes = match to {
-        BakeTo::Lobes => Some(fit(ex, scene, plan, on, (&binned.bins, None), progress)?),
-        BakeTo::Bins => None,
+    let (lobes, direct) = match to {
+        BakeTo::Lobes => {
+            let (lobes, direct) = fit(ex, scene, plan, on, (&binned.bins, None), progress)?;
+            (Some(lobes), direct)
+        }
+        BakeTo::Bins => (None, None),
     };
     Ok(BakeRun {
         traced,
         lobes,
+        direct,
         photons,
         binning: binned.binning.clone(),
         binned: Some(binned),
@@ -369,7 +380,7 @@ fn splat_count(scene: &Scene) -> Result<u32> {
 pub fn bake(scene: &Scene, device: BakeDevice, progress: &Progress) -> Result<Baked> {
     let plan = BakePlan::new(scene, device.limits())?;
     let to = BakeTo::Lobes;
-    let (lobes, photons, binning) = match device {
+    let (lobes, direct, photons, binning) = match device {
         BakeDevice::Gpu(gpu, on_gpu) => on_device(scene, gpu, on_gpu, |ex, on| {
             bake_on(ex, scene, &plan, on, to, progress)?.kept()
         })?,
@@ -411,6 +422,7 @@ pub fn bake(scene: &Scene, device: BakeDevice, progress: &Progress) -> Result<Ba
         binning,
         em,
         lobes,
+        direct,
     })
 }
 
@@ -558,7 +570,7 @@ pub fn deposit_traced<E: Executor>(
 
 /// The lobe fit (`sequence::fit_lobes`) over binned photons, or with every splat's irradiance
 /// from `deposits` where they are given, with final gathering through the scene; the lobes
-/// come back to the host.
+/// come back to the host, with the direct bake final gathering made (where it ran).
 pub fn fit<E: Executor>(
     ex: &mut E,
     scene: &Scene,
@@ -566,7 +578,7 @@ pub fn fit<E: Executor>(
     on: &SceneBuffers<E::Buffer>,
     (bins, deposits): (&Bins<E::Buffer>, Option<&Deposits<E::Buffer>>),
     progress: &Progress,
-) -> Result<LobeMap> {
+) -> Result<(LobeMap, Option<DirectMap>)> {
     let spin = progress.spinner("em");
     let t = Instant::now();
     let setup = plan.gather_setup(scene);
@@ -610,6 +622,10 @@ pub fn fit<E: Executor>(
     let fitted = sequence::fit_lobes(ex, &input, em, plan.limits.fit_shape)?;
     ex.finish()?;
     let stats = fitted.stats(ms_since(t));
+    let direct = match &fitted.direct {
+        Some(d) => Some(d.read_back(ex, &plan.direct)?),
+        None => None,
+    };
     let mut lobes = fitted.read_back(ex, em.lobes, on.splat_count, stats)?;
     if let Some(g) = &plan.groups {
         lobes.stats.served = g.serve(&mut lobes);
@@ -617,7 +633,7 @@ pub fn fit<E: Executor>(
     lobes.stats.rays = lobes.stats.fitted as u64 * em.gather as u64 * em.gather as u64;
     lobes.stats.coverages = cover.groups;
     spin.finish_and_clear();
-    Ok(lobes)
+    Ok((lobes, direct))
 }
 
 /// Splats with photons near them: those the fit listed, and with deposits the glossy splats

@@ -83,10 +83,14 @@ impl FrameRenderer {
         Ok(())
     }
 
-    /// Bakes the scene's light on the device and keeps the lobes for the frames to come.
+    /// Bakes the scene's light on the device and keeps the lobes for the frames to come, with
+    /// the direct bake final gathering made where it ran.
     pub fn bake(&mut self, gpu: &Gpu, scene: &Scene, progress: &Progress) -> Result<Baked> {
         let baked = bake(scene, BakeDevice::Gpu(gpu, &self.on_gpu), progress)?;
         self.set_lobes(gpu, scene, &baked.lobes)?;
+        if let Some(direct) = &baked.direct {
+            self.set_direct(gpu, scene, direct, 0.0)?;
+        }
         Ok(baked)
     }
 
@@ -132,8 +136,8 @@ impl FrameRenderer {
         Ok(ms)
     }
 
-    /// Draws with a direct bake of the current lights made elsewhere (the CPU mirror's,
-    /// `cpu::frames::cpu_direct`), which took `ms`.
+    /// Draws with a direct bake of the scene's lights made elsewhere (the CPU mirror's,
+    /// `cpu::frames::cpu_direct`, or the one final gathering made), which took `ms`.
     pub fn set_direct(
         &mut self,
         gpu: &Gpu,

@@ -550,6 +550,9 @@ pub struct Fit<B> {
     pub gather_ms: f64,
     pub fit_ms: f64,
     pub final_gather_ms: f64,
+    /// With final gathering, the direct bake its rays read: every splat's, of the setup's
+    /// lights, the same as the frames bake (`bake_direct`), so they may take it.
+    pub direct: Option<Direct<B>>,
 }
 
 impl<B> Fit<B> {
@@ -753,6 +756,7 @@ pub fn fit_lobes<E: Executor>(
     ex.read::<u32>(&counters, 1)?;
     let mut fit_ms = ms_since(t) - select_ms - gather_ms;
     let mut final_gather_ms = 0.0;
+    let mut direct = None;
     if let Some(g) = gathering {
         let refit = Refit {
             fit_input,
@@ -760,7 +764,8 @@ pub fn fit_lobes<E: Executor>(
             listed,
             groups: fit_groups,
         };
-        let (more, gather_rays_ms, refit_ms) = fit_to_rays(ex, cfg, shape, g, &refit)?;
+        let (more, gather_rays_ms, refit_ms, baked) = fit_to_rays(ex, cfg, shape, g, &refit)?;
+        direct = Some(baked);
         dispatches += more;
         final_gather_ms = gather_rays_ms;
         fit_ms += refit_ms;
@@ -777,6 +782,7 @@ pub fn fit_lobes<E: Executor>(
         gather_ms,
         fit_ms,
         final_gather_ms,
+        direct,
     })
 }
 
@@ -837,15 +843,15 @@ struct Refit<'a, B> {
 
 /// Final gathering and the fit to it (design §6), after the photon fit gave every splat its
 /// irradiance: the direct bake, then per batch of the fit list `final_gather` and `em_fit` over
-/// its samples. Returns the `em_fit` dispatches, and the milliseconds of the rays (with the
-/// direct bake) and of their fit.
+/// its samples. Returns the `em_fit` dispatches, the milliseconds of the rays (with the
+/// direct bake) and of their fit, and the direct bake.
 fn fit_to_rays<E: Executor>(
     ex: &mut E,
     cfg: &EmConfig,
     shape: FitShape,
     g: &Gathering<E::Buffer>,
     refit: &Refit<E::Buffer>,
-) -> Result<(u32, f64, f64)> {
+) -> Result<(u32, f64, f64, Direct<E::Buffer>)> {
     let (input, light, counters, listed) = (
         refit.fit_input.input,
         refit.fit_input.light,
@@ -913,7 +919,7 @@ fn fit_to_rays<E: Executor>(
         ex.read::<u32>(counters, 1)?;
         fit_ms += ms_since(t);
     }
-    Ok((dispatches, rays_ms, fit_ms))
+    Ok((dispatches, rays_ms, fit_ms, direct))
 }
 
 /// The buffers of `em_fit`'s dispatches.

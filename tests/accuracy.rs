@@ -52,8 +52,15 @@ fn objects_against_path_tracer(
             };
             let cam = camera_uniform(&view, scene.bounds(), &cfg);
             let params = shade_params(scene, &baked.lobes, &cfg);
-            let still =
-                cpu_refined(scene, &grid, &baked.lobes, &cam, &params, b.still_spp).unwrap();
+            let still = cpu_refined(
+                scene,
+                &grid,
+                (&baked.lobes, baked.direct.as_ref()),
+                &cam,
+                &params,
+                b.still_spp,
+            )
+            .unwrap();
             let spp = match show {
                 Show::Direct => b.direct_spp,
                 _ => b.indirect_spp,

@@ -172,7 +172,7 @@ fn deposits_and_shared_light_on_the_device_equal_the_mirror() {
     let quiet = Progress::new(false);
     let lit_gpu = on_device(&scene, &gpu, &on_gpu_scene, |ex, on| {
         let input = (&deposits.bins, Some(&deposits));
-        bake::fit(ex, &scene, &plan, on, input, &quiet)
+        bake::fit(ex, &scene, &plan, on, input, &quiet).map(|(lobes, _)| lobes)
     })
     .unwrap();
     let shape = plan.limits.fit_shape;

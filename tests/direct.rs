@@ -107,7 +107,7 @@ fn baked_direct_light_agrees_with_shadow_rays() {
         cpu_frame(
             &scene,
             &grid,
-            &lobes,
+            (&lobes, None),
             &cam,
             &shade_params(&scene, &lobes, &cfg),
         )
@@ -176,7 +176,7 @@ fn refined_parity(gpu: &lobelight::gpu::Gpu, scene: &Scene, cfg: &FrameConfig, w
     let still = renderer.read_hdr(gpu).unwrap();
     let cam = camera_uniform(&view, scene.bounds(), cfg);
     let params = shade_params(scene, &lobes, cfg);
-    let mirror = cpu_refined(scene, &grid, &lobes, &cam, &params, 8).unwrap();
+    let mirror = cpu_refined(scene, &grid, (&lobes, None), &cam, &params, 8).unwrap();
     let d = difference(&still, &mirror).unwrap();
     eprintln!("{what}: device against mirror: {d:?}");
     assert!(d.mean_relative <= 0.01, "{what}: {d:?}");
@@ -213,4 +213,21 @@ fn refined_still_differs_from_the_exact_frame_by_anti_aliasing() {
         d.within_5_percent >= 0.7 && d.within_5_percent < 0.99,
         "{d:?}"
     );
+}
+
+/// The direct bake final gathering makes is the frames' own (same lights, samples, seed and
+/// shadow bias), so a render hands it to the frames: on the mirror it equals `cpu_direct`
+/// exactly, and a scene with nothing glossy, which gathers nothing, hands none.
+#[test]
+fn the_bake_hands_its_direct_light_to_the_frames() {
+    let scene = cornell(20_000);
+    let grid = common::host_grid(&scene);
+    let baked = bake(&scene, BakeDevice::Cpu(&grid), &Progress::new(false)).unwrap();
+    let made = baked.direct.expect("final gathering's direct bake");
+    assert_eq!(made, cpu_direct(&scene, &grid).unwrap());
+    let mut diffuse = scene::load(Path::new("scenes/diffuse.toml")).unwrap();
+    diffuse.bake.photons = 20_000;
+    let grid = common::host_grid(&diffuse);
+    let baked = bake(&diffuse, BakeDevice::Cpu(&grid), &Progress::new(false)).unwrap();
+    assert!(baked.direct.is_none());
 }

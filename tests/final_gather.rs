@@ -256,7 +256,7 @@ fn lobes_fitted_to_gathered_samples_match_the_mirror() {
         let uploaded = GpuBins::upload(&gpu, &bins).unwrap();
         let quiet = Progress::new(false);
         on_device(&scene, &gpu, &on_gpu, |ex, on| {
-            bake::fit(ex, &scene, &plan, on, (&uploaded, None), &quiet)
+            bake::fit(ex, &scene, &plan, on, (&uploaded, None), &quiet).map(|(lobes, _)| lobes)
         })
         .unwrap()
     };

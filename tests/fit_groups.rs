@@ -129,7 +129,7 @@ fn shared_fits_match_the_mirror() {
     let (on_cpu, bins) = on_mirror(&scene, &grid, |ex, on| {
         let traced = bake::trace(ex, &plan, on, &quiet)?;
         let binned = bake::bin_traced(ex, &plan, on, &traced, &quiet)?;
-        let lobes = bake::fit(ex, &scene, &plan, on, (&binned.bins, None), &quiet)?;
+        let lobes = bake::fit(ex, &scene, &plan, on, (&binned.bins, None), &quiet)?.0;
         Ok((lobes, binned.bins.read_back(ex)?))
     })
     .unwrap();
@@ -137,7 +137,7 @@ fn shared_fits_match_the_mirror() {
         let on_gpu = GpuScene::upload(&gpu, &scene).unwrap();
         let uploaded = GpuBins::upload(&gpu, &bins).unwrap();
         on_device(&scene, &gpu, &on_gpu, |ex, on| {
-            bake::fit(ex, &scene, &plan, on, (&uploaded, None), &quiet)
+            bake::fit(ex, &scene, &plan, on, (&uploaded, None), &quiet).map(|(lobes, _)| lobes)
         })
         .unwrap()
     };

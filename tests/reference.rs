@@ -108,7 +108,7 @@ fn reference_and_lobes_agree_where_nothing_is_glossy() {
     let a = cpu_frame(
         &scene,
         &grid,
-        &lobes,
+        (&lobes, None),
         &cam,
         &shade_params(&scene, &lobes, &cfg),
     )

@@ -66,7 +66,14 @@ fn cpu_hdr(
     cfg: &FrameConfig,
 ) -> Vec<[f32; 4]> {
     let cam = camera_uniform(view, scene.bounds(), cfg);
-    cpu_frame(scene, grid, lobes, &cam, &shade_params(scene, lobes, cfg)).unwrap()
+    cpu_frame(
+        scene,
+        grid,
+        (lobes, None),
+        &cam,
+        &shade_params(scene, lobes, cfg),
+    )
+    .unwrap()
 }
 
 /// The level of detail of moving frames (`--lod`): the device merges the same splats as the

@@ -38,7 +38,7 @@ fn frames(gpu: &Gpu, scene: &Scene, lobes: &LobeMap, view: &View) -> [Vec<[f32; 
     let grid = common::host_grid(scene);
     [
         on_device,
-        cpu_frame(scene, &grid, lobes, &cam, &params).unwrap(),
+        cpu_frame(scene, &grid, (lobes, None), &cam, &params).unwrap(),
     ]
 }
 

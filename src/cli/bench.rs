@@ -382,7 +382,7 @@ fn em_fits<E: Executor>(
             groups: plan.groups.clone().filter(|_| !em.fit_all),
             ..plan.clone()
         };
-        bake::fit(ex, scene, &plan, on, input, &quiet)
+        Ok(bake::fit(ex, scene, &plan, on, input, &quiet)?.0)
     };
     if warm {
         let once = |em: &EmConfig| EmConfig {

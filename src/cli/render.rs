@@ -339,6 +339,7 @@ fn bake_or_load(
                 let skipped = StageReport::skipped(&why);
                 let baked = Baked {
                     lobes,
+                    direct: None,
                     photons: skipped.clone(),
                     binning: skipped.clone(),
                     em: skipped,
@@ -499,6 +500,10 @@ fn render_lobes(
             let on_gpu = BakeDevice::Gpu(gpu, &renderer.on_gpu);
             let (baked, hit) = bake_or_load(scene, on_gpu, opts, &progress)?;
             renderer.set_lobes(gpu, scene, &baked.lobes)?;
+            // The direct bake final gathering made is the one the frames would make.
+            if let Some(direct) = &baked.direct {
+                renderer.set_direct(gpu, scene, direct, 0.0)?;
+            }
             for shot in shots {
                 let (t, view) = (Instant::now(), &shot.view);
                 let targets = if opts.spp == 0 {
@@ -531,8 +536,21 @@ fn render_lobes(
                 let t = Instant::now();
                 let cam = camera_uniform(&shot.view, scene.bounds(), &opts.frame);
                 let hdr = match opts.spp {
-                    0 => cpu_frame(scene, &host_grid, &baked.lobes, &cam, &params)?,
-                    spp => cpu_refined(scene, &host_grid, &baked.lobes, &cam, &params, spp)?,
+                    0 => cpu_frame(
+                        scene,
+                        &host_grid,
+                        (&baked.lobes, baked.direct.as_ref()),
+                        &cam,
+                        &params,
+                    )?,
+                    spp => cpu_refined(
+                        scene,
+                        &host_grid,
+                        (&baked.lobes, baked.direct.as_ref()),
+                        &cam,
+                        &params,
+                        spp,
+                    )?,
                 };
                 let shade = refined(ms_since(t), opts.spp);
                 record(drawn_on_cpu(hdr, format, &opts.tone, shade)?, shot, t)?;

@@ -357,7 +357,14 @@ impl Runner<'_> {
                 let mut hdr = Vec::new();
                 for _ in 0..frames.max(1) {
                     let t = Instant::now();
-                    hdr = cpu_refined(scene, &grid, &baked.lobes, &cam, &params, spp)?;
+                    hdr = cpu_refined(
+                        scene,
+                        &grid,
+                        (&baked.lobes, baked.direct.as_ref()),
+                        &cam,
+                        &params,
+                        spp,
+                    )?;
                     times.push(ms_since(t));
                 }
                 (hdr, baked)

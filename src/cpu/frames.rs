@@ -2,6 +2,8 @@
 //! image's refinement frames, the reference and the path tracer, each the sequence the device
 //! runs (`renderer::FrameRenderer`), on `CpuExecutor`s or the mirrors' functions.
 
+use std::borrow::Cow;
+
 use crate::bins::PhotonBins;
 use crate::cpu;
 use crate::direct::{DirectMap, direct_params, shadow_bias};
@@ -50,20 +52,33 @@ pub fn cpu_path(
     ex.read(&hdr, pixels)
 }
 
+/// The direct bake a frame reads where it is `needed`: `made` where the bake made one of the
+/// scene's lights (final gathering's), else baked now.
+fn direct_for<'a>(
+    scene: &Scene,
+    grid: &SplatGrid,
+    needed: bool,
+    made: Option<&'a DirectMap>,
+) -> Result<Cow<'a, DirectMap>> {
+    Ok(match (needed, made) {
+        (false, _) => Cow::Owned(DirectMap::default()),
+        (true, Some(d)) => Cow::Borrowed(d),
+        (true, None) => Cow::Owned(cpu_direct(scene, grid)?),
+    })
+}
+
 /// The splat passes on the CPU: visibility, attributes, shade; linear HDR pixels. Baked
-/// direct light (`params.direct`) is baked first.
+/// direct light (`params.direct`) is `direct` where the bake made it (`Baked::direct`), else
+/// baked first.
 pub fn cpu_frame(
     scene: &Scene,
     grid: &SplatGrid,
-    lobes: &LobeMap,
+    (lobes, direct): (&LobeMap, Option<&DirectMap>),
     cam: &Camera,
     params: &ShadeParams,
 ) -> Result<Vec<[f32; 4]>> {
-    let baked = Direct::of_code(params.direct) == Direct::Baked;
-    let direct = match baked || params.glossy_rays > 0 {
-        true => cpu_direct(scene, grid)?,
-        false => DirectMap::default(),
-    };
+    let needed = Direct::of_code(params.direct) == Direct::Baked || params.glossy_rays > 0;
+    let direct = direct_for(scene, grid, needed, direct)?;
     let mut hdr = vec![[0.0; 4]; (cam.size[0] * cam.size[1]) as usize];
     cpu_frame_into(scene, grid, lobes, &direct, cam, params, &mut hdr);
     Ok(hdr)
@@ -143,20 +158,17 @@ pub fn cpu_frame_into(
 }
 
 /// The still image of `cam` on the CPU: `spp` refinement frames, each jittered and with its
-/// share of shadow rays, averaged.
+/// share of shadow rays, averaged. Glossy rays read the direct bake at their hits: `direct`
+/// where the bake made it, else baked first.
 pub fn cpu_refined(
     scene: &Scene,
     grid: &SplatGrid,
-    lobes: &LobeMap,
+    (lobes, direct): (&LobeMap, Option<&DirectMap>),
     cam: &Camera,
     params: &ShadeParams,
     spp: u32,
 ) -> Result<Vec<[f32; 4]>> {
-    // Glossy rays read the direct bake at their hits.
-    let direct = match params.glossy_rays > 0 {
-        true => cpu_direct(scene, grid)?,
-        false => DirectMap::default(),
-    };
+    let direct = direct_for(scene, grid, params.glossy_rays > 0, direct)?;
     let mut hdr = vec![[0.0; 4]; (cam.size[0] * cam.size[1]) as usize];
     for k in 0..spp.max(1) {
         let cam = Camera {
