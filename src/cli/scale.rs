@@ -107,7 +107,8 @@ pub struct ScaleRow {
     pub splats_served: u32,
     /// Measures of a gather disk's covered share (one a coverage group of splats).
     pub coverages: u32,
-    /// The direct bake: each splat's visibility of each light.
+    /// The direct bake: each splat's visibility of each light (0 where final gathering's
+    /// served the frames: its time is in `em_ms`).
     pub direct_ms: f64,
     /// Photons, binning, EM and the direct bake.
     pub bake_ms: f64,
@@ -188,10 +189,16 @@ fn measure(
     let mut renderer = FrameRenderer::new(gpu, &scene)?;
     let grid_ms = renderer.on_gpu.grid_ms;
     let progress = Progress::new(true);
+    // Where final gathering ran, its direct bake serves the frames (its time is in the EM's):
+    // a direct bake of its own here would count it twice.
     let (baked, direct_ms, mirror_grid_ms) = match engine {
         BakeEngine::Device => {
             let baked = renderer.bake(gpu, &scene, &progress)?;
-            (baked, renderer.bake_direct(gpu, &scene)?, 0.0)
+            let direct_ms = match baked.direct {
+                Some(_) => 0.0,
+                None => renderer.bake_direct(gpu, &scene)?,
+            };
+            (baked, direct_ms, 0.0)
         }
         BakeEngine::Mirror => {
             let t = Instant::now();
@@ -199,10 +206,19 @@ fn measure(
             let grid_ms = ms_since(t);
             let baked = bake(&scene, BakeDevice::Cpu(&grid), &progress)?;
             renderer.set_lobes(gpu, &scene, &baked.lobes)?;
-            let t = Instant::now();
-            let direct = cpu_direct(&scene, &grid)?;
-            let direct_ms = ms_since(t);
-            renderer.set_direct(gpu, &scene, &direct, direct_ms)?;
+            let direct_ms = match &baked.direct {
+                Some(direct) => {
+                    renderer.set_direct(gpu, &scene, direct, 0.0)?;
+                    0.0
+                }
+                None => {
+                    let t = Instant::now();
+                    let direct = cpu_direct(&scene, &grid)?;
+                    let ms = ms_since(t);
+                    renderer.set_direct(gpu, &scene, &direct, ms)?;
+                    ms
+                }
+            };
             (baked, direct_ms, grid_ms)
         }
     };
