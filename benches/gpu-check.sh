@@ -1,13 +1,16 @@
 #!/usr/bin/env bash
 # The GPU check: on a machine with a GPU (or lavapipe) and lobelight built, runs the tests that
-# need a device and the benchmarks of the model scenes and of a 10 M-splat cloud, and writes
-# one JSON with the adapter's name, each step's status and time and each benchmark's report.
+# need a device and the benchmarks of the model scenes, of 10 M-splat clouds (diffuse and
+# glossy) and of a dense cloud in a large room, and writes one JSON with the adapter's name,
+# each step's status and time and each benchmark's report.
 #
-#   benches/gpu-check.sh [--quick] [--no-tests] [-o FILE]      (default FILE: gpu-check.json)
+#   benches/gpu-check.sh [--quick] [--no-tests | --no-benches] [-o FILE]
+#                                                            (default FILE: gpu-check.json)
 #
 #   --quick     small sizes (the default box at 20 k photons and 4 × 4 gather rays, a 100 k
 #               cloud): under a minute on lavapipe, which is how the script itself is tested
 #   --no-tests  benchmarks only
+#   --no-benches  the tests only (a short lease: run the benchmarks first, then the tests)
 #
 # Environment:
 #   LOBELIGHT        the binary (default: target/release/lobelight, built by `cargo build --release`)
@@ -21,13 +24,15 @@ set -uo pipefail
 
 quick=0
 tests=1
+benches=1
 out=gpu-check.json
 while [ $# -gt 0 ]; do
   case "$1" in
     --quick) quick=1 ;;
     --no-tests) tests=0 ;;
+    --no-benches) benches=0 ;;
     -o) out="$2"; shift ;;
-    -h|--help) sed -n '2,18p' "$0"; exit 0 ;;
+    -h|--help) sed -n '2,20p' "$0"; exit 0 ;;
     *) echo "gpu-check: unknown argument '$1' (see --help)" >&2; exit 2 ;;
   esac
   shift
@@ -121,6 +126,10 @@ if [ -z "$adapter" ]; then
   echo "gpu-check: no adapter: $(cat "$work/info.err")" >&2
   exit 1
 fi
+if [ "$adapter" = '"cpu mirror"' ]; then
+  echo "gpu-check: no GPU adapter (lobelight would run on the CPU mirror): $(cat "$work/info.err")" >&2
+  exit 1
+fi
 echo "gpu-check: adapter $adapter ($backend)" >&2
 
 # The tests that open a device (each integration test that calls common::gpu(), but the
@@ -146,15 +155,19 @@ if [ $tests = 1 ]; then
   fi
 fi
 
-if [ $quick = 1 ]; then
+if [ $benches = 0 ]; then
+  scenes=()
+elif [ $quick = 1 ]; then
   scenes=(scenes/cornell.toml)
   photons=(--photons 20000 --gather 4)
   sizes=100000
+  cluster=(--cluster-splats 20000 --photons 20000 --gather 4)
 else
   # The box against the models whose bake the box's tuning does not predict.
   scenes=(scenes/cornell.toml scenes/bunny.toml scenes/dragon_full.toml)
   photons=()
   sizes=1000000,10000000
+  cluster=()
 fi
 for scene in "${scenes[@]}"; do
   name=$(basename "$scene" .toml)
@@ -168,7 +181,13 @@ for scene in "${scenes[@]}"; do
     run_step "${what}_$name" "$bin" bench "$what" "$scene" "${photons[@]}" --gpu --json
   done
 done
-run_step scale "$bin" bench scale --sizes "$sizes" -o "$work/scale" --gpu --json
+if [ $benches = 1 ]; then
+  for material in diffuse glossy; do
+    run_step "scale_$material" "$bin" bench scale --sizes "$sizes" --material "$material" \
+      -o "$work/scale_$material" --gpu --json
+  done
+  run_step cluster "$bin" bench cluster "${cluster[@]}" -o "$work/cluster" --gpu --json
+fi
 
 write_report
 echo "gpu-check: wrote $out" >&2

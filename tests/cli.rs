@@ -852,7 +852,9 @@ fn the_gpu_check_runs_here() {
         ("photons_cornell", "photons_per_s"),
         ("em_cornell", "fits_per_s"),
         ("frame_cornell", "frame_ms"),
-        ("scale", "growth"),
+        ("scale_diffuse", "growth"),
+        ("scale_glossy", "growth"),
+        ("cluster", "photons_slowdown"),
     ];
     for (step, key) in reports {
         let s = &steps[step];
@@ -894,7 +896,19 @@ fn render_runs_the_faster_engine_and_says_which() {
         let err = String::from_utf8_lossy(&out.stderr).into_owned();
         assert!(out.status.success(), "{extra:?}: {err}");
         let v: serde_json::Value = serde_json::from_slice(&out.stdout).expect("render's JSON");
-        (v["backend"].as_str().unwrap_or_default().to_string(), err)
+        let backend = v["backend"].as_str().unwrap_or_default().to_string();
+        // A device's render says what its pipelines' compile took; the mirror compiles none.
+        let compiled = v["pipelines"]["pipelines"].as_u64();
+        if backend == "cpu" {
+            assert_eq!(compiled, None, "{v}");
+        } else {
+            assert!(compiled.is_some_and(|n| n > 0), "{v}");
+            assert!(
+                v["pipelines"]["ms"].as_f64().is_some_and(|ms| ms > 0.0),
+                "{v}"
+            );
+        }
+        (backend, err)
     };
     let (backend, err) = render(&[]);
     let said: Vec<&str> = err

@@ -14,11 +14,11 @@ use crate::cpu::frames::{cpu_frame, cpu_path, cpu_reference, cpu_refined};
 use crate::cpu::photon_view::scene_scale;
 use crate::error::{Error, Result};
 use crate::frame::{FrameConfig, camera_uniform, shade_params};
-use crate::gpu::Gpu;
 use crate::gpu::photon_view::photon_image;
 use crate::gpu::photons::trace_photons;
 use crate::gpu::scene::GpuScene;
 use crate::gpu::tone::tone_map;
+use crate::gpu::{Compiled, Gpu};
 use crate::photons::PhotonConfig;
 use crate::renderer::FrameRenderer;
 use crate::scene::Scene;
@@ -126,6 +126,9 @@ pub struct RenderReport {
     /// With `--views`: each image drawn (this shard's), with its time from the bake in memory.
     #[serde(skip_serializing_if = "Vec::is_empty")]
     pub views: Vec<ShotReport>,
+    /// On a device: the compute pipelines it compiled, whose time the stages above include.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub pipelines: Option<Compiled>,
 }
 
 impl std::fmt::Display for RenderReport {
@@ -152,6 +155,13 @@ impl std::fmt::Display for RenderReport {
                 (_, _, Some(why)) => writeln!(f, "{name:<8}   skipped: {why}")?,
                 _ => writeln!(f, "{name:<8}   ran")?,
             }
+        }
+        if let Some(c) = &self.pipelines {
+            writeln!(
+                f,
+                "compiled {:>9.1} ms  ({} compute pipelines, in the stages above)",
+                c.ms, c.pipelines
+            )?;
         }
         write!(
             f,
@@ -275,6 +285,7 @@ pub fn render(
         log_average,
         stages,
         views,
+        pipelines: gpu.map(Gpu::compiled),
     })
 }
 

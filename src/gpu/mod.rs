@@ -51,6 +51,13 @@ type Window<'a> = (
 type Surface = wgpu::Surface<'static>;
 
 /// A device (headless, or able to present to a window) and everything recorded on it.
+/// Compute pipelines compiled (WGSL to the driver's code) and the time they took.
+#[derive(Clone, Copy, Debug, Default, PartialEq, serde::Serialize)]
+pub struct Compiled {
+    pub pipelines: u32,
+    pub ms: f64,
+}
+
 pub struct Gpu {
     pub device: wgpu::Device,
     pub queue: wgpu::Queue,
@@ -62,6 +69,9 @@ pub struct Gpu {
     /// or less where a test makes small scenes page.
     page_bytes: u64,
     pipelines: Mutex<HashMap<String, wgpu::ComputePipeline>>,
+    /// The compute pipelines compiled so far and their time, which the stages that first
+    /// asked for them counted in theirs (a GPU driver's compile can outweigh a small bake).
+    compiled: Mutex<Compiled>,
     /// The adapter the device came from (a window's surface asks it what it supports).
     pub adapter: wgpu::Adapter,
     /// First uncaptured device error, surfaced as an `Error` after the next wait
@@ -212,10 +222,16 @@ impl Gpu {
             limits,
             subgroups,
             pipelines: Mutex::new(HashMap::new()),
+            compiled: Mutex::new(Compiled::default()),
             error,
             adapter,
         };
         Ok(Some((gpu, surface)))
+    }
+
+    /// The compute pipelines compiled so far (`Compiled`).
+    pub fn compiled(&self) -> Compiled {
+        self.compiled.lock().map(|c| *c).unwrap_or_default()
     }
 
     pub fn backend_name(&self) -> &'static str {
@@ -273,6 +289,7 @@ impl Gpu {
         if let Some(p) = cache.get(&key) {
             return Ok(p.clone());
         }
+        let started = std::time::Instant::now();
         let source = crate::shaders::resolve_stage_paged(stage, defines, paging)?;
         let module = self.shader_module(stage.name(), source);
         let pipeline = self
@@ -292,6 +309,10 @@ impl Gpu {
             });
         self.check()?;
         cache.insert(key, pipeline.clone());
+        if let Ok(mut c) = self.compiled.lock() {
+            c.pipelines += 1;
+            c.ms += started.elapsed().as_secs_f64() * 1e3;
+        }
         Ok(pipeline)
     }
 
