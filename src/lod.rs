@@ -17,7 +17,7 @@ use rayon::prelude::*;
 
 use crate::shared::rng::pcg_hash;
 use crate::shared::splat::LOD_MAX_LEVEL;
-use crate::types::{Splat, SplatLod};
+use crate::types::{LOD_LEVELS, Splat, SplatChunk, SplatLod};
 
 /// Splats merge only where their normals lie within about 37° of each other: a disk stands in
 /// for its neighbours only along their surface. Across a thin part or a sharp edge it would
@@ -38,7 +38,8 @@ pub fn splat_lods(splats: &[Splat]) -> Vec<SplatLod> {
     let n = splats.len();
     let centre = |i: u32| Vec3::from(splats[i as usize].center);
     // extent[i][L]: splat i's disk at level L, for L up to top[i].
-    let mut extent: Vec<[f32; 4]> = splats.iter().map(|s| [s.radius; 4]).collect();
+    let mut extent: Vec<[f32; LOD_LEVELS]> =
+        splats.iter().map(|s| [s.radius; LOD_LEVELS]).collect();
     let mut top = vec![0u32; n];
     let mut parent = vec![NONE; n];
     // Each splat's ancestor at the level last built.
@@ -78,7 +79,7 @@ pub fn splat_lods(splats: &[Splat]) -> Vec<SplatLod> {
         .map(|i| {
             let t = top[i] as usize;
             let mut lod = SplatLod {
-                extent: [1, 2, 3].map(|k| extent[i][k.min(t)]),
+                extent: [1, 2, 3, 4, 5].map(|k| extent[i][k.min(t)]),
                 top: t as u32,
                 ..SplatLod::default()
             };
@@ -87,6 +88,133 @@ pub fn splat_lods(splats: &[Splat]) -> Vec<SplatLod> {
                 lod.parent_gap = (Vec3::from(splats[i].center) - centre(p)).length();
             }
             lod
+        })
+        .collect()
+}
+
+/// Splats a chunk holds: a frame's selection visits the chunks, and within a chunk it visits,
+/// the levels its bounds cannot rule out (`shared::splat::chunk_visits`). 256 keeps the
+/// chunks' records under 0.5 byte a splat, and one invocation's walk of a chunk short.
+pub const CHUNK: usize = 256;
+
+/// What a frame's selection walks: the merge tree, and the splats in chunks near one another.
+pub struct LodTree {
+    /// Per splat, its place in the merge tree (in the splats' order).
+    pub lods: Vec<SplatLod>,
+    /// The splats chunk by chunk, each chunk's sorted by top level.
+    pub order: Vec<u32>,
+    pub chunks: Vec<SplatChunk>,
+}
+
+impl LodTree {
+    /// The merge tree of `splats`, and their chunks along a Morton curve of their centres.
+    pub fn build(splats: &[Splat]) -> LodTree {
+        let lods = splat_lods(splats);
+        let mut order = morton_order(splats);
+        for run in order.chunks_mut(CHUNK) {
+            run.sort_by_key(|&i| lods[i as usize].top);
+        }
+        let chunks = chunks(splats, &lods, &order);
+        LodTree {
+            lods,
+            order,
+            chunks,
+        }
+    }
+
+    /// Without a merge tree (the level of detail off): the chunks alone, each splat at level
+    /// 0 with no parent, so that chunks are culled by the view alone.
+    pub fn flat(splats: &[Splat]) -> LodTree {
+        let lods = vec![SplatLod::default(); splats.len()];
+        let order = morton_order(splats);
+        let chunks = chunks(splats, &lods, &order);
+        LodTree {
+            lods,
+            order,
+            chunks,
+        }
+    }
+}
+
+/// The entries of `ch` (positions in the tree's order) that a frame visits, level by level
+/// (`visits`: bit t for its splats whose top level is t, as `shared::splat::chunk_visits` says).
+pub fn visited(ch: &SplatChunk, visits: u32) -> impl Iterator<Item = u32> + '_ {
+    (0..LOD_LEVELS).flat_map(move |t| {
+        let start = if t == 0 { 0 } else { ch.ends[t - 1] };
+        let end = if visits >> t & 1 != 0 {
+            ch.ends[t]
+        } else {
+            start
+        };
+        (start..end).map(move |e| ch.first + e)
+    })
+}
+
+/// The splats' indices along a Morton curve of their centres in the bounds (21 bits an axis;
+/// the index breaks ties), so that each run of `CHUNK` lies close together.
+fn morton_order(splats: &[Splat]) -> Vec<u32> {
+    let (lo, hi) = splats.iter().fold(
+        (Vec3::splat(f32::INFINITY), Vec3::splat(f32::NEG_INFINITY)),
+        |(lo, hi), s| (lo.min(s.center.into()), hi.max(s.center.into())),
+    );
+    let scale = (hi - lo).max(Vec3::splat(1e-30)).recip() * ((1u32 << 21) - 1) as f32;
+    let spread = |v: u32| {
+        // The 21 bits of v, two zero bits between each.
+        let mut x = v as u64 & 0x1f_ffff;
+        x = (x | x << 32) & 0x1f_0000_0000_ffff;
+        x = (x | x << 16) & 0x1f_0000_ff00_00ff;
+        x = (x | x << 8) & 0x100f_00f0_0f00_f00f;
+        x = (x | x << 4) & 0x10c3_0c30_c30c_30c3;
+        (x | x << 2) & 0x1249_2492_4924_9249
+    };
+    let mut keyed: Vec<(u64, u32)> = splats
+        .par_iter()
+        .enumerate()
+        .map(|(i, s)| {
+            let q = ((Vec3::from(s.center) - lo) * scale).max(Vec3::ZERO);
+            let key = spread(q.x as u32) | spread(q.y as u32) << 1 | spread(q.z as u32) << 2;
+            (key, i as u32)
+        })
+        .collect();
+    keyed.par_sort_unstable();
+    keyed.into_iter().map(|(_, i)| i).collect()
+}
+
+/// Each run of `CHUNK` entries of `order` (sorted by top level within) as a chunk.
+fn chunks(splats: &[Splat], lods: &[SplatLod], order: &[u32]) -> Vec<SplatChunk> {
+    order
+        .par_chunks(CHUNK)
+        .enumerate()
+        .map(|(k, run)| {
+            let at = |i: u32| (&splats[i as usize], &lods[i as usize]);
+            let (lo, hi) = run.iter().fold(
+                (Vec3::splat(f32::INFINITY), Vec3::splat(f32::NEG_INFINITY)),
+                |(lo, hi), &i| (lo.min(at(i).0.center.into()), hi.max(at(i).0.center.into())),
+            );
+            let center = (lo + hi) * 0.5;
+            let mut ch = SplatChunk {
+                center: center.to_array(),
+                first: (k * CHUNK) as u32,
+                ..SplatChunk::default()
+            };
+            for (e, &i) in run.iter().enumerate() {
+                let (s, lod) = at(i);
+                let t = lod.top as usize;
+                let reach = (Vec3::from(s.center) - center).length();
+                ch.centre_reach = ch.centre_reach.max(reach);
+                for end in &mut ch.ends[t..] {
+                    *end = (e + 1) as u32;
+                }
+                let own = if t == 0 { s.radius } else { lod.extent[t - 1] };
+                ch.level_fit[t] = ch.level_fit[t].max(own);
+                ch.parent_gap[t] = ch.parent_gap[t].max(lod.parent_gap);
+                // A root among them (no parent) keeps the level visited: -1 from then on.
+                ch.parent_fit[t] = match lod.parent_extent > 0.0 && ch.parent_fit[t] >= 0.0 {
+                    true => ch.parent_fit[t].max(lod.parent_extent),
+                    false => -1.0,
+                };
+            }
+            ch
         })
         .collect()
 }

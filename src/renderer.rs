@@ -265,10 +265,11 @@ impl FrameRenderer {
         params: &ShadeParams,
         splatting: Splatting,
     ) -> Result<SceneBuffers<'_>> {
-        if frame_camera(cam, params, splatting).lod > 0.0 {
-            self.frame_scene.ensure_lods(gpu, scene)?;
+        let merged = frame_camera(cam, params, splatting).lod > 0.0;
+        if Direct::of_code(params.direct) == Direct::Baked {
+            self.frame_scene.ensure_tree(gpu, scene, merged)?;
         }
-        Ok(self.frame_scene.buffers(&self.on_gpu))
+        Ok(self.frame_scene.buffers(&self.on_gpu, merged))
     }
 
     /// Records the reference image of `cam` from binned photons (`bins`, with the binning's
@@ -302,7 +303,7 @@ impl FrameRenderer {
             ..cfg.clone()
         };
         let params = shade_params_for(scene, 0, self.extent.shadow_bias, &cfg);
-        let buffers = self.frame_scene.buffers(&self.on_gpu);
+        let buffers = self.frame_scene.buffers(&self.on_gpu, false);
         reference.draw(
             gpu,
             encoder,
@@ -457,5 +458,17 @@ impl FrameRenderer {
     pub fn read_hdr(&self, gpu: &Gpu) -> Result<Vec<[f32; 4]>> {
         let targets = self.targets()?;
         gpu.read(&targets.hdr, (targets.width * targets.height) as usize)
+    }
+
+    /// The splats the last frame of baked direct light drew, as `splat_list` listed them, and
+    /// each one's drawn radius (the selection's parity with `cpu::splat_select::selection`).
+    pub fn read_selection(&self, gpu: &Gpu) -> Result<(Vec<u32>, Vec<f32>)> {
+        let fs = &self.frame_scene;
+        let count = gpu.read::<u32>(&fs.selected_count, 1)?[0] as usize;
+        let selected: Vec<u32> = gpu.read(&fs.selected, count)?;
+        let splats = self.on_gpu.grid.params.splat_count as usize;
+        let drawn: Vec<f32> = gpu.read(&fs.drawn, splats)?;
+        let radii = selected.iter().map(|&i| drawn[i as usize]).collect();
+        Ok((selected, radii))
     }
 }

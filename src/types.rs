@@ -122,16 +122,43 @@ fn row_holds(r: &[f32; 4], s: &Splat) -> bool {
 #[repr(C)]
 #[derive(Clone, Copy, Debug, Default, PartialEq, Pod, Zeroable)]
 pub struct SplatLod {
-    /// The radius of the splat's disk at levels 1, 2 and 3 (up to `top`).
-    pub extent: [f32; 3],
+    /// The radius of the splat's disk at levels 1 to 5 (up to `top`).
+    pub extent: [f32; 5],
     /// The highest level the splat belongs to (0 to `LOD_MAX_LEVEL`).
     pub top: u32,
     /// The radius of its parent's disk at level `top + 1` (the splat its top level merges
     /// into), and the distance between their centres; 0 when `top` is the tree's last level.
     pub parent_extent: f32,
     pub parent_gap: f32,
-    pub _pad0: u32,
-    pub _pad1: u32,
+}
+
+/// Levels of the merge tree, the splats' own included (0 to `LOD_MAX_LEVEL`).
+pub const LOD_LEVELS: usize = 6;
+
+/// A run of up to `lod::CHUNK` splats near one another, which a frame culls as one
+/// (`shared::splat::chunk_visits`, docs/design.md §8): its entries of `LodTree::order`, sorted
+/// by their top level, and per level the bounds over its splats of that top level which tell,
+/// from its nearest depth alone, that the level of detail draws none of them.
+#[repr(C)]
+#[derive(Clone, Copy, Debug, Default, PartialEq, Pod, Zeroable)]
+pub struct SplatChunk {
+    /// A centre of the chunk, and the farthest of its splats' centres from it.
+    pub center: [f32; 3],
+    pub centre_reach: f32,
+    /// Its first entry in the order.
+    pub first: u32,
+    /// Where the entries of splats whose top level is t end (from `first`): level t's entries
+    /// are `ends[t - 1]..ends[t]`, with 0 before level 0.
+    pub ends: [u32; LOD_LEVELS],
+    /// Over level t's splats: their largest disk at level t (their own radius at 0), the
+    /// largest they are drawn with.
+    pub level_fit: [f32; LOD_LEVELS],
+    /// Their largest parent's disk (`SplatLod::parent_extent`); below 0 where one has no
+    /// parent (a root, always drawn where its disk fits).
+    pub parent_fit: [f32; LOD_LEVELS],
+    /// Their largest distance to their parent.
+    pub parent_gap: [f32; LOD_LEVELS],
+    pub _pad: [u32; 3],
 }
 
 /// Isotropic Ward material (docs/design.md §3): the specular part; the diffuse albedo lives per splat.

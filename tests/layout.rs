@@ -37,9 +37,17 @@ fn rust_layouts() -> Vec<RustLayout> {
             extent,
             top,
             parent_extent,
+            parent_gap
+        }),
+        layout!(SplatChunk {
+            center,
+            centre_reach,
+            first,
+            ends,
+            level_fit,
+            parent_fit,
             parent_gap,
-            _pad0,
-            _pad1
+            _pad
         }),
         layout!(Material {
             specular,

@@ -85,7 +85,7 @@ fn level_of_detail_matches_the_mirror_and_thins() {
     use lobelight::shared::splat::lod_radius;
     let gpu = common::gpu();
     let (scene, grid, lobes) = glossy_cornell();
-    let lods = lobelight::lod::splat_lods(&scene.splats);
+    let lods = lobelight::lod::LodTree::build(&scene.splats).lods;
     let cfg = FrameConfig {
         splatter: Splatter::Raster,
         lod: 2.0,
@@ -120,7 +120,7 @@ fn level_of_detail_leaves_no_hole() {
     use lobelight::cpu::splat_select::{drawn_splats, selection};
     use lobelight::cpu::splat_visibility::{bin_tiles, splat_visibility};
     let scene = scene::load(Path::new("scenes/cornell.toml")).unwrap();
-    let lods = lobelight::lod::splat_lods(&scene.splats);
+    let tree = lobelight::lod::LodTree::build(&scene.splats);
     let covered = |cam: &lobelight::types::Camera, splats: &[lobelight::types::Splat]| {
         let visible = splat_visibility(cam, splats, &scene.clips, &bin_tiles(cam, splats));
         visible.iter().map(|v| v.depth > 0.0).collect::<Vec<bool>>()
@@ -133,7 +133,7 @@ fn level_of_detail_leaves_no_hole() {
             };
             for view in views(&scene, size) {
                 let cam = camera_uniform(&view, scene.bounds(), &cfg);
-                let chosen = selection(&cam, &scene.splats, &lods);
+                let chosen = selection(&cam, &scene.splats, &tree);
                 let full = covered(&cam, &scene.splats);
                 let merged = covered(&cam, &drawn_splats(&scene.splats, &chosen.drawn));
                 let holes = full
@@ -690,4 +690,116 @@ fn a_drawn_box_ends_at_its_edges() {
     let unclipped = cpu_hdr(&scene, &grid, &lobes, &view, &cfg);
     let rim = outside.iter().filter(|&&i| drawn(&unclipped, i)).count();
     assert!(rim > 500, "unclipped, {rim} pixels drawn outside the box");
+}
+
+/// A frame of baked direct light selects what it draws chunk by chunk of the level of detail's
+/// tree (`chunk_visits`) and draws exactly the splats, at the radii, that the per-splat rule
+/// (`drawn_radius`) draws over every splat, with the level of detail off and on: on the mirror
+/// the same set, on the device the mirror's list in its order. The chunks bite: a close view
+/// of a corner visits under half of the splats, and with the level of detail at 4 pixels the
+/// front view visits fewer than it would without it.
+#[test]
+fn selection_by_chunks_draws_what_every_splat_would() {
+    use lobelight::cpu::splat_select::{selection, splat_select};
+    use lobelight::frame::{Splatting, frame_camera};
+    use lobelight::lod::{LodTree, visited};
+    use lobelight::shared::splat::drawn_radius;
+    let gpu = common::gpu();
+    let (scene, _, lobes) = glossy_cornell();
+    let (tree, flat) = (LodTree::build(&scene.splats), LodTree::flat(&scene.splats));
+    let mut renderer = FrameRenderer::new(&gpu, &scene).unwrap();
+    renderer.set_lobes(&gpu, &scene, &lobes).unwrap();
+    let mut views = views(&scene, 96);
+    let mut corner = scene.camera.clone();
+    corner.eye = [0.3, -0.3, 0.3];
+    corner.target = [1.0, -1.0, -1.0];
+    views.push(View::new(&corner, 96, 96));
+    let n = scene.splats.len();
+    let exact = common::rounds_like_the_mirror(&gpu);
+    for (v, view) in views.iter().enumerate() {
+        let mut visits_at = Vec::new();
+        for lod in [0.0, 1.5, 4.0] {
+            let cfg = FrameConfig {
+                splatter: Splatter::Raster,
+                lod,
+                ..FrameConfig::default()
+            };
+            let params = shade_params(&scene, &lobes, &cfg);
+            let cam = frame_camera(
+                &camera_uniform(view, scene.bounds(), &cfg),
+                &params,
+                Splatting::Raster,
+            );
+            let t = if lod > 0.0 { &tree } else { &flat };
+            let want: Vec<(u32, f32)> = (0..n)
+                .filter_map(|i| {
+                    let r = drawn_radius(&cam, &scene.splats[i], &t.lods[i]);
+                    (r > 0.0).then_some((i as u32, r))
+                })
+                .collect();
+            let chosen = selection(&cam, &scene.splats, t);
+            let mut got: Vec<(u32, f32)> = chosen
+                .selected
+                .iter()
+                .map(|&i| (i, chosen.drawn[i as usize]))
+                .collect();
+            got.sort_by_key(|&(i, _)| i);
+            assert!(
+                got == want,
+                "view {v}, lod {lod}: {} against {}",
+                got.len(),
+                want.len()
+            );
+            let selected = splat_select(&cam, &scene.splats, t);
+            let visited: usize = t
+                .chunks
+                .iter()
+                .zip(&selected.visits)
+                .map(|(ch, &m)| visited(ch, m).count())
+                .sum();
+            eprintln!(
+                "view {v}, lod {lod}: {} drawn, {visited} of {n} visited",
+                got.len()
+            );
+            visits_at.push(visited);
+
+            renderer.draw(&gpu, &scene, view, &cfg).unwrap();
+            let (list, radii) = renderer.read_selection(&gpu).unwrap();
+            let listed: Vec<f32> = list.iter().map(|&i| chosen.drawn[i as usize]).collect();
+            if exact {
+                if list != chosen.selected {
+                    let k = list.iter().zip(&chosen.selected).position(|(a, b)| a != b);
+                    panic!(
+                        "view {v}, lod {lod}: {} listed against {}, first apart at {k:?}: {:?} {:?}",
+                        list.len(),
+                        chosen.selected.len(),
+                        k.map(|k| &list[k.saturating_sub(2)..(k + 3).min(list.len())]),
+                        k.map(|k| &chosen.selected
+                            [k.saturating_sub(2)..(k + 3).min(chosen.selected.len())])
+                    );
+                }
+                assert_eq!(radii, listed, "view {v}, lod {lod}");
+            } else {
+                // Elsewhere a splat at the view's edge may round to the other side.
+                let mine: std::collections::HashSet<u32> =
+                    chosen.selected.iter().copied().collect();
+                let theirs: std::collections::HashSet<u32> = list.iter().copied().collect();
+                let apart = mine.symmetric_difference(&theirs).count();
+                assert!(
+                    apart * 1000 <= mine.len(),
+                    "view {v}, lod {lod}: {apart} apart"
+                );
+            }
+        }
+        if v == 2 {
+            assert!(
+                2 * visits_at[0] < n,
+                "the corner visits {} of {n}",
+                visits_at[0]
+            );
+        }
+        if v == 0 {
+            assert!(visits_at[2] < visits_at[0], "lod 4 visits {visits_at:?}");
+        }
+    }
 }

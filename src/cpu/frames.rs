@@ -16,7 +16,7 @@ use crate::frame::{
 use crate::grid::SplatGrid;
 use crate::scene::Scene;
 use crate::sequence::Executor;
-use crate::types::{Camera, EmParams, PathParams, ShadeParams, SplatLod};
+use crate::types::{Camera, EmParams, PathParams, ShadeParams};
 
 /// The direct bake on the CPU mirror (`sequence::bake_direct`).
 pub fn cpu_direct(scene: &Scene, grid: &SplatGrid) -> Result<DirectMap> {
@@ -98,11 +98,11 @@ pub fn cpu_frame_into(
     let baked = Direct::of_code(params.direct) == Direct::Baked;
     let selection = match baked {
         true => {
-            let lods = match cam.lod > 0.0 {
-                true => crate::lod::splat_lods(&scene.splats),
-                false => vec![SplatLod::default(); scene.splats.len()],
+            let tree = match cam.lod > 0.0 {
+                true => crate::lod::LodTree::build(&scene.splats),
+                false => crate::lod::LodTree::flat(&scene.splats),
             };
-            Some(cpu::splat_select::selection(cam, &scene.splats, &lods))
+            Some(cpu::splat_select::selection(cam, &scene.splats, &tree))
         }
         false => None,
     };

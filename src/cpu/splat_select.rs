@@ -1,40 +1,60 @@
-//! Mirror of `wgsl/splat_select.wgsl`: the radius each splat is drawn with in a frame of baked
-//! direct light (facing the eye, inside the view, at its level of detail; 0: not drawn), and
-//! each workgroup's count of drawn splats. `selection` adds `splat_list` for the list.
+//! Mirror of `wgsl/splat_select.wgsl`: chunk by chunk of the level of detail's tree, the radius
+//! each splat of the levels the chunk visits is drawn with in a frame of baked direct light
+//! (`drawn_radius`; 0: not drawn), each chunk's count of drawn splats and the levels it
+//! visited. `selection` adds `splat_list` for the list.
 
-use glam::Vec3;
 use rayon::prelude::*;
 
-use crate::shared::splat::{faces_camera, in_view, lod_radius};
-use crate::types::{Camera, Splat, SplatLod};
+use crate::lod::{LodTree, visited};
+use crate::shared::splat::{chunk_visits, drawn_radius};
+use crate::types::{Camera, Splat};
 
 pub const WG: u32 = 64;
 
-/// The drawn radii, and the count of each workgroup of `WG` splats.
-pub fn splat_select(cam: &Camera, splats: &[Splat], lods: &[SplatLod]) -> (Vec<f32>, Vec<u32>) {
-    let eye = Vec3::from(cam.eye);
-    let drawn: Vec<f32> = splats
-        .par_iter()
-        .zip(lods)
-        .map(|(s, lod)| {
-            let mut s = *s;
-            if cam.lod > 0.0 {
-                s.radius = lod_radius(cam, &s, lod);
-            }
-            match faces_camera(&s, eye) && s.radius > 0.0 && in_view(cam, &s) {
-                true => s.radius,
-                false => 0.0,
-            }
-        })
-        .collect();
-    let counts = drawn
-        .chunks(WG as usize)
-        .map(|c| c.iter().filter(|&&r| r > 0.0).count() as u32)
-        .collect();
-    (drawn, counts)
+/// What `splat_select` writes: per splat the drawn radius (0 where it is not drawn or its
+/// chunk did not visit it), and per chunk its count of drawn splats and the levels it visited.
+pub struct Selected {
+    pub drawn: Vec<f32>,
+    pub counts: Vec<u32>,
+    pub visits: Vec<u32>,
 }
 
-/// What a frame of baked direct light draws: the splats in index order (`splat_list`), and
+pub fn splat_select(cam: &Camera, splats: &[Splat], tree: &LodTree) -> Selected {
+    let per_chunk: Vec<(u32, Vec<(u32, f32)>)> = tree
+        .chunks
+        .par_iter()
+        .map(|ch| {
+            let visits = chunk_visits(cam, ch);
+            let radii = visited(ch, visits)
+                .map(|e| {
+                    let i = tree.order[e as usize];
+                    (
+                        i,
+                        drawn_radius(cam, &splats[i as usize], &tree.lods[i as usize]),
+                    )
+                })
+                .collect();
+            (visits, radii)
+        })
+        .collect();
+    let mut drawn = vec![0.0; splats.len()];
+    let mut counts = Vec::with_capacity(per_chunk.len());
+    let mut visits = Vec::with_capacity(per_chunk.len());
+    for (v, radii) in per_chunk {
+        counts.push(radii.iter().filter(|(_, r)| *r > 0.0).count() as u32);
+        visits.push(v);
+        for (i, r) in radii {
+            drawn[i as usize] = r;
+        }
+    }
+    Selected {
+        drawn,
+        counts,
+        visits,
+    }
+}
+
+/// What a frame of baked direct light draws: the splats chunk by chunk (`splat_list`), and
 /// each splat's drawn radius.
 pub struct Selection {
     pub selected: Vec<u32>,
@@ -42,9 +62,10 @@ pub struct Selection {
 }
 
 /// `splat_select`, the scan of its counts and `splat_list`, as the device runs them.
-pub fn selection(cam: &Camera, splats: &[Splat], lods: &[SplatLod]) -> Selection {
-    let (drawn, counts) = splat_select(cam, splats, lods);
-    let offsets: Vec<u32> = counts
+pub fn selection(cam: &Camera, splats: &[Splat], tree: &LodTree) -> Selection {
+    let chosen = splat_select(cam, splats, tree);
+    let offsets: Vec<u32> = chosen
+        .counts
         .iter()
         .scan(0, |sum, &c| {
             let first = *sum;
@@ -52,8 +73,11 @@ pub fn selection(cam: &Camera, splats: &[Splat], lods: &[SplatLod]) -> Selection
             Some(first)
         })
         .collect();
-    let selected = super::splat_list::splat_list(&offsets, &drawn);
-    Selection { selected, drawn }
+    let selected = super::splat_list::splat_list(&offsets, &chosen.drawn, tree, &chosen.visits);
+    Selection {
+        selected,
+        drawn: chosen.drawn,
+    }
 }
 
 /// The splats as the raster passes draw them with the level of detail: each at the radius

@@ -18,7 +18,7 @@ use crate::sequence::{Direct, TileLists, bin_splat_tiles};
 use crate::shaders::Stage;
 use crate::shaders::{PAGE_BINDING_STEP, Paging};
 use crate::shared::splat::{SPLAT_CORNERS, SPLATS_PER_INSTANCE, instances};
-use crate::types::{Camera, ShadeParams, SplatLod};
+use crate::types::{Camera, ShadeParams};
 
 /// The format of the blended targets: f32 where the device can blend it, else f16.
 pub fn accumulation_format(gpu: &Gpu) -> wgpu::TextureFormat {
@@ -77,18 +77,39 @@ pub struct SceneBuffers<'a> {
     /// it sends towards the eye.
     pub shaded: &'a wgpu::Buffer,
     /// `splat_list`'s list of the splats a frame draws and shades: its length, and the
-    /// indices, in index order.
+    /// indices, chunk by chunk.
     pub selected_count: &'a wgpu::Buffer,
     pub selected: &'a wgpu::Buffer,
-    /// `splat_select`'s count per workgroup (scanned into `splat_list`'s offsets), and the
-    /// raster passes' indirect draw of the list.
+    /// `splat_select`'s count per chunk (scanned into `splat_list`'s offsets) and the levels
+    /// each visited, and the raster passes' indirect draw of the list and `splat_shade`'s
+    /// dispatch.
     pub group_counts: &'a wgpu::Buffer,
+    pub visits: &'a wgpu::Buffer,
     pub draw_args: &'a wgpu::Buffer,
-    /// The level of detail's merge tree (`lod`) once built, a stand-in to bind before, and
-    /// the radius `splat_select` chose for each splat this frame.
-    pub lods: Option<&'a wgpu::Buffer>,
-    pub no_lods: &'a wgpu::Buffer,
+    /// What `splat_select` walks (`lod::LodTree`): the merge tree once built, else the
+    /// splats' chunks without it; and the radius it chose for each splat this frame.
+    pub tree: Option<&'a TreeBuffers>,
     pub drawn: &'a wgpu::Buffer,
+}
+
+/// A `lod::LodTree` on the device.
+pub struct TreeBuffers {
+    pub lods: wgpu::Buffer,
+    pub chunks: wgpu::Buffer,
+    pub order: wgpu::Buffer,
+    /// Whether it holds the merge tree (`LodTree::build`) or the chunks alone (`flat`).
+    pub merged: bool,
+}
+
+impl TreeBuffers {
+    fn upload(gpu: &Gpu, tree: &crate::lod::LodTree, merged: bool) -> Result<TreeBuffers> {
+        Ok(TreeBuffers {
+            lods: gpu.storage("level of detail", &tree.lods)?,
+            chunks: gpu.storage("splat chunks", &tree.chunks)?,
+            order: gpu.storage("splats by chunk", &tree.order)?,
+            merged,
+        })
+    }
 }
 
 impl<'a> SceneBuffers<'a> {
@@ -150,27 +171,28 @@ pub struct FrameScene {
     /// Per splat, the radiance towards the eye of the frame being drawn (`splat_shade`).
     pub shaded: wgpu::Buffer,
     /// The splats a frame of baked direct light draws and shades (`splat_list`): how many, and
-    /// which, in index order.
+    /// which, chunk by chunk.
     pub selected_count: wgpu::Buffer,
     pub selected: wgpu::Buffer,
-    /// `splat_select`'s count per workgroup of splats, scanned in place into `splat_list`'s
-    /// offsets, and the raster passes' indirect draw of the list (`splat_list` writes it).
+    /// `splat_select`'s count per chunk of splats, scanned in place into `splat_list`'s
+    /// offsets, the levels each visited, and the raster passes' indirect draw of the list
+    /// and `splat_shade`'s dispatch (`splat_list` writes both).
     pub group_counts: wgpu::Buffer,
+    pub visits: wgpu::Buffer,
     pub draw_args: wgpu::Buffer,
-    /// The level of detail's merge tree (`lod::splat_lods`), built for the first frame that
-    /// draws with it (`ensure_lods`), and per splat the radius `splat_select` chose for the
-    /// frame being drawn.
-    pub lods: OnceLock<wgpu::Buffer>,
+    /// The level of detail's tree (`lod::LodTree::build`), built for the first frame of baked
+    /// direct light that draws with it (`ensure_tree`), or the splats' chunks alone for one
+    /// without it; and per splat the radius `splat_select` chose for the frame being drawn.
+    pub tree: OnceLock<TreeBuffers>,
+    pub flat: OnceLock<TreeBuffers>,
     pub drawn: wgpu::Buffer,
-    /// What `splat_select` binds in place of the tree before it is built (it reads it only
-    /// with the level of detail on).
-    no_lods: wgpu::Buffer,
 }
 
 impl FrameScene {
     pub fn upload(gpu: &Gpu, scene: &Scene, lobes: &LobeMap) -> Result<FrameScene> {
         let splats = scene.splats.len().max(1) as u64;
         let visibility = splats * scene.lights.len().max(1) as u64 * 4;
+        let chunks = splats.div_ceil(crate::lod::CHUNK as u64);
         Ok(FrameScene {
             splat_light: gpu.storage("splat light", &lobes.light)?,
             lobes: gpu.storage("lobes", &lobes.lobes)?,
@@ -183,40 +205,45 @@ impl FrameScene {
             shaded: gpu.storage_zeroed("shaded splats", splats * 16)?,
             selected_count: gpu.storage_zeroed("selected splat count", 4)?,
             selected: gpu.storage_zeroed("selected splats", splats * 4)?,
-            group_counts: gpu.storage_zeroed(
-                "selected per workgroup",
-                crate::sequence::groups(Stage::SplatSelect, splats as u32)? as u64 * 4,
-            )?,
+            group_counts: gpu.storage_zeroed("selected per chunk", chunks * 4)?,
+            visits: gpu.storage_zeroed("levels visited per chunk", chunks * 4)?,
             draw_args: gpu.device.create_buffer(&wgpu::BufferDescriptor {
-                label: Some("listed splats' draw"),
-                size: 16,
+                label: Some("listed splats' draw and shading"),
+                size: 32,
                 usage: wgpu::BufferUsages::STORAGE | wgpu::BufferUsages::INDIRECT,
                 mapped_at_creation: false,
             }),
-            lods: OnceLock::new(),
+            tree: OnceLock::new(),
+            flat: OnceLock::new(),
             drawn: gpu.storage_zeroed("drawn radii", splats * 4)?,
-            no_lods: gpu.storage("no level of detail", &[SplatLod::default()])?,
         })
     }
 
-    /// Builds the level of detail's merge tree of `scene` and uploads it, once.
-    pub fn ensure_lods(&self, gpu: &Gpu, scene: &Scene) -> Result<()> {
-        if self.lods.get().is_none() {
+    /// Builds what `splat_select` walks for frames with the level of detail on (`merged`: the
+    /// merge tree and its chunks) or off (the chunks alone), and uploads it, once each.
+    pub fn ensure_tree(&self, gpu: &Gpu, scene: &Scene, merged: bool) -> Result<()> {
+        let slot = if merged { &self.tree } else { &self.flat };
+        if slot.get().is_none() {
             let start = std::time::Instant::now();
-            let tree = crate::lod::splat_lods(&scene.splats);
+            let tree = match merged {
+                true => crate::lod::LodTree::build(&scene.splats),
+                false => crate::lod::LodTree::flat(&scene.splats),
+            };
             let ms = crate::timing::ms_since(start);
             log::info!(
-                "level of detail: merge tree of {} splats in {ms:.0} ms",
-                tree.len()
+                "level of detail: {} of {} splats in {ms:.0} ms",
+                if merged { "merge tree" } else { "chunks" },
+                tree.lods.len()
             );
             // Set once: a second caller's tree would be the same.
-            let _ = self.lods.set(gpu.storage("level of detail", &tree)?);
+            let _ = slot.set(TreeBuffers::upload(gpu, &tree, merged)?);
         }
         Ok(())
     }
 
-    /// What the passes bind, with the scene's splats, materials and grid.
-    pub fn buffers<'a>(&'a self, on_gpu: &'a GpuScene) -> SceneBuffers<'a> {
+    /// What the passes bind, with the scene's splats, materials and grid; `merged`: the
+    /// level of detail's tree for `splat_select` (else the chunks alone), where built.
+    pub fn buffers<'a>(&'a self, on_gpu: &'a GpuScene, merged: bool) -> SceneBuffers<'a> {
         SceneBuffers {
             splats: &on_gpu.splats,
             splat_count: on_gpu.grid.params.splat_count,
@@ -233,9 +260,9 @@ impl FrameScene {
             selected_count: &self.selected_count,
             selected: &self.selected,
             group_counts: &self.group_counts,
+            visits: &self.visits,
             draw_args: &self.draw_args,
-            lods: self.lods.get(),
-            no_lods: &self.no_lods,
+            tree: if merged { &self.tree } else { &self.flat }.get(),
             drawn: &self.drawn,
         }
     }
@@ -788,13 +815,12 @@ impl SplatPipelines {
         scene: &SceneBuffers,
         uniforms: &Uniforms,
     ) -> Result<()> {
-        let lods = match (scene.lods, uniforms.camera.lod > 0.0) {
-            (Some(lods), _) => lods,
-            (None, false) => scene.no_lods,
-            (None, true) => {
+        let tree = match scene.tree {
+            Some(t) if t.merged == (uniforms.camera.lod > 0.0) => t,
+            _ => {
                 return Err(Error::Internal(
-                    "a frame with the level of detail was drawn before its merge tree was built \
-                     (FrameScene::ensure_lods)"
+                    "a frame of baked direct light was drawn before the tree it selects by was \
+                     built (FrameScene::ensure_tree)"
                         .into(),
                 ));
             }
@@ -803,21 +829,27 @@ impl SplatPipelines {
             &uniforms.cam,
             scene.splats,
             scene.group_counts,
-            lods,
+            &tree.lods,
             scene.drawn,
+            &tree.chunks,
+            &tree.order,
+            scene.visits,
         ];
-        let groups = crate::sequence::groups(Stage::SplatSelect, scene.splat_count)?;
+        // One invocation a chunk, in both passes.
+        let chunks = scene.splat_count.div_ceil(crate::lod::CHUNK as u32);
+        let groups = chunks.div_ceil(crate::cpu::splat_select::WG);
         gpu.dispatch(encoder, Stage::SplatSelect, &select, groups)?;
-        // One count a workgroup: `groups` is their number.
-        super::scan::exclusive_scan(gpu, encoder, scene.group_counts, groups)?;
+        super::scan::exclusive_scan(gpu, encoder, scene.group_counts, chunks)?;
         let list = [
             scene.group_counts,
             scene.drawn,
             scene.selected_count,
             scene.selected,
             scene.draw_args,
+            &tree.chunks,
+            &tree.order,
+            scene.visits,
         ];
-        let groups = crate::sequence::groups(Stage::SplatList, scene.splat_count)?;
         gpu.dispatch(encoder, Stage::SplatList, &list, groups)
     }
 
@@ -833,6 +865,10 @@ impl SplatPipelines {
         let stage = Stage::SplatShade;
         let mut buffers = scene.shading(&uniforms.cam, &uniforms.params).to_vec();
         buffers.extend([scene.shaded, scene.selected_count, scene.selected]);
+        if self.indirect {
+            // As many workgroups as the list needs (`splat_list` wrote them), not the scene.
+            return gpu.dispatch_indirect(encoder, stage, &buffers, (scene.draw_args, 16));
+        }
         let groups = crate::sequence::groups(stage, scene.splat_count)?;
         gpu.dispatch(encoder, stage, &buffers, groups)
     }

@@ -345,6 +345,33 @@ impl Gpu {
         self.dispatch_pipeline(encoder, stage, &pipeline, &paging, bind_groups, groups)
     }
 
+    /// Like `dispatch`, with the workgroup counts read on the device from `args` at `offset`
+    /// (three u32s, as a stage before wrote them): a dispatch sized by what that stage found.
+    pub fn dispatch_indirect(
+        &self,
+        encoder: &mut wgpu::CommandEncoder,
+        stage: Stage,
+        buffers: &[&wgpu::Buffer],
+        (args, offset): (&wgpu::Buffer, u64),
+    ) -> Result<()> {
+        let paging = self.paging(stage, &[buffers])?;
+        let pipeline = self.variant_paged(stage, &[], &[], &paging)?;
+        let entries = self.paged_entries(stage, 0, buffers, &paging)?;
+        let group = self.device.create_bind_group(&wgpu::BindGroupDescriptor {
+            label: Some(stage.name()),
+            layout: &pipeline.get_bind_group_layout(0),
+            entries: &entries,
+        });
+        let mut pass = encoder.begin_compute_pass(&wgpu::ComputePassDescriptor {
+            label: Some(stage.name()),
+            timestamp_writes: None,
+        });
+        pass.set_pipeline(&pipeline);
+        pass.set_bind_group(0, &group, &[]);
+        pass.dispatch_workgroups_indirect(args, offset);
+        Ok(())
+    }
+
     /// Records one dispatch of an already compiled (e.g. specialized) pipeline.
     pub fn dispatch_pipeline(
         &self,

@@ -7,7 +7,7 @@ use glam::{Vec2, Vec3, Vec4};
 
 use super::lobes::FAMILY_WARD;
 use super::sampling::frame_of;
-use crate::types::{Camera, Material, Splat, SplatLod, SurfaceClip};
+use crate::types::{Camera, LOD_LEVELS, Material, Splat, SplatChunk, SplatLod, SurfaceClip};
 
 pub const KERNEL_SHARPNESS: f32 = 2.0;
 
@@ -43,7 +43,7 @@ pub fn instances(count: u32) -> u32 {
 
 /// Level of detail of moving frames (`Camera::lod`): the merge tree's levels above the splats
 /// themselves (`lod`); see `wgsl/shared/splat.wgsl`.
-pub const LOD_MAX_LEVEL: u32 = 3;
+pub const LOD_MAX_LEVEL: u32 = 5;
 
 /// The radius splat `s` is drawn with this frame: its disk at the coarsest of its levels
 /// (`lod`) that projects within `cam.lod` pixels, its own radius with the level of detail off,
@@ -54,8 +54,7 @@ pub fn lod_radius(cam: &Camera, s: &Splat, lod: &SplatLod) -> f32 {
         return s.radius;
     }
     let z = (Vec3::from(s.center) - Vec3::from(cam.eye)).dot(Vec3::from(cam.forward));
-    let view = cam.lod * 2.0 * cam.tan_y;
-    let fits = |extent: f32, depth: f32| depth > cam.near && extent * cam.size[1] <= view * depth;
+    let fits = |extent: f32, depth: f32| lod_fits(cam, extent, depth);
     let (mut radius, mut level) = (s.radius, 0);
     for k in 1..=lod.top.min(LOD_MAX_LEVEL) {
         if fits(lod.extent[k as usize - 1], z) {
@@ -67,6 +66,62 @@ pub fn lod_radius(cam: &Camera, s: &Splat, lod: &SplatLod) -> f32 {
         return 0.0;
     }
     radius
+}
+
+/// Whether a disk of radius `extent` at `depth` projects within the level of detail.
+pub fn lod_fits(cam: &Camera, extent: f32, depth: f32) -> bool {
+    depth > cam.near && extent * cam.size[1] <= cam.lod * 2.0 * cam.tan_y * depth
+}
+
+/// The radius splat `s` is drawn with in a frame of baked direct light (`splat_select`): at
+/// its level of detail where it is on, 0 where it faces away, lies outside the view or its
+/// parent's disk stands in for it.
+pub fn drawn_radius(cam: &Camera, s: &Splat, lod: &SplatLod) -> f32 {
+    let mut s = *s;
+    if cam.lod > 0.0 {
+        s.radius = lod_radius(cam, &s, lod);
+    }
+    match faces_camera(&s, Vec3::from(cam.eye)) && s.radius > 0.0 && in_view(cam, &s) {
+        true => s.radius,
+        false => 0.0,
+    }
+}
+
+const _: () = assert!(LOD_LEVELS == LOD_MAX_LEVEL as usize + 1);
+
+/// The levels of chunk `ch` whose splats a frame visits (bit t: those whose top level is t):
+/// not those that lie outside the view, and with the level of detail on, not those whose
+/// parents' disks project within it even at the chunk's nearest depth, and their own top-level
+/// disks too (then `lod_radius` gives every one of them 0). Conservative: a splat that
+/// `drawn_radius` draws is always visited (`in_view`'s test holds for a sphere that holds its
+/// splats' with the margin its gradient asks for, a small slack for rounding).
+pub fn chunk_visits(cam: &Camera, ch: &SplatChunk) -> u32 {
+    let c = Vec3::from(ch.center) - Vec3::from(cam.eye);
+    let z = c.dot(Vec3::from(cam.forward));
+    let d = ch.centre_reach;
+    let nearest = z - d - 1e-4 * (z.abs() + d);
+    let mut visits = 0;
+    for t in 0..LOD_LEVELS {
+        // Level t's splats are drawn no wider than their disk at level t.
+        let r = 2.0 * ch.level_fit[t];
+        let slack = 1e-4 * (z.abs() + d + r);
+        let edge = |axis: [f32; 3], tan: f32, size: f32| {
+            let a = tan * (1.0 + 2.0 / size);
+            c.dot(Vec3::from(axis)).abs() - a * z
+                <= r * (1.0 + tan * tan).sqrt() + d * (1.0 + a * a).sqrt() + slack
+        };
+        let shown = z + d + slack >= cam.near - r
+            && edge(cam.right, cam.tan_x, cam.size[0])
+            && edge(cam.up, cam.tan_y, cam.size[1]);
+        let covered = cam.lod > 0.0
+            && ch.parent_fit[t] > 0.0
+            && (t == 0 || lod_fits(cam, ch.level_fit[t], nearest))
+            && lod_fits(cam, ch.parent_fit[t], nearest - ch.parent_gap[t]);
+        if shown && !covered {
+            visits |= 1 << t;
+        }
+    }
+    visits
 }
 
 pub fn splat_corner(s: &Splat, i: u32) -> Vec3 {

@@ -89,7 +89,7 @@ const SPLATS_PER_INSTANCE: u32 = 32u;
 // tree (SplatLod, src/lod.rs) has LOD_MAX_LEVEL levels above the splats; splat_select draws each
 // splat at the coarsest of its levels that fits, or not at all where its parent's may fit, and
 // writes the radius for the raster passes. Twin: src/shared/splat.rs.
-const LOD_MAX_LEVEL: u32 = 3u;
+const LOD_MAX_LEVEL: u32 = 5u;
 // Whether the visibility pass draws splat_list's list (frames of baked direct light) or every
 // splat (frames of shadow rays); the host builds a pipeline of each, so that neither runs the
 // other's branch (llvmpipe runs both sides of a branch on a uniform).
@@ -136,6 +136,55 @@ fn lod_radius(cam: Camera, s: Splat, lod: SplatLod) -> f32 {
         return 0.0;
     }
     return radius;
+}
+
+// The radius splat s is drawn with in a frame of baked direct light (splat_select): at its
+// level of detail where it is on, 0 where it faces away, lies outside the view or its parent's
+// disk stands in for it.
+fn drawn_radius(cam: Camera, s_in: Splat, lod: SplatLod) -> f32 {
+    var s = s_in;
+    if cam.lod > 0.0 {
+        s.radius = lod_radius(cam, s, lod);
+    }
+    let shown = faces_camera(s, cam.eye) && s.radius > 0.0 && in_view(cam, s);
+    return select(0.0, s.radius, shown);
+}
+
+// Levels of the merge tree, the splats' own included.
+const LOD_LEVELS: u32 = 6u;
+
+// The levels of chunk ch whose splats a frame visits (bit t: those whose top level is t): not
+// those that lie outside the view, and with the level of detail on, not those whose parents'
+// disks project within it even at the chunk's nearest depth, and their own top-level disks too
+// (then lod_radius gives every one of them 0). Conservative: a splat drawn_radius draws is
+// always visited (in_view's test holds for a sphere that holds its splats' with the margin its
+// gradient asks for, a small slack for rounding). Twin: shared::splat::chunk_visits.
+fn chunk_visits(cam: Camera, ch: SplatChunk) -> u32 {
+    let c = ch.center - cam.eye;
+    let z = dot(c, cam.forward);
+    let d = ch.centre_reach;
+    let nearest = z - d - 1e-4 * (abs(z) + d);
+    let ax = cam.tan_x * (1.0 + 2.0 / cam.size.x);
+    let ay = cam.tan_y * (1.0 + 2.0 / cam.size.y);
+    var visits = 0u;
+    for (var t = 0u; t < LOD_LEVELS; t++) {
+        // Level t's splats are drawn no wider than their disk at level t.
+        let r = 2.0 * ch.level_fit[t];
+        let slack = 1e-4 * (abs(z) + d + r);
+        let shown = z + d + slack >= cam.near - r
+            && abs(dot(c, cam.right)) - ax * z
+                <= r * sqrt(1.0 + cam.tan_x * cam.tan_x) + d * sqrt(1.0 + ax * ax) + slack
+            && abs(dot(c, cam.up)) - ay * z
+                <= r * sqrt(1.0 + cam.tan_y * cam.tan_y) + d * sqrt(1.0 + ay * ay) + slack;
+        let covered = cam.lod > 0.0
+            && ch.parent_fit[t] > 0.0
+            && (t == 0u || lod_fits(cam, ch.level_fit[t], nearest))
+            && lod_fits(cam, ch.parent_fit[t], nearest - ch.parent_gap[t]);
+        if shown && !covered {
+            visits |= 1u << t;
+        }
+    }
+    return visits;
 }
 
 // Corner `i` (0..2) of the triangle in the splat's plane that bounds its disk: its

@@ -59,12 +59,22 @@ fn clip_drawn_rows(c: SurfaceClip, s: Splat) -> array<vec4<f32>, 2> {
 
 // A splat's place in the level of detail's merge tree (src/types.rs).
 struct SplatLod {
-    extent: array<f32, 3>,
+    extent: array<f32, 5>,
     top: u32,
     parent_extent: f32,
     parent_gap: f32,
-    _pad0: u32,
-    _pad1: u32,
+}
+
+// A run of splats a frame culls as one (SplatChunk in src/types.rs).
+struct SplatChunk {
+    center: vec3<f32>,
+    centre_reach: f32,
+    first: u32,
+    ends: array<u32, 6>,
+    level_fit: array<f32, 6>,
+    parent_fit: array<f32, 6>,
+    parent_gap: array<f32, 6>,
+    _pad: array<u32, 3>,
 }
 
 struct Material {
