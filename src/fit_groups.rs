@@ -59,7 +59,7 @@ impl FitGroups {
             fit_all
                 || materials
                     .get(s.material as usize)
-                    .is_some_and(|m| m.specular.iter().any(|&x| x > 0.0))
+                    .is_some_and(Material::is_glossy)
         };
         let cells = CellGroups::new(splats, fitted, cell, GROUP_COS_MIN)?;
         let n = cells.group.len() as u32;

@@ -169,6 +169,13 @@ pub struct Material {
     pub roughness: f32,
 }
 
+impl Material {
+    /// Whether it reflects glossily (some specular part): its splats need lobes.
+    pub fn is_glossy(&self) -> bool {
+        self.specular.iter().any(|&s| s > 0.0)
+    }
+}
+
 /// Light kinds, the values of `Light::kind`.
 pub mod light_kind {
     pub const POINT: u32 = 0;

@@ -183,7 +183,7 @@ fn deposits_and_shared_light_on_the_device_equal_the_mirror() {
     let (mut lit, mut apart, mut sums) = (0, 0, [0.0f64; 2]);
     for i in 0..scene.splats.len() {
         let m = scene.materials[scene.splats[i].material as usize];
-        if m.specular.iter().any(|&s| s > 0.0) {
+        if m.is_glossy() {
             continue;
         }
         let (a, b) = (&lit_cpu.light[i], &lit_gpu.light[i]);

@@ -129,7 +129,7 @@ fn final_gather_matches_the_mirror_and_the_photons() {
     let glossy: Vec<u32> = (0..scene.splats.len() as u32)
         .filter(|&i| {
             let m = scene.materials[scene.splats[i as usize].material as usize];
-            m.specular.iter().any(|&c| c > 0.0)
+            m.is_glossy()
         })
         .collect();
     assert!(glossy.len() > 1000, "{} glossy splats", glossy.len());

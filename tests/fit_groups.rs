@@ -24,7 +24,7 @@ fn cornell(photons: u64) -> Scene {
 
 fn glossy(scene: &Scene, i: usize) -> bool {
     let m = &scene.materials[scene.splats[i].material as usize];
-    m.specular.iter().any(|&c| c > 0.0)
+    m.is_glossy()
 }
 
 /// The grey irradiance of a splat's lobes.

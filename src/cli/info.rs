@@ -84,10 +84,7 @@ pub fn info(scene: &Scene, gpu: Option<&Gpu>) -> Result<Info> {
         let glossy = scene
             .splats
             .iter()
-            .filter(|s| {
-                let m = &scene.materials[s.material as usize];
-                m.specular.iter().any(|&x| x > 0.0)
-            })
+            .filter(|s| scene.materials[s.material as usize].is_glossy())
             .count() as u64;
         let lobes = glossy * scene.bake.lobes as u64 * std::mem::size_of::<Lobe>() as u64;
         Memory {

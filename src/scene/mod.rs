@@ -104,9 +104,7 @@ impl Scene {
 
     /// True when some material has a specular part, i.e. lobes are worth fitting.
     pub fn has_glossy(&self) -> bool {
-        self.materials
-            .iter()
-            .any(|m| m.specular.iter().any(|&s| s > 0.0))
+        self.materials.iter().any(Material::is_glossy)
     }
 
     /// Photon search radius: the scene's, or 1/40 of the largest extent of the bounds.
