@@ -806,8 +806,9 @@ impl SplatPipelines {
     }
 
     /// Records `splat_select`, the scan of its counts and `splat_list`, before the visibility
-    /// pass of a frame of baked direct light: the radius each splat is drawn with, the list of
-    /// those drawn in index order, and the raster passes' indirect draw of it.
+    /// pass of a frame of baked direct light, chunk by chunk of the level of detail's tree: the
+    /// radius each visited splat is drawn with, the list of those drawn in the chunks' order,
+    /// the raster passes' indirect draw of it and `splat_shade`'s dispatch.
     fn record_splat_select(
         &self,
         gpu: &Gpu,
