@@ -730,12 +730,19 @@ fn bench_scale_reports_each_size() {
         assert!(dir.join(format!("terrain_{n}.ply")).is_file());
         assert!(dir.join(format!("terrain_{n}.toml")).is_file());
     }
-    for key in ["load", "grid", "bake", "frame"] {
+    for key in ["load", "grid", "bake", "frame", "frame_ratio"] {
         assert!(
             v["growth"][key].as_f64().is_some_and(f64::is_finite),
             "{key}: {v}"
         );
     }
+    let (first, last) = (&rows[0]["frame_ms"], &rows[rows.len() - 1]["frame_ms"]);
+    let ratio = last.as_f64().unwrap_or(0.0) / first.as_f64().unwrap_or(1.0);
+    let said = v["growth"]["frame_ratio"].as_f64().unwrap_or(0.0);
+    assert!(
+        (said - ratio).abs() <= 1e-9 * ratio,
+        "{said} against {ratio}"
+    );
     assert_eq!(v["material"], "diffuse");
     assert!(rows.iter().all(|r| r["splats_fitted"] == 0), "{v}");
     // A glossy cloud fits lobes, most of its splats served by shared fits; its scene file

@@ -128,6 +128,9 @@ pub struct Growth {
     pub em: f64,
     pub frame: f64,
     pub peak_rss: Option<f64>,
+    /// The largest cloud's frame time over the smallest's (a frame whose work followed what it
+    /// draws, not the scene, would keep it near 1).
+    pub frame_ratio: f64,
 }
 
 /// Bake settings from the command line, applied to each generated scene.
@@ -278,6 +281,7 @@ fn growth(rows: &[ScaleRow]) -> Growth {
         bake: k(a.bake_ms, b.bake_ms),
         em: k(a.em_ms, b.em_ms),
         frame: k(a.frame_ms, b.frame_ms),
+        frame_ratio: b.frame_ms / a.frame_ms.max(1e-9),
         peak_rss: match (a.peak_rss_bytes, b.peak_rss_bytes) {
             (Some(x), Some(y)) => Some(k(x as f64, y as f64)),
             _ => None,
@@ -401,8 +405,9 @@ impl std::fmt::Display for ScaleBench {
         let g = &self.growth;
         write!(
             f,
-            "growth (time ∝ splats^k): load {:.2}, grid {:.2}, bake {:.2} (EM {:.2}), frame {:.2}",
-            g.load, g.grid, g.bake, g.em, g.frame
+            "growth (time ∝ splats^k): load {:.2}, grid {:.2}, bake {:.2} (EM {:.2}), frame {:.2} \
+             ({:.2}x from the smallest cloud to the largest)",
+            g.load, g.grid, g.bake, g.em, g.frame, g.frame_ratio
         )?;
         if let Some(m) = g.peak_rss {
             write!(f, ", peak memory {m:.2}")?;
