@@ -50,7 +50,6 @@ type Window<'a> = (
 );
 type Surface = wgpu::Surface<'static>;
 
-/// A device (headless, or able to present to a window) and everything recorded on it.
 /// Compute pipelines compiled (WGSL to the driver's code) and the time they took.
 #[derive(Clone, Copy, Debug, Default, PartialEq, serde::Serialize)]
 pub struct Compiled {
@@ -58,6 +57,7 @@ pub struct Compiled {
     pub ms: f64,
 }
 
+/// A device (headless, or able to present to a window) and everything recorded on it.
 pub struct Gpu {
     pub device: wgpu::Device,
     pub queue: wgpu::Queue,
@@ -356,18 +356,7 @@ impl Gpu {
     ) -> Result<()> {
         let paging = self.paging(stage, &[buffers])?;
         let pipeline = self.variant_paged(stage, &[], &[], &paging)?;
-        let entries = self.paged_entries(stage, 0, buffers, &paging)?;
-        let group = self.device.create_bind_group(&wgpu::BindGroupDescriptor {
-            label: Some(stage.name()),
-            layout: &pipeline.get_bind_group_layout(0),
-            entries: &entries,
-        });
-        let mut pass = encoder.begin_compute_pass(&wgpu::ComputePassDescriptor {
-            label: Some(stage.name()),
-            timestamp_writes: None,
-        });
-        pass.set_pipeline(&pipeline);
-        pass.set_bind_group(0, &group, &[]);
+        let mut pass = self.bound_pass(encoder, stage, &pipeline, &paging, &[buffers])?;
         pass.dispatch_workgroups_indirect(args, offset);
         Ok(())
     }
@@ -385,6 +374,22 @@ impl Gpu {
         if groups == 0 {
             return Ok(());
         }
+        let (x, y) = self.dispatch_dims(groups)?;
+        let mut pass = self.bound_pass(encoder, stage, pipeline, paging, bind_groups)?;
+        pass.dispatch_workgroups(x, y, 1);
+        Ok(())
+    }
+
+    /// A compute pass of `stage` with `pipeline` set and `bind_groups` bound (one buffer list
+    /// per group, paged as `paging` says), ready for its dispatch.
+    fn bound_pass<'e>(
+        &self,
+        encoder: &'e mut wgpu::CommandEncoder,
+        stage: Stage,
+        pipeline: &wgpu::ComputePipeline,
+        paging: &Paging,
+        bind_groups: &[&[&wgpu::Buffer]],
+    ) -> Result<wgpu::ComputePass<'e>> {
         let mut made = Vec::with_capacity(bind_groups.len());
         for (g, buffers) in bind_groups.iter().enumerate() {
             let entries = self.paged_entries(stage, g as u32, buffers, paging)?;
@@ -394,18 +399,15 @@ impl Gpu {
                 entries: &entries,
             }));
         }
-        let bind_groups = made;
-        let (x, y) = self.dispatch_dims(groups)?;
         let mut pass = encoder.begin_compute_pass(&wgpu::ComputePassDescriptor {
             label: Some(stage.name()),
             timestamp_writes: None,
         });
         pass.set_pipeline(pipeline);
-        for (g, bind_group) in bind_groups.iter().enumerate() {
+        for (g, bind_group) in made.iter().enumerate() {
             pass.set_bind_group(g as u32, bind_group, &[]);
         }
-        pass.dispatch_workgroups(x, y, 1);
-        Ok(())
+        Ok(pass)
     }
 
     /// Splits a workgroup count into (x, y) within the per-dimension limit; shaders bound-check
