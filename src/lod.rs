@@ -99,7 +99,10 @@ pub const CHUNK: usize = 256;
 
 /// What a frame's selection walks: the merge tree, and the splats in chunks near one another.
 pub struct LodTree {
-    /// Per splat, its place in the merge tree (in the splats' order).
+    /// Whether it holds the merge tree (`build`) or the chunks alone (`flat`).
+    pub merged: bool,
+    /// Per splat, its place in the merge tree (in the splats' order); without one, a single
+    /// stand-in record (level 0, no parent) for every splat, as the device binds it.
     pub lods: Vec<SplatLod>,
     /// The splats chunk by chunk, each chunk's sorted by top level.
     pub order: Vec<u32>,
@@ -114,25 +117,34 @@ impl LodTree {
         for run in order.chunks_mut(CHUNK) {
             run.sort_by_key(|&i| lods[i as usize].top);
         }
-        let chunks = chunks(splats, &lods, &order);
-        LodTree {
-            lods,
-            order,
-            chunks,
-        }
+        LodTree::chunked(splats, true, lods, order)
     }
 
     /// Without a merge tree (the level of detail off): the chunks alone, each splat at level
     /// 0 with no parent, so that chunks are culled by the view alone.
     pub fn flat(splats: &[Splat]) -> LodTree {
-        let lods = vec![SplatLod::default(); splats.len()];
-        let order = morton_order(splats);
-        let chunks = chunks(splats, &lods, &order);
-        LodTree {
+        LodTree::chunked(
+            splats,
+            false,
+            vec![SplatLod::default()],
+            morton_order(splats),
+        )
+    }
+
+    /// Splat `i`'s place in the merge tree (the stand-in without one).
+    pub fn lod(&self, i: u32) -> &SplatLod {
+        &self.lods[if self.merged { i as usize } else { 0 }]
+    }
+
+    fn chunked(splats: &[Splat], merged: bool, lods: Vec<SplatLod>, order: Vec<u32>) -> LodTree {
+        let mut tree = LodTree {
+            merged,
             lods,
             order,
-            chunks,
-        }
+            chunks: Vec::new(),
+        };
+        tree.chunks = chunks(splats, &tree);
+        tree
     }
 }
 
@@ -181,12 +193,12 @@ fn morton_order(splats: &[Splat]) -> Vec<u32> {
 }
 
 /// Each run of `CHUNK` entries of `order` (sorted by top level within) as a chunk.
-fn chunks(splats: &[Splat], lods: &[SplatLod], order: &[u32]) -> Vec<SplatChunk> {
-    order
+fn chunks(splats: &[Splat], tree: &LodTree) -> Vec<SplatChunk> {
+    tree.order
         .par_chunks(CHUNK)
         .enumerate()
         .map(|(k, run)| {
-            let at = |i: u32| (&splats[i as usize], &lods[i as usize]);
+            let at = |i: u32| (&splats[i as usize], tree.lod(i));
             let (lo, hi) = run.iter().fold(
                 (Vec3::splat(f32::INFINITY), Vec3::splat(f32::NEG_INFINITY)),
                 |(lo, hi), &i| (lo.min(at(i).0.center.into()), hi.max(at(i).0.center.into())),

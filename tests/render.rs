@@ -85,7 +85,7 @@ fn level_of_detail_matches_the_mirror_and_thins() {
     use lobelight::shared::splat::lod_radius;
     let gpu = common::gpu();
     let (scene, grid, lobes) = glossy_cornell();
-    let lods = lobelight::lod::LodTree::build(&scene.splats).lods;
+    let lods = lobelight::lod::splat_lods(&scene.splats);
     let cfg = FrameConfig {
         splatter: Splatter::Raster,
         lod: 2.0,
@@ -733,7 +733,7 @@ fn selection_by_chunks_draws_what_every_splat_would() {
             let t = if lod > 0.0 { &tree } else { &flat };
             let want: Vec<(u32, f32)> = (0..n)
                 .filter_map(|i| {
-                    let r = drawn_radius(&cam, &scene.splats[i], &t.lods[i]);
+                    let r = drawn_radius(&cam, &scene.splats[i], t.lod(i as u32));
                     (r > 0.0).then_some((i as u32, r))
                 })
                 .collect();

@@ -28,10 +28,7 @@ pub fn splat_select(cam: &Camera, splats: &[Splat], tree: &LodTree) -> Selected 
             let radii = visited(ch, visits)
                 .map(|e| {
                     let i = tree.order[e as usize];
-                    (
-                        i,
-                        drawn_radius(cam, &splats[i as usize], &tree.lods[i as usize]),
-                    )
+                    (i, drawn_radius(cam, &splats[i as usize], tree.lod(i)))
                 })
                 .collect();
             (visits, radii)

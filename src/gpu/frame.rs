@@ -18,7 +18,7 @@ use crate::sequence::{Direct, TileLists, bin_splat_tiles};
 use crate::shaders::Stage;
 use crate::shaders::{PAGE_BINDING_STEP, Paging};
 use crate::shared::splat::{SPLAT_CORNERS, SPLATS_PER_INSTANCE, instances};
-use crate::types::{Camera, ShadeParams, SplatLod};
+use crate::types::{Camera, ShadeParams};
 
 /// The format of the blended targets: f32 where the device can blend it, else f16.
 pub fn accumulation_format(gpu: &Gpu) -> wgpu::TextureFormat {
@@ -102,18 +102,12 @@ pub struct TreeBuffers {
 }
 
 impl TreeBuffers {
-    fn upload(gpu: &Gpu, tree: &crate::lod::LodTree, merged: bool) -> Result<TreeBuffers> {
-        // Without the merge tree `splat_select` reads no record of it (the level of detail is
-        // off): one stands in for the 32 bytes a splat it would take.
-        let lods = match merged {
-            true => &tree.lods[..],
-            false => &[SplatLod::default()][..],
-        };
+    fn upload(gpu: &Gpu, tree: &crate::lod::LodTree) -> Result<TreeBuffers> {
         Ok(TreeBuffers {
-            lods: gpu.storage("level of detail", lods)?,
+            lods: gpu.storage("level of detail", &tree.lods)?,
             chunks: gpu.storage("splat chunks", &tree.chunks)?,
             order: gpu.storage("splats by chunk", &tree.order)?,
-            merged,
+            merged: tree.merged,
         })
     }
 }
@@ -239,10 +233,10 @@ impl FrameScene {
             log::info!(
                 "level of detail: {} of {} splats in {ms:.0} ms",
                 if merged { "merge tree" } else { "chunks" },
-                tree.lods.len()
+                tree.order.len()
             );
             // Set once: a second caller's tree would be the same.
-            let _ = slot.set(TreeBuffers::upload(gpu, &tree, merged)?);
+            let _ = slot.set(TreeBuffers::upload(gpu, &tree)?);
         }
         Ok(())
     }
