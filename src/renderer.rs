@@ -87,11 +87,18 @@ impl FrameRenderer {
     /// the direct bake final gathering made where it ran.
     pub fn bake(&mut self, gpu: &Gpu, scene: &Scene, progress: &Progress) -> Result<Baked> {
         let baked = bake(scene, BakeDevice::Gpu(gpu, &self.on_gpu), progress)?;
+        self.set_baked(gpu, scene, &baked)?;
+        Ok(baked)
+    }
+
+    /// Keeps a bake's lobes for the frames to come, and the direct bake final gathering made
+    /// where it ran (the frames' own: the same lights, samples, seed and shadow bias).
+    pub fn set_baked(&mut self, gpu: &Gpu, scene: &Scene, baked: &Baked) -> Result<()> {
         self.set_lobes(gpu, scene, &baked.lobes)?;
         if let Some(direct) = &baked.direct {
             self.set_direct(gpu, scene, direct, 0.0)?;
         }
-        Ok(baked)
+        Ok(())
     }
 
     /// Traces and bins the scene's photons on the device, for a reference (no lobes).

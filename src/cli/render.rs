@@ -510,11 +510,7 @@ fn render_lobes(
             let mut renderer = FrameRenderer::new(gpu, scene)?;
             let on_gpu = BakeDevice::Gpu(gpu, &renderer.on_gpu);
             let (baked, hit) = bake_or_load(scene, on_gpu, opts, &progress)?;
-            renderer.set_lobes(gpu, scene, &baked.lobes)?;
-            // The direct bake final gathering made is the one the frames would make.
-            if let Some(direct) = &baked.direct {
-                renderer.set_direct(gpu, scene, direct, 0.0)?;
-            }
+            renderer.set_baked(gpu, scene, &baked)?;
             for shot in shots {
                 let (t, view) = (Instant::now(), &shot.view);
                 let targets = if opts.spp == 0 {

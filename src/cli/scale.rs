@@ -208,12 +208,9 @@ fn measure(
             let grid = cpu::scene_grid(&scene)?;
             let grid_ms = ms_since(t);
             let baked = bake(&scene, BakeDevice::Cpu(&grid), &progress)?;
-            renderer.set_lobes(gpu, &scene, &baked.lobes)?;
+            renderer.set_baked(gpu, &scene, &baked)?;
             let direct_ms = match &baked.direct {
-                Some(direct) => {
-                    renderer.set_direct(gpu, &scene, direct, 0.0)?;
-                    0.0
-                }
+                Some(_) => 0.0,
                 None => {
                     let t = Instant::now();
                     let direct = cpu_direct(&scene, &grid)?;
