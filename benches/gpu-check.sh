@@ -162,12 +162,15 @@ elif [ $quick = 1 ]; then
   photons=(--photons 20000 --gather 4)
   sizes=100000
   cluster=(--cluster-splats 20000 --photons 20000 --gather 4)
+  # Frames with the temporal pass timed, and an orbit of two frames (its keys, not its figure).
+  frame=(--taa --orbit 2)
 else
   # The box against the models whose bake the box's tuning does not predict.
   scenes=(scenes/cornell.toml scenes/bunny.toml scenes/dragon_full.toml)
   photons=()
   sizes=1000000,10000000
   cluster=()
+  frame=(--taa)
 fi
 for scene in "${scenes[@]}"; do
   name=$(basename "$scene" .toml)
@@ -177,9 +180,10 @@ for scene in "${scenes[@]}"; do
   fi
   # --gpu: the device's figures, also where it is a software rasterizer (whose bakes the
   # benchmarks would otherwise run on the CPU mirror).
-  for what in photons em frame; do
+  for what in photons em; do
     run_step "${what}_$name" "$bin" bench "$what" "$scene" "${photons[@]}" --gpu --json
   done
+  run_step "frame_$name" "$bin" bench frame "$scene" "${photons[@]}" "${frame[@]}" --gpu --json
 done
 if [ $benches = 1 ]; then
   for material in diffuse glossy; do

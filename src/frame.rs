@@ -9,7 +9,7 @@ use crate::direct::shadow_bias;
 use crate::em::LobeMap;
 use crate::error::{Error, Result};
 use crate::scene::Scene;
-use crate::types::{Camera, DIRECT_BAKED, DIRECT_RAYS, PathParams, ShadeParams};
+use crate::types::{Camera, DIRECT_BAKED, DIRECT_RAYS, PathParams, ShadeParams, TemporalParams};
 
 /// Which light a frame shows: everything, or one part of it (the viewer's keys 1–5).
 #[derive(Clone, Copy, Debug, Default, PartialEq, Eq, serde::Serialize)]
@@ -170,6 +170,9 @@ pub struct FrameConfig {
     /// Rays a pixel and refinement frame tracing the glossy surfaces' indirect light
     /// (`ShadeParams::glossy_rays`; 0: their lobes give it, as in moving frames).
     pub glossy_rays: u32,
+    /// Moving frames are jittered and blended with the ones before (`temporal`); off (the
+    /// default), each is drawn alone at the pixel centres.
+    pub temporal: bool,
 }
 
 impl Default for FrameConfig {
@@ -183,6 +186,7 @@ impl Default for FrameConfig {
             show: Terms::ALL,
             lod: DEFAULT_LOD,
             glossy_rays: DEFAULT_GLOSSY_RAYS,
+            temporal: false,
         }
     }
 }
@@ -315,6 +319,26 @@ pub fn jitter(k: u32) -> [f32; 2] {
         return [0.0; 2];
     }
     [halton(k, 2) - 0.5, halton(k, 3) - 0.5]
+}
+
+/// Moving frames cycle through this many sub-pixel offsets (`jitter`; the first after a
+/// reset is the pixel centre).
+pub const TEMPORAL_JITTERS: u32 = 16;
+
+/// The temporal pass's uniform for a `width × height` moving frame: the history's running mean
+/// counts up to 16 frames (the jitter cycle), kept where the surface's distance agrees within
+/// 5 % and its normal within 60°. `reset`: no history to blend.
+pub fn temporal_params(width: u32, height: u32, reset: bool) -> TemporalParams {
+    TemporalParams {
+        width,
+        height,
+        reset: reset as u32,
+        max_frames: TEMPORAL_JITTERS,
+        depth_tolerance: 0.05,
+        normal_cos: 0.5,
+        _pad0: 0,
+        _pad1: 0,
+    }
 }
 
 /// The shading uniform of refinement frame `k` of `spp`: shadow rays per pixel, the frame's

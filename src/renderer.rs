@@ -15,8 +15,8 @@ use crate::direct::{DirectMap, direct_params_biased};
 use crate::em::LobeMap;
 use crate::error::{Error, Result};
 use crate::frame::{
-    Direct, FrameConfig, SceneExtent, Splatter, Splatting, Terms, camera_uniform, frame_camera,
-    jitter, path_params, refinement, shade_params_for,
+    Direct, FrameConfig, SceneExtent, Splatter, Splatting, TEMPORAL_JITTERS, Terms, camera_uniform,
+    frame_camera, jitter, path_params, refinement, shade_params_for, temporal_params,
 };
 use crate::gpu::Gpu;
 use crate::gpu::bins::GpuBins;
@@ -26,7 +26,7 @@ use crate::gpu::reference::ReferencePipeline;
 use crate::gpu::scene::GpuScene;
 use crate::gpu::tone::{GpuToned, tone_map};
 use crate::scene::Scene;
-use crate::sequence::path_sample;
+use crate::sequence::{TemporalHistory, path_sample};
 use crate::tone::ToneConfig;
 use crate::types::{Camera, EmParams, Light, PathParams, ShadeParams};
 
@@ -47,6 +47,26 @@ pub struct FrameRenderer {
     /// The scene's bounds and shadow bias, walked once per scene, not per frame.
     extent: SceneExtent,
     targets: Option<FrameTargets>,
+    /// The moving frames' history (`record_moving`); none after a reset.
+    history: Option<History>,
+}
+
+/// A moving frame about to be drawn: the history it continues, and what it will be.
+struct Moving {
+    last: Option<History>,
+    next: History,
+}
+
+/// What the last moving frame was drawn with, which the next one's history must share.
+#[derive(Clone, Copy)]
+struct History {
+    /// Its camera, jitter included.
+    cam: Camera,
+    params: ShadeParams,
+    splatting: Splatting,
+    /// Moving frames since the last reset: picks the jitter and which history buffer is the
+    /// last frame's.
+    frames: u32,
 }
 
 impl FrameRenderer {
@@ -68,6 +88,7 @@ impl FrameRenderer {
             lights: scene.lights.clone(),
             extent: SceneExtent::of(scene),
             targets: None,
+            history: None,
         })
     }
 
@@ -80,6 +101,7 @@ impl FrameRenderer {
         self.direct_ms = None;
         self.lights = scene.lights.clone();
         self.extent = SceneExtent::of(scene);
+        self.history = None;
         Ok(())
     }
 
@@ -112,6 +134,7 @@ impl FrameRenderer {
         self.frame_scene.splat_light = gpu.storage("splat light", &lobes.light)?;
         self.frame_scene.lobes = gpu.storage("lobes", &lobes.lobes)?;
         self.lobes_per_splat = lobes.lobes_per_splat;
+        self.history = None;
         self.set_lights(gpu, scene)
     }
 
@@ -123,6 +146,7 @@ impl FrameRenderer {
             self.frame_scene.lights = gpu.storage("lights", &scene.lights)?;
             self.lights = scene.lights.clone();
             self.direct_ms = None;
+            self.history = None;
         }
         Ok(())
     }
@@ -138,6 +162,7 @@ impl FrameRenderer {
         let direct = crate::sequence::bake_direct(&mut ex, &self.frame_scene.lights, &params)?;
         gpu.submit_and_wait(encoder)?;
         self.frame_scene.direct = direct;
+        self.history = None;
         let ms = crate::timing::ms_since(start);
         self.direct_ms = Some(ms);
         Ok(ms)
@@ -158,6 +183,7 @@ impl FrameRenderer {
             visibility: gpu.storage("light visibility", &baked.visibility)?,
         };
         self.direct_ms = Some(ms);
+        self.history = None;
         Ok(())
     }
 
@@ -193,6 +219,7 @@ impl FrameRenderer {
         let fits = |t: &FrameTargets| t.width == width && t.height == height;
         if !self.targets.as_ref().is_some_and(fits) {
             self.targets = Some(self.pipelines.targets(gpu, width, height)?);
+            self.history = None;
         }
         self.targets()
     }
@@ -215,6 +242,73 @@ impl FrameRenderer {
     ) -> Result<&wgpu::Buffer> {
         let params = shade_params_for(scene, self.lobes_per_splat, self.extent.shadow_bias, cfg);
         self.record_params(gpu, encoder, scene, cam, &params, cfg.splatter)
+    }
+
+    /// Records the moving frame of `cam`: with `cfg.temporal`, jittered and blended with the
+    /// moving frames before it (`sequence::temporal`; none before it after a reset: a new
+    /// scene, lobes, lights or size, or other shading), else as `record`. Returns the HDR
+    /// image, the resolved one.
+    pub fn record_moving(
+        &mut self,
+        gpu: &Gpu,
+        encoder: &mut wgpu::CommandEncoder,
+        scene: &Scene,
+        cam: &Camera,
+        cfg: &FrameConfig,
+    ) -> Result<&wgpu::Buffer> {
+        if !cfg.temporal {
+            self.history = None;
+            return self.record(gpu, encoder, scene, cam, cfg);
+        }
+        let moving = self.next_moving(scene, cam, cfg)?;
+        let next = &moving.next;
+        self.record_params(gpu, encoder, scene, &next.cam, &next.params, cfg.splatter)?;
+        self.record_temporal(gpu, encoder, &moving)?;
+        self.history = Some(moving.next);
+        Ok(&self.targets()?.hdr)
+    }
+
+    /// The next moving frame of `cam`: its jitter, and the history it continues where the
+    /// last moving frame was shaded alike.
+    fn next_moving(&self, scene: &Scene, cam: &Camera, cfg: &FrameConfig) -> Result<Moving> {
+        let params = shade_params_for(scene, self.lobes_per_splat, self.extent.shadow_bias, cfg);
+        let splatting = self.pipelines.splatting(cfg.splatter)?;
+        let last = self
+            .history
+            .filter(|h| h.params == params && h.splatting == splatting);
+        let frames = last.map_or(0, |h| h.frames);
+        let cam = Camera {
+            jitter: jitter(frames % TEMPORAL_JITTERS),
+            ..*cam
+        };
+        let next = History {
+            cam,
+            params,
+            splatting,
+            frames: frames + 1,
+        };
+        Ok(Moving { last, next })
+    }
+
+    /// Records the temporal pass of a moving frame, its splat passes recorded.
+    fn record_temporal(
+        &self,
+        gpu: &Gpu,
+        encoder: &mut wgpu::CommandEncoder,
+        moving: &Moving,
+    ) -> Result<()> {
+        let t = self.targets()?;
+        let (cam, last) = (&moving.next.cam, moving.last);
+        let params = temporal_params(t.width, t.height, last.is_none());
+        let prev = last.map_or(*cam, |h| h.cam);
+        // Frame k since the reset reads history buffer k % 2 and writes the other.
+        let k = moving.next.frames - 1;
+        let [from, to] = [k % 2, (k + 1) % 2].map(|b| TemporalHistory {
+            image: &t.history[b as usize],
+            surface: &t.history_surface[b as usize],
+        });
+        let mut ex = GpuExecutor::new(gpu, encoder);
+        crate::sequence::temporal(&mut ex, cam, &prev, &params, &t.hdr, &t.surface, from, to)
     }
 
     /// Records refinement frame `k` of `spp` of `cam` (`frame::refinement`): jittered, with
@@ -325,6 +419,22 @@ impl FrameRenderer {
         Ok(&targets.hdr)
     }
 
+    /// Targets of `view`'s size and the direct bake where `cfg` reads it; returns `view`'s
+    /// camera uniform.
+    fn prepare(
+        &mut self,
+        gpu: &Gpu,
+        scene: &Scene,
+        view: &View,
+        cfg: &FrameConfig,
+    ) -> Result<Camera> {
+        self.resize(gpu, view.width, view.height)?;
+        if cfg.needs_direct_bake() {
+            self.ensure_direct(gpu, scene)?;
+        }
+        Ok(camera_uniform(view, self.extent.bounds, cfg))
+    }
+
     /// Draws the lobes' frame of `view` (its size and camera) and waits.
     pub fn draw(
         &mut self,
@@ -333,13 +443,24 @@ impl FrameRenderer {
         view: &View,
         cfg: &FrameConfig,
     ) -> Result<&FrameTargets> {
-        self.resize(gpu, view.width, view.height)?;
-        if cfg.needs_direct_bake() {
-            self.ensure_direct(gpu, scene)?;
-        }
-        let cam = camera_uniform(view, self.extent.bounds, cfg);
+        let cam = self.prepare(gpu, scene, view, cfg)?;
         let mut encoder = gpu.encoder("frame");
         self.record(gpu, &mut encoder, scene, &cam, cfg)?;
+        gpu.submit_and_wait(encoder)?;
+        self.targets()
+    }
+
+    /// Draws the moving frame of `view` (`record_moving`) and waits.
+    pub fn draw_moving(
+        &mut self,
+        gpu: &Gpu,
+        scene: &Scene,
+        view: &View,
+        cfg: &FrameConfig,
+    ) -> Result<&FrameTargets> {
+        let cam = self.prepare(gpu, scene, view, cfg)?;
+        let mut encoder = gpu.encoder("moving frame");
+        self.record_moving(gpu, &mut encoder, scene, &cam, cfg)?;
         gpu.submit_and_wait(encoder)?;
         self.targets()
     }
@@ -355,11 +476,7 @@ impl FrameRenderer {
         spp: u32,
         mut each: impl FnMut(u32),
     ) -> Result<&FrameTargets> {
-        self.resize(gpu, view.width, view.height)?;
-        if cfg.needs_direct_bake() {
-            self.ensure_direct(gpu, scene)?;
-        }
-        let cam = camera_uniform(view, self.extent.bounds, cfg);
+        let cam = self.prepare(gpu, scene, view, cfg)?;
         for k in 0..spp.max(1) {
             let mut encoder = gpu.encoder("refinement frame");
             self.record_sample(gpu, &mut encoder, scene, &cam, cfg, k, spp)?;
@@ -420,25 +537,39 @@ impl FrameRenderer {
         self.targets()
     }
 
-    /// The lobes' frame of `view` with a wait after each splat pass: the milliseconds of
-    /// each (benchmarks; slower than `draw`, which waits once).
+    /// The moving frame of `view` (`draw_moving`) with a wait after each splat pass and after
+    /// the temporal pass: the milliseconds of each, the temporal pass's last (0 without it)
+    /// (benchmarks; slower than `draw_moving`, which waits once).
     pub fn draw_timed(
         &mut self,
         gpu: &Gpu,
         scene: &Scene,
         view: &View,
         cfg: &FrameConfig,
-    ) -> Result<[f64; 3]> {
-        self.resize(gpu, view.width, view.height)?;
-        if cfg.needs_direct_bake() {
-            self.ensure_direct(gpu, scene)?;
-        }
-        let cam = camera_uniform(view, self.extent.bounds, cfg);
+    ) -> Result<[f64; 4]> {
+        let cam = self.prepare(gpu, scene, view, cfg)?;
+        let moving = match cfg.temporal {
+            true => Some(self.next_moving(scene, &cam, cfg)?),
+            false => None,
+        };
+        let cam = moving.as_ref().map_or(cam, |m| m.next.cam);
         let params = shade_params_for(scene, self.lobes_per_splat, self.extent.shadow_bias, cfg);
         let splatting = self.pipelines.splatting(cfg.splatter)?;
         let buffers = self.frame_buffers(gpu, scene, &cam, &params, splatting)?;
-        self.pipelines
-            .draw_timed(gpu, &buffers, &cam, &params, splatting, self.targets()?)
+        let [visibility, attributes, shade] =
+            self.pipelines
+                .draw_timed(gpu, &buffers, &cam, &params, splatting, self.targets()?)?;
+        let mut temporal = 0.0;
+        self.history = None;
+        if let Some(moving) = moving {
+            let t = std::time::Instant::now();
+            let mut encoder = gpu.encoder("temporal");
+            self.record_temporal(gpu, &mut encoder, &moving)?;
+            gpu.submit_and_wait(encoder)?;
+            temporal = crate::timing::ms_since(t);
+            self.history = Some(moving.next);
+        }
+        Ok([visibility, attributes, shade, temporal])
     }
 
     /// Records the tone mapping of the current targets' HDR image.

@@ -30,7 +30,7 @@ use crate::tone::{ToneConfig, reduce_levels};
 use crate::types::{
     BinParams, Camera, DepositParams, DirectParams, DistanceParams, EmParams, Emitter,
     GatherParams, GridParams, Lobe, PathParams, Photon, PhotonViewParams, ScanParams, SplatLight,
-    TileParams, TraceCounters,
+    TemporalParams, TileParams, TraceCounters,
 };
 
 /// Where a sequence runs: buffers, uniforms, dispatches by stage name, copies and readbacks.
@@ -142,6 +142,46 @@ pub fn tone_map<E: Executor>(
         rgba,
         log_sum: sums_in,
     })
+}
+
+/// The moving frames' history buffers of one frame: the resolved image (w: the frames it
+/// holds) and the surface each pixel kept.
+pub struct TemporalHistory<'a, B> {
+    pub image: &'a B,
+    pub surface: &'a B,
+}
+
+/// Temporal anti-aliasing of a moving frame (`temporal`): `hdr` and its `surface`, drawn with
+/// `cam`, blended into `last` (drawn with `prev`), resolved into `next`, whose image is then
+/// copied into `hdr`.
+#[allow(clippy::too_many_arguments)]
+pub fn temporal<E: Executor>(
+    ex: &mut E,
+    cam: &Camera,
+    prev: &Camera,
+    params: &TemporalParams,
+    hdr: &E::Buffer,
+    surface: &E::Buffer,
+    last: TemporalHistory<E::Buffer>,
+    next: TemporalHistory<E::Buffer>,
+) -> Result<()> {
+    let pixels = params.width * params.height;
+    let cam_buf = ex.uniform("camera", cam)?;
+    let prev_buf = ex.uniform("last camera", prev)?;
+    let params_buf = ex.uniform("temporal params", params)?;
+    let bindings = [
+        &cam_buf,
+        &prev_buf,
+        &params_buf,
+        hdr,
+        surface,
+        last.image,
+        last.surface,
+        next.image,
+        next.surface,
+    ];
+    ex.dispatch(Stage::Temporal, &bindings, groups(Stage::Temporal, pixels)?)?;
+    ex.copy(next.image, 0, hdr, 0, pixels as u64 * 16)
 }
 
 /// A splat grid where it was built.

@@ -107,6 +107,7 @@ stages! {
     Present => "present",
     PhotonView => "photon_view",
     PhotonResolve => "photon_resolve",
+    Temporal => "temporal",
 }
 
 impl Stage {

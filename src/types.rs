@@ -541,6 +541,28 @@ pub const DIRECT_RAYS: u32 = 0;
 /// `ShadeParams::direct`: the bake's per-splat visibility (`direct_bake`).
 pub const DIRECT_BAKED: u32 = 1;
 
+/// Uniform of `temporal`, the moving frames' anti-aliasing: this frame's jittered samples
+/// blended into the last resolved image, reprojected by depth and camera motion.
+#[repr(C)]
+#[derive(Clone, Copy, Debug, Default, PartialEq, Pod, Zeroable)]
+pub struct TemporalParams {
+    pub width: u32,
+    pub height: u32,
+    /// 1: no history (the first moving frame, or after a change of scene, light or view
+    /// mode): the frame is its own resolved image.
+    pub reset: u32,
+    /// The most frames the history's running mean counts: the current frame weighs at least
+    /// 1 / `max_frames`.
+    pub max_frames: u32,
+    /// History is kept where its distance from the previous eye is within this share of the
+    /// distance the reprojected surface should have.
+    pub depth_tolerance: f32,
+    /// ... and where its normal is within this cosine of the surface's.
+    pub normal_cos: f32,
+    pub _pad0: u32,
+    pub _pad1: u32,
+}
+
 /// Uniform of the compute splatter's stages (`splat_tile_count`, `splat_tile_scatter`,
 /// `splat_compute`): the image in `TILE`² pixel tiles, tiles numbered x-fastest.
 #[repr(C)]

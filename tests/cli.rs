@@ -99,8 +99,9 @@ fn errors_are_one_line_with_non_zero_exit() {
     assert!(lines[0].contains("scenes/does_not_exist.toml"), "{err}");
 }
 
-/// `bench frame`: its keys, timed with the passes apart and with the level of detail that
-/// moving frames draw with by default (whose merge tree must be built for those frames too).
+/// `bench frame`: its keys, timed with the passes apart (the temporal pass too) and with the
+/// level of detail that moving frames draw with by default (whose merge tree must be built for
+/// those frames too), and a two-frame orbit.
 #[test]
 fn bench_frame_json_has_the_documented_keys() {
     let v = json(&[
@@ -109,6 +110,9 @@ fn bench_frame_json_has_the_documented_keys() {
         "scenes/cornell.toml",
         "--photons",
         "20000",
+        "--taa",
+        "--orbit",
+        "2",
         "--json",
     ]);
     for key in [
@@ -121,6 +125,7 @@ fn bench_frame_json_has_the_documented_keys() {
         "frame_ms",
         "sizes",
         "refinement",
+        "orbit",
     ] {
         assert!(v.get(key).is_some(), "missing key {key}: {v}");
     }
@@ -133,11 +138,20 @@ fn bench_frame_json_has_the_documented_keys() {
             "{size}"
         );
         assert!(size["frame_ms"].as_f64().unwrap() > 0.0, "{size}");
+        assert!(size["temporal_ms"].as_f64().unwrap() > 0.0, "{size}");
     }
     assert!(
         v["refinement"]["moving_rel_mse"].as_f64().unwrap() > 0.0,
         "{v}"
     );
+    // The orbit: both frames against their still images, with the temporal pass and alone;
+    // the first frame has no history, so both are the same image there.
+    let orbit = &v["orbit"];
+    assert_eq!(orbit["frames"], 2, "{orbit}");
+    let (with, alone) = (&orbit["rel_mse"], &orbit["rel_mse_alone"]);
+    assert_eq!(with.as_array().map(Vec::len), Some(2), "{orbit}");
+    assert_eq!(with[0], alone[0], "{orbit}");
+    assert!(orbit["median_rel_mse"].as_f64().unwrap() > 0.0, "{orbit}");
 }
 
 #[test]

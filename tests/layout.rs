@@ -226,6 +226,16 @@ fn rust_layouts() -> Vec<RustLayout> {
             sample,
             glossy_rays
         }),
+        layout!(TemporalParams {
+            width,
+            height,
+            reset,
+            max_frames,
+            depth_tolerance,
+            normal_cos,
+            _pad0,
+            _pad1
+        }),
         layout!(TileParams {
             tiles_x,
             tiles_y,

@@ -184,6 +184,7 @@ fn mirror_workgroup_shapes_match_the_wgsl() {
         (Stage::Shade, shade::WG, 1),
         (Stage::PhotonView, photon_view::WG, 1),
         (Stage::PhotonResolve, photon_resolve::WG, 1),
+        (Stage::Temporal, temporal::WG, 1),
     ];
     for &(name, wg, items) in mirrors {
         let shape = stage_shape(name).unwrap();

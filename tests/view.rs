@@ -231,6 +231,8 @@ fn bench_frame_window_reports_the_window() {
                 "20000",
                 "--area-samples",
                 "1",
+                "--orbit",
+                "0",
             ])
             .args(["--window", "--json"]);
     });

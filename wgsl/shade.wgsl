@@ -33,6 +33,9 @@
 // #paged
 @group(0) @binding(9) var<storage, read> direct_light: array<vec4<f32>>;
 @group(0) @binding(10) var<storage, read> materials: array<Material>;
+// Per pixel the surface shown (normal, distance along the view ray; FAR where none): what
+// the moving frames' temporal pass reprojects.
+@group(0) @binding(11) var<storage, read_write> surface: array<vec4<f32>>;
 
 const WG: u32 = 64u;
 // Keeps the glossy rays' random numbers apart from the shadow rays'.
@@ -235,6 +238,7 @@ fn main(@builtin(workgroup_id) wg: vec3<u32>, @builtin(num_workgroups) num_wg: v
     let acc = textureLoad(radiance_sum, px, 0);
     var color = vec3<f32>(0.0);
     var t_surface = FAR;
+    var normal = vec3<f32>(0.0);
     if acc.w > 0.0 {
         let inv_w = 1.0 / acc.w;
         let g = textureLoad(geometry_sum, px, 0);
@@ -244,6 +248,7 @@ fn main(@builtin(workgroup_id) wg: vec3<u32>, @builtin(num_workgroups) num_wg: v
         var sf: Surface;
         sf.p = cam.eye + t_surface * d;
         sf.n = select(-d, normalize(g.xyz), dot(g.xyz, g.xyz) > 0.0);
+        normal = sf.n;
         sf.wo = -d;
         // Terms the frame does not show weigh nothing; with neither, no shadow ray is cast.
         sf.rho_d = select(vec3<f32>(0.0), dif.xyz * inv_w, (params.show & SHOW_DIRECT_DIFFUSE) != 0u);
@@ -275,6 +280,7 @@ fn main(@builtin(workgroup_id) wg: vec3<u32>, @builtin(num_workgroups) num_wg: v
         shown_color = light;
     }
     let out = vec4<f32>(shown_color, 1.0);
+    surface[i] = vec4<f32>(normal, t_surface);
     // Refinement: the running mean of this frame and the `sample` frames before it.
     if params.sample == 0u {
         hdr[i] = out;

@@ -504,6 +504,81 @@ pub struct FrameBench {
     /// `--window`: frames drawn in a 1280×720 window by the viewer, swap chain included.
     #[serde(skip_serializing_if = "Option::is_none")]
     pub window: Option<ViewReport>,
+    /// GPU: the moving frames of a scripted orbit against the still images of their views
+    /// (`--orbit FRAMES`, 0: none).
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub orbit: Option<OrbitAccuracy>,
+}
+
+/// How far the moving frames of an orbit are from the still images of their views.
+#[derive(Debug, Serialize)]
+pub struct OrbitAccuracy {
+    pub frames: u32,
+    /// Degrees the scene's camera turns a frame, about its up axis through its target.
+    pub degrees_per_frame: f32,
+    pub width: u32,
+    pub height: u32,
+    /// Refinement frames of each view's still image.
+    pub spp: u32,
+    /// Median over the orbit of each moving frame's relMSE against its view's still image:
+    /// with the temporal pass (`--taa`; the history carried from frame to frame as in the
+    /// viewer), and each frame drawn alone.
+    pub median_rel_mse: f64,
+    pub median_rel_mse_alone: f64,
+    /// Each frame's, in order.
+    pub rel_mse: Vec<f64>,
+    pub rel_mse_alone: Vec<f64>,
+}
+
+/// `bench frame`'s orbit: frames, size and turn a frame.
+pub const ORBIT_FRAMES: u32 = 30;
+const ORBIT_SIZE: (u32, u32) = (256, 256);
+const ORBIT_DEGREES_PER_FRAME: f32 = 0.5;
+
+/// Draws `frames` moving frames of the scene's camera turning about its up axis, with the
+/// temporal pass (its history carried from frame to frame as in the viewer) and alone, each
+/// compared with its view's still image (`REFINEMENT_SPP` refinement frames).
+fn orbit(
+    renderer: &mut FrameRenderer,
+    gpu: &Gpu,
+    scene: &Scene,
+    cfg: &FrameConfig,
+    frames: u32,
+) -> Result<OrbitAccuracy> {
+    let (w, h) = ORBIT_SIZE;
+    let axis = glam::Vec3::from(scene.camera.up);
+    let [temporal, alone] = [true, false].map(|temporal| FrameConfig {
+        temporal,
+        ..cfg.clone()
+    });
+    let (mut rel_mse, mut rel_mse_alone) = (Vec::new(), Vec::new());
+    for k in 0..frames {
+        let turn = ORBIT_DEGREES_PER_FRAME * k as f32;
+        let view = View::new(
+            &crate::scene::views::turned(&scene.camera, axis, turn),
+            w,
+            h,
+        );
+        renderer.draw_moving(gpu, scene, &view, &temporal)?;
+        let moving = renderer.read_hdr(gpu)?;
+        renderer.draw(gpu, scene, &view, &alone)?;
+        let single = renderer.read_hdr(gpu)?;
+        renderer.draw_refined(gpu, scene, &view, cfg, REFINEMENT_SPP, |_| {})?;
+        let still = renderer.read_hdr(gpu)?;
+        rel_mse.push(difference(&moving, &still)?.rel_mse);
+        rel_mse_alone.push(difference(&single, &still)?.rel_mse);
+    }
+    Ok(OrbitAccuracy {
+        frames,
+        degrees_per_frame: ORBIT_DEGREES_PER_FRAME,
+        width: w,
+        height: h,
+        spp: REFINEMENT_SPP,
+        median_rel_mse: median(rel_mse.clone()),
+        median_rel_mse_alone: median(rel_mse_alone.clone()),
+        rel_mse,
+        rel_mse_alone,
+    })
 }
 
 #[derive(Debug, Serialize)]
@@ -513,13 +588,17 @@ pub struct FrameTiming {
     /// Median over the timed frames of shade + tone map.
     pub frame_ms: f64,
     pub fps: f64,
-    /// Medians of the two parts: the splat passes with shading, and tone mapping.
+    /// Medians of the two parts: the splat passes with shading (and the temporal pass), and
+    /// tone mapping.
     pub shade_ms: f64,
     pub tonemap_ms: f64,
     /// GPU: medians of the visibility, attribute and shade passes, each waited for (with baked
     /// direct light the attribute pass includes `splat_shade` before it).
     #[serde(skip_serializing_if = "Option::is_none")]
     pub passes_ms: Option<[f64; 3]>,
+    /// GPU: median of the temporal pass (`--taa`; 0 without), waited for apart.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub temporal_ms: Option<f64>,
     /// GPU: median of the present pass (the tone-mapped bytes drawn onto a window-format
     /// BGRA8 texture of this size), apart from `frame_ms`; what a window adds to a frame
     /// besides the swap chain itself.
@@ -534,7 +613,8 @@ pub struct RefinementTiming {
     pub spp: u32,
     /// Median milliseconds of one refinement frame (jittered, shadow rays), tone map apart.
     pub frame_ms: f64,
-    /// relMSE of the timed (moving-camera) frame against the still image.
+    /// relMSE against the still image of a moving frame drawn alone (no temporal history:
+    /// the first frame of a motion; the orbit's figures are the frames that follow).
     pub moving_rel_mse: f64,
 }
 
@@ -552,6 +632,7 @@ pub fn frame(
     gpu: Option<&Gpu>,
     cfg: &FrameConfig,
     tone: &ToneConfig,
+    orbit_frames: u32,
 ) -> Result<FrameBench> {
     cfg.validate()?;
     let progress = Progress::new(false);
@@ -559,6 +640,7 @@ pub fn frame(
     let mut direct_bake_ms = None;
     let mut splatter = "raster";
     let mut refinement = None;
+    let mut orbit_accuracy = None;
     let (adapter, backend, fitted) = match gpu {
         Some(gpu) => {
             let mut renderer = FrameRenderer::new(gpu, scene)?;
@@ -596,9 +678,15 @@ pub fn frame(
                 t.passes_ms = Some(std::array::from_fn(|k| {
                     median(pass_ms[1..].iter().map(|p| p[k]).collect())
                 }));
+                t.temporal_ms = Some(median(pass_ms[1..].iter().map(|p| p[3]).collect()));
                 t.present_ms = Some(median(present_ms[1..].to_vec()));
                 sizes.push(t);
                 if refinement.is_none() {
+                    let alone = FrameConfig {
+                        temporal: false,
+                        ..cfg.clone()
+                    };
+                    renderer.draw(gpu, scene, &view, &alone)?;
                     let moving = renderer.read_hdr(gpu)?;
                     let mut ms = Vec::new();
                     let mut last = Instant::now();
@@ -613,6 +701,9 @@ pub fn frame(
                         moving_rel_mse: difference(&moving, &still)?.rel_mse,
                     });
                 }
+            }
+            if orbit_frames > 0 {
+                orbit_accuracy = Some(orbit(&mut renderer, gpu, scene, cfg, orbit_frames)?);
             }
             let name = gpu.info.name.clone();
             (name, gpu.backend_name().to_string(), lobes.stats.fitted)
@@ -667,6 +758,7 @@ pub fn frame(
         sizes,
         refinement,
         window: None,
+        orbit: orbit_accuracy,
     })
 }
 
@@ -714,6 +806,7 @@ fn timing(width: u32, height: u32, times: &[(f64, f64)]) -> FrameTiming {
         shade_ms: median(times.iter().map(|t| t.0).collect()),
         tonemap_ms: median(times.iter().map(|t| t.1).collect()),
         passes_ms: None,
+        temporal_ms: None,
         present_ms: None,
         frames: times.len() as u32,
     }
@@ -747,7 +840,11 @@ impl std::fmt::Display for FrameBench {
                 s.width, s.height, s.frame_ms, s.fps, s.shade_ms, s.tonemap_ms
             )?;
             if let Some([v, a, sh]) = s.passes_ms {
-                write!(f, " (visibility {v:.1}, attributes {a:.1}, shade {sh:.1})")?;
+                write!(f, " (visibility {v:.1}, attributes {a:.1}, shade {sh:.1}")?;
+                match s.temporal_ms {
+                    Some(t) if t > 0.0 => write!(f, ", temporal {t:.1})")?,
+                    _ => write!(f, ")")?,
+                }
             }
             if let Some(p) = s.present_ms {
                 write!(f, "; present {p:.1} ms")?;
@@ -759,6 +856,19 @@ impl std::fmt::Display for FrameBench {
                 "\nrefinement   {:.1} ms/frame; the moving frame's relMSE against the {}-frame \
                  still image: {:.5}",
                 r.frame_ms, r.spp, r.moving_rel_mse
+            )?;
+        }
+        if let Some(o) = &self.orbit {
+            write!(
+                f,
+                "\norbit        {} frames at {}×{}, {}° a frame: median relMSE against each \
+                 view's still image {:.5} with --taa, {:.5} each frame alone",
+                o.frames,
+                o.width,
+                o.height,
+                o.degrees_per_frame,
+                o.median_rel_mse,
+                o.median_rel_mse_alone
             )?;
         }
         if let Some(w) = &self.window {

@@ -236,6 +236,11 @@ struct LookArgs {
     /// moving frame). Still images only.
     #[arg(long, value_name = "N", default_value_t = crate::frame::DEFAULT_GLOSSY_RAYS)]
     glossy_rays: u32,
+    /// Temporal anti-aliasing of moving frames: each jittered and blended with the ones
+    /// before it, reprojected (by default each is drawn alone at the pixel centres; see
+    /// docs/measurements.md, "Moving frames that remember").
+    #[arg(long)]
+    taa: bool,
 }
 
 impl LookArgs {
@@ -247,6 +252,7 @@ impl LookArgs {
             splatter: self.splatter,
             lod: self.lod,
             glossy_rays: self.glossy_rays,
+            temporal: self.taa,
             ..FrameConfig::default()
         }
     }
@@ -410,6 +416,11 @@ enum Command {
         /// `cluster` only: the dense cloud's splat count.
         #[arg(long, value_name = "N", default_value_t = cluster::DEFAULT_CLUSTER)]
         cluster_splats: u64,
+        /// `frame` only: moving frames of a scripted orbit (the scene's camera turned by
+        /// half a degree a frame) each compared with its view's still image, under the key
+        /// `orbit` (0: none).
+        #[arg(long, value_name = "FRAMES", default_value_t = bench::ORBIT_FRAMES)]
+        orbit: u32,
     },
 }
 
@@ -748,6 +759,7 @@ fn run(cli: Cli) -> Result<()> {
             device,
             json,
             window,
+            orbit,
             ..
         } => {
             if scenes.is_empty() {
@@ -778,8 +790,8 @@ fn run(cli: Cli) -> Result<()> {
                         (r.to_string(), to_json(&r)?)
                     }
                     BenchKind::Frame => {
-                        let mut r =
-                            bench::frame(&scene, gpu.as_ref(), &look.frame(), &look.tone())?;
+                        let (frame, tone) = (look.frame(), look.tone());
+                        let mut r = bench::frame(&scene, gpu.as_ref(), &frame, &tone, orbit)?;
                         if window {
                             let (frame, tone) = (look.frame(), look.tone());
                             let backend = device.backend;

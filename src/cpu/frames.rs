@@ -154,7 +154,18 @@ pub fn cpu_frame_into(
         direct_light: &direct.direct,
         materials: &scene.materials,
     };
-    cpu::shade::shade(cam, params, &sums, &scene.lights, &hit_light, &geo, hdr);
+    let mut surface = vec![[0.0; 4]; hdr.len()];
+    let lights = &scene.lights;
+    cpu::shade::shade(
+        cam,
+        params,
+        &sums,
+        lights,
+        &hit_light,
+        &geo,
+        hdr,
+        &mut surface,
+    );
 }
 
 /// The still image of `cam` on the CPU: `spp` refinement frames, each jittered and with its
@@ -207,6 +218,17 @@ pub fn cpu_reference(
         direct_light: &[],
         materials: &scene.materials,
     };
-    cpu::shade::shade(cam, &params, &sums, &scene.lights, &no_hits, &geo, &mut hdr);
+    let mut surface = vec![[0.0; 4]; hdr.len()];
+    let lights = &scene.lights;
+    cpu::shade::shade(
+        cam,
+        &params,
+        &sums,
+        lights,
+        &no_hits,
+        &geo,
+        &mut hdr,
+        &mut surface,
+    );
     hdr
 }

@@ -41,6 +41,7 @@ pub mod splat_shade;
 pub mod splat_shading;
 pub mod splat_tiles;
 pub mod splat_visibility;
+pub mod temporal;
 pub mod tonemap_apply;
 pub mod tonemap_reduce;
 pub mod trace_rays;
@@ -95,6 +96,7 @@ pub fn mirror(stage: Stage) -> Option<Mirror> {
         Stage::ScanReduce => Mirror::Plain(scan_reduce::dispatch),
         Stage::SplatTileCount => Mirror::Plain(splat_tiles::dispatch_tile_count),
         Stage::SplatTileScatter => Mirror::Plain(splat_tiles::dispatch_tile_scatter),
+        Stage::Temporal => Mirror::Plain(temporal::dispatch),
         Stage::TonemapApply => Mirror::Plain(tonemap_apply::dispatch),
         Stage::TonemapReduce => Mirror::Plain(tonemap_reduce::dispatch),
         Stage::TraceRays

@@ -254,7 +254,9 @@ fn emitted(
 }
 
 /// Shades every pixel into `hdr` (`width × height` values): written for refinement sample 0,
-/// added to the running mean after it.
+/// added to the running mean after it. `surface` gets each pixel's surface (normal, distance
+/// along the view ray; `FAR` where none), what the temporal pass reprojects.
+#[allow(clippy::too_many_arguments)]
 pub fn shade(
     cam: &Camera,
     params: &ShadeParams,
@@ -263,16 +265,19 @@ pub fn shade(
     baked: &HitLight,
     geo: &Geometry,
     hdr: &mut [[f32; 4]],
+    surface: &mut [[f32; 4]],
 ) {
     let eye = Vec3::from(cam.eye);
     let width = cam.size[0] as u32;
-    hdr.par_iter_mut().enumerate().for_each(|(i, out)| {
+    let pixels = hdr.par_iter_mut().zip(surface.par_iter_mut());
+    pixels.enumerate().for_each(|(i, (out, out_surface))| {
         let i = i as u32;
         let px = Vec2::new((i % width) as f32, (i / width) as f32);
         let d = pixel_ray(cam, px + 0.5);
         let acc = Vec4::from(sums.radiance[i as usize]);
         let mut color = Vec3::ZERO;
         let mut t_surface = FAR;
+        let mut normal = Vec3::ZERO;
         let shown = |bit: u32, v: Vec3| {
             if params.show & bit != 0 {
                 v
@@ -296,6 +301,7 @@ pub fn shade(
                 rho_s: shown(SHOW_DIRECT_SPECULAR, spec.truncate() * inv_w),
                 alpha: if spec.w > 0.0 { dif.w / spec.w } else { 0.0 },
             };
+            normal = sf.n;
             color = acc.truncate() * inv_w;
             // Baked direct light came with the attribute pass's sums.
             let rays = params.direct == DIRECT_RAYS;
@@ -323,6 +329,7 @@ pub fn shade(
             None => color,
         };
         let c = c.extend(1.0);
+        *out_surface = normal.extend(t_surface).to_array();
         // Refinement: the running mean of this frame and the `sample` frames before it.
         *out = if params.sample == 0 {
             c

@@ -306,6 +306,12 @@ pub struct FrameTargets {
     sums: Vec<wgpu::TextureView>,
     /// Linear HDR radiance, one `vec4<f32>` per pixel, rows from the top.
     pub hdr: wgpu::Buffer,
+    /// The surface each pixel shows (normal, distance from the eye; `shade`'s output).
+    pub surface: wgpu::Buffer,
+    /// The moving frames' resolved images and the surfaces they kept (`temporal`), one the
+    /// last frame's, the other the next's: which is which, `FrameRenderer`'s history knows.
+    pub history: [wgpu::Buffer; 2],
+    pub history_surface: [wgpu::Buffer; 2],
 }
 
 impl FrameTargets {
@@ -428,6 +434,7 @@ fn shade_layouts(gpu: &Gpu, paging: &Paging) -> Result<[wgpu::BindGroupLayout; 2
     frame.extend((2..6).map(texture));
     frame.extend([buffer_entry(6, READ), buffer_entry(7, READ_WRITE)]);
     frame.extend([8, 9, 10].map(|binding| buffer_entry(binding, READ)));
+    frame.push(buffer_entry(11, READ_WRITE));
     let mut geometry = vec![buffer_entry(0, UNIFORM)];
     for p in crate::shaders::paged_bindings(Stage::Shade)? {
         let pages = paging.of(&p.name).map_or(1, |l| l.pages);
@@ -696,14 +703,21 @@ impl SplatPipelines {
                 )
             })
             .collect();
-        let hdr = gpu.storage_zeroed("hdr image", width as u64 * height as u64 * 16)?;
+        let pixels = width as u64 * height as u64;
+        let image = |label| gpu.storage_zeroed(label, pixels * 16);
         Ok(FrameTargets {
             width,
             height,
             depth,
             front,
             sums,
-            hdr,
+            hdr: image("hdr image")?,
+            surface: image("surface image")?,
+            history: [image("temporal history")?, image("temporal history")?],
+            history_surface: [
+                image("temporal history surface")?,
+                image("temporal history surface")?,
+            ],
         })
     }
 
@@ -1098,6 +1112,10 @@ impl SplatPipelines {
         frame_entries.push(wgpu::BindGroupEntry {
             binding: 7,
             resource: out.hdr.as_entire_binding(),
+        });
+        frame_entries.push(wgpu::BindGroupEntry {
+            binding: 11,
+            resource: out.surface.as_entire_binding(),
         });
         // The baked light at the glossy rays' hits (paged: a splat's each, like the geometry),
         // and the hit disks' materials.

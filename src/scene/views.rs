@@ -92,15 +92,8 @@ pub fn parse(path: &Path, text: &str, base: &CameraDesc) -> Result<Vec<CameraDes
                 "degrees must be a number and axis a nonzero vector".into()
             ));
         }
-        let (eye, target) = (Vec3::from(base.eye), Vec3::from(base.target));
         for k in 0..o.frames {
-            let turn = (o.degrees * k as f32 / o.frames as f32).to_radians();
-            let q = Quat::from_axis_angle(axis.normalize(), turn);
-            let cam = CameraDesc {
-                eye: (target + q * (eye - target)).to_array(),
-                up: (q * Vec3::from(base.up)).to_array(),
-                ..base.clone()
-            };
+            let cam = turned(base, axis, o.degrees * k as f32 / o.frames as f32);
             super::validate_camera(&cam).map_err(|m| bad(format!("frame {k}: {m}")))?;
             views.push(cam);
         }
@@ -113,6 +106,17 @@ pub fn parse(path: &Path, text: &str, base: &CameraDesc) -> Result<Vec<CameraDes
         ));
     }
     Ok(views)
+}
+
+/// `base` turned by `degrees` about `axis` (a nonzero vector) through its target.
+pub fn turned(base: &CameraDesc, axis: Vec3, degrees: f32) -> CameraDesc {
+    let (eye, target) = (Vec3::from(base.eye), Vec3::from(base.target));
+    let q = Quat::from_axis_angle(axis.normalize(), degrees.to_radians());
+    CameraDesc {
+        eye: (target + q * (eye - target)).to_array(),
+        up: (q * Vec3::from(base.up)).to_array(),
+        ..base.clone()
+    }
 }
 
 /// The file of view `k` of `count` in the sequence named by `output`: a run of `#` in its name

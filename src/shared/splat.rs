@@ -178,6 +178,23 @@ pub fn pixel_ray(cam: &Camera, pixel: Vec2) -> Vec3 {
     .normalize()
 }
 
+/// Where world point `p` lies in the image of `cam` without its jitter: the point in pixels
+/// (`pixel_ray(cam, xy - jitter)` points at `p`) and the view depth z (z <= 0: at or behind
+/// the eye, and xy means nothing).
+pub fn project_point(cam: &Camera, p: Vec3) -> Vec3 {
+    let v = p - Vec3::from(cam.eye);
+    let z = v.dot(Vec3::from(cam.forward));
+    let ndc = Vec2::new(
+        v.dot(Vec3::from(cam.right)) / cam.tan_x,
+        v.dot(Vec3::from(cam.up)) / cam.tan_y,
+    ) / z;
+    Vec3::new(
+        (ndc.x * 0.5 + 0.5) * cam.size[0],
+        (0.5 - ndc.y * 0.5) * cam.size[1],
+        z,
+    )
+}
+
 #[derive(Clone, Copy, Debug)]
 pub struct SplatHit {
     pub t: f32,

@@ -284,6 +284,16 @@ fn pixel_ray(cam: Camera, pixel: vec2<f32>) -> vec3<f32> {
     return normalize(cam.forward + (ndc.x * cam.tan_x) * cam.right + (ndc.y * cam.tan_y) * cam.up);
 }
 
+// Where world point p lies in the image of `cam` without its jitter: the point of the image
+// in pixels (as pixel_ray takes it: pixel_ray(cam, xy - cam.jitter) points at p) and the view
+// depth z (z <= 0: at or behind the eye, and xy means nothing).
+fn project_point(cam: Camera, p: vec3<f32>) -> vec3<f32> {
+    let v = p - cam.eye;
+    let z = dot(v, cam.forward);
+    let ndc = vec2<f32>(dot(v, cam.right) / cam.tan_x, dot(v, cam.up) / cam.tan_y) / z;
+    return vec3<f32>((ndc.x * 0.5 + 0.5) * cam.size.x, (0.5 - ndc.y * 0.5) * cam.size.y, z);
+}
+
 // Where ray (o, d) meets a splat's plane: t, and q = |hit - centre|^2 / r^2 (inside: q <= 1;
 // NaN or above 1 for a ray along the plane).
 struct SplatHit {

@@ -260,6 +260,17 @@ struct Camera {
     _pad2: f32,
 }
 
+struct TemporalParams {
+    width: u32,
+    height: u32,
+    reset: u32,
+    max_frames: u32,
+    depth_tolerance: f32,
+    normal_cos: f32,
+    _pad0: u32,
+    _pad1: u32,
+}
+
 struct ShadeParams {
     lobes_per_splat: u32,
     family: u32,

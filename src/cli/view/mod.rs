@@ -377,7 +377,8 @@ impl State {
                         let ms = self.renderer.bake_direct(gpu, scene)?;
                         eprintln!("direct bake: {ms:.0} ms");
                     }
-                    self.renderer.record(gpu, encoder, scene, &cam, frame)?;
+                    self.renderer
+                        .record_moving(gpu, encoder, scene, &cam, frame)?;
                 } else if self.samples < self.spp {
                     let (k, spp) = (self.samples, self.spp);
                     self.renderer
