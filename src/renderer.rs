@@ -303,9 +303,10 @@ impl FrameRenderer {
         let prev = last.map_or(*cam, |h| h.cam);
         // Frame k since the reset reads history buffer k % 2 and writes the other.
         let k = moving.next.frames - 1;
+        let history = t.history(gpu)?;
         let [from, to] = [k % 2, (k + 1) % 2].map(|b| TemporalHistory {
-            image: &t.history[b as usize],
-            surface: &t.history_surface[b as usize],
+            image: &history.image[b as usize],
+            surface: &history.surface[b as usize],
         });
         let mut ex = GpuExecutor::new(gpu, encoder);
         crate::sequence::temporal(&mut ex, cam, &prev, &params, &t.hdr, &t.surface, from, to)

@@ -308,13 +308,39 @@ pub struct FrameTargets {
     pub hdr: wgpu::Buffer,
     /// The surface each pixel shows (normal, distance from the eye; `shade`'s output).
     pub surface: wgpu::Buffer,
-    /// The moving frames' resolved images and the surfaces they kept (`temporal`), one the
-    /// last frame's, the other the next's: which is which, `FrameRenderer`'s history knows.
-    pub history: [wgpu::Buffer; 2],
-    pub history_surface: [wgpu::Buffer; 2],
+    /// The moving frames' history, made by the first frame with the temporal pass.
+    history: OnceLock<TemporalImages>,
+}
+
+/// The moving frames' resolved images and the surfaces they kept (`temporal`), one pair the
+/// last frame's, the other the next's: which is which, `FrameRenderer`'s history knows.
+pub struct TemporalImages {
+    pub image: [wgpu::Buffer; 2],
+    pub surface: [wgpu::Buffer; 2],
 }
 
 impl FrameTargets {
+    /// The temporal pass's history buffers, made on first use (four images: frames without
+    /// the pass need none).
+    pub fn history(&self, gpu: &Gpu) -> Result<&TemporalImages> {
+        if self.history.get().is_none() {
+            let pixels = self.width as u64 * self.height as u64;
+            let image = |label| gpu.storage_zeroed(label, pixels * 16);
+            let made = TemporalImages {
+                image: [image("temporal history")?, image("temporal history")?],
+                surface: [
+                    image("temporal history surface")?,
+                    image("temporal history surface")?,
+                ],
+            };
+            // One thread draws a renderer's frames: the cell is empty here.
+            let _ = self.history.set(made);
+        }
+        self.history
+            .get()
+            .ok_or_else(|| Error::internal("the temporal history was not kept"))
+    }
+
     /// The attribute targets as colour attachments cleared to zero.
     pub(super) fn cleared_sums(&self) -> Vec<Option<wgpu::RenderPassColorAttachment<'_>>> {
         self.sums
@@ -713,11 +739,7 @@ impl SplatPipelines {
             sums,
             hdr: image("hdr image")?,
             surface: image("surface image")?,
-            history: [image("temporal history")?, image("temporal history")?],
-            history_surface: [
-                image("temporal history surface")?,
-                image("temporal history surface")?,
-            ],
+            history: OnceLock::new(),
         })
     }
 
