@@ -547,10 +547,10 @@ fn orbit(
 ) -> Result<OrbitAccuracy> {
     let (w, h) = ORBIT_SIZE;
     let axis = glam::Vec3::from(scene.camera.up);
-    let [temporal, alone] = [true, false].map(|temporal| FrameConfig {
-        temporal,
+    let temporal = FrameConfig {
+        temporal: true,
         ..cfg.clone()
-    });
+    };
     let (mut rel_mse, mut rel_mse_alone) = (Vec::new(), Vec::new());
     for k in 0..frames {
         let turn = ORBIT_DEGREES_PER_FRAME * k as f32;
@@ -561,7 +561,8 @@ fn orbit(
         );
         renderer.draw_moving(gpu, scene, &view, &temporal)?;
         let moving = renderer.read_hdr(gpu)?;
-        renderer.draw(gpu, scene, &view, &alone)?;
+        // `draw` draws the frame alone, whatever `cfg.temporal` says.
+        renderer.draw(gpu, scene, &view, cfg)?;
         let single = renderer.read_hdr(gpu)?;
         renderer.draw_refined(gpu, scene, &view, cfg, REFINEMENT_SPP, |_| {})?;
         let still = renderer.read_hdr(gpu)?;
@@ -682,11 +683,11 @@ pub fn frame(
                 t.present_ms = Some(median(present_ms[1..].to_vec()));
                 sizes.push(t);
                 if refinement.is_none() {
-                    let alone = FrameConfig {
-                        temporal: false,
-                        ..cfg.clone()
-                    };
-                    renderer.draw(gpu, scene, &view, &alone)?;
+                    // A moving frame alone (`draw`): the last timed frame is one, unless the
+                    // temporal pass blended it.
+                    if cfg.temporal {
+                        renderer.draw(gpu, scene, &view, cfg)?;
+                    }
                     let moving = renderer.read_hdr(gpu)?;
                     let mut ms = Vec::new();
                     let mut last = Instant::now();
