@@ -33,8 +33,8 @@
 // #paged
 @group(0) @binding(9) var<storage, read> direct_light: array<vec4<f32>>;
 @group(0) @binding(10) var<storage, read> materials: array<Material>;
-// Per pixel the surface shown (normal, distance along the view ray; FAR where none): what
-// the moving frames' temporal pass reprojects.
+// Per pixel the surface shown (normal, reversed where a light shows; distance along the view
+// ray, FAR where none): what the moving frames' temporal pass reprojects.
 @group(0) @binding(11) var<storage, read_write> surface: array<vec4<f32>>;
 
 const WG: u32 = 64u;
@@ -280,7 +280,9 @@ fn main(@builtin(workgroup_id) wg: vec3<u32>, @builtin(num_workgroups) num_wg: v
         shown_color = light;
     }
     let out = vec4<f32>(shown_color, 1.0);
-    surface[i] = vec4<f32>(normal, t_surface);
+    // A light's pixels carry the normal reversed: to the temporal pass a light and the surface
+    // it lies on are two surfaces, so that no history carries its brightness onto the ceiling.
+    surface[i] = vec4<f32>(select(normal, -normal, seen.w >= 0.0), t_surface);
     // Refinement: the running mean of this frame and the `sample` frames before it.
     if params.sample == 0u {
         hdr[i] = out;

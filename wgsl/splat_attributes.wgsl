@@ -86,8 +86,7 @@ fn vs_baked(@builtin(vertex_index) k: u32, @builtin(instance_index) b: u32) -> S
     }
     let listed = selected_at(i);
     let s = drawn_splat(splats_at(listed), drawn_at(listed));
-    // Moving frames draw disks as they are (drawn_clip.wgsl).
-    var out = splat_vertex(cam, s, listed, instance_corner(k));
+    var out = clipped_vertex(splat_vertex(cam, s, listed, instance_corner(k)), s, drawn_clip(s));
     out.radiance = shaded_at(listed).xyz;
     return out;
 }
@@ -101,7 +100,7 @@ fn fs_baked(v: SplatVertex) -> BakedAttributes {
     let s = vertex_splat(v);
     let d = pixel_ray(cam, v.position.xy);
     let h = splat_hit(s, cam.eye, d);
-    if !covers(cam, h, d) || !in_front(v, s) {
+    if !covers(cam, h, d) || !clip_passes(v, cam.eye + h.t * d) || !in_front(v, s) {
         discard;
     }
     let w = splat_weight(h.q);

@@ -30,8 +30,7 @@
 
 const WG: u32 = 64u;
 
-// Whether a hit at p on splat s is drawn where its surface ends (as the raster passes test;
-// moving frames, of baked direct light, draw disks as they are).
+// Whether a hit at p on splat s is drawn where its surface ends (as the raster passes test).
 fn drawn(s: Splat, p: vec3<f32>) -> bool {
     let rows = clip_drawn_rows(drawn_clip(s), s);
     return rows_pass(rows[0], rows[1], p);
@@ -67,7 +66,7 @@ fn main(@builtin(workgroup_id) wg: vec3<u32>, @builtin(num_workgroups) num_wg: v
     for (var k = begin; k < end; k++) {
         let s = splats_at(tile_splats[k]);
         let h = splat_hit(s, cam.eye, d);
-        if covers(cam, h, d) && (baked || drawn(s, cam.eye + h.t * d)) {
+        if covers(cam, h, d) && drawn(s, cam.eye + h.t * d) {
             let z = view_depth(cam, h.t * z_of + cam.depth_tolerance * s.radius);
             if z > nearest {
                 nearest = z;
@@ -84,7 +83,7 @@ fn main(@builtin(workgroup_id) wg: vec3<u32>, @builtin(num_workgroups) num_wg: v
         let i = tile_splats[k];
         let s = splats_at(i);
         let h = splat_hit(s, cam.eye, d);
-        if !covers(cam, h, d) || !(baked || drawn(s, cam.eye + h.t * d))
+        if !covers(cam, h, d) || !drawn(s, cam.eye + h.t * d)
             || !(view_depth(cam, h.t * z_of) >= nearest)
             || !same_surface(front, s.normal) {
             continue;

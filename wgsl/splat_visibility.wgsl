@@ -1,6 +1,6 @@
 // Splat pass 1, visibility (docs/design.md section 8): every front-facing splat as a triangle; the
-// fragment shader intersects the pixel's view ray with the disk, discards outside it (and,
-// but in moving frames (LISTED), outside its surface's bounds, drawn_clip.wgsl), and
+// fragment shader intersects the pixel's view ray with the disk, discards outside it (and
+// outside its surface's bounds, drawn_clip.wgsl), and
 // writes the hit's depth pushed back by `depth_tolerance` splat radii along view z, and the
 // splat's normal (octahedral) into the front target. The attribute pass then blends every
 // splat within that tolerance of the nearest surface and facing its way (same_surface).
@@ -35,9 +35,9 @@ fn vs_main(@builtin(vertex_index) k: u32, @builtin(instance_index) b: u32) -> Sp
             return surplus_vertex(i);
         }
         let listed = selected_at(i);
-        // Moving frames draw disks as they are (drawn_clip.wgsl).
-        return splat_vertex(cam, drawn_splat(splats_at(listed), drawn_at(listed)), listed,
-                            instance_corner(k));
+        let s = drawn_splat(splats_at(listed), drawn_at(listed));
+        return clipped_vertex(splat_vertex(cam, s, listed, instance_corner(k)), s,
+                              drawn_clip(s));
     }
     if i >= splats_len() {
         return surplus_vertex(i);
@@ -57,7 +57,7 @@ fn fs_main(v: SplatVertex) -> Visible {
     let s = vertex_splat(v);
     let d = pixel_ray(cam, v.position.xy);
     let h = splat_hit(s, cam.eye, d);
-    if !covers(cam, h, d) || (!LISTED && !clip_passes(v, cam.eye + h.t * d)) {
+    if !covers(cam, h, d) || !clip_passes(v, cam.eye + h.t * d) {
         discard;
     }
     let z = h.t * dot(d, cam.forward);

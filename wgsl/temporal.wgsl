@@ -2,10 +2,15 @@
 // moving frame is drawn with its own sub-pixel jitter and blended into the last resolved image,
 // found where the surface a pixel shows was in the last frame's camera. Per pixel:
 // - the history: the four last-frame pixels around where the pixel's surface was (where it
-//   shows none, its view direction's, a point at infinity), each kept only where it showed
-//   the same surface (its distance from the last eye within depth_tolerance of the reprojected
-//   point's, its normal within normal_cos; what the motion uncovered starts anew), bilinear
-//   among the kept ones;
+//   shows none, its view direction's, a point at infinity), each kept only where it showed a
+//   surface the pixel shows now (its distance from the last eye within depth_tolerance of
+//   that surface's, its normal within normal_cos; what the motion uncovered starts anew), or
+//   one an edge neighbour shows where what it showed lies within the pixel's footprint now,
+//   bilinear among the kept ones. The neighbours count because a jittered pixel on an edge
+//   shows either side of it: held to its own surface alone, the history was dropped there
+//   every few frames and the edge showed that frame's aliased sample. The footprint keeps a
+//   silhouette that moved off the pixel from staying in it. Lights carry their surface's
+//   normal reversed (shade.wgsl), so a light and the ceiling it lies on are two surfaces;
 // - the clamp: the history's colour limited to the range of the frame's neighbourhood (the
 //   pixel and its four edge neighbours), so that what moved or changed light leaves no trail
 //   beyond it;
@@ -51,6 +56,56 @@ fn weight_of(c: vec3<f32>) -> f32 {
     return 1.0 / (1.0 + max(luminance(c), 0.0));
 }
 
+// Surface s (normal, distance along its ray) that pixel q shows, as (normal, distance from
+// the last frame's eye); NO_SURFACE where it shows none.
+fn seen_from_last_eye(q: vec2<i32>, s: vec4<f32>) -> vec4<f32> {
+    if s.w >= NO_SURFACE {
+        return vec4<f32>(s.xyz, NO_SURFACE);
+    }
+    let p = cam.eye + s.w * pixel_ray(cam, vec2<f32>(q) + 0.5);
+    return vec4<f32>(s.xyz, length(p - prev.eye));
+}
+
+// Whether the last frame's surface `was` (normal, distance from its eye) is the surface
+// `seen` (seen_from_last_eye): both none, or distances within depth_tolerance and normals
+// within normal_cos.
+fn same_surface_seen(was: vec4<f32>, seen: vec4<f32>) -> bool {
+    let was_shown = was.w < NO_SURFACE;
+    let shown = seen.w < NO_SURFACE;
+    if !was_shown || !shown {
+        return was_shown == shown;
+    }
+    return abs(was.w - seen.w) <= params.depth_tolerance * seen.w
+        && dot(was.xyz, seen.xyz) >= params.normal_cos;
+}
+
+// Edge neighbour k (0-3: right, left, down, up) of pixel px, clamped to the image.
+fn edge_neighbour(px: vec2<i32>, k: i32, size: vec2<i32>) -> vec2<i32> {
+    let step = select(vec2<i32>(1 - 2 * (k & 1), 0), vec2<i32>(0, 1 - 2 * (k & 1)), k >= 2);
+    return clamp(px + step, vec2<i32>(0), size - 1);
+}
+
+// Whether one of pixel px's edge neighbours shows the last frame's surface `was` now.
+fn shown_beside(px: vec2<i32>, size: vec2<i32>, was: vec4<f32>) -> bool {
+    for (var k = 0; k < 4; k++) {
+        let q = edge_neighbour(px, k, size);
+        if same_surface_seen(was, seen_from_last_eye(q, surface[pixel_index(q.x, q.y)])) {
+            return true;
+        }
+    }
+    return false;
+}
+
+// Whether what last-frame pixel q showed (surface `was`: normal, distance along its ray)
+// lies within pixel px's footprint in this frame's image; nothing lies everywhere.
+fn in_footprint(px: vec2<i32>, q: vec2<i32>, was: vec4<f32>) -> bool {
+    if was.w >= NO_SURFACE {
+        return true;
+    }
+    let now = project_point(cam, prev.eye + was.w * pixel_ray(prev, vec2<f32>(q) + 0.5));
+    return now.z > 0.0 && all(vec2<i32>(floor(now.xy)) == px);
+}
+
 @compute @workgroup_size(64)
 fn main(@builtin(workgroup_id) wg: vec3<u32>, @builtin(num_workgroups) num_wg: vec3<u32>,
         @builtin(local_invocation_index) lid: u32) {
@@ -61,19 +116,19 @@ fn main(@builtin(workgroup_id) wg: vec3<u32>, @builtin(num_workgroups) num_wg: v
     let px = vec2<i32>(i32(i % params.width), i32(i / params.width));
     let size = vec2<i32>(i32(params.width), i32(params.height));
     let current = hdr[i].xyz;
+    let own = surface[i];
+    let shows = own.w < NO_SURFACE;
     // The neighbourhood's colour range: the pixel and its four edge neighbours (the 3x3
     // square's corners cost llvmpipe a third of the pass for a range hardly wider).
     var lo = current;
     var hi = current;
     for (var k = 0; k < 4; k++) {
-        let step = select(vec2<i32>(1 - 2 * (k & 1), 0), vec2<i32>(0, 1 - 2 * (k & 1)), k >= 2);
-        let q = clamp(px + step, vec2<i32>(0), size - 1);
+        let q = edge_neighbour(px, k, size);
         let c = hdr[pixel_index(q.x, q.y)].xyz;
         lo = min(lo, c);
         hi = max(hi, c);
     }
-    let own = surface[i];
-    let shows = own.w < NO_SURFACE;
+    let seen = seen_from_last_eye(px, own);
     var out = vec4<f32>(current, 1.0);
     if params.reset == 0u {
         // Where the surface is now and was in the last frame's image: a point, or where the
@@ -82,7 +137,6 @@ fn main(@builtin(workgroup_id) wg: vec3<u32>, @builtin(num_workgroups) num_wg: v
         let p = cam.eye + own.w * d;
         let now = project_point(cam, select(cam.eye + d, p, shows));
         let was = project_point(prev, select(prev.eye + d, p, shows));
-        let expected = length(p - prev.eye);
         // The pixel's centre moved as the surface did; pixel k's centre is at k + 0.5.
         let at = vec2<f32>(px) + (was.xy - now.xy);
         let base = floor(at);
@@ -98,12 +152,10 @@ fn main(@builtin(workgroup_id) wg: vec3<u32>, @builtin(num_workgroups) num_wg: v
             }
             let j = pixel_index(q.x, q.y);
             let was_surface = history_surface[j];
-            let was_shown = was_surface.w < NO_SURFACE;
-            var same = !shows && !was_shown;
-            if shows && was_shown {
-                same = abs(was_surface.w - expected) <= params.depth_tolerance * expected
-                    && dot(was_surface.xyz, own.xyz) >= params.normal_cos;
-            }
+            // A surface only a neighbour shows counts where this pixel's footprint held it (the
+            // neighbours are read only then: on edges).
+            let same = same_surface_seen(was_surface, seen)
+                || (shown_beside(px, size, was_surface) && in_footprint(px, q, was_surface));
             if same {
                 let b = select(1.0 - f.x, f.x, (k & 1) == 1) * select(1.0 - f.y, f.y, k >= 2);
                 let h = history[j];

@@ -113,12 +113,8 @@ pub fn cpu_frame_into(
         _ => std::borrow::Cow::Borrowed(&scene.splats[..]),
     };
     let tiles = cpu::splat_visibility::bin_tiles(cam, &drawn);
-    // Moving frames (baked direct light) draw disks as they are; still images end them where
-    // their surfaces end (wgsl/shared/drawn_clip.wgsl).
-    let clips: &[crate::types::SurfaceClip] = match baked {
-        true => &[],
-        false => &scene.clips,
-    };
+    // Disks end where their surfaces end (wgsl/shared/drawn_clip.wgsl).
+    let clips = &scene.clips[..];
     let visible = cpu::splat_visibility::splat_visibility(cam, &drawn, clips, &tiles);
     let shading = cpu::splat_shading::Shading {
         params,

@@ -254,8 +254,9 @@ fn emitted(
 }
 
 /// Shades every pixel into `hdr` (`width × height` values): written for refinement sample 0,
-/// added to the running mean after it. `surface` gets each pixel's surface (normal, distance
-/// along the view ray; `FAR` where none), what the temporal pass reprojects.
+/// added to the running mean after it. `surface` gets each pixel's surface (normal, reversed
+/// where a light shows; distance along the view ray, `FAR` where none), what the temporal pass
+/// reprojects.
 #[allow(clippy::too_many_arguments)]
 pub fn shade(
     cam: &Camera,
@@ -323,12 +324,17 @@ pub fn shade(
         // A light seen directly hides what lies behind it, or adds to its own surface where
         // it reflects; its radiance counts with the direct diffuse term, so that the parts a
         // frame can show add up to the whole.
-        let c = match emitted(cam, params, lights, d, t_surface) {
+        let seen = emitted(cam, params, lights, d, t_surface);
+        let c = match seen {
             Some((light, false)) => shown(SHOW_DIRECT_DIFFUSE, light),
             Some((light, true)) => color + shown(SHOW_DIRECT_DIFFUSE, light),
             None => color,
         };
         let c = c.extend(1.0);
+        // A light's pixels carry the normal reversed: to the temporal pass a light and the
+        // surface it lies on are two surfaces, so that no history carries its brightness onto
+        // the ceiling.
+        let normal = if seen.is_some() { -normal } else { normal };
         *out_surface = normal.extend(t_surface).to_array();
         // Refinement: the running mean of this frame and the `sample` frames before it.
         *out = if params.sample == 0 {

@@ -1,6 +1,7 @@
 //! Mirror of `wgsl/temporal.wgsl`: a moving frame blended into the last resolved image,
-//! reprojected through the surface each pixel shows, the history kept where it showed the same
-//! surface and clamped to the colour range of the pixel and its four edge neighbours.
+//! reprojected through the surface each pixel shows, the history kept where it showed a surface
+//! the pixel shows now (or an edge neighbour does, within the pixel's footprint) and clamped to
+//! the colour range of the pixel and its four edge neighbours.
 
 use glam::{IVec2, Vec3, Vec4};
 use rayon::prelude::*;
@@ -50,6 +51,60 @@ fn weight_of(c: Vec3) -> f32 {
     1.0 / (1.0 + luminance(c).max(0.0))
 }
 
+/// Surface `s` (normal, distance along its ray) that pixel `q` shows, as (normal, distance from
+/// the last frame's eye); `NO_SURFACE` where it shows none.
+fn seen_from_last_eye(input: &TemporalInput, q: IVec2, s: Vec4) -> Vec4 {
+    if s.w >= NO_SURFACE {
+        return s.truncate().extend(NO_SURFACE);
+    }
+    let p = Vec3::from(input.cam.eye) + s.w * pixel_ray(input.cam, q.as_vec2() + 0.5);
+    s.truncate()
+        .extend((p - Vec3::from(input.prev.eye)).length())
+}
+
+/// Whether the last frame's surface `was` (normal, distance from its eye) is the surface
+/// `seen` (`seen_from_last_eye`): both none, or distances within `depth_tolerance` and
+/// normals within `normal_cos`.
+fn same_surface_seen(params: &TemporalParams, was: Vec4, seen: Vec4) -> bool {
+    let (was_shown, shown) = (was.w < NO_SURFACE, seen.w < NO_SURFACE);
+    if !was_shown || !shown {
+        return was_shown == shown;
+    }
+    (was.w - seen.w).abs() <= params.depth_tolerance * seen.w
+        && was.truncate().dot(seen.truncate()) >= params.normal_cos
+}
+
+/// Edge neighbour `k` (0–3: right, left, down, up) of pixel `px`, clamped to the image.
+fn edge_neighbour(px: IVec2, k: i32, size: IVec2) -> IVec2 {
+    let sign = 1 - 2 * (k & 1);
+    let step = if k >= 2 {
+        IVec2::new(0, sign)
+    } else {
+        IVec2::new(sign, 0)
+    };
+    (px + step).clamp(IVec2::ZERO, size - 1)
+}
+
+/// Whether one of pixel `px`'s edge neighbours shows the last frame's surface `was` now.
+fn shown_beside(input: &TemporalInput, px: IVec2, size: IVec2, was: Vec4) -> bool {
+    (0..4).any(|k| {
+        let q = edge_neighbour(px, k, size);
+        let s = Vec4::from(input.surface[(q.y * size.x + q.x) as usize]);
+        same_surface_seen(input.params, was, seen_from_last_eye(input, q, s))
+    })
+}
+
+/// Whether what last-frame pixel `q` showed (surface `was`: normal, distance along its ray)
+/// lies within pixel `px`'s footprint in this frame's image; nothing lies everywhere.
+fn in_footprint(input: &TemporalInput, px: IVec2, q: IVec2, was: Vec4) -> bool {
+    if was.w >= NO_SURFACE {
+        return true;
+    }
+    let d = pixel_ray(input.prev, q.as_vec2() + 0.5);
+    let now = project_point(input.cam, Vec3::from(input.prev.eye) + was.w * d);
+    now.z > 0.0 && now.truncate().floor().as_ivec2() == px
+}
+
 fn resolve(input: &TemporalInput, i: u32) -> ([f32; 4], [f32; 4]) {
     let TemporalInput {
         cam, prev, params, ..
@@ -58,22 +113,16 @@ fn resolve(input: &TemporalInput, i: u32) -> ([f32; 4], [f32; 4]) {
     let px = IVec2::new((i % params.width) as i32, (i / params.width) as i32);
     let size = IVec2::new(params.width as i32, params.height as i32);
     let current = Vec4::from(input.hdr[i as usize]).truncate();
+    let own = Vec4::from(input.surface[i as usize]);
+    let shows = own.w < NO_SURFACE;
     // The neighbourhood's colour range: the pixel and its four edge neighbours.
     let (mut lo, mut hi) = (current, current);
     for k in 0..4 {
-        let sign = 1 - 2 * (k & 1);
-        let step = if k >= 2 {
-            IVec2::new(0, sign)
-        } else {
-            IVec2::new(sign, 0)
-        };
-        let q = (px + step).clamp(IVec2::ZERO, size - 1);
-        let c = Vec4::from(input.hdr[index(q)]).truncate();
+        let c = Vec4::from(input.hdr[index(edge_neighbour(px, k, size))]).truncate();
         lo = lo.min(c);
         hi = hi.max(c);
     }
-    let own = Vec4::from(input.surface[i as usize]);
-    let shows = own.w < NO_SURFACE;
+    let seen = seen_from_last_eye(input, px, own);
     let mut out = current.extend(1.0);
     if params.reset == 0 {
         // Where the surface is now and was in the last frame's image: a point, or where the
@@ -83,7 +132,6 @@ fn resolve(input: &TemporalInput, i: u32) -> ([f32; 4], [f32; 4]) {
         let p = eye + own.w * d;
         let now = project_point(cam, if shows { p } else { eye + d });
         let was = project_point(prev, if shows { p } else { prev_eye + d });
-        let expected = (p - prev_eye).length();
         // The pixel's centre moved as the surface did; pixel k's centre is at k + 0.5.
         let at = px.as_vec2() + (was.truncate() - now.truncate());
         let base = at.floor();
@@ -99,12 +147,11 @@ fn resolve(input: &TemporalInput, i: u32) -> ([f32; 4], [f32; 4]) {
             }
             let j = index(q);
             let was_surface = Vec4::from(input.history_surface[j]);
-            let was_shown = was_surface.w < NO_SURFACE;
-            let mut same = !shows && !was_shown;
-            if shows && was_shown {
-                same = (was_surface.w - expected).abs() <= params.depth_tolerance * expected
-                    && was_surface.truncate().dot(own.truncate()) >= params.normal_cos;
-            }
+            // A surface only a neighbour shows counts where this pixel's footprint held it (the
+            // neighbours are read only then: on edges).
+            let same = same_surface_seen(params, was_surface, seen)
+                || (shown_beside(input, px, size, was_surface)
+                    && in_footprint(input, px, q, was_surface));
             if same {
                 let wx = if k & 1 == 1 { f.x } else { 1.0 - f.x };
                 let wy = if k >= 2 { f.y } else { 1.0 - f.y };

@@ -1079,10 +1079,7 @@ impl SplatPipelines {
                     .filter(|(b, _)| !DIRECT_BAKE_BINDINGS.contains(b))
                     .collect(),
             };
-            // Moving frames (baked) draw disks as they are: `fs_baked` reads no clip.
-            if !baked {
-                list.push((ATTRIBUTES_CLIP_BINDING, scene.clips));
-            }
+            list.push((ATTRIBUTES_CLIP_BINDING, scene.clips));
             let which = match baked {
                 true => Raster::AttributesBaked,
                 false => Raster::Attributes,
