@@ -128,13 +128,14 @@ fn main(@builtin(workgroup_id) wg: vec3<u32>, @builtin(num_workgroups) num_wg: v
         lo = min(lo, c);
         hi = max(hi, c);
     }
-    let seen = seen_from_last_eye(px, own);
     var out = vec4<f32>(current, 1.0);
     if params.reset == 0u {
         // Where the surface is now and was in the last frame's image: a point, or where the
         // pixel shows none, a direction (the same from either eye).
         let d = pixel_ray(cam, vec2<f32>(px) + 0.5);
         let p = cam.eye + own.w * d;
+        // The pixel's own surface as seen_from_last_eye gives it, from the ray already cast.
+        let seen = vec4<f32>(own.xyz, select(NO_SURFACE, length(p - prev.eye), shows));
         let now = project_point(cam, select(cam.eye + d, p, shows));
         let was = project_point(prev, select(prev.eye + d, p, shows));
         // The pixel's centre moved as the surface did; pixel k's centre is at k + 0.5.

@@ -122,7 +122,6 @@ fn resolve(input: &TemporalInput, i: u32) -> ([f32; 4], [f32; 4]) {
         lo = lo.min(c);
         hi = hi.max(c);
     }
-    let seen = seen_from_last_eye(input, px, own);
     let mut out = current.extend(1.0);
     if params.reset == 0 {
         // Where the surface is now and was in the last frame's image: a point, or where the
@@ -130,6 +129,12 @@ fn resolve(input: &TemporalInput, i: u32) -> ([f32; 4], [f32; 4]) {
         let d = pixel_ray(cam, px.as_vec2() + 0.5);
         let (eye, prev_eye) = (Vec3::from(cam.eye), Vec3::from(prev.eye));
         let p = eye + own.w * d;
+        // The pixel's own surface as `seen_from_last_eye` gives it, from the ray already cast.
+        let seen = own.truncate().extend(if shows {
+            (p - prev_eye).length()
+        } else {
+            NO_SURFACE
+        });
         let now = project_point(cam, if shows { p } else { eye + d });
         let was = project_point(prev, if shows { p } else { prev_eye + d });
         // The pixel's centre moved as the surface did; pixel k's centre is at k + 0.5.
