@@ -47,6 +47,10 @@ pub struct FrameRenderer {
     /// The scene's bounds and shadow bias, walked once per scene, not per frame.
     extent: SceneExtent,
     targets: Option<FrameTargets>,
+    /// The targets of the size before, kept for a renderer that switches between two sizes
+    /// (the viewer's moving frames at a lower internal resolution, its still image at the
+    /// window's), so that a switch allocates nothing.
+    spare: Option<FrameTargets>,
     /// The moving frames' history (`record_moving`); none after a reset.
     history: Option<History>,
 }
@@ -88,6 +92,7 @@ impl FrameRenderer {
             lights: scene.lights.clone(),
             extent: SceneExtent::of(scene),
             targets: None,
+            spare: None,
             history: None,
         })
     }
@@ -214,11 +219,16 @@ impl FrameRenderer {
         self.frame_scene.direct.read_back(&mut ex, &params)
     }
 
-    /// Targets of `width × height`, made anew only when the size changed.
+    /// Targets of `width × height`: the current ones, the spare ones where they have that size
+    /// (the two swap), else made anew (the current ones become the spare).
     pub fn resize(&mut self, gpu: &Gpu, width: u32, height: u32) -> Result<&FrameTargets> {
         let fits = |t: &FrameTargets| t.width == width && t.height == height;
         if !self.targets.as_ref().is_some_and(fits) {
-            self.targets = Some(self.pipelines.targets(gpu, width, height)?);
+            let next = match self.spare.take() {
+                Some(spare) if fits(&spare) => spare,
+                _ => self.pipelines.targets(gpu, width, height)?,
+            };
+            self.spare = self.targets.replace(next);
             self.history = None;
         }
         self.targets()

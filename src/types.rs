@@ -541,6 +541,24 @@ pub const DIRECT_RAYS: u32 = 0;
 /// `ShadeParams::direct`: the bake's per-splat visibility (`direct_bake`).
 pub const DIRECT_BAKED: u32 = 1;
 
+/// Uniform of `present`, the window's last pass: the tone-mapped image of `image_width ×
+/// image_height` drawn onto a target of `target_width × target_height`, bilinearly where the
+/// two differ (moving frames drawn at a lower internal resolution).
+#[repr(C)]
+#[derive(Clone, Copy, Debug, Default, PartialEq, Pod, Zeroable)]
+pub struct PresentParams {
+    pub image_width: u32,
+    pub image_height: u32,
+    pub target_width: u32,
+    pub target_height: u32,
+    /// 1: the target's format is sRGB, so the bytes are decoded to linear (the hardware
+    /// encodes them again on write).
+    pub decode: u32,
+    pub _pad0: u32,
+    pub _pad1: u32,
+    pub _pad2: u32,
+}
+
 /// Uniform of `temporal`, the moving frames' anti-aliasing: this frame's jittered samples
 /// blended into the last resolved image, reprojected by depth and camera motion.
 #[repr(C)]

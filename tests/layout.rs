@@ -226,6 +226,16 @@ fn rust_layouts() -> Vec<RustLayout> {
             sample,
             glossy_rays
         }),
+        layout!(PresentParams {
+            image_width,
+            image_height,
+            target_width,
+            target_height,
+            decode,
+            _pad0,
+            _pad1,
+            _pad2
+        }),
         layout!(TemporalParams {
             width,
             height,

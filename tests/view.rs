@@ -262,68 +262,141 @@ fn bench_frame_window_reports_the_window() {
     assert!(w["frames"].as_u64().unwrap() >= 10, "{w}");
 }
 
+/// `bench frame --window --target-ms` turns the camera in the window every frame; with a
+/// target no frame meets, the viewer steps its moving frames down to the smallest internal
+/// size, one step every two frames after the first (the first frame at a size makes its
+/// targets and moves nothing), and the checked frames, upsampled, are measured against their still images.
+#[test]
+fn the_window_orbit_steps_down_to_its_target() {
+    let exe = env!("CARGO_BIN_EXE_lobelight");
+    let out = in_xvfb(|c| {
+        c.args(["-a", "-s", "-screen 0 1600x900x24", exe, "bench", "frame"])
+            .args(["scenes/cornell.toml", "--photons", "20000"])
+            .args(["--area-samples", "1", "--orbit", "0"])
+            .args(["--window", "--target-ms", "1", "--json"]);
+    });
+    assert!(
+        out.status.success(),
+        "{}",
+        String::from_utf8_lossy(&out.stderr)
+    );
+    let r: serde_json::Value = serde_json::from_slice(&out.stdout).unwrap();
+    let w = &r["window_orbit"];
+    assert_eq!(w["frames"].as_u64(), Some(30), "{w}");
+    let widths: Vec<u64> = w["drawn"]
+        .as_array()
+        .unwrap()
+        .iter()
+        .map(|d| d[0].as_u64().unwrap())
+        .collect();
+    // The window's size once, then each smaller size twice, down to an eighth of the width.
+    let expected: Vec<u64> = std::iter::once(1280)
+        .chain([905, 640, 453, 320, 227].iter().flat_map(|&x| [x, x]))
+        .chain(std::iter::repeat(160))
+        .take(30)
+        .collect();
+    assert_eq!(widths, expected, "{w}");
+    let rel_mse = w["rel_mse"].as_array().unwrap();
+    assert_eq!(rel_mse.len(), 3, "{w}");
+    // A 160-pixel-wide frame upsampled eightfold is far from its still image, but not black.
+    assert!(
+        rel_mse
+            .iter()
+            .all(|e| e.as_f64().is_some_and(|e| e > 0.0 && e < 1.0)),
+        "{w}"
+    );
+}
+
 /// The present pass drawn into an offscreen texture of a plain and of an sRGB format, read
-/// back, against the mirror: within one 8-bit step.
+/// back, against the mirror: within one 8-bit step, for an image of the target's size (each
+/// pixel its own) and for a smaller one upsampled (a moving frame at a lower internal
+/// resolution).
 #[test]
 fn the_present_pass_matches_its_mirror() {
     let gpu = common::gpu();
-    let (w, h) = (64u32, 48u32);
-    let rgba: Vec<u32> = (0..w * h).map(|i| (i * 2654435761) | 0xff00_0000).collect();
-    let buffer = gpu.storage("image", &rgba).unwrap();
-    for format in [
-        wgpu::TextureFormat::Rgba8Unorm,
-        wgpu::TextureFormat::Rgba8UnormSrgb,
-    ] {
-        let pipeline = PresentPipeline::new(&gpu, format).unwrap();
-        let texture = gpu.device.create_texture(&wgpu::TextureDescriptor {
-            label: Some("present target"),
-            size: wgpu::Extent3d {
-                width: w,
-                height: h,
-                depth_or_array_layers: 1,
-            },
-            mip_level_count: 1,
-            sample_count: 1,
-            dimension: wgpu::TextureDimension::D2,
-            format,
-            usage: wgpu::TextureUsages::RENDER_ATTACHMENT | wgpu::TextureUsages::COPY_SRC,
-            view_formats: &[],
-        });
-        let out = gpu.storage_zeroed("read back", (w * h * 4) as u64).unwrap();
-        let mut encoder = gpu.encoder("present test");
-        let view = texture.create_view(&Default::default());
-        pipeline.record(&gpu, &mut encoder, &view, &buffer, (w, h));
-        encoder.copy_texture_to_buffer(
-            texture.as_image_copy(),
-            wgpu::TexelCopyBufferInfo {
-                buffer: &out,
-                layout: wgpu::TexelCopyBufferLayout {
-                    offset: 0,
-                    bytes_per_row: Some(w * 4),
-                    rows_per_image: Some(h),
-                },
-            },
-            texture.size(),
-        );
-        gpu.submit_and_wait(encoder).unwrap();
-        let got: Vec<u32> = gpu.read(&out, (w * h) as usize).unwrap();
-        let want = present(pipeline.params(w, h), &rgba);
-        for (i, (g, m)) in got.iter().zip(&want).enumerate() {
-            for (c, &value) in m[..3].iter().enumerate() {
-                // What the texture stores: the mirror's value, sRGB-encoded for an sRGB format.
-                let v = if format.is_srgb() {
-                    lobelight::shared::tone::srgb_byte(value) as i32
-                } else {
-                    (value * 255.0).round() as i32
-                };
-                let stored = ((g >> (8 * c)) & 0xff) as i32;
+    let target = (64u32, 48u32);
+    for image in [target, (27, 19)] {
+        let rgba: Vec<u32> = (0..image.0 * image.1)
+            .map(|i| (i * 2654435761) | 0xff00_0000)
+            .collect();
+        for format in [
+            wgpu::TextureFormat::Rgba8Unorm,
+            wgpu::TextureFormat::Rgba8UnormSrgb,
+        ] {
+            let got = present_on_device(&gpu, format, &rgba, image, target);
+            let pipeline = PresentPipeline::new(&gpu, format).unwrap();
+            let want = present(&pipeline.params(image, target), &rgba);
+            for (i, (g, m)) in got.iter().zip(&want).enumerate() {
+                for (c, &value) in m[..3].iter().enumerate() {
+                    // What the texture stores: the mirror's value, sRGB-encoded for an sRGB
+                    // format.
+                    let v = if format.is_srgb() {
+                        lobelight::shared::tone::srgb_byte(value) as i32
+                    } else {
+                        (value * 255.0).round() as i32
+                    };
+                    let stored = ((g >> (8 * c)) & 0xff) as i32;
+                    assert!(
+                        (stored - v).abs() <= 1,
+                        "{image:?} {format:?} pixel {i} channel {c}: {stored} vs {v}"
+                    );
+                }
+            }
+            if image == target && !format.is_srgb() {
+                // Each pixel its own: the bytes come back as they went in.
+                let same = got.iter().zip(&rgba).all(|(g, p)| g == p);
                 assert!(
-                    (stored - v).abs() <= 1,
-                    "{format:?} pixel {i} channel {c}: {stored} vs {v}"
+                    same,
+                    "the present pass changed an image of the target's size"
                 );
             }
         }
     }
+}
+
+/// `rgba` (`image` pixels) drawn by the present pass onto a texture of `format` and `target`
+/// pixels, read back.
+fn present_on_device(
+    gpu: &lobelight::gpu::Gpu,
+    format: wgpu::TextureFormat,
+    rgba: &[u32],
+    image: (u32, u32),
+    (w, h): (u32, u32),
+) -> Vec<u32> {
+    let buffer = gpu.storage("image", rgba).unwrap();
+    let pipeline = PresentPipeline::new(gpu, format).unwrap();
+    let texture = gpu.device.create_texture(&wgpu::TextureDescriptor {
+        label: Some("present target"),
+        size: wgpu::Extent3d {
+            width: w,
+            height: h,
+            depth_or_array_layers: 1,
+        },
+        mip_level_count: 1,
+        sample_count: 1,
+        dimension: wgpu::TextureDimension::D2,
+        format,
+        usage: wgpu::TextureUsages::RENDER_ATTACHMENT | wgpu::TextureUsages::COPY_SRC,
+        view_formats: &[],
+    });
+    let out = gpu.storage_zeroed("read back", (w * h * 4) as u64).unwrap();
+    let mut encoder = gpu.encoder("present test");
+    let view = texture.create_view(&Default::default());
+    pipeline.record(gpu, &mut encoder, &view, &buffer, image, (w, h));
+    encoder.copy_texture_to_buffer(
+        texture.as_image_copy(),
+        wgpu::TexelCopyBufferInfo {
+            buffer: &out,
+            layout: wgpu::TexelCopyBufferLayout {
+                offset: 0,
+                bytes_per_row: Some(w * 4),
+                rows_per_image: Some(h),
+            },
+        },
+        texture.size(),
+    );
+    gpu.submit_and_wait(encoder).unwrap();
+    gpu.read(&out, (w * h) as usize).unwrap()
 }
 
 /// With `--cache` the first run bakes and saves; the second loads the lobes at start (no bake)

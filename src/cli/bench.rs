@@ -32,6 +32,7 @@ use crate::scene::Scene;
 use crate::sequence::Executor;
 use crate::timing::ms_since;
 use crate::tone::ToneConfig;
+use crate::types::PresentParams;
 
 #[derive(Debug, Serialize)]
 pub struct PhotonBench {
@@ -504,6 +505,11 @@ pub struct FrameBench {
     /// `--window`: frames drawn in a 1280×720 window by the viewer, swap chain included.
     #[serde(skip_serializing_if = "Option::is_none")]
     pub window: Option<ViewReport>,
+    /// `--window`: a scripted orbit in the window with the viewer's target frame time
+    /// (`--target-ms`), every frame a moving frame, and how far its frames are from the still
+    /// images of their views.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub window_orbit: Option<WindowOrbit>,
     /// GPU: the moving frames of a scripted orbit against the still images of their views
     /// (`--orbit FRAMES`, 0: none).
     #[serde(skip_serializing_if = "Option::is_none")]
@@ -528,6 +534,19 @@ pub struct OrbitAccuracy {
     /// Each frame's, in order.
     pub rel_mse: Vec<f64>,
     pub rel_mse_alone: Vec<f64>,
+}
+
+/// The window's orbit with a target frame time: what the viewer measured, and each checked
+/// frame (drawn again offscreen at the size the window drew it, upsampled with the present
+/// pass's weights) against the still image of its view at the window's size.
+#[derive(Debug, Serialize)]
+pub struct WindowOrbit {
+    #[serde(flatten)]
+    pub window: ViewReport,
+    /// The frames checked, their relMSE, and its median.
+    pub checked: Vec<u32>,
+    pub rel_mse: Vec<f64>,
+    pub median_rel_mse: f64,
 }
 
 /// `bench frame`'s orbit: frames, size and turn a frame.
@@ -634,6 +653,7 @@ pub fn frame(
     cfg: &FrameConfig,
     tone: &ToneConfig,
     orbit_frames: u32,
+    window_orbit: Option<ViewReport>,
 ) -> Result<FrameBench> {
     cfg.validate()?;
     let progress = Progress::new(false);
@@ -642,6 +662,7 @@ pub fn frame(
     let mut splatter = "raster";
     let mut refinement = None;
     let mut orbit_accuracy = None;
+    let mut window_checked = None;
     let (adapter, backend, fitted) = match gpu {
         Some(gpu) => {
             let mut renderer = FrameRenderer::new(gpu, scene)?;
@@ -671,7 +692,7 @@ pub fn frame(
                     times.push((shade, ms_since(t)));
                     let t = Instant::now();
                     let mut encoder = gpu.encoder("present");
-                    present.record(gpu, &mut encoder, &window, &toned.rgba, (w, h));
+                    present.record(gpu, &mut encoder, &window, &toned.rgba, (w, h), (w, h));
                     gpu.submit_and_wait(encoder)?;
                     present_ms.push(ms_since(t));
                 }
@@ -705,6 +726,9 @@ pub fn frame(
             }
             if orbit_frames > 0 {
                 orbit_accuracy = Some(orbit(&mut renderer, gpu, scene, cfg, orbit_frames)?);
+            }
+            if let Some(w) = window_orbit {
+                window_checked = Some(check_window_orbit(&mut renderer, gpu, scene, cfg, w)?);
             }
             let name = gpu.info.name.clone();
             (name, gpu.backend_name().to_string(), lobes.stats.fitted)
@@ -759,6 +783,7 @@ pub fn frame(
         sizes,
         refinement,
         window: None,
+        window_orbit: window_checked,
         orbit: orbit_accuracy,
     })
 }
@@ -768,14 +793,28 @@ pub const WINDOW_FRAMES: u32 = 10;
 /// The window's size.
 pub const WINDOW_SIZE: (u32, u32) = (1280, 720);
 
-/// Opens the viewer on `scene` at `WINDOW_SIZE`, bakes, draws `WINDOW_FRAMES` frames and
-/// closes: the median frame time with the window's swap chain.
+/// The window orbit's frames and turn a frame (`bench frame`'s orbit's).
+pub const WINDOW_ORBIT_FRAMES: u32 = ORBIT_FRAMES;
+/// Every this many frames one is checked against its still image (the last of each run, when
+/// the internal resolution has settled).
+const WINDOW_ORBIT_CHECK: u32 = 10;
+
+/// Opens the viewer on `scene` at `WINDOW_SIZE`, bakes, draws and closes: the frames' times
+/// with the window's swap chain, and the sizes the viewer drew them at. Without a target,
+/// `WINDOW_FRAMES` moving frames of the scene's camera at the window's size; with `target_ms`
+/// (the viewer's `--target-ms`), an orbit of `WINDOW_ORBIT_FRAMES` frames turning
+/// `ORBIT_DEGREES_PER_FRAME` a frame.
 pub fn window_frames(
     scene: &Scene,
     frame: FrameConfig,
     tone: ToneConfig,
     backend: BackendChoice,
+    target_ms: Option<f64>,
 ) -> Result<ViewReport> {
+    let (frames, turn) = match target_ms {
+        Some(_) => (WINDOW_ORBIT_FRAMES, ORBIT_DEGREES_PER_FRAME),
+        None => (WINDOW_FRAMES, 0.0),
+    };
     let opts = ViewOptions {
         width: WINDOW_SIZE.0,
         height: WINDOW_SIZE.1,
@@ -783,15 +822,71 @@ pub fn window_frames(
         frame,
         tone,
         method: Method::Lobes,
-        frames: Some(WINDOW_FRAMES),
+        frames: Some(frames),
         // Every frame a moving frame: what a camera in motion gets.
         spp: 0,
         screenshot: None,
         cache: None,
         // The frames are measured; the bake only has to come in.
         gpu_bake: false,
+        target_ms: target_ms.unwrap_or(0.0),
+        turn,
     };
     crate::cli::view::view(scene.clone(), opts)
+}
+
+/// Draws the window orbit's frames again offscreen, each at the size the window drew it (with
+/// the temporal pass's history where `cfg` has it), and checks every `WINDOW_ORBIT_CHECK`-th,
+/// upsampled to the window's size as the present pass does, against the still image of its
+/// view (`REFINEMENT_SPP` refinement frames at the window's size).
+fn check_window_orbit(
+    renderer: &mut FrameRenderer,
+    gpu: &Gpu,
+    scene: &Scene,
+    cfg: &FrameConfig,
+    window: ViewReport,
+) -> Result<WindowOrbit> {
+    let axis = glam::Vec3::from(scene.camera.up);
+    let size = (window.width, window.height);
+    let camera = |k: u32| {
+        let turn = window.degrees_per_frame * k as f32;
+        crate::scene::views::turned(&scene.camera, axis, turn)
+    };
+    let checked: Vec<u32> = (0..window.frames)
+        .filter(|k| k % WINDOW_ORBIT_CHECK == WINDOW_ORBIT_CHECK - 1)
+        .collect();
+    // The moving frames first, all of them in order (a still image between two would reset
+    // the temporal history), keeping the checked ones upsampled.
+    let mut shown = Vec::new();
+    for (k, drawn) in window.drawn.iter().enumerate() {
+        let view = View::new(&camera(k as u32), drawn[0], drawn[1]);
+        renderer.draw_moving(gpu, scene, &view, cfg)?;
+        if checked.contains(&(k as u32)) {
+            let params = PresentParams {
+                image_width: drawn[0],
+                image_height: drawn[1],
+                target_width: size.0,
+                target_height: size.1,
+                ..Default::default()
+            };
+            shown.push(crate::cpu::present::upsample(
+                &params,
+                &renderer.read_hdr(gpu)?,
+            ));
+        }
+    }
+    let mut rel_mse = Vec::new();
+    for (&k, image) in checked.iter().zip(&shown) {
+        let view = View::new(&camera(k), size.0, size.1);
+        renderer.draw_refined(gpu, scene, &view, cfg, REFINEMENT_SPP, |_| {})?;
+        rel_mse.push(difference(image, &renderer.read_hdr(gpu)?)?.rel_mse);
+    }
+    Ok(WindowOrbit {
+        window,
+        checked,
+        median_rel_mse: median(rel_mse.clone()),
+        rel_mse,
+    })
 }
 
 /// The usual window surface format (Vulkan's first choice on most platforms).
@@ -881,6 +976,27 @@ impl std::fmt::Display for FrameBench {
                 w.frame_ms,
                 1e3 / w.frame_ms.max(1e-9),
                 w.frames
+            )?;
+        }
+        if let Some(o) = &self.window_orbit {
+            let w = &o.window;
+            let mut sizes: Vec<u32> = w.drawn.iter().map(|d| d[0]).collect();
+            sizes.sort_unstable();
+            let widths = match (sizes.first(), sizes.last()) {
+                (Some(lo), Some(hi)) => format!("{lo}–{hi}"),
+                _ => "none".to_string(),
+            };
+            write!(
+                f,
+                "\nwindow orbit {} frames, {}° a frame, target {} ms: {:.1} ms/frame ({:.1} fps), \
+                 drawn {} pixels wide; relMSE against each checked view's still image {:.5}",
+                w.frames,
+                w.degrees_per_frame,
+                w.target_ms,
+                w.frame_ms,
+                w.fps,
+                widths,
+                o.median_rel_mse
             )?;
         }
         Ok(())

@@ -361,6 +361,21 @@ enum Command {
         /// With --frames: save the last frame here (PNG).
         #[arg(long, value_name = "OUT.png", requires = "frames")]
         screenshot: Option<PathBuf>,
+        /// Moving frames' target time: where they would take longer they are drawn at a lower
+        /// internal resolution (the title shows it) and upsampled to the window; a resting
+        /// camera refines at the window's size. 0: always the window's size. Default 33, but
+        /// a scripted run (--frames) draws at the window's size unless given.
+        #[arg(long, value_name = "MS")]
+        target_ms: Option<f64>,
+        /// With --frames: degrees the camera turns about its up axis before each frame after
+        /// the first (a scripted orbit: every frame a moving frame).
+        #[arg(
+            long,
+            value_name = "DEGREES",
+            requires = "frames",
+            default_value_t = 0.0
+        )]
+        turn: f32,
         /// Load the bake from FILE when it was made for this scene and these bake settings
         /// (an instant start); else bake and save it there.
         #[arg(long, value_name = "FILE")]
@@ -399,10 +414,15 @@ enum Command {
         /// Print one JSON object per scene on stdout (an array for several scenes).
         #[arg(long)]
         json: bool,
-        /// `frame` only: also draw WINDOW_FRAMES frames in a 1280×720 window (needs a display;
-        /// one scene), the figures under the key `window`.
+        /// `frame` only: also draw 10 moving frames of the scene's camera in a 1280×720 window
+        /// (needs a display; one scene), the figures under the key `window`.
         #[arg(long)]
         window: bool,
+        /// `frame --window` only: the window draws a 30-frame orbit instead, with this target
+        /// frame time (the viewer's `--target-ms`; 33 is its default), under the key
+        /// `window_orbit`, each checked frame against its view's still image.
+        #[arg(long, value_name = "MS", requires = "window")]
+        target_ms: Option<f64>,
         /// `sweep` only: turn only these knobs (path, photons, iterations, radius, lobes,
         /// splats, family, prune, share), comma-separated; default all.
         #[arg(long, value_delimiter = ',')]
@@ -561,6 +581,8 @@ fn run(cli: Cli) -> Result<()> {
             frames,
             spp,
             screenshot,
+            target_ms,
+            turn,
             cache,
             method,
             bake,
@@ -568,6 +590,19 @@ fn run(cli: Cli) -> Result<()> {
             backend,
             gpu,
         } => {
+            let default_ms = match frames {
+                Some(_) => 0.0,
+                None => crate::cli::view::DEFAULT_TARGET_MS,
+            };
+            let target_ms = target_ms.unwrap_or(default_ms);
+            if !(target_ms.is_finite() && target_ms >= 0.0) {
+                return Err(Error::Invalid(format!(
+                    "--target-ms must be a time of 0 ms or more, not {target_ms}"
+                )));
+            }
+            if !turn.is_finite() {
+                return Err(Error::Invalid(format!("--turn must be finite, not {turn}")));
+            }
             let mut scene = scene::load(&scene)?;
             bake.apply(&mut scene)?;
             let [w0, h0] = scene.camera.resolution;
@@ -585,6 +620,8 @@ fn run(cli: Cli) -> Result<()> {
                 cache,
                 spp,
                 gpu_bake: gpu,
+                target_ms,
+                turn,
             };
             opts.frame.validate()?;
             if method == render::Method::Path {
@@ -759,6 +796,7 @@ fn run(cli: Cli) -> Result<()> {
             device,
             json,
             window,
+            target_ms,
             orbit,
             ..
         } => {
@@ -772,6 +810,13 @@ fn run(cli: Cli) -> Result<()> {
                     "--window is for `bench frame` of one scene on a GPU (a process opens one window)"
                         .into(),
                 ));
+            }
+            if let Some(ms) = target_ms
+                && !(ms.is_finite() && ms >= 0.0)
+            {
+                return Err(Error::Invalid(format!(
+                    "--target-ms must be a time of 0 ms or more, not {ms}"
+                )));
             }
             // Moving frames run on the device, a software rasterizer included (faster there
             // than the mirror); photons, the fit and re-bakes where still images run.
@@ -791,12 +836,20 @@ fn run(cli: Cli) -> Result<()> {
                     }
                     BenchKind::Frame => {
                         let (frame, tone) = (look.frame(), look.tone());
-                        let mut r = bench::frame(&scene, gpu.as_ref(), &frame, &tone, orbit)?;
+                        // The window first (a process opens one): the orbit's frames are then
+                        // drawn again offscreen, at the sizes the window drew them.
+                        let (mut still, mut moving) = (None, None);
                         if window {
-                            let (frame, tone) = (look.frame(), look.tone());
-                            let backend = device.backend;
-                            r.window = Some(bench::window_frames(&scene, frame, tone, backend)?);
+                            let (f, t, backend) = (frame.clone(), tone, device.backend);
+                            let report = bench::window_frames(&scene, f, t, backend, target_ms)?;
+                            match target_ms {
+                                Some(_) => moving = Some(report),
+                                None => still = Some(report),
+                            }
                         }
+                        let gpu = gpu.as_ref();
+                        let mut r = bench::frame(&scene, gpu, &frame, &tone, orbit, moving)?;
+                        r.window = still;
                         (r.to_string(), to_json(&r)?)
                     }
                     BenchKind::Rebake => {

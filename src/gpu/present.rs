@@ -1,10 +1,12 @@
 //! The window's last pass (`wgsl/present.wgsl`): the tone-mapped image drawn onto a surface
-//! texture (or any colour target of the same format, which is how its test reads it back).
+//! texture (or any colour target of the same format, which is how its test reads it back),
+//! upsampled where the image is smaller than the target.
 
 use super::frame::raster_pipeline;
 use super::{Gpu, buffer_entries};
 use crate::error::Result;
 use crate::shaders::Stage;
+use crate::types::PresentParams;
 
 pub struct PresentPipeline {
     pipeline: wgpu::RenderPipeline,
@@ -27,21 +29,31 @@ impl PresentPipeline {
         })
     }
 
-    /// The uniform of an image of `width × height`.
-    pub fn params(&self, width: u32, height: u32) -> [u32; 4] {
-        [width, height, self.decode as u32, 0]
+    /// The uniform of an image of `image` pixels (width, height) drawn onto a target of
+    /// `target` pixels.
+    pub fn params(&self, image: (u32, u32), target: (u32, u32)) -> PresentParams {
+        PresentParams {
+            image_width: image.0,
+            image_height: image.1,
+            target_width: target.0,
+            target_height: target.1,
+            decode: self.decode as u32,
+            ..Default::default()
+        }
     }
 
-    /// Records the draw of `rgba` (`width × height` packed sRGB pixels) onto `view`.
+    /// Records the draw of `rgba` (`image` packed sRGB pixels, width and height) onto `view`,
+    /// a target of `target` pixels.
     pub fn record(
         &self,
         gpu: &Gpu,
         encoder: &mut wgpu::CommandEncoder,
         view: &wgpu::TextureView,
         rgba: &wgpu::Buffer,
-        (width, height): (u32, u32),
+        image: (u32, u32),
+        target: (u32, u32),
     ) {
-        let params = gpu.uniform("present params", &self.params(width, height));
+        let params = gpu.uniform("present params", &self.params(image, target));
         let group = gpu.device.create_bind_group(&wgpu::BindGroupDescriptor {
             label: Some(Stage::Present.name()),
             layout: &self.pipeline.get_bind_group_layout(0),

@@ -260,6 +260,17 @@ struct Camera {
     _pad2: f32,
 }
 
+struct PresentParams {
+    image_width: u32,
+    image_height: u32,
+    target_width: u32,
+    target_height: u32,
+    decode: u32,
+    _pad0: u32,
+    _pad1: u32,
+    _pad2: u32,
+}
+
 struct TemporalParams {
     width: u32,
     height: u32,

@@ -4,11 +4,14 @@
 //! and switches to full global illumination when the lobes arrive.
 //!
 //! Keys: see `HELP`. A moved light bakes again at once, a preview with an eighth of the
-//! photons first (`baking`). `--frames N --screenshot OUT.png` draws N frames once the bake
-//! is in, saves the last and exits (scripted runs and tests).
+//! photons first (`baking`). Moving frames keep `--target-ms` by drawing at a lower internal
+//! resolution (`resolution`), which the present pass upsamples. `--frames N --screenshot
+//! OUT.png` draws N frames once the bake is in, saves the last and exits (scripted runs and
+//! tests; `--turn` turns the camera every frame).
 
 pub mod baking;
 mod orbit;
+mod resolution;
 
 use std::path::PathBuf;
 use std::sync::Arc;
@@ -40,6 +43,7 @@ use crate::types::Camera;
 use baking::{BakeEngine, BakeResult, Baking};
 pub use baking::{PREVIEW_FRACTION, passes};
 pub use orbit::Orbit;
+pub use resolution::{DEFAULT_TARGET_MS, Resolution};
 
 pub const HELP: &str = "mouse: left drag orbit, right drag pan, wheel zoom | W A S D fly, Q E \
 down/up | arrows move the light (re-bake) | 1 full, 2 direct, 3 indirect, 4 diffuse only, \
@@ -67,6 +71,12 @@ pub struct ViewOptions {
     pub cache: Option<PathBuf>,
     /// Bake on the window's device even where it is a software rasterizer (`--gpu`).
     pub gpu_bake: bool,
+    /// The moving frames' target time (ms): they are drawn smaller than the window where
+    /// they would take longer (0: always at the window's size).
+    pub target_ms: f64,
+    /// Scripted run: degrees the camera turns about its up axis before each frame after the
+    /// first (0: it stays).
+    pub turn: f32,
 }
 
 /// What a scripted run measured.
@@ -78,6 +88,15 @@ pub struct ViewReport {
     pub frames: u32,
     pub frame_ms: f64,
     pub bake_s: f64,
+    /// 1000 / `frame_ms`.
+    pub fps: f64,
+    /// `--target-ms` (0: none) and `--turn`.
+    pub target_ms: f64,
+    pub degrees_per_frame: f32,
+    /// Each of the frames: its time (ms), and the size it was drawn at before the present
+    /// pass upsampled it to the window (the window's own at rest or without a target).
+    pub frames_ms: Vec<f64>,
+    pub drawn: Vec<[u32; 2]>,
 }
 
 pub fn view(scene: Scene, opts: ViewOptions) -> Result<ViewReport> {
@@ -147,6 +166,11 @@ struct State {
     version: u64,
     /// Which light the frame shows (keys 1–5).
     show: Show,
+    /// The moving frames' internal resolution, and the size the last frame was drawn at.
+    resolution: Resolution,
+    drawn: (u32, u32),
+    /// Sizes of the frames since the bake came in (a scripted run reports them).
+    lit_drawn: Vec<[u32; 2]>,
 }
 
 impl App {
@@ -262,6 +286,9 @@ impl App {
                 .into_iter()
                 .find(|s| s.terms() == self.opts.frame.show)
                 .unwrap_or_default(),
+            resolution: Resolution::new(self.opts.target_ms),
+            drawn: (inner.width.max(1), inner.height.max(1)),
+            lit_drawn: Vec::new(),
         })
     }
 }
@@ -327,23 +354,25 @@ impl State {
         Ok(())
     }
 
-    /// Records the HDR image of the chosen method into `encoder`; returns its buffer.
+    /// Records the HDR image of the chosen method into `encoder`; returns its buffer and size
+    /// (a moving frame's internal resolution, else the window's).
     fn record_hdr<'a>(
         &'a mut self,
         scene: &Scene,
         frame: &FrameConfig,
         encoder: &mut wgpu::CommandEncoder,
-    ) -> Result<std::borrow::Cow<'a, wgpu::Buffer>> {
+    ) -> Result<(std::borrow::Cow<'a, wgpu::Buffer>, (u32, u32))> {
         let (w, h) = (self.config.width, self.config.height);
-        let view = View::new(&self.orbit.camera(), w, h);
-        let cam = camera_uniform(&view, self.renderer.extent().bounds, frame);
+        let camera = self.orbit.camera();
+        let bounds = self.renderer.extent().bounds;
+        let cam = camera_uniform(&View::new(&camera, w, h), bounds, frame);
         let gpu = &self.gpu;
         match (self.method, &mut self.baked) {
             (Method::Photons, Some(baked)) => {
                 let scale = scene_scale(&scene.lights, baked.emitted)?;
                 let on_gpu = &self.renderer.on_gpu;
                 let hdr = photon_image(gpu, encoder, on_gpu, &baked.photons, &cam, scale)?;
-                Ok(std::borrow::Cow::Owned(hdr))
+                Ok((std::borrow::Cow::Owned(hdr), (w, h)))
             }
             (Method::Reference, Some(baked)) => {
                 // Bins the first time the view is shown, where the bake needed none.
@@ -359,14 +388,15 @@ impl State {
                 };
                 let binned = baked.binned.insert(binned);
                 let (bins, em) = (&binned.bins, &binned.em);
+                self.renderer.resize(gpu, w, h)?;
                 let hdr = self
                     .renderer
                     .record_reference(gpu, encoder, scene, bins, em, &cam, frame)?;
-                Ok(std::borrow::Cow::Borrowed(hdr))
+                Ok((std::borrow::Cow::Borrowed(hdr), (w, h)))
             }
             // The lobes, and what shows while the photons a view needs are on their way: a
-            // moving frame, then refinement frames while the camera rests, then the still
-            // image as it stands.
+            // moving frame (at the internal resolution), then refinement frames while the
+            // camera rests, then the still image as it stands (at the window's size).
             _ => {
                 let key = Some((cam, frame.show, self.method, self.version));
                 // Without refinement every frame is drawn anew, as for a moving camera.
@@ -377,25 +407,35 @@ impl State {
                         let ms = self.renderer.bake_direct(gpu, scene)?;
                         eprintln!("direct bake: {ms:.0} ms");
                     }
+                    let (iw, ih) = self.resolution.size((w, h));
+                    let cam = camera_uniform(&View::new(&camera, iw, ih), bounds, frame);
+                    self.renderer.resize(gpu, iw, ih)?;
                     self.renderer
                         .record_moving(gpu, encoder, scene, &cam, frame)?;
                 } else if self.samples < self.spp {
                     let (k, spp) = (self.samples, self.spp);
+                    self.renderer.resize(gpu, w, h)?;
                     self.renderer
                         .record_sample(gpu, encoder, scene, &cam, frame, k, spp)?;
                     self.samples += 1;
                 }
-                Ok(std::borrow::Cow::Borrowed(&self.renderer.targets()?.hdr))
+                let t = self.renderer.targets()?;
+                Ok((std::borrow::Cow::Borrowed(&t.hdr), (t.width, t.height)))
             }
         }
     }
 
-    /// Draws one frame; returns the tone-mapped image's buffer (for screenshots), or none
-    /// when the surface could not give a texture this time.
-    fn draw(&mut self, scene: &Scene, frame: &FrameConfig) -> Result<Option<wgpu::Buffer>> {
+    /// Draws one frame; returns the tone-mapped image's buffer (for screenshots) and its
+    /// size, or none when the surface could not give a texture this time.
+    fn draw(
+        &mut self,
+        scene: &Scene,
+        frame: &FrameConfig,
+    ) -> Result<Option<(wgpu::Buffer, (u32, u32))>> {
         let (w, h) = (self.config.width, self.config.height);
-        let targets = self.renderer.targets()?;
-        if targets.width != w || targets.height != h {
+        // A window too large for this device draws nothing until it is smaller (`resize`
+        // said so).
+        if self.gpu.check_image(w, h).is_err() {
             return Ok(None);
         }
         let texture = match self.surface.get_current_texture() {
@@ -422,16 +462,22 @@ impl State {
         let gpu = self.gpu.clone();
         let mut encoder = gpu.encoder("view frame");
         let tone = self.tone;
-        let hdr = self.record_hdr(scene, &frame, &mut encoder)?;
-        let toned = tone_map(&gpu, &mut encoder, &hdr, w * h, &tone)?;
+        let (hdr, (iw, ih)) = self.record_hdr(scene, &frame, &mut encoder)?;
+        let toned = tone_map(&gpu, &mut encoder, &hdr, iw * ih, &tone)?;
         drop(hdr);
         let target = texture.texture.create_view(&Default::default());
-        self.present
-            .record(&gpu, &mut encoder, &target, &toned.rgba, (w, h));
+        let present = &self.present;
+        present.record(&gpu, &mut encoder, &target, &toned.rgba, (iw, ih), (w, h));
         gpu.submit_and_wait(encoder)?;
         gpu.queue.present(texture);
         self.frame_ms = crate::timing::ms_since(start);
-        Ok(Some(toned.rgba))
+        self.drawn = (iw, ih);
+        // Moving frames (which leave no refinement sample) keep the target; refinement
+        // frames are at the window's size anyway.
+        if self.samples == 0 && self.method == Method::Lobes {
+            self.resolution.record(self.frame_ms);
+        }
+        Ok(Some((toned.rgba, (iw, ih))))
     }
 
     /// The image on screen is final until something changes: the lobes' still image is
@@ -471,7 +517,8 @@ impl State {
         };
         let waiting = self.method != Method::Lobes && self.baked.is_none();
         let still = match (self.method, self.samples) {
-            (Method::Lobes, 0) => " — moving".to_string(),
+            // The internal resolution (`--target-ms`) the present pass upsamples.
+            (Method::Lobes, 0) => format!(" — moving at {}×{}", self.drawn.0, self.drawn.1),
             (Method::Lobes, k) => format!(" — still: {k}/{} samples", self.spp),
             _ => String::new(),
         };
@@ -488,10 +535,28 @@ impl State {
         )
     }
 
-    fn screenshot(&self, rgba: &wgpu::Buffer, path: &std::path::Path) -> Result<()> {
-        let (w, h) = (self.config.width, self.config.height);
-        let pixels = self.gpu.read::<u32>(rgba, (w * h) as usize)?;
-        crate::cli::render::write_rgba8(path, &pixels, w, h)
+    /// Saves the tone-mapped image `shot` (its buffer and size) as the window showed it: a
+    /// moving frame drawn smaller is upsampled as the present pass did (its mirror).
+    fn screenshot(&self, shot: &(wgpu::Buffer, (u32, u32)), path: &std::path::Path) -> Result<()> {
+        let (rgba, image) = (&shot.0, shot.1);
+        let pixels = self.gpu.read::<u32>(rgba, (image.0 * image.1) as usize)?;
+        let window = (self.config.width, self.config.height);
+        if image == window {
+            return crate::cli::render::write_rgba8(path, &pixels, window.0, window.1);
+        }
+        let params = self.present.params(image, window);
+        let params = crate::types::PresentParams {
+            decode: 0,
+            ..params
+        };
+        let shown: Vec<u32> = crate::cpu::present::present(&params, &pixels)
+            .iter()
+            .map(|c| {
+                let byte = |v: f32| (v * 255.0).round().clamp(0.0, 255.0) as u32;
+                byte(c[0]) | byte(c[1]) << 8 | byte(c[2]) << 16 | 0xff00_0000
+            })
+            .collect();
+        crate::cli::render::write_rgba8(path, &shown, window.0, window.1)
     }
 
     fn key(&mut self, key: &Key) -> Option<KeyAction> {
@@ -584,6 +649,9 @@ impl App {
         if state.baking.is_none() {
             state.frames_lit += 1;
             state.lit_ms.push(state.frame_ms);
+            state.lit_drawn.push([state.drawn.0, state.drawn.1]);
+            // A scripted orbit: the next frame's camera.
+            state.orbit.spin(self.opts.turn);
         }
         state.window.set_title(&state.title(&scene));
         if let Some(n) = self.opts.frames
@@ -593,12 +661,18 @@ impl App {
                 state.screenshot(&rgba, path)?;
                 eprintln!("wrote {}", path.display());
             }
+            let frame_ms = crate::cli::measure::median(state.lit_ms.clone());
             self.report = ViewReport {
                 width: state.config.width,
                 height: state.config.height,
                 frames: state.lit_ms.len() as u32,
-                frame_ms: crate::cli::measure::median(state.lit_ms.clone()),
+                frame_ms,
                 bake_s: state.bake_s.unwrap_or(0.0),
+                fps: 1e3 / frame_ms.max(1e-9),
+                target_ms: self.opts.target_ms,
+                degrees_per_frame: self.opts.turn,
+                frames_ms: state.lit_ms.clone(),
+                drawn: state.lit_drawn.clone(),
             };
             let r = &self.report;
             eprintln!(

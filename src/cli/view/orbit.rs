@@ -64,6 +64,12 @@ impl Orbit {
         self.pitch = (self.pitch + dy * TURN).clamp(-PITCH_LIMIT, PITCH_LIMIT);
     }
 
+    /// Turns the eye about the up axis through the target by `degrees` (a scripted orbit;
+    /// `scene::views::turned`'s turn of the scene's camera).
+    pub fn spin(&mut self, degrees: f32) {
+        self.yaw += degrees.to_radians();
+    }
+
     /// A drag of (dx, dy) pixels slides the target across the view.
     pub fn pan(&mut self, dx: f32, dy: f32) {
         let back = self.back();

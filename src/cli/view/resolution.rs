@@ -1,0 +1,160 @@
+//! The moving frames' internal resolution. The viewer keeps a target frame time
+//! (`--target-ms`) by drawing moving frames smaller than the window, on a ladder of sizes each
+//! about half the pixels of the one above, and the present pass upsamples them; at rest the
+//! refinement frames draw at the window's size.
+//!
+//! After each moving frame the controller steps one size down when the frame took longer than
+//! the target, and the frame before it at this size did too, or when it took half as long
+//! again (a lone slow frame of a software rasterizer's noise moves nothing). It steps up only when the size above is known to fit: its last frame there took
+//! too long (that is why it left), so it tries the size above again after `FORGET` moving
+//! frames, and only when this frame left room (`PROBE`): the view changes what a frame costs,
+//! and a probe that fails costs one slow frame.
+
+/// Linear scales of the window's size, largest first: each step about halves the pixels.
+pub const SCALES: [f32; 7] = [1.0, 0.707, 0.5, 0.354, 0.25, 0.177, 0.125];
+
+/// Moving frames after which a size found too slow is tried again.
+const FORGET: u64 = 60;
+/// The share of the target a frame must stay under before the size above is tried again.
+const PROBE: f64 = 0.7;
+/// A frame this many times the target steps down alone, without a slow frame before it.
+const FAR_OVER: f64 = 1.5;
+
+/// The target frame time of `view` when `--target-ms` is not given.
+pub const DEFAULT_TARGET_MS: f64 = 33.0;
+
+#[derive(Clone, Debug)]
+pub struct Resolution {
+    /// Milliseconds a frame may take; 0: moving frames at the window's size.
+    target_ms: f64,
+    /// Index into `SCALES` of the next moving frame's size.
+    level: usize,
+    /// Moving frames drawn so far, and the one at which the size above was last left.
+    frames: u64,
+    left_above: u64,
+    /// The last frame was the first at its size: its time includes making its targets, so it
+    /// moves nothing.
+    changed: bool,
+    /// The last frame at this size took longer than the target.
+    over: bool,
+}
+
+impl Resolution {
+    pub fn new(target_ms: f64) -> Resolution {
+        Resolution {
+            target_ms,
+            level: 0,
+            frames: 0,
+            left_above: 0,
+            changed: false,
+            over: false,
+        }
+    }
+
+    /// The size (width, height) of the next moving frame in a window of `window`.
+    pub fn size(&self, (width, height): (u32, u32)) -> (u32, u32) {
+        let s = SCALES[self.level];
+        let scaled = |n: u32| ((n as f32 * s).round() as u32).clamp(1, n.max(1));
+        (scaled(width), scaled(height))
+    }
+
+    /// Takes the time of the moving frame just drawn at `size()` and picks the next one's.
+    pub fn record(&mut self, ms: f64) {
+        self.frames += 1;
+        if self.target_ms <= 0.0 || std::mem::take(&mut self.changed) {
+            return;
+        }
+        let over = ms > self.target_ms;
+        let over_before = std::mem::replace(&mut self.over, over);
+        let slow = over && (over_before || ms > FAR_OVER * self.target_ms);
+        if slow && self.level + 1 < SCALES.len() {
+            self.level += 1;
+            self.left_above = self.frames;
+            (self.changed, self.over) = (true, false);
+        } else if self.level > 0
+            && self.frames - self.left_above >= FORGET
+            && ms < PROBE * self.target_ms
+        {
+            self.level -= 1;
+            (self.changed, self.over) = (true, false);
+        }
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// A frame's time in a model of the viewer on a software rasterizer: a fixed part (the
+    /// splats) and a part that follows the pixels.
+    fn model(fixed: f64, window: f64) -> impl Fn((u32, u32)) -> f64 {
+        move |(w, h)| fixed + window * (w * h) as f64 / (1280.0 * 720.0)
+    }
+
+    /// Runs `frames` moving frames of a 1280×720 window, frame k costing `cost(k, size)`;
+    /// returns each frame's size and time.
+    fn run(
+        target_ms: f64,
+        frames: usize,
+        cost: impl Fn(usize, (u32, u32)) -> f64,
+    ) -> Vec<((u32, u32), f64)> {
+        let mut r = Resolution::new(target_ms);
+        (0..frames)
+            .map(|k| {
+                let size = r.size((1280, 720));
+                let ms = cost(k, size);
+                r.record(ms);
+                (size, ms)
+            })
+            .collect()
+    }
+
+    #[test]
+    fn frames_settle_on_the_largest_size_within_the_target() {
+        // 40 + 200 / 4 = 90 ms at half the width, 140 ms at 0.707 of it.
+        let frames = run(95.0, 200, |_, size| model(40.0, 200.0)(size));
+        let settled = &frames[10..];
+        assert!(
+            settled.iter().all(|f| f.0 == (640, 360) && f.1 <= 95.0),
+            "{settled:?}"
+        );
+    }
+
+    #[test]
+    fn a_cheaper_view_gets_the_larger_sizes_back() {
+        // 60 + 80 / 4 = 80 ms at half the width, 100 ms at 0.707 of it; the view turns away
+        // from the costly splats at frame 100, and every size fits.
+        let cost = |k: usize, size| model(if k < 100 { 60.0 } else { 0.0 }, 80.0)(size);
+        let frames = run(90.0, 400, cost);
+        assert_eq!(frames[99].0, (640, 360));
+        // Two probes up (each after FORGET frames at a size), then the window's size for good.
+        let back = 100 + 2 * FORGET as usize + 4;
+        assert!(
+            frames[back..].iter().all(|f| f.0 == (1280, 720)),
+            "{:?}",
+            &frames[back..]
+        );
+    }
+
+    #[test]
+    fn a_lone_slow_frame_moves_nothing() {
+        // 90 ms at half the width within a target of 95 ms; every tenth frame 30 % slower.
+        let cost = |k: usize, size| model(40.0, 200.0)(size) * if k % 10 == 9 { 1.3 } else { 1.0 };
+        let frames = run(95.0, 200, cost);
+        assert!(frames[10..].iter().all(|f| f.0 == (640, 360)), "{frames:?}");
+    }
+
+    #[test]
+    fn an_unreachable_target_draws_the_smallest_size() {
+        let frames = run(10.0, 20, |_, size| model(40.0, 200.0)(size));
+        assert_eq!(frames.last().map(|f| f.0), Some((160, 90)));
+    }
+
+    #[test]
+    fn no_target_keeps_the_window_size() {
+        let cost = |_, size| model(40.0, 200.0)(size);
+        assert!(run(0.0, 10, cost).iter().all(|f| f.0 == (1280, 720)));
+        // A target every size meets keeps it too.
+        assert!(run(1000.0, 10, cost).iter().all(|f| f.0 == (1280, 720)));
+    }
+}
