@@ -4,11 +4,11 @@
 //! refinement frames draw at the window's size.
 //!
 //! After each moving frame the controller steps one size down when the frame took longer than
-//! the target, and the frame before it at this size did too, or when it took half as long
-//! again (a lone slow frame of a software rasterizer's noise moves nothing). It steps up only when the size above is known to fit: its last frame there took
-//! too long (that is why it left), so it tries the size above again after `FORGET` moving
-//! frames, and only when this frame left room (`PROBE`): the view changes what a frame costs,
-//! and a probe that fails costs one slow frame.
+//! the target and the frame before it at this size did too, or when it took half as long
+//! again (a lone slow frame of a software rasterizer's noise moves nothing). It steps up only
+//! `FORGET` moving frames after its last step down, and only from a frame that left room
+//! (`PROBE`): the size above was too slow when it was left, the view changes what a frame
+//! costs, and a try that fails costs one slow frame.
 
 /// Linear scales of the window's size, largest first: each step about halves the pixels.
 pub const SCALES: [f32; 7] = [1.0, 0.707, 0.5, 0.354, 0.25, 0.177, 0.125];
@@ -29,7 +29,7 @@ pub struct Resolution {
     target_ms: f64,
     /// Index into `SCALES` of the next moving frame's size.
     level: usize,
-    /// Moving frames drawn so far, and the one at which the size above was last left.
+    /// Moving frames drawn so far, and the one of the last step down.
     frames: u64,
     left_above: u64,
     /// The last frame was the first at its size: its time includes making its targets, so it
