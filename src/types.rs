@@ -559,6 +559,21 @@ pub struct PresentParams {
     pub _pad2: u32,
 }
 
+impl PresentParams {
+    /// An image of `image` pixels (width, height) drawn onto a target of `target` pixels,
+    /// decoded to linear where `decode`.
+    pub fn new(image: (u32, u32), target: (u32, u32), decode: bool) -> PresentParams {
+        PresentParams {
+            image_width: image.0,
+            image_height: image.1,
+            target_width: target.0,
+            target_height: target.1,
+            decode: decode as u32,
+            ..Default::default()
+        }
+    }
+}
+
 /// Uniform of `temporal`, the moving frames' anti-aliasing: this frame's jittered samples
 /// blended into the last resolved image, reprojected by depth and camera motion.
 #[repr(C)]

@@ -862,13 +862,7 @@ fn check_window_orbit(
         let view = View::new(&camera(k as u32), drawn[0], drawn[1]);
         renderer.draw_moving(gpu, scene, &view, cfg)?;
         if checked.contains(&(k as u32)) {
-            let params = PresentParams {
-                image_width: drawn[0],
-                image_height: drawn[1],
-                target_width: size.0,
-                target_height: size.1,
-                ..Default::default()
-            };
+            let params = PresentParams::new((drawn[0], drawn[1]), size, false);
             shown.push(crate::cpu::present::upsample(
                 &params,
                 &renderer.read_hdr(gpu)?,

@@ -499,6 +499,16 @@ fn print_json<T: serde::Serialize>(value: &T) -> Result<()> {
     Ok(())
 }
 
+/// `--target-ms` of `view` and `bench frame --window`: a time, 0 for none.
+fn checked_target_ms(ms: f64) -> Result<f64> {
+    match ms.is_finite() && ms >= 0.0 {
+        true => Ok(ms),
+        false => Err(Error::Invalid(format!(
+            "--target-ms must be a time of 0 ms or more, not {ms}"
+        ))),
+    }
+}
+
 fn run(cli: Cli) -> Result<()> {
     match cli.command {
         Command::Info {
@@ -594,12 +604,7 @@ fn run(cli: Cli) -> Result<()> {
                 Some(_) => 0.0,
                 None => crate::cli::view::DEFAULT_TARGET_MS,
             };
-            let target_ms = target_ms.unwrap_or(default_ms);
-            if !(target_ms.is_finite() && target_ms >= 0.0) {
-                return Err(Error::Invalid(format!(
-                    "--target-ms must be a time of 0 ms or more, not {target_ms}"
-                )));
-            }
+            let target_ms = checked_target_ms(target_ms.unwrap_or(default_ms))?;
             if !turn.is_finite() {
                 return Err(Error::Invalid(format!("--turn must be finite, not {turn}")));
             }
@@ -811,12 +816,8 @@ fn run(cli: Cli) -> Result<()> {
                         .into(),
                 ));
             }
-            if let Some(ms) = target_ms
-                && !(ms.is_finite() && ms >= 0.0)
-            {
-                return Err(Error::Invalid(format!(
-                    "--target-ms must be a time of 0 ms or more, not {ms}"
-                )));
+            if let Some(ms) = target_ms {
+                checked_target_ms(ms)?;
             }
             // Moving frames run on the device, a software rasterizer included (faster there
             // than the mirror); photons, the fit and re-bakes where still images run.

@@ -32,14 +32,7 @@ impl PresentPipeline {
     /// The uniform of an image of `image` pixels (width, height) drawn onto a target of
     /// `target` pixels.
     pub fn params(&self, image: (u32, u32), target: (u32, u32)) -> PresentParams {
-        PresentParams {
-            image_width: image.0,
-            image_height: image.1,
-            target_width: target.0,
-            target_height: target.1,
-            decode: self.decode as u32,
-            ..Default::default()
-        }
+        PresentParams::new(image, target, self.decode)
     }
 
     /// Records the draw of `rgba` (`image` packed sRGB pixels, width and height) onto `view`,

@@ -544,11 +544,7 @@ impl State {
         if image == window {
             return crate::cli::render::write_rgba8(path, &pixels, window.0, window.1);
         }
-        let params = self.present.params(image, window);
-        let params = crate::types::PresentParams {
-            decode: 0,
-            ..params
-        };
+        let params = crate::types::PresentParams::new(image, window, false);
         let shown: Vec<u32> = crate::cpu::present::present(&params, &pixels)
             .iter()
             .map(|c| {
