@@ -296,6 +296,27 @@ fn the_window_orbit_steps_down_to_its_target() {
         .take(30)
         .collect();
     assert_eq!(widths, expected, "{w}");
+    // Then at that size the merged disks widen by √2 a step, twice each, to four times the
+    // scene's level of detail.
+    let lods: Vec<f64> = w["lod"]
+        .as_array()
+        .unwrap()
+        .iter()
+        .map(|l| l.as_f64().unwrap())
+        .collect();
+    let base = lods[0];
+    let expected: Vec<f64> = std::iter::repeat_n(1.0, 13)
+        .chain([1.414, 2.0, 2.828].iter().flat_map(|&x| [x, x]))
+        .chain(std::iter::repeat(4.0))
+        .take(30)
+        .collect();
+    assert!(base > 0.0, "{w}");
+    assert!(
+        lods.iter()
+            .zip(&expected)
+            .all(|(l, e)| (l / base - e).abs() < 1e-3),
+        "{w}"
+    );
     let rel_mse = w["rel_mse"].as_array().unwrap();
     assert_eq!(rel_mse.len(), 3, "{w}");
     // A 160-pixel-wide frame upsampled eightfold is far from its still image, but not black.

@@ -11,17 +11,14 @@
 
 @group(0) @binding(0) var<uniform> params: PresentParams;
 @group(0) @binding(1) var<storage, read> rgba: array<u32>;
+// The target's format is sRGB (params.decode, which the mirror reads, says the same): a
+// pipeline constant, since llvmpipe pays for a branch on a uniform even where it is not taken.
+override DECODE: bool = false;
 
 fn srgb_to_linear(c: vec3<f32>) -> vec3<f32> {
     let low = c / 12.92;
     let high = pow((c + 0.055) / 1.055, vec3<f32>(2.4));
     return select(high, low, c <= vec3<f32>(0.04045));
-}
-
-fn texel(x: i32, y: i32) -> vec3<f32> {
-    let last = vec2<i32>(i32(params.image_width), i32(params.image_height)) - vec2<i32>(1);
-    let p = vec2<u32>(clamp(vec2<i32>(x, y), vec2<i32>(0), last));
-    return unpack4x8unorm(rgba[p.y * params.image_width + p.x]).rgb;
 }
 
 @vertex
@@ -31,17 +28,24 @@ fn vs_main(@builtin(vertex_index) corner: u32) -> @builtin(position) vec4<f32> {
 
 @fragment
 fn fs_main(@builtin(position) pixel: vec4<f32>) -> @location(0) vec4<f32> {
-    let image = vec2<f32>(f32(params.image_width), f32(params.image_height));
+    let w = params.image_width;
+    let image = vec2<f32>(f32(w), f32(params.image_height));
     let target_size = vec2<f32>(f32(params.target_width), f32(params.target_height));
     // The fragment's centre in the image's pixels, less half a pixel: the integer part is the
-    // upper-left tap, the fraction the weights.
-    let s = pixel.xy * (image / target_size) - vec2<f32>(0.5);
+    // upper-left tap, the fraction the weights (0 at equal sizes: the fragment's own pixel).
+    // A tap past the image's edge reads the edge's pixel.
+    let s = max(pixel.xy * (image / target_size) - vec2<f32>(0.5), vec2<f32>(0.0));
     let f = floor(s);
     let t = s - f;
-    let x = i32(f.x);
-    let y = i32(f.y);
-    let top = mix(texel(x, y), texel(x + 1, y), t.x);
-    let bottom = mix(texel(x, y + 1), texel(x + 1, y + 1), t.x);
-    let c = mix(top, bottom, t.y);
-    return vec4<f32>(select(c, srgb_to_linear(c), params.decode != 0u), 1.0);
+    let x0 = u32(f.x);
+    let x1 = min(x0 + 1u, w - 1u);
+    let row0 = u32(f.y) * w;
+    let row1 = min(u32(f.y) + 1u, params.image_height - 1u) * w;
+    let top = mix(unpack4x8unorm(rgba[row0 + x0]), unpack4x8unorm(rgba[row0 + x1]), t.x);
+    let bottom = mix(unpack4x8unorm(rgba[row1 + x0]), unpack4x8unorm(rgba[row1 + x1]), t.x);
+    let c = mix(top, bottom, t.y).rgb;
+    if DECODE {
+        return vec4<f32>(srgb_to_linear(c), 1.0);
+    }
+    return vec4<f32>(c, 1.0);
 }

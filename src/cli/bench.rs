@@ -547,6 +547,25 @@ pub struct WindowOrbit {
     pub checked: Vec<u32>,
     pub rel_mse: Vec<f64>,
     pub median_rel_mse: f64,
+    /// The frames the controller settled on: those after its last step at the size and level
+    /// of detail of the last frame (the first there left out: it makes its targets), and
+    /// their median time and rate.
+    pub settled_frames: u32,
+    pub settled_ms: f64,
+    pub settled_fps: f64,
+}
+
+/// The times of the orbit's frames drawn at the last frame's size and level of detail, after
+/// the first of them.
+fn settled_times(w: &ViewReport) -> Vec<f64> {
+    let rung = |k: usize| (w.drawn.get(k).copied(), w.lod.get(k).copied());
+    let last = w.frames_ms.len().saturating_sub(1);
+    let first = (0..=last)
+        .rev()
+        .take_while(|&k| rung(k) == rung(last))
+        .last()
+        .unwrap_or(0);
+    w.frames_ms.iter().skip(first + 1).copied().collect()
 }
 
 /// `bench frame`'s orbit: frames, size and turn a frame.
@@ -835,10 +854,10 @@ pub fn window_frames(
     crate::cli::view::view(scene.clone(), opts)
 }
 
-/// Draws the window orbit's frames again offscreen, each at the size the window drew it (with
-/// the temporal pass's history where `cfg` has it), and checks every `WINDOW_ORBIT_CHECK`-th,
-/// upsampled to the window's size as the present pass does, against the still image of its
-/// view (`REFINEMENT_SPP` refinement frames at the window's size).
+/// Draws the window orbit's frames again offscreen, each at the size and level of detail the
+/// window drew it (with the temporal pass's history where `cfg` has it), and checks every
+/// `WINDOW_ORBIT_CHECK`-th, upsampled to the window's size as the present pass does, against
+/// the still image of its view (`REFINEMENT_SPP` refinement frames at the window's size).
 fn check_window_orbit(
     renderer: &mut FrameRenderer,
     gpu: &Gpu,
@@ -860,7 +879,11 @@ fn check_window_orbit(
     let mut shown = Vec::new();
     for (k, drawn) in window.drawn.iter().enumerate() {
         let view = View::new(&camera(k as u32), drawn[0], drawn[1]);
-        renderer.draw_moving(gpu, scene, &view, cfg)?;
+        let moving = FrameConfig {
+            lod: window.lod.get(k).copied().unwrap_or(cfg.lod),
+            ..cfg.clone()
+        };
+        renderer.draw_moving(gpu, scene, &view, &moving)?;
         if checked.contains(&(k as u32)) {
             let params = PresentParams::new((drawn[0], drawn[1]), size, false);
             shown.push(crate::cpu::present::upsample(
@@ -875,11 +898,20 @@ fn check_window_orbit(
         renderer.draw_refined(gpu, scene, &view, cfg, REFINEMENT_SPP, |_| {})?;
         rel_mse.push(difference(image, &renderer.read_hdr(gpu)?)?.rel_mse);
     }
+    let settled = settled_times(&window);
+    let settled_ms = median(settled.clone());
     Ok(WindowOrbit {
         window,
         checked,
         median_rel_mse: median(rel_mse.clone()),
         rel_mse,
+        settled_frames: settled.len() as u32,
+        settled_ms,
+        settled_fps: if settled.is_empty() {
+            0.0
+        } else {
+            1e3 / settled_ms.max(1e-9)
+        },
     })
 }
 
@@ -980,16 +1012,23 @@ impl std::fmt::Display for FrameBench {
                 (Some(lo), Some(hi)) => format!("{lo}–{hi}"),
                 _ => "none".to_string(),
             };
+            let coarsest = w.lod.iter().copied().fold(0.0f32, f32::max);
             write!(
                 f,
                 "\nwindow orbit {} frames, {}° a frame, target {} ms: {:.1} ms/frame ({:.1} fps), \
-                 drawn {} pixels wide; relMSE against each checked view's still image {:.5}",
+                 drawn {} pixels wide, level of detail up to {:.1} px; settled {:.1} ms/frame \
+                 ({:.1} fps) over its last {} frames; relMSE against each checked view's still \
+                 image {:.5}",
                 w.frames,
                 w.degrees_per_frame,
                 w.target_ms,
                 w.frame_ms,
                 w.fps,
                 widths,
+                coarsest,
+                o.settled_ms,
+                o.settled_fps,
+                o.settled_frames,
                 o.median_rel_mse
             )?;
         }

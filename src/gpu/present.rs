@@ -2,10 +2,10 @@
 //! texture (or any colour target of the same format, which is how its test reads it back),
 //! upsampled where the image is smaller than the target.
 
-use super::frame::raster_pipeline;
+use super::frame::raster_pipeline_at;
 use super::{Gpu, buffer_entries};
 use crate::error::Result;
-use crate::shaders::Stage;
+use crate::shaders::{Paging, Stage};
 use crate::types::PresentParams;
 
 pub struct PresentPipeline {
@@ -21,12 +21,21 @@ impl PresentPipeline {
             blend: None,
             write_mask: wgpu::ColorWrites::ALL,
         });
-        let pipeline = raster_pipeline(gpu, Stage::Present, None, &[target])?;
+        let decode = format.is_srgb();
+        let constants = [("DECODE", f64::from(u8::from(decode)))];
+        let entries = ["vs_main", "fs_main"];
+        let paging = Paging::default();
+        let pipeline = raster_pipeline_at(
+            gpu,
+            Stage::Present,
+            entries,
+            None,
+            &[target],
+            &paging,
+            &constants,
+        )?;
         gpu.check()?;
-        Ok(PresentPipeline {
-            pipeline,
-            decode: format.is_srgb(),
-        })
+        Ok(PresentPipeline { pipeline, decode })
     }
 
     /// The uniform of an image of `image` pixels (width, height) drawn onto a target of

@@ -97,6 +97,9 @@ pub struct ViewReport {
     /// pass upsampled it to the window (the window's own at rest or without a target).
     pub frames_ms: Vec<f64>,
     pub drawn: Vec<[u32; 2]>,
+    /// Each frame's level of detail in pixels of the size it was drawn at: `--lod`, coarser
+    /// where the target asked for it (`Resolution::lod`).
+    pub lod: Vec<f32>,
 }
 
 pub fn view(scene: Scene, opts: ViewOptions) -> Result<ViewReport> {
@@ -166,11 +169,15 @@ struct State {
     version: u64,
     /// Which light the frame shows (keys 1–5).
     show: Show,
-    /// The moving frames' internal resolution, and the size the last frame was drawn at.
+    /// The moving frames' internal resolution, and the size and level of detail the last
+    /// frame was drawn at.
     resolution: Resolution,
     drawn: (u32, u32),
-    /// Sizes of the frames since the bake came in (a scripted run reports them).
+    drawn_lod: f32,
+    /// Sizes and levels of detail of the frames since the bake came in (a scripted run
+    /// reports them).
     lit_drawn: Vec<[u32; 2]>,
+    lit_lod: Vec<f32>,
 }
 
 impl App {
@@ -288,7 +295,9 @@ impl App {
                 .unwrap_or_default(),
             resolution: Resolution::new(self.opts.target_ms),
             drawn: (inner.width.max(1), inner.height.max(1)),
+            drawn_lod: self.opts.frame.lod,
             lit_drawn: Vec::new(),
+            lit_lod: Vec::new(),
         })
     }
 }
@@ -367,6 +376,8 @@ impl State {
         let bounds = self.renderer.extent().bounds;
         let cam = camera_uniform(&View::new(&camera, w, h), bounds, frame);
         let gpu = &self.gpu;
+        // A moving frame coarsens it where the target asks (below).
+        self.drawn_lod = frame.lod;
         match (self.method, &mut self.baked) {
             (Method::Photons, Some(baked)) => {
                 let scale = scene_scale(&scene.lights, baked.emitted)?;
@@ -408,10 +419,15 @@ impl State {
                         eprintln!("direct bake: {ms:.0} ms");
                     }
                     let (iw, ih) = self.resolution.size((w, h));
-                    let cam = camera_uniform(&View::new(&camera, iw, ih), bounds, frame);
+                    let moving = FrameConfig {
+                        lod: self.resolution.lod(frame.lod),
+                        ..frame.clone()
+                    };
+                    let cam = camera_uniform(&View::new(&camera, iw, ih), bounds, &moving);
                     self.renderer.resize(gpu, iw, ih)?;
                     self.renderer
-                        .record_moving(gpu, encoder, scene, &cam, frame)?;
+                        .record_moving(gpu, encoder, scene, &cam, &moving)?;
+                    self.drawn_lod = moving.lod;
                 } else if self.samples < self.spp {
                     let (k, spp) = (self.samples, self.spp);
                     self.renderer.resize(gpu, w, h)?;
@@ -518,6 +534,10 @@ impl State {
         let waiting = self.method != Method::Lobes && self.baked.is_none();
         let still = match (self.method, self.samples) {
             // The internal resolution (`--target-ms`) the present pass upsamples.
+            (Method::Lobes, 0) if self.drawn_lod > 0.0 => format!(
+                " — moving at {}×{}, level of detail {:.1} px",
+                self.drawn.0, self.drawn.1, self.drawn_lod
+            ),
             (Method::Lobes, 0) => format!(" — moving at {}×{}", self.drawn.0, self.drawn.1),
             (Method::Lobes, k) => format!(" — still: {k}/{} samples", self.spp),
             _ => String::new(),
@@ -646,6 +666,7 @@ impl App {
             state.frames_lit += 1;
             state.lit_ms.push(state.frame_ms);
             state.lit_drawn.push([state.drawn.0, state.drawn.1]);
+            state.lit_lod.push(state.drawn_lod);
             // A scripted orbit: the next frame's camera.
             state.orbit.spin(self.opts.turn);
         }
@@ -669,6 +690,7 @@ impl App {
                 degrees_per_frame: self.opts.turn,
                 frames_ms: state.lit_ms.clone(),
                 drawn: state.lit_drawn.clone(),
+                lod: state.lit_lod.clone(),
             };
             let r = &self.report;
             eprintln!(
