@@ -27,6 +27,11 @@ fn drawn_clip(s: Splat) -> SurfaceClip {
     return drawn_clips[min(s.object, DRAWN_CLIPS - 1u)];
 }
 
+// Whether the fragment of vertex v with its hit at p is drawn (drawn_clip.wgsl).
+fn clip_passes(v: SplatVertex, p: vec3<f32>) -> bool {
+    return clip_cuts(v) == 0u || cut_rows_keep(v, drawn_clips[clip_surface(v)], p);
+}
+
 @vertex
 fn vs_main(@builtin(vertex_index) k: u32, @builtin(instance_index) b: u32) -> SplatVertex {
     let i = instance_splat(k, b);

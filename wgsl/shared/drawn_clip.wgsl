@@ -1,8 +1,11 @@
 // Where the drawn splats' surfaces end (SurfaceClip in src/types.rs), for the passes that draw
 // splats: a pixel sees a disk only where the disk's surface keeps the hit, as a traced ray
 // does (trace.wgsl), so that a box's edges are drawn where the box ends, as the path tracer
-// sees them. The vertex passes on the clip's rows that cut its disk (none for nearly all), so
-// that a fragment tests two planes and reads nothing. Each drawing stage declares
+// sees them. The vertex passes on which of the clip's rows cut its disk (none for nearly all)
+// and its surface, in one flat value: a fragment of a cut disk reads those rows from the uniform
+// and tests them, one of an uncut disk tests nothing. Passing the rows themselves (eight flat
+// floats a vertex) cost llvmpipe's vertex and setup work 15-20 % of a 160x90 frame of the
+// bunny (docs/viewer.md). Each drawing stage declares
 // `drawn_clips: array<SurfaceClip, DRAWN_CLIPS>`, a uniform, at the binding after its own (so
 // that its bindings stay numbered without a gap): the clips of the first DRAWN_CLIPS - 1
 // surfaces, then a zero clip for every later one (`drawn_clip`). A uniform, not a storage
@@ -15,12 +18,16 @@
 // Surfaces whose clips the drawing passes hold (the last entry stays zero).
 const DRAWN_CLIPS: u32 = 64u;
 
-// Vertex v of splat s, whose surface's clip is c, with the rows that cut its disk.
+// Vertex v of splat s, whose surface's clip is c (drawn_clips[min(s.object, DRAWN_CLIPS -
+// 1)]): bits 0-2 of its `clip` say which of the rows x, y, z cut the disk (the first two that
+// do, as clip_drawn_rows picks them), the bits above the surface.
 fn clipped_vertex(v: SplatVertex, s: Splat, c: SurfaceClip) -> SplatVertex {
     var out = v;
-    let rows = clip_drawn_rows(c, s);
-    out.clip_a = rows[0];
-    out.clip_b = rows[1];
+    let x = !clip_row_holds(c.x, s);
+    let y = !clip_row_holds(c.y, s);
+    let z = !clip_row_holds(c.z, s) && !(x && y);
+    let cuts = select(0u, 1u, x) | select(0u, 2u, y) | select(0u, 4u, z);
+    out.clip = cuts | (min(s.object, DRAWN_CLIPS - 1u) << 3u);
     return out;
 }
 
@@ -30,8 +37,27 @@ fn rows_pass(a: vec4<f32>, b: vec4<f32>, p: vec3<f32>) -> bool {
     return abs(dot(a, q)) <= 1.0 && abs(dot(b, q)) <= 1.0;
 }
 
-// Whether a fragment of vertex v with its hit at p is drawn. Nearly every disk has no row that
-// cuts it (then the first is zero): such a triangle's fragments skip the test.
-fn clip_passes(v: SplatVertex, p: vec3<f32>) -> bool {
-    return all(v.clip_a == vec4<f32>(0.0)) || rows_pass(v.clip_a, v.clip_b, p);
+// Whether row r, where it cuts the disk (`cut`), keeps the point q.
+fn row_keeps(cut: bool, r: vec4<f32>, q: vec4<f32>) -> bool {
+    return !cut || abs(dot(r, q)) <= 1.0;
+}
+
+// The rows of its surface's clip that cut vertex v's disk (bits 0-2; 0 for nearly every disk),
+// and that surface's entry in drawn_clips.
+fn clip_cuts(v: SplatVertex) -> u32 {
+    return v.clip & 7u;
+}
+
+fn clip_surface(v: SplatVertex) -> u32 {
+    return v.clip >> 3u;
+}
+
+// Whether the rows of clip c that cut vertex v's disk keep a hit at p. A stage's clip_passes
+// reads c from its drawn_clips only where a row cuts (clip_cuts), so that the fragments of
+// nearly every disk read nothing.
+fn cut_rows_keep(v: SplatVertex, c: SurfaceClip, p: vec3<f32>) -> bool {
+    let cuts = clip_cuts(v);
+    let q = vec4<f32>(p, 1.0);
+    return row_keeps((cuts & 1u) != 0u, c.x, q) && row_keeps((cuts & 2u) != 0u, c.y, q)
+        && row_keeps((cuts & 4u) != 0u, c.z, q);
 }

@@ -53,8 +53,9 @@ struct Attributes {
 }
 
 // What the raster passes' vertices pass on: the splat's index, and what its fragments test
-// and blend, flat. A fragment then loads nothing: reading its splat from the (paged) splat
-// array cost the baked frames 13 % of their time at 1280x720 (docs/measurements.md).
+// and blend, flat. A fragment then loads nothing but the clip rows of the few disks a surface's
+// edge cuts: reading its splat from the (paged) splat array cost the baked frames 13 % of their
+// time at 1280x720 (docs/measurements.md).
 struct SplatVertex {
     @builtin(position) position: vec4<f32>,
     @location(0) @interpolate(flat) splat: u32,
@@ -63,10 +64,9 @@ struct SplatVertex {
     @location(3) @interpolate(flat) normal: vec3<f32>,
     // The radiance splat_shade gave the splat (the baked attribute pass), else 0.
     @location(4) @interpolate(flat) radiance: vec3<f32>,
-    // The rows of its surface's clip that cut the disk, zero where none does
-    // (drawn_clip.wgsl's clipped_vertex).
-    @location(5) @interpolate(flat) clip_a: vec4<f32>,
-    @location(6) @interpolate(flat) clip_b: vec4<f32>,
+    // Which rows of its surface's clip cut the disk, and the surface (drawn_clip.wgsl's
+    // clipped_vertex); 0 where none does.
+    @location(5) @interpolate(flat) clip: u32,
 }
 
 // Corners of the splat's primitive: the equilateral triangle circumscribing its disk
@@ -240,8 +240,7 @@ fn splat_vertex(cam: Camera, s: Splat, i: u32, corner: u32) -> SplatVertex {
     out.normal = s.normal;
     out.radius = s.radius;
     out.radiance = vec3<f32>(0.0);
-    out.clip_a = vec4<f32>(0.0);
-    out.clip_b = vec4<f32>(0.0);
+    out.clip = 0u;
     return out;
 }
 
