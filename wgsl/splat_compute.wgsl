@@ -38,7 +38,7 @@ fn drawn(s: Splat, p: vec3<f32>) -> bool {
 
 // Splat s's surface's clip as drawn (drawn_clip.wgsl).
 fn drawn_clip(s: Splat) -> SurfaceClip {
-    return drawn_clips[min(s.object, DRAWN_CLIPS - 1u)];
+    return drawn_clips[drawn_clip_index(s)];
 }
 
 @compute @workgroup_size(64)

@@ -24,7 +24,7 @@
 
 // Splat s's surface's clip as drawn (drawn_clip.wgsl).
 fn drawn_clip(s: Splat) -> SurfaceClip {
-    return drawn_clips[min(s.object, DRAWN_CLIPS - 1u)];
+    return drawn_clips[drawn_clip_index(s)];
 }
 
 // Whether the fragment of vertex v with its hit at p is drawn (drawn_clip.wgsl).

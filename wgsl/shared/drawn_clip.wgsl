@@ -18,16 +18,17 @@
 // Surfaces whose clips the drawing passes hold (the last entry stays zero).
 const DRAWN_CLIPS: u32 = 64u;
 
-// Vertex v of splat s, whose surface's clip is c (drawn_clips[min(s.object, DRAWN_CLIPS -
-// 1)]): bits 0-2 of its `clip` say which of the rows x, y, z cut the disk (the first two that
-// do, as clip_drawn_rows picks them), the bits above the surface.
+// Splat s's surface's entry in a stage's drawn_clips.
+fn drawn_clip_index(s: Splat) -> u32 {
+    return min(s.object, DRAWN_CLIPS - 1u);
+}
+
+// Vertex v of splat s, whose surface's clip is c (drawn_clips[drawn_clip_index(s)]): bits 0-2
+// of its `clip` say which of the rows x, y, z cut the disk (clip_cut_rows), the bits above the
+// surface.
 fn clipped_vertex(v: SplatVertex, s: Splat, c: SurfaceClip) -> SplatVertex {
     var out = v;
-    let x = !clip_row_holds(c.x, s);
-    let y = !clip_row_holds(c.y, s);
-    let z = !clip_row_holds(c.z, s) && !(x && y);
-    let cuts = select(0u, 1u, x) | select(0u, 2u, y) | select(0u, 4u, z);
-    out.clip = cuts | (min(s.object, DRAWN_CLIPS - 1u) << 3u);
+    out.clip = clip_cut_rows(c, s) | (drawn_clip_index(s) << 3u);
     return out;
 }
 

@@ -41,20 +41,30 @@ fn clip_holds_disk(c: SurfaceClip, s: Splat) -> bool {
 // zero row keeps everything): what a drawn disk needs tested per pixel. A disk of a box's face
 // lies in the face's plane, whose row keeps it; the two others cut it at a corner.
 fn clip_drawn_rows(c: SurfaceClip, s: Splat) -> array<vec4<f32>, 2> {
+    let cuts = clip_cut_rows(c, s);
     var rows = array<vec4<f32>, 2>(vec4<f32>(0.0), vec4<f32>(0.0));
     var k = 0u;
-    if !clip_row_holds(c.x, s) {
+    if (cuts & 1u) != 0u {
         rows[k] = c.x;
         k += 1u;
     }
-    if !clip_row_holds(c.y, s) {
+    if (cuts & 2u) != 0u {
         rows[k] = c.y;
         k += 1u;
     }
-    if !clip_row_holds(c.z, s) && k < 2u {
+    if (cuts & 4u) != 0u {
         rows[k] = c.z;
     }
     return rows;
+}
+
+// Which of clip c's rows clip_drawn_rows picks for splat s, as bits (x 1, y 2, z 4): those
+// that cut its disk, the first two of them.
+fn clip_cut_rows(c: SurfaceClip, s: Splat) -> u32 {
+    let x = !clip_row_holds(c.x, s);
+    let y = !clip_row_holds(c.y, s);
+    let z = !clip_row_holds(c.z, s) && !(x && y);
+    return select(0u, 1u, x) | select(0u, 2u, y) | select(0u, 4u, z);
 }
 
 // A splat's place in the level of detail's merge tree (src/types.rs).
