@@ -178,7 +178,7 @@ fn bumpy_ball_obj(radius: f32, rings: u32) -> String {
 /// photons a curved surface sends its splats, not the surface's shadow in the gather disk's
 /// plane: counting the shadow read +5.4 % on this ball (+4.1 % on the bunny made diffuse), and
 /// counting the surface without the share of it whose light arrives from the splat's front
-/// −3.3 % (−2.9 %); both fail; now −1.1 % (−0.6 %). 64², 64 refinement frames, the path
+/// −3.3 % (−2.9 %); both fail; now +2.6 % (+0.3 %). 64², 64 refinement frames, the path
 /// tracer at 2,048 samples.
 #[test]
 fn a_curved_diffuse_model_matches_the_path_tracer() {
