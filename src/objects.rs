@@ -67,7 +67,7 @@ fn seen(scene: &Scene, geo: &Geometry, cam: &Camera, pixel: Vec2) -> u32 {
 }
 
 /// The object-ID image of `cam` (`cam.size` pixels, row by row): per pixel the surface all of
-/// its `samples` points see (the first at the pixel's centre, then `frame::jitter`'s), else
+/// its `samples` points see (`frame::jitter`'s for as many refinement frames), else
 /// `MIXED`, or `NONE`.
 pub fn object_ids(scene: &Scene, grid: &SplatGrid, cam: &Camera, samples: u32) -> Result<Vec<u16>> {
     if scene.surfaces.len() >= MIXED as usize - 1 {
@@ -84,7 +84,7 @@ pub fn object_ids(scene: &Scene, grid: &SplatGrid, cam: &Camera, samples: u32) -
     };
     let (w, h) = (cam.size[0] as u32, cam.size[1] as u32);
     let points: Vec<Vec2> = (0..samples.max(1))
-        .map(|k| Vec2::splat(0.5) + Vec2::from(crate::frame::jitter(k)))
+        .map(|k| Vec2::splat(0.5) + Vec2::from(crate::frame::jitter(k, samples.max(1))))
         .collect();
     // Per pixel: its ID, and whether a point of it sees a light.
     let pixels: Vec<(u16, bool)> = (0..w * h)

@@ -15,8 +15,8 @@ use crate::direct::{DirectMap, direct_params_biased};
 use crate::em::LobeMap;
 use crate::error::{Error, Result};
 use crate::frame::{
-    Direct, FrameConfig, SceneExtent, Splatter, Splatting, TEMPORAL_JITTERS, Terms, camera_uniform,
-    frame_camera, jitter, path_params, refinement, shade_params_for, temporal_params,
+    Direct, FrameConfig, SceneExtent, Splatter, Splatting, Terms, camera_uniform, frame_camera,
+    jitter, path_params, refinement, shade_params_for, temporal_jitter, temporal_params,
 };
 use crate::gpu::Gpu;
 use crate::gpu::bins::GpuBins;
@@ -288,7 +288,7 @@ impl FrameRenderer {
             .filter(|h| h.params == params && h.splatting == splatting);
         let frames = last.map_or(0, |h| h.frames);
         let cam = Camera {
-            jitter: jitter(frames % TEMPORAL_JITTERS),
+            jitter: temporal_jitter(frames),
             ..*cam
         };
         let next = History {
@@ -338,7 +338,7 @@ impl FrameRenderer {
     ) -> Result<&wgpu::Buffer> {
         let base = shade_params_for(scene, self.lobes_per_splat, self.extent.shadow_bias, cfg);
         let cam = Camera {
-            jitter: jitter(k),
+            jitter: jitter(k, spp),
             ..*cam
         };
         let params = refinement(&base, k, spp);

@@ -138,6 +138,54 @@ fn a_one_sample_still_is_the_exact_frame() {
     assert_eq!(renderer.read_hdr(&gpu).unwrap(), exact);
 }
 
+/// The refinement frames' points within the pixel: their mean is the pixel's centre for every
+/// count (every pixel takes the same point in a frame, so an offset mean shifts every edge of
+/// the image alike: the Halton points of before were 0.043 pixel off in y at 16 frames), and a
+/// power of two of them puts one point in each column and each row of that many. The moving
+/// frames' cycle starts at the centre, so a frame without history is the one drawn alone.
+#[test]
+fn the_refinement_points_are_centred_and_stratified() {
+    use lobelight::frame::{TEMPORAL_JITTERS, jitter, temporal_jitter};
+    assert_eq!(jitter(0, 1), [0.0; 2]);
+    assert_eq!(temporal_jitter(0), [0.0; 2]);
+    for n in [2, 3, 5, 12, 16, 24, 64, 256] {
+        let points: Vec<[f32; 2]> = (0..n).map(|k| jitter(k, n)).collect();
+        for axis in 0..2 {
+            let mean = points.iter().map(|p| p[axis] as f64).sum::<f64>() / n as f64;
+            // Counts between powers of two take a prefix of the larger set, whose mean is off
+            // by at most 1.41 / n pixel for every count up to 300 (computed on the side).
+            let bound = if n.is_power_of_two() {
+                1e-6
+            } else {
+                1.5 / n as f64
+            };
+            assert!(mean.abs() <= bound, "n = {n}, axis {axis}: mean {mean}");
+            assert!(
+                points.iter().all(|p| p[axis].abs() < 0.5),
+                "n = {n}: {points:?}"
+            );
+            if n.is_power_of_two() {
+                let mut strata: Vec<u32> = points
+                    .iter()
+                    .map(|p| ((p[axis] + 0.5) * n as f32) as u32)
+                    .collect();
+                strata.sort();
+                assert_eq!(strata, (0..n).collect::<Vec<_>>(), "n = {n}, axis {axis}");
+            }
+        }
+    }
+    let cycle: Vec<[f32; 2]> = (0..TEMPORAL_JITTERS).map(temporal_jitter).collect();
+    assert_eq!(temporal_jitter(TEMPORAL_JITTERS), cycle[0]);
+    for axis in 0..2 {
+        let mut strata: Vec<u32> = cycle
+            .iter()
+            .map(|p| ((p[axis] + 0.5) * 16.0) as u32)
+            .collect();
+        strata.sort();
+        assert_eq!(strata, (0..16).collect::<Vec<_>>(), "axis {axis}");
+    }
+}
+
 /// A still image of 8 jittered frames, on the device and on the mirror: the same image within
 /// the splat passes' parity tolerances. Also the glossy direct light alone of the box of
 /// spheres, where the near-mirror sphere's lobe is narrower than the light, so that its
@@ -184,9 +232,10 @@ fn refined_parity(gpu: &lobelight::gpu::Gpu, scene: &Scene, cfg: &FrameConfig, w
 }
 
 /// The still image against the exact one-frame render (256², on the device): the same light,
-/// moved only within pixels. Energy within 1 % and SMAPE under 0.03 (measured 0.8 %, most of
-/// it the light's own edge, and 0.025); most pixels within 5 %, but not all, or the jitter
-/// would not bite (measured 77 % at this bake's 20 k photons, 91 % at 200 k: edges, and the
+/// moved only within pixels. Energy within 1 % and SMAPE under 0.035 (measured −0.6 %, most of
+/// it the light's own edge, and 0.030; 0.025 while the pixel's centre was one of the 16 points,
+/// which drew the still image towards the centre's sample); most pixels within 5 %, but not
+/// all, or the jitter would not bite (measured 74 % at this bake's 20 k photons: edges, and the
 /// lobes' splat-sized patches, which a pixel centre samples and a jittered pixel averages).
 #[test]
 fn refined_still_differs_from_the_exact_frame_by_anti_aliasing() {
@@ -208,7 +257,7 @@ fn refined_still_differs_from_the_exact_frame_by_anti_aliasing() {
     let d = difference(&still, &exact).unwrap();
     eprintln!("still against exact: {d:?}");
     assert!(d.energy.abs() <= 0.01, "{d:?}");
-    assert!(d.smape <= 0.03, "{d:?}");
+    assert!(d.smape <= 0.035, "{d:?}");
     assert!(
         d.within_5_percent >= 0.7 && d.within_5_percent < 0.99,
         "{d:?}"
