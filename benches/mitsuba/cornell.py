@@ -126,7 +126,7 @@ def per_object(mi, name, args, depth, out):
     reuse = args.reuse_references and converged.exists() and path.exists()
     seconds = None
     if not reuse:
-        seconds = render_mitsuba(mi, name, args.size, args.spp, depth, 0, converged)
+        seconds = render_mitsuba(mi, name, args.size, args.spp, depth, args.seed, converged)
         print(f"{name}: Mitsuba {args.spp} spp in {seconds:.1f} s", file=sys.stderr)
     ids = out / f"ids_{name}.png"
     lobes = out / f"lobelight_{name}.exr"
@@ -164,7 +164,8 @@ def equal_time(mi, args, depth, out, converged_seconds):
         # Samples per pixel that fit in lobelight's time, from the converged run's rate.
         equal_spp = max(1, int(args.spp * ours_seconds / converged_seconds))
         equal = out / f"mitsuba_equal_time_{photons}.exr"
-        equal_seconds = render_mitsuba(mi, "diffuse", args.size, equal_spp, depth, 1, equal)
+        equal_seconds = render_mitsuba(mi, "diffuse", args.size, equal_spp, depth,
+                                       args.seed + 1, equal)
         runs.append({
             "photons": photons,
             "lobelight": {
@@ -194,6 +195,9 @@ def main():
     p.add_argument("-o", "--output", type=Path, default=Path("mitsuba-out"))
     p.add_argument("--path-spp", type=int, default=2048,
                    help="samples per pixel of lobelight's own path tracer in the per-object table")
+    p.add_argument("--seed", type=int, default=0,
+                   help="seed of Mitsuba's converged images (a second seed gives benches/noise.py "
+                        "the reference's own noise); the equal-time images take the next")
     p.add_argument("--reuse-references", action="store_true",
                    help="keep the output folder's Mitsuba converged and path-traced images where "
                         "both are there (same --size, --spp and --path-spp): only the renderer's "

@@ -114,6 +114,8 @@ struct BakeArgs {
     /// Photons to emit.
     #[arg(long)]
     photons: Option<u64>,
+    /// Seed of the random numbers: the photons', the frames' and the path tracer's (the same
+    /// scene and seed give the same image on one device).
     #[arg(long)]
     seed: Option<u32>,
     /// Which hits store photons.
