@@ -114,8 +114,8 @@ struct BakeArgs {
     /// Photons to emit.
     #[arg(long)]
     photons: Option<u64>,
-    /// Seed of the random numbers: the photons', the frames' and the path tracer's (the same
-    /// scene and seed give the same image on one device).
+    /// Seed of the bake's random numbers (the photons') and of the path tracer's; the frames'
+    /// shadow rays keep theirs. The same scene and seed give the same image on one device.
     #[arg(long)]
     seed: Option<u32>,
     /// Which hits store photons.
