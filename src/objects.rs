@@ -84,7 +84,7 @@ pub fn object_ids(scene: &Scene, grid: &SplatGrid, cam: &Camera, samples: u32) -
     };
     let (w, h) = (cam.size[0] as u32, cam.size[1] as u32);
     let points: Vec<Vec2> = (0..samples.max(1))
-        .map(|k| Vec2::splat(0.5) + Vec2::from(crate::frame::jitter(k, samples.max(1))))
+        .map(|k| Vec2::splat(0.5) + Vec2::from(crate::frame::jitter(k, samples)))
         .collect();
     // Per pixel: its ID, and whether a point of it sees a light.
     let pixels: Vec<(u16, bool)> = (0..w * h)

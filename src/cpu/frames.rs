@@ -179,7 +179,7 @@ pub fn cpu_refined(
     let mut hdr = vec![[0.0; 4]; (cam.size[0] * cam.size[1]) as usize];
     for k in 0..spp.max(1) {
         let cam = Camera {
-            jitter: jitter(k, spp.max(1)),
+            jitter: jitter(k, spp),
             ..*cam
         };
         let params = refinement(params, k, spp);
