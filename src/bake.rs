@@ -54,6 +54,12 @@ pub struct StageReport {
     /// splats of a cell of R/16 that face alike).
     #[serde(skip_serializing_if = "Option::is_none")]
     pub coverages: Option<u32>,
+    /// EM: splats whose photon estimate was widened (`em_smooth`), and of those the ones to
+    /// the widest kernel.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub splats_smoothed: Option<u32>,
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub splats_smoothed_widest: Option<u32>,
     /// EM: lobes kept, and what the fitted splats would keep without pruning.
     #[serde(skip_serializing_if = "Option::is_none")]
     pub lobes_kept: Option<u64>,
@@ -412,6 +418,8 @@ pub fn bake(scene: &Scene, device: BakeDevice, progress: &Progress) -> Result<Ba
         splats_served: Some(s.served),
         rays: Some(s.rays),
         coverages: Some(s.coverages),
+        splats_smoothed: Some(s.smoothed[1] + s.smoothed[2]),
+        splats_smoothed_widest: Some(s.smoothed[2]),
         lobes_kept: Some(lobes.lobes.len() as u64),
         lobes_fitted: Some(s.fitted as u64 * em_cfg.lobes as u64),
         skipped_reason: Some(em_skipped(&lobes, em_cfg, scene.splats.len())),
@@ -669,6 +677,7 @@ fn em_skipped(map: &LobeMap, cfg: &EmConfig, splats: usize) -> String {
         n if n >= splats => String::new(),
         n => format!("; coverage measured {n} times for {splats} splats"),
     };
+    let covered = covered + &smoothed(&s.smoothed);
     if s.fitted == 0 {
         format!(
             "no EM and no lobes kept: no glossy splat has photons (irradiance gathered on {} \
@@ -692,6 +701,24 @@ fn em_skipped(map: &LobeMap, cfg: &EmConfig, splats: usize) -> String {
             } + &covered
         )
     }
+}
+
+/// What `em_smooth` did, for the stage's detail: how many lit splats took a wider estimate
+/// than their own, and how many fitted a subset of their crowded boxes.
+fn smoothed(counts: &[u32; 4]) -> String {
+    let [own, half, widest, crowded] = *counts;
+    if own + half + widest == 0 {
+        return String::new();
+    }
+    let crowded = match crowded {
+        0 => String::new(),
+        n => format!(", {n} from a subset of their neighbours"),
+    };
+    format!(
+        "; {} of {} lit splats smoothed ({widest} to the widest kernel{crowded})",
+        half + widest,
+        own + half + widest
+    )
 }
 
 fn progress_photons(progress: &Progress, s: &PhotonStats) {

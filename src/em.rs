@@ -80,6 +80,9 @@ pub struct EmConfig {
     /// Shared fits (`fit_groups`): fitted splats within one cell of this many search radii,
     /// facing alike, share one fit (0: each fits its own).
     pub share: f32,
+    /// The photons' estimate widened where the light is smooth (`em_smooth`): the widest
+    /// kernel, in search radii (0: each splat keeps its own estimate). Deposits only.
+    pub smooth: f32,
 }
 
 impl EmConfig {
@@ -101,6 +104,7 @@ impl EmConfig {
             check_radius(self.radius)?;
             check_slab(self.slab)?;
             check_share(self.share)?;
+            check_smooth(self.smooth)?;
             check_gather(self.gather)
         };
         check().map_err(Error::Invalid)
@@ -138,6 +142,7 @@ impl EmConfig {
                 0
             },
             fit_candidates: self.fit_candidates,
+            smooth_radii: self.smooth,
             ..Default::default()
         }
     }
@@ -178,6 +183,15 @@ pub fn check_share(share: f32) -> std::result::Result<(), String> {
     Ok(())
 }
 
+pub fn check_smooth(smooth: f32) -> std::result::Result<(), String> {
+    if !(smooth.is_finite() && (0.0..=MAX_SMOOTH).contains(&smooth)) {
+        return Err(format!(
+            "smooth must be within 0..={MAX_SMOOTH} search radii (0: no smoothing), got {smooth}"
+        ));
+    }
+    Ok(())
+}
+
 pub fn check_gather(gather: u32) -> std::result::Result<(), String> {
     if gather > MAX_GATHER {
         return Err(format!(
@@ -194,6 +208,15 @@ pub const DEFAULT_GATHER: u32 = 16;
 /// `EmConfig::share` unless a scene or the command line says otherwise (docs/measurements.md,
 /// "Shared fits").
 pub const DEFAULT_SHARE: f32 = 1.0;
+
+/// `EmConfig::smooth` unless a scene or the command line says otherwise (docs/measurements.md,
+/// "Smoothing").
+pub const DEFAULT_SMOOTH: f32 = 2.0;
+
+/// Widest smoothing kernel, in search radii: `em_smooth`'s box reaches the widest kernel plus
+/// a deposit's reach past R, at most 2 reach (the `SMOOTH_SPAN` + 1 cells its box may span),
+/// which holds for 2 R since the reach is at least R.
+pub const MAX_SMOOTH: f32 = 2.0;
 
 /// Largest cell of a shared fit, in search radii: past it one fit would stand for light that
 /// the photons resolve apart.
@@ -300,6 +323,9 @@ pub struct EmStats {
     pub served: u32,
     /// Measures of the covered share of a gather disk (`em_coverage`): one a coverage group.
     pub coverages: u32,
+    /// `em_smooth`: the lit splats by the estimate they took (their own, the plane within half
+    /// the widest kernel, within all of it), and those whose box was too crowded to fit.
+    pub smoothed: [u32; 4],
 }
 
 /// What final gathering reads of the scene besides the photons and the splats

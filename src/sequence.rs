@@ -24,7 +24,7 @@ use crate::shaders::Stage;
 use crate::shaders::stage_shape;
 use crate::shared::bins::list_count;
 use crate::shared::dispatch::groups_for;
-use crate::shared::lobes::{EM_COVER_APPLY, EM_DEFER_FIT, EM_GROUPS, EM_SHARE};
+use crate::shared::lobes::{EM_COVER_APPLY, EM_DEFER_FIT, EM_GROUPS, EM_SHARE, EM_SMOOTH_APPLY};
 use crate::timing::ms_since;
 use crate::tone::{ToneConfig, reduce_levels};
 use crate::types::{
@@ -525,6 +525,16 @@ pub struct DepositInput<'a, B> {
     pub spread: &'a B,
 }
 
+/// Where `em_smooth` finds a splat's neighbours: the binned deposits' records (their
+/// parameters, the bins' parameters, list starts and keys) and the splats.
+pub struct Records<'a, B> {
+    pub deposit_params: &'a B,
+    pub bin_params: &'a B,
+    pub splats: &'a B,
+    pub cell_start: &'a B,
+    pub keys: &'a B,
+}
+
 /// What the lobe fit reads of the binned photons.
 pub struct FitInput<'a, B> {
     pub bin_params: &'a B,
@@ -593,6 +603,8 @@ pub struct Fit<B> {
     /// With final gathering, the direct bake its rays read: every splat's, of the setup's
     /// lights, the same as the frames bake (`bake_direct`), so they may take it.
     pub direct: Option<Direct<B>>,
+    /// `em_smooth`'s counts (`smooth_light`; zeros where it did not run).
+    pub smoothed: [u32; 4],
 }
 
 impl<B> Fit<B> {
@@ -612,6 +624,7 @@ impl<B> Fit<B> {
             rays: 0,
             served: 0,
             coverages: 0,
+            smoothed: self.smoothed,
         }
     }
 
@@ -793,6 +806,19 @@ pub fn fit_lobes<E: Executor>(
         let params = cfg.params(splat_count, splat_count, shape);
         cover_light(ex, &params, &light, input.cover.as_ref())?;
     }
+    // The deposits' estimate widened where the light is smooth, before the rays read it.
+    let mut smoothed = [0; 4];
+    if let (Some(d), true) = (&input.deposits, cfg.smooth > 0.0) {
+        let params = cfg.params(splat_count, splat_count, shape);
+        let records = Records {
+            deposit_params: d.params,
+            bin_params: input.bin_params,
+            splats: input.splats,
+            cell_start: input.cell_start,
+            keys: d.keys,
+        };
+        smoothed = smooth_light(ex, &params, &records, &light)?;
+    }
     ex.read::<u32>(&counters, 1)?;
     let mut fit_ms = ms_since(t) - select_ms - gather_ms;
     let mut final_gather_ms = 0.0;
@@ -823,6 +849,7 @@ pub fn fit_lobes<E: Executor>(
         fit_ms,
         final_gather_ms,
         direct,
+        smoothed,
     })
 }
 
@@ -869,6 +896,45 @@ pub fn cover_light<E: Executor>(
     let bindings = [&uniform, light, words, &shares];
     let groups = groups(Stage::EmCoverage, params.splat_count)?;
     ex.dispatch_traced(Stage::EmCoverage, &bindings, groups)
+}
+
+/// `em_smooth` (design §6, "Smoothing"): each splat's photon irradiance, the least noisy of
+/// its own and planes fitted to its surface's estimates within half of and all of the widest
+/// kernel that agree with it within their noise. Two passes: the first chooses from the
+/// neighbours' light into a buffer of its own, the second writes the choice into `light`.
+/// Returns the lit splats by the scale they chose (own, half, widest) and how many of them
+/// fitted an even subset of their boxes' records (past `SMOOTH_BUDGET`).
+pub fn smooth_light<E: Executor>(
+    ex: &mut E,
+    params: &EmParams,
+    records: &Records<E::Buffer>,
+    light: &E::Buffer,
+) -> Result<[u32; 4]> {
+    let n = params.splat_count;
+    let smoothed = ex.zeroed("smoothed light", n.max(1) as u64 * 16)?;
+    let counters = ex.zeroed("smoothing counters", 16)?;
+    for flags in [
+        params.flags & !EM_SMOOTH_APPLY,
+        params.flags | EM_SMOOTH_APPLY,
+    ] {
+        let uniform = ex.uniform("em smooth params", &EmParams { flags, ..*params })?;
+        let bindings = [
+            &uniform,
+            records.deposit_params,
+            records.bin_params,
+            records.splats,
+            records.cell_start,
+            records.keys,
+            light,
+            &smoothed,
+            &counters,
+        ];
+        ex.dispatch(Stage::EmSmooth, &bindings, groups(Stage::EmSmooth, n)?)?;
+    }
+    match ex.read::<u32>(&counters, 4)?[..] {
+        [a, b, c, d] => Ok([a, b, c, d]),
+        _ => Err(Error::Gpu("smoothing counters readback was short".into())),
+    }
 }
 
 /// What `fit_to_rays` takes of the photon fit: its `em_fit` buffers, its counters (read back

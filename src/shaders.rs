@@ -87,6 +87,7 @@ stages! {
     EmShare => "em_share",
     EmFit => "em_fit",
     EmCoverage => "em_coverage",
+    EmSmooth => "em_smooth",
     ScanReduce => "scan_reduce",
     ScanApply => "scan_apply",
     TonemapReduce => "tonemap_reduce",

@@ -447,7 +447,8 @@ pub struct EmParams {
     /// The fit-list entry of this dispatch's first workgroup (batches of gathered samples:
     /// the samples of entry `list_first + k` begin at k · gathered).
     pub list_first: u32,
-    pub _pad0: u32,
+    /// `em_smooth`'s widest kernel, in search radii (its other is half as wide).
+    pub smooth_radii: f32,
     pub _pad1: u32,
     pub _pad2: u32,
 }

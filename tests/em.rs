@@ -99,6 +99,7 @@ fn config(family: LobeFamily, lobes: u32, iterations: u32) -> EmConfig {
         gather: 0,
         estimate: lobelight::em::Estimate::Photons,
         share: 0.0,
+        smooth: 0.0,
     }
 }
 

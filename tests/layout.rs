@@ -172,7 +172,7 @@ fn rust_layouts() -> Vec<RustLayout> {
             fit_candidates,
             gathered,
             list_first,
-            _pad0,
+            smooth_radii,
             _pad1,
             _pad2
         }),

@@ -172,6 +172,7 @@ fn mirror_workgroup_shapes_match_the_wgsl() {
         (Stage::EmDeposit, em_deposit::WG, 1),
         (Stage::EmDepositList, em_deposit_list::WG, 1),
         (Stage::EmShare, em_share::WG, 1),
+        (Stage::EmSmooth, em_smooth::WG, 1),
         (Stage::EmCoverage, em_coverage::WG, 1),
         (Stage::ScanReduce, scan_reduce::WG, scan_reduce::ITEMS),
         (Stage::ScanApply, scan_apply::WG, scan_apply::ITEMS),
@@ -397,8 +398,36 @@ fn em_flags_match_the_wgsl() {
         ("EM_SHARE", EM_SHARE),
         ("EM_GROUPS", EM_GROUPS),
         ("EM_COVER_APPLY", EM_COVER_APPLY),
+        ("EM_SMOOTH_APPLY", EM_SMOOTH_APPLY),
         ("FOLLOWER_BIT", FOLLOWER_BIT),
     ] {
         assert_eq!(wgsl_const_u32(&source, name), value, "{name}");
+    }
+}
+
+/// `em_smooth` and its mirror choose alike only with the same thresholds.
+#[test]
+fn smoothing_constants_match_the_wgsl() {
+    use lobelight::shared::lobes::*;
+    let source = shaders::resolve_stage(Stage::EmSmooth).unwrap();
+    for (name, value) in [
+        ("SMOOTH_PHOTONS_ENOUGH", SMOOTH_PHOTONS_ENOUGH),
+        ("SMOOTH_BUDGET", SMOOTH_BUDGET),
+        ("SMOOTH_SPAN", SMOOTH_SPAN),
+    ] {
+        assert_eq!(wgsl_const_u32(&source, name), value, "{name}");
+    }
+    for (name, value) in [
+        ("SMOOTH_COS_MIN", SMOOTH_COS_MIN),
+        ("SMOOTH_CONFIDENCE", SMOOTH_CONFIDENCE),
+        ("SMOOTH_DET_MIN", SMOOTH_DET_MIN),
+    ] {
+        let decl = format!("const {name}: f32 = ");
+        let wgsl: f32 = source
+            .lines()
+            .find_map(|l| l.trim().strip_prefix(decl.as_str()))
+            .and_then(|v| v.trim_end_matches(';').parse().ok())
+            .unwrap_or_else(|| panic!("no `{decl}` in em_smooth.wgsl"));
+        assert_eq!(wgsl, value, "{name}");
     }
 }

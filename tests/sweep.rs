@@ -24,6 +24,7 @@ fn small_plan() -> SweepPlan {
         families: vec![LobeFamily::Vmf],
         prune: vec![false],
         shares: vec![0.0],
+        smooths: vec![0.0],
         frames: 1,
     }
 }
@@ -35,9 +36,11 @@ fn a_small_sweep_writes_its_tables_and_charts() {
     let dir = std::env::temp_dir().join(format!("lobelight-sweep-{}", std::process::id()));
     let plan = small_plan();
     let r = sweep(&[("cornell".into(), scene)], Some(&gpu), &plan, &dir).unwrap();
-    assert_eq!(r.rows.len(), 13);
+    assert_eq!(r.rows.len(), 14);
     let share = r.rows.iter().find(|row| row.knob == "share").unwrap();
     assert_eq!(share.value, "0R");
+    let smooth = r.rows.iter().find(|row| row.knob == "smooth").unwrap();
+    assert_eq!(smooth.value, "0R");
     let path = r.rows.iter().find(|row| row.knob == "path").unwrap();
     assert_eq!(path.value, "4 spp");
     assert_eq!(r.references[0].spp, 64);
@@ -63,7 +66,7 @@ fn a_small_sweep_writes_its_tables_and_charts() {
     assert!(by("photons", "200k") < by("photons", "30k"), "{:?}", r.rows);
     let csv = std::fs::read_to_string(dir.join("sweep.csv")).unwrap();
     assert!(csv.starts_with("scene,knob,value,photons"));
-    assert_eq!(csv.lines().count(), 14);
+    assert_eq!(csv.lines().count(), 15);
     assert!(csv.lines().next().unwrap().ends_with(",prune,lobes_kept"));
     let md = std::fs::read_to_string(dir.join("sweep.md")).unwrap();
     assert!(md.contains("| iterations | 10 |"), "{md}");

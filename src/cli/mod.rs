@@ -158,6 +158,11 @@ struct BakeArgs {
     /// share one lobe fit whose rays all of them cast (0: each splat fits its own lobes).
     #[arg(long, value_name = "RADII")]
     share: Option<f32>,
+    /// The photons' estimate widened where the light is smooth: each splat takes the widest of
+    /// its own and its surface's means within half of and all of this many search radii that
+    /// agrees with the narrower within their noise (0: no smoothing).
+    #[arg(long, value_name = "RADII")]
+    smooth: Option<f32>,
 }
 
 impl BakeArgs {
@@ -194,6 +199,9 @@ impl BakeArgs {
         }
         if let Some(r) = self.share {
             scene.bake.share = r;
+        }
+        if let Some(r) = self.smooth {
+            scene.bake.smooth = r;
         }
         scene.bake.sparse |= self.sparse;
         scene.bake.prune &= !self.fixed_lobes;
@@ -426,7 +434,7 @@ enum Command {
         #[arg(long, value_name = "MS", requires = "window")]
         target_ms: Option<f64>,
         /// `sweep` only: turn only these knobs (path, photons, iterations, radius, lobes,
-        /// splats, family, prune, share), comma-separated; default all.
+        /// splats, family, prune, share, smooth), comma-separated; default all.
         #[arg(long, value_delimiter = ',')]
         knobs: Vec<String>,
         /// `scale` only: the splat counts of the generated clouds, comma-separated.

@@ -63,6 +63,8 @@ pub struct SweepPlan {
     pub prune: Vec<bool>,
     /// Shared fits' cells, in search radii (0: each splat its own fit).
     pub shares: Vec<f32>,
+    /// Smoothing's widest kernel, in search radii (0: each splat's own photon estimate).
+    pub smooths: Vec<f32>,
     /// Timed frames per setting (after one untimed); the median is reported.
     pub frames: u32,
 }
@@ -83,6 +85,7 @@ impl Default for SweepPlan {
             families: vec![LobeFamily::Ward, LobeFamily::Vmf],
             prune: vec![true, false],
             shares: vec![0.0, 0.5, 1.0, 2.0, 4.0],
+            smooths: vec![0.0, 1.0, 2.0],
             frames: 3,
         }
     }
@@ -99,10 +102,11 @@ enum Setting {
     Family(LobeFamily),
     Prune(bool),
     Share(f32),
+    Smooth(f32),
 }
 
 /// The knobs a sweep can turn, by name.
-pub const KNOBS: [&str; 9] = [
+pub const KNOBS: [&str; 10] = [
     "path",
     "photons",
     "iterations",
@@ -112,6 +116,7 @@ pub const KNOBS: [&str; 9] = [
     "family",
     "prune",
     "share",
+    "smooth",
 ];
 
 impl Setting {
@@ -125,6 +130,7 @@ impl Setting {
             Setting::Family(_) => "family",
             Setting::Prune(_) => "prune",
             Setting::Share(_) => "share",
+            Setting::Smooth(_) => "smooth",
         }
     }
 
@@ -137,7 +143,7 @@ impl Setting {
             Setting::Splats(f) => format!("{}%", f * 100.0),
             Setting::Family(f) => format!("{f:?}").to_lowercase(),
             Setting::Prune(on) => if on { "on" } else { "off" }.into(),
-            Setting::Share(r) => format!("{r}R"),
+            Setting::Share(r) | Setting::Smooth(r) => format!("{r}R"),
         }
     }
 }
@@ -152,6 +158,7 @@ impl SweepPlan {
         out.extend(self.families.iter().map(|&f| Setting::Family(f)));
         out.extend(self.prune.iter().map(|&on| Setting::Prune(on)));
         out.extend(self.shares.iter().map(|&r| Setting::Share(r)));
+        out.extend(self.smooths.iter().map(|&r| Setting::Smooth(r)));
         out
     }
 
@@ -177,6 +184,7 @@ impl SweepPlan {
         keep(&mut self.families, turned("family"));
         keep(&mut self.prune, turned("prune"));
         keep(&mut self.shares, turned("share"));
+        keep(&mut self.smooths, turned("smooth"));
         keep(&mut self.path_spp, turned("path"));
         Ok(self)
     }
@@ -220,6 +228,7 @@ fn apply(base: &Scene, setting: Setting, radius: f32) -> Scene {
         Setting::Family(f) => scene.bake.family = f,
         Setting::Prune(on) => scene.bake.prune = on,
         Setting::Share(r) => scene.bake.share = r,
+        Setting::Smooth(r) => scene.bake.smooth = r,
         Setting::Splats(_) => {}
     }
     scene

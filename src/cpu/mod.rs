@@ -17,6 +17,7 @@ pub mod em_fit;
 pub mod em_gather;
 pub mod em_select;
 pub mod em_share;
+pub mod em_smooth;
 pub mod exec;
 pub mod final_gather;
 pub mod frames;
@@ -83,6 +84,7 @@ pub fn mirror(stage: Stage) -> Option<Mirror> {
         Stage::EmGather => Mirror::Plain(em_gather::dispatch),
         Stage::EmSelect => Mirror::Plain(em_select::dispatch),
         Stage::EmShare => Mirror::Plain(em_share::dispatch),
+        Stage::EmSmooth => Mirror::Plain(em_smooth::dispatch),
         Stage::FinalGather => Mirror::Traced(final_gather::dispatch),
         Stage::GridCount => Mirror::Plain(grid_count::dispatch),
         Stage::GridDistance => Mirror::Plain(grid_distance::dispatch),

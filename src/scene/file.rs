@@ -131,6 +131,9 @@ pub struct BakeDesc {
     /// Shared fits: fitted splats within one cell of this many search radii, facing alike,
     /// share one lobe fit, whose rays all of them cast (0: each splat fits its own lobes).
     pub share: f32,
+    /// The photons' estimate widened where the light is smooth: the widest kernel, in search
+    /// radii (0: each splat keeps its own estimate).
+    pub smooth: f32,
 }
 
 impl Default for BakeDesc {
@@ -151,6 +154,7 @@ impl Default for BakeDesc {
             gather: crate::em::DEFAULT_GATHER,
             estimate: crate::em::Estimate::Deposits,
             share: crate::em::DEFAULT_SHARE,
+            smooth: crate::em::DEFAULT_SMOOTH,
         }
     }
 }

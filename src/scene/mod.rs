@@ -391,6 +391,7 @@ fn validate_bake(b: &BakeDesc) -> std::result::Result<(), String> {
     crate::em::check_slab(b.slab)?;
     crate::em::check_gather(b.gather)?;
     crate::em::check_share(b.share)?;
+    crate::em::check_smooth(b.smooth)?;
     if b.max_depth == 0 || b.max_depth > 64 {
         return Err(format!(
             "max_depth must be within 1..=64, got {}",

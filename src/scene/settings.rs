@@ -37,6 +37,7 @@ impl EmConfig {
             gather: b.gather,
             estimate: b.estimate,
             share: b.share,
+            smooth: b.smooth,
         }
     }
 }

@@ -72,8 +72,13 @@ pub struct BinBox {
 }
 
 pub fn bin_box(c: Vec3, r: f32, b: &BinParams) -> BinBox {
+    bin_box_spanning(c, r, b, BIN_SPAN)
+}
+
+/// `bin_box` for a ball wider than the bins were sized for: at most `span` + 1 cells per axis.
+pub fn bin_box_spanning(c: Vec3, r: f32, b: &BinParams, span: u32) -> BinBox {
     let lo = bin_coord(c - Vec3::splat(r), b);
-    let hi = bin_coord(c + Vec3::splat(r), b).min(lo + UVec3::splat(BIN_SPAN));
+    let hi = bin_coord(c + Vec3::splat(r), b).min(lo + UVec3::splat(span));
     let reach = r * b.inv_cell_size * BIN_REACH_MARGIN;
     BinBox {
         lo,

@@ -64,9 +64,14 @@ struct BinBox {
 const BIN_REACH_MARGIN: f32 = 1.0001;
 
 fn bin_box(c: vec3<f32>, r: f32, b: BinParams) -> BinBox {
+    return bin_box_spanning(c, r, b, BIN_SPAN);
+}
+
+// bin_box for a ball wider than the bins were sized for: at most span + 1 cells per axis.
+fn bin_box_spanning(c: vec3<f32>, r: f32, b: BinParams, span: u32) -> BinBox {
     var box: BinBox;
     box.lo = bin_coord(c - vec3<f32>(r), b);
-    let hi = min(bin_coord(c + vec3<f32>(r), b), box.lo + vec3<u32>(BIN_SPAN));
+    let hi = min(bin_coord(c + vec3<f32>(r), b), box.lo + vec3<u32>(span));
     box.size = hi - box.lo + vec3<u32>(1u);
     box.center = (c - b.origin) * b.inv_cell_size;
     let reach = r * b.inv_cell_size * BIN_REACH_MARGIN;

@@ -34,6 +34,18 @@ const EM_SHARE: u32 = 32u;
 const EM_GROUPS: u32 = 64u;
 // em_coverage's second pass: each splat's irradiance divided by its group's share.
 const EM_COVER_APPLY: u32 = 128u;
+// em_smooth's second pass: each splat's chosen irradiance copied into its light.
+const EM_SMOOTH_APPLY: u32 = 256u;
+// em_smooth (src/shared/lobes.rs says why each): a neighbour faces within this cosine of the
+// splat (11 degrees), the intervals' half width in standard deviations,
+// the photons past which the own estimate is kept, the records a splat's fit visits, and the
+// least determinant of a plane's moments over the cube of their weight.
+const SMOOTH_COS_MIN: f32 = 0.98;
+const SMOOTH_CONFIDENCE: f32 = 2.0;
+const SMOOTH_PHOTONS_ENOUGH: u32 = 40000u;
+const SMOOTH_BUDGET: u32 = 512u;
+const SMOOTH_DET_MIN: f32 = 1e-6;
+const SMOOTH_SPAN: u32 = 8u;
 // A splat's word in the groups when another splat's fit serves it.
 const FOLLOWER_BIT: u32 = 0x80000000u;
 

@@ -237,7 +237,7 @@ struct EmParams {
     fit_candidates: u32,
     gathered: u32,
     list_first: u32,
-    _pad0: u32,
+    smooth_radii: f32,
     _pad1: u32,
     _pad2: u32,
 }
