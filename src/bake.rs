@@ -712,7 +712,7 @@ fn smoothed(counts: &[u32; 4]) -> String {
     }
     let crowded = match crowded {
         0 => String::new(),
-        n => format!(", {n} from a subset of their neighbours"),
+        n => format!(", {n} by a choice from a subset of the neighbours"),
     };
     format!(
         "; {} of {} lit splats smoothed ({widest} to the widest kernel{crowded})",

@@ -38,8 +38,9 @@ impl Fnv {
 /// mended, a stage added), so that caches baked before are stale rather than silently loaded:
 /// 1: photons end at the lights they meet; 2: a box's and a quad's disks end at its edges;
 /// 3: the splats' irradiance from photon deposits; 4: the covered share on every path; 5:
-/// shared fits; 6: the photons' estimate smoothed where the light is smooth.
-const BAKE_REVISION: u32 = 6;
+/// shared fits; 6: the photons' estimate smoothed where the light is smooth; 7: smoothing
+/// chosen once a coverage group.
+const BAKE_REVISION: u32 = 7;
 
 /// The hash of what the bake depends on.
 pub fn bake_key(scene: &Scene) -> u64 {

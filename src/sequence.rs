@@ -802,14 +802,14 @@ pub fn fit_lobes<E: Executor>(
     // The photons' estimate where the gather disk leaves the surface, on every path that has
     // the scene's geometry: before final gathering's rays read it, and where no fit follows
     // (an all-diffuse scene fits nothing, yet its edges darkened as the glossy scene's did).
+    // Both passes read every splat, the photon fit's lobes left as they are.
+    let every_splat = cfg.params(splat_count, splat_count, shape);
     if input.gathering.is_some() {
-        let params = cfg.params(splat_count, splat_count, shape);
-        cover_light(ex, &params, &light, input.cover.as_ref())?;
+        cover_light(ex, &every_splat, &light, input.cover.as_ref())?;
     }
     // The deposits' estimate widened where the light is smooth, before the rays read it.
     let mut smoothed = [0; 4];
     if let (Some(d), true) = (&input.deposits, cfg.smooth > 0.0) {
-        let params = cfg.params(splat_count, splat_count, shape);
         let records = Records {
             deposit_params: d.params,
             bin_params: input.bin_params,
@@ -817,7 +817,7 @@ pub fn fit_lobes<E: Executor>(
             cell_start: input.cell_start,
             keys: d.keys,
         };
-        smoothed = smooth_light(ex, &params, &records, &light)?;
+        smoothed = smooth_light(ex, &every_splat, &records, &light, input.cover.as_ref())?;
     }
     ex.read::<u32>(&counters, 1)?;
     let mut fit_ms = ms_since(t) - select_ms - gather_ms;
@@ -867,12 +867,9 @@ pub fn cover_light<E: Executor>(
     let own;
     let (words, count) = match cover {
         Some(c) => (c.words, c.groups),
-        // Each splat its own group, and its own leader.
         None => {
-            let n = params.splat_count;
-            let words: Vec<u32> = (0..n).chain(0..n).collect();
-            own = ex.upload("coverage groups", &words)?;
-            (&own, n)
+            own = ex.upload("coverage groups", &own_groups(params.splat_count))?;
+            (&own, params.splat_count)
         }
     };
     let shares = ex.zeroed("coverage shares", count.max(1) as u64 * 4)?;
@@ -898,26 +895,47 @@ pub fn cover_light<E: Executor>(
     ex.dispatch_traced(Stage::EmCoverage, &bindings, groups)
 }
 
+/// Coverage groups of one splat each, each its own leader (`CoverGroups::words`' layout).
+fn own_groups(n: u32) -> Vec<u32> {
+    (0..n).chain(0..n).collect()
+}
+
 /// `em_smooth` (design §6, "Smoothing"): each splat's photon irradiance, the least noisy of
 /// its own and planes fitted to its surface's estimates within half of and all of the widest
-/// kernel that agree with it within their noise. Two passes: the first chooses from the
-/// neighbours' light into a buffer of its own, the second writes the choice into `light`.
-/// Returns the lit splats by the scale they chose (own, half, widest) and how many of them
-/// fitted an even subset of their boxes' records (past `SMOOTH_BUDGET`).
+/// kernel that agree with it within their noise, chosen once a group of `cover` (once a splat
+/// without). Two passes: the first chooses at each group's leader from the neighbours' light
+/// into a buffer of its own, the second reads the group's plane at each member into `light`.
+/// Returns the smoothed splats by the scale they took (own, half, widest) and how many of them
+/// took a choice from an even subset of its box's records (past `SMOOTH_BUDGET`).
 pub fn smooth_light<E: Executor>(
     ex: &mut E,
     params: &EmParams,
     records: &Records<E::Buffer>,
     light: &E::Buffer,
+    cover: Option<&CoverInput<'_, E::Buffer>>,
 ) -> Result<[u32; 4]> {
     let n = params.splat_count;
-    let smoothed = ex.zeroed("smoothed light", n.max(1) as u64 * 16)?;
+    let own;
+    let (words, count) = match cover {
+        Some(c) => (c.words, c.groups),
+        None => {
+            own = ex.upload("smoothing groups", &own_groups(n))?;
+            (&own, n)
+        }
+    };
+    let smoothed = ex.zeroed("smoothing choices", count.max(1) as u64 * 48)?;
     let counters = ex.zeroed("smoothing counters", 16)?;
-    for flags in [
-        params.flags & !EM_SMOOTH_APPLY,
-        params.flags | EM_SMOOTH_APPLY,
-    ] {
-        let uniform = ex.uniform("em smooth params", &EmParams { flags, ..*params })?;
+    let choose = EmParams {
+        active_count: count,
+        flags: params.flags & !EM_SMOOTH_APPLY,
+        ..*params
+    };
+    let apply = EmParams {
+        flags: params.flags | EM_SMOOTH_APPLY,
+        ..*params
+    };
+    for (p, invocations) in [(choose, count), (apply, n)] {
+        let uniform = ex.uniform("em smooth params", &p)?;
         let bindings = [
             &uniform,
             records.deposit_params,
@@ -928,8 +946,10 @@ pub fn smooth_light<E: Executor>(
             light,
             &smoothed,
             &counters,
+            words,
         ];
-        ex.dispatch(Stage::EmSmooth, &bindings, groups(Stage::EmSmooth, n)?)?;
+        let groups = groups(Stage::EmSmooth, invocations)?;
+        ex.dispatch(Stage::EmSmooth, &bindings, groups)?;
     }
     match ex.read::<u32>(&counters, 4)?[..] {
         [a, b, c, d] => Ok([a, b, c, d]),

@@ -1,7 +1,8 @@
 //! `em_smooth` (docs/design.md section 6, "Smoothing"): the photons' estimate widened where the
 //! light is smooth, on the device against the mirror, and what it must do to known light: keep
-//! light that changes linearly exactly (at edges too), lower the noise of flat light, and move
-//! no splat's estimate further than its own noise allows across a step.
+//! light that changes linearly exactly (at edges too, and where a group's choice serves its
+//! members), lower the noise of flat light, and move no splat's estimate further than its own
+//! noise allows across a step.
 
 mod common;
 
@@ -10,9 +11,10 @@ use std::path::Path;
 use glam::Vec3;
 use lobelight::cpu::{self, CpuExecutor, DepositBins};
 use lobelight::em::deposit_params;
+use lobelight::fit_groups::CoverGroups;
 use lobelight::gpu::exec::GpuExecutor;
 use lobelight::scene::Scene;
-use lobelight::sequence::{Executor, Records, smooth_light};
+use lobelight::sequence::{CoverInput, Executor, Records, smooth_light};
 use lobelight::shared::lobes::SMOOTH_CONFIDENCE;
 use lobelight::types::{EmParams, SplatLight};
 
@@ -38,13 +40,13 @@ fn cornell() -> (Scene, DepositBins, EmParams) {
     (scene, deposits, em.params(n, n, shape))
 }
 
-/// Every splat's light after `em_smooth` on `ex`, from `light`.
+/// Every splat's light after `em_smooth` on `ex`, from `light`, chosen once a group of
+/// `cover` (once a splat without).
 fn smoothed<E: Executor>(
     ex: &mut E,
-    scene: &Scene,
-    d: &DepositBins,
-    em: &EmParams,
+    (scene, d, em): (&Scene, &DepositBins, &EmParams),
     light: &[SplatLight],
+    cover: Option<&CoverGroups>,
 ) -> Vec<SplatLight> {
     let deposit_params = ex.uniform("deposit params", &d.params).unwrap();
     let bin_params = ex.uniform("bin params", &d.bins.params).unwrap();
@@ -59,8 +61,26 @@ fn smoothed<E: Executor>(
         keys: &keys,
     };
     let buffer = ex.upload("light", light).unwrap();
-    smooth_light(ex, em, &records, &buffer).unwrap();
+    let words = cover.map(|c| ex.upload("cover", &c.words).unwrap());
+    let input = cover.zip(words.as_ref()).map(|(c, words)| CoverInput {
+        words,
+        groups: c.groups,
+    });
+    smooth_light(ex, em, &records, &buffer, input.as_ref()).unwrap();
     ex.read(&buffer, light.len()).unwrap()
+}
+
+/// Coverage groups in cells of 2 R, 32 times the bake's side: groups of several splats on
+/// the default box, whose splats are too far apart to share the bake's cells.
+fn coarse_groups(scene: &Scene, em: &EmParams) -> CoverGroups {
+    let groups = CoverGroups::new(&scene.splats, 32.0 * em.radius).unwrap();
+    assert!(
+        groups.groups * 2 < groups.splats,
+        "{} groups for {} splats",
+        groups.groups,
+        groups.splats
+    );
+    groups
 }
 
 /// A standard normal number (Box–Muller).
@@ -106,29 +126,42 @@ fn smoothing_on_the_device_equals_the_mirror() {
     let light = light_of(&scene, |_, c| {
         (1.0 + 0.3 * c.x) * (1.0 + 0.05 * normal(&mut rng))
     });
-    let on_cpu = smoothed(&mut CpuExecutor::default(), &scene, &d, &em, &light);
-    let on_gpu = {
-        let mut encoder = gpu.encoder("smoothing");
-        let mut ex = GpuExecutor::new(&gpu, &mut encoder);
-        smoothed(&mut ex, &scene, &d, &em, &light)
-    };
-    let apart = on_cpu
-        .iter()
-        .zip(&on_gpu)
-        .filter(|(a, b)| (a.irradiance[0] - b.irradiance[0]).abs() > 1e-4 * a.irradiance[0])
-        .count();
-    eprintln!("{apart} of {} splats further apart than 1e-4", on_cpu.len());
-    assert!(apart * 200 <= on_cpu.len(), "{apart} splats apart");
-    let moved = on_cpu
-        .iter()
-        .zip(&light)
-        .filter(|(a, b)| a.irradiance != b.irradiance)
-        .count();
-    assert!(moved * 2 > light.len(), "only {moved} splats smoothed");
+    let coarse = coarse_groups(&scene, &em);
+    for cover in [None, Some(&coarse)] {
+        let on_cpu = smoothed(
+            &mut CpuExecutor::default(),
+            (&scene, &d, &em),
+            &light,
+            cover,
+        );
+        let on_gpu = {
+            let mut encoder = gpu.encoder("smoothing");
+            let mut ex = GpuExecutor::new(&gpu, &mut encoder);
+            smoothed(&mut ex, (&scene, &d, &em), &light, cover)
+        };
+        let apart = on_cpu
+            .iter()
+            .zip(&on_gpu)
+            .filter(|(a, b)| (a.irradiance[0] - b.irradiance[0]).abs() > 1e-4 * a.irradiance[0])
+            .count();
+        let grouped = cover.is_some();
+        eprintln!(
+            "grouped {grouped}: {apart} of {} splats further apart than 1e-4",
+            on_cpu.len()
+        );
+        assert!(apart * 200 <= on_cpu.len(), "{apart} splats apart");
+        let moved = on_cpu
+            .iter()
+            .zip(&light)
+            .filter(|(a, b)| a.irradiance != b.irradiance)
+            .count();
+        assert!(moved * 2 > light.len(), "only {moved} splats smoothed");
+    }
 }
 
 /// Light that changes linearly over a face is what a plane fit reproduces: every splat keeps
-/// its irradiance within 1e-4 (measured: 4.9e-6), those at a face's edge and in its corners too, where a mean of
+/// its irradiance within 1e-4 (measured: 4.9e-6), those at a face's edge and in its corners too,
+/// and members of groups of 2 R that read their leader's plane at their own place, where a mean of
 /// the neighbours (all on one side) would take the light of the face's inside (a ramp of
 /// 0.3 per unit, over a kernel of 2 R = 0.1: 1.5 %).
 #[test]
@@ -136,14 +169,18 @@ fn light_that_changes_linearly_is_kept() {
     let (scene, d, em) = cornell();
     let ramp = |_: usize, c: Vec3| 1.0 + 0.3 * (c.x + c.y + c.z);
     let light = light_of(&scene, ramp);
-    let out = smoothed(&mut CpuExecutor::default(), &scene, &d, &em, &light);
-    let mut worst = 0.0f32;
-    for (i, (a, b)) in out.iter().zip(&light).enumerate() {
-        let (a, b) = (a.irradiance[0], b.irradiance[0]);
-        worst = worst.max((a - b).abs() / b);
-        assert!((a - b).abs() <= 1e-4 * b, "splat {i}: {a} against {b}");
+    let coarse = coarse_groups(&scene, &em);
+    for cover in [None, Some(&coarse)] {
+        let mut ex = CpuExecutor::default();
+        let out = smoothed(&mut ex, (&scene, &d, &em), &light, cover);
+        let mut worst = 0.0f32;
+        for (i, (a, b)) in out.iter().zip(&light).enumerate() {
+            let (a, b) = (a.irradiance[0], b.irradiance[0]);
+            worst = worst.max((a - b).abs() / b);
+            assert!((a - b).abs() <= 1e-4 * b, "splat {i}: {a} against {b}");
+        }
+        eprintln!("grouped {}: worst {worst:.2e}", cover.is_some());
     }
-    eprintln!("worst {worst:.2e}");
 }
 
 /// Flat light with 5 % noise a splat: inside the ceiling the noise falls by at least half
@@ -153,7 +190,7 @@ fn flat_light_loses_its_noise() {
     let (scene, d, em) = cornell();
     let mut rng = Rng(11);
     let light = light_of(&scene, |_, _| 1.0 + 0.05 * normal(&mut rng));
-    let out = smoothed(&mut CpuExecutor::default(), &scene, &d, &em, &light);
+    let out = smoothed(&mut CpuExecutor::default(), (&scene, &d, &em), &light, None);
     let inside = ceiling(&scene, 2.0 * em.smooth_radii * em.radius);
     assert!(inside.len() > 3000, "{} splats inside", inside.len());
     let stats = |l: &[SplatLight]| {
@@ -176,7 +213,7 @@ fn a_step_of_the_light_is_kept() {
     let (scene, d, em) = cornell();
     let step = |_: usize, c: Vec3| if c.x < 0.0 { 1.0 } else { 2.0 };
     let light = light_of(&scene, step);
-    let out = smoothed(&mut CpuExecutor::default(), &scene, &d, &em, &light);
+    let out = smoothed(&mut CpuExecutor::default(), (&scene, &d, &em), &light, None);
     let widest = em.smooth_radii * em.radius;
     for (i, (a, b)) in out.iter().zip(&light).enumerate() {
         let (a, b) = (a.irradiance[0], b.irradiance[0]);

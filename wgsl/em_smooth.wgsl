@@ -17,10 +17,13 @@
 // noise is one over the square root of its photons. A neighbour counts where it belongs to the
 // splat's object, faces within SMOOTH_COS_MIN of it and its centre lies within the slab: the
 // same surface (a reflecting light's disks, just below the ceiling, are another). The
-// neighbours are the deposits' records (splats a photon landed on), in the em_share bins. Two
-// passes: the first (EM_SMOOTH_APPLY unset) writes each splat's chosen irradiance to
-// `smoothed`, the second copies it into the light (a splat must not read a neighbour the pass
-// has already changed). CPU mirror: src/cpu/em_smooth.rs.
+// neighbours are the deposits' records (splats a photon landed on), in the em_share bins. The
+// choice is made once a coverage group (splats within R/16 of each other facing within
+// SMOOTH_COS_MIN: a dense scan's R holds thousands, whose choices differ by little), at its
+// leader. Two passes: the first (EM_SMOOTH_APPLY unset, one invocation a group) writes each
+// group's choice to `smoothed`, with its plane's slopes; the second (one invocation a splat)
+// reads its group's plane at the splat's place into the light (a splat must not read a
+// neighbour the pass has already changed). CPU mirror: src/cpu/em_smooth.rs.
 
 // #import types
 // #import dispatch
@@ -38,12 +41,18 @@
 @group(0) @binding(5) var<storage, read> bin_keys: array<vec2<u32>>;
 // #paged
 @group(0) @binding(6) var<storage, read_write> light: array<SplatLight>;
-// Each splat's chosen irradiance (xyz) and scale (w), from the first pass to the second.
+// Each group's choice, three a group, from the first pass to the second: the plane's light at
+// the leader (xyz) and its scale (w: 0 keeps each member's own); its slopes along the leader's
+// tangent and bitangent per widest kernel (xyz; w of the first: 1 where the leader's box held
+// more records than the budget and an even subset of them was fitted).
 // #paged
 @group(0) @binding(7) var<storage, read_write> smoothed: array<vec4<f32>>;
-// The lit splats by the scale they chose (0, 1, 2), and those whose box held more records than
-// the budget (an even subset of them was fitted).
+// The smoothed splats by the scale they took (0, 1, 2), and those whose group's choice came
+// from a subset of its records.
 @group(0) @binding(8) var<storage, read_write> counters: array<atomic<u32>, 4>;
+// em_coverage's groups: each splat's group, then each group's leader.
+// #paged
+@group(0) @binding(9) var<storage, read> cover: array<u32>;
 
 const WG: u32 = 64u;
 
@@ -75,58 +84,112 @@ fn moments_add(a: ptr<function, Moments>, w: f32, u: f32, v: f32, e: vec3<f32>) 
     (*a).r[2] += w * v * e;
 }
 
-// The fitted plane's light at the splat (xyz) and how much more noise it has than the
-// weighted mean of the same neighbours (w); w < 0 where the neighbours do not span the plane.
-fn moments_solve(a: Moments) -> vec4<f32> {
+// The fitted plane: its light at the splat and its slopes along u and v (rows 0 to 2, xyz),
+// and how much more noise its light at the splat has than the weighted mean of the same
+// neighbours (row 0, w); w < 0 where the neighbours do not span the plane.
+fn moments_solve(a: Moments) -> array<vec4<f32>, 3> {
+    var plane: array<vec4<f32>, 3>;
+    plane[0].w = -1.0;
     let m00 = a.m[0];
     let m01 = a.m[1];
     let m02 = a.m[2];
     let m11 = a.m[3];
     let m12 = a.m[4];
     let m22 = a.m[5];
-    // The first row of the cofactors of the symmetric 3 x 3 moment matrix.
+    // The cofactors of the symmetric 3 x 3 moment matrix (its adjugate, symmetric too).
     let c = vec3<f32>(m11 * m22 - m12 * m12, m12 * m02 - m01 * m22, m01 * m12 - m11 * m02);
     let det = m00 * c.x + m01 * c.y + m02 * c.z;
     if !(det > SMOOTH_DET_MIN * m00 * m00 * m00) {
-        return vec4<f32>(0.0, 0.0, 0.0, -1.0);
+        return plane;
     }
-    let e = (c.x * a.r[0] + c.y * a.r[1] + c.z * a.r[2]) / det;
+    let c11 = m00 * m22 - m02 * m02;
+    let c12 = m01 * m02 - m00 * m12;
+    let c22 = m00 * m11 - m01 * m01;
     let fit = c.x * c.x * a.m2[0]
         + c.y * c.y * a.m2[3]
         + c.z * c.z * a.m2[5]
         + 2.0 * (c.x * c.y * a.m2[1] + c.x * c.z * a.m2[2] + c.y * c.z * a.m2[4]);
     let mean = a.m2[0] / (m00 * m00);
-    return vec4<f32>(e, fit / (det * det) / mean);
+    plane[0] = vec4<f32>((c.x * a.r[0] + c.y * a.r[1] + c.z * a.r[2]) / det,
+        fit / (det * det) / mean);
+    plane[1] = vec4<f32>((c.y * a.r[0] + c11 * a.r[1] + c12 * a.r[2]) / det, 0.0);
+    plane[2] = vec4<f32>((c.z * a.r[0] + c12 * a.r[1] + c22 * a.r[2]) / det, 0.0);
+    return plane;
+}
+
+// Whether a splat's estimate is one to smooth: lit by photons (not by the photon fit's lobes,
+// which carry their own irradiance), above zero and with fewer than SMOOTH_PHOTONS_ENOUGH.
+fn smoothable(l: SplatLight) -> bool {
+    let level = (l.irradiance.x + l.irradiance.y + l.irradiance.z) / 3.0;
+    return l.photons > 0u && l.lobes == 0u && level > 0.0 && l.photons < SMOOTH_PHOTONS_ENOUGH;
+}
+
+// The second pass: splat i's irradiance read from its group's plane at its place in the
+// leader's tangent plane, and counted.
+fn apply_choice(i: u32) {
+    var l = light_at(i);
+    if !smoothable(l) {
+        return;
+    }
+    let g = cover_at(i);
+    let choice = smoothed_at(3u * g);
+    let s = splats_at(i);
+    let leader = splats_at(cover_at(em.splat_count + g));
+    // A member of another object than its leader's (a light's disk just below the ceiling)
+    // keeps its own: the leader's plane is of its own surface.
+    var scale = u32(choice.w);
+    if s.object != leader.object {
+        scale = 0u;
+    }
+    if scale != 0u {
+        let d = s.center - leader.center;
+        let f = frame_of(leader.normal);
+        let widest = em.smooth_radii * em.radius;
+        let u = dot(d, f.t) / widest;
+        let v = dot(d, f.b) / widest;
+        let slopes = smoothed_at(3u * g + 1u);
+        l.irradiance = choice.xyz + u * slopes.xyz + v * smoothed_at(3u * g + 2u).xyz;
+        light_put(i, l);
+    }
+    atomicAdd(&counters[scale], 1u);
+    if slopes_subset(g) {
+        atomicAdd(&counters[3], 1u);
+    }
+}
+
+fn slopes_subset(g: u32) -> bool {
+    return smoothed_at(3u * g + 1u).w != 0.0;
+}
+
+fn choice_put(g: u32, choice: array<vec4<f32>, 3>) {
+    smoothed_put(3u * g, choice[0]);
+    smoothed_put(3u * g + 1u, choice[1]);
+    smoothed_put(3u * g + 2u, choice[2]);
 }
 
 @compute @workgroup_size(64)
 fn main(@builtin(workgroup_id) wg: vec3<u32>, @builtin(num_workgroups) num_wg: vec3<u32>,
         @builtin(local_invocation_index) lid: u32) {
-    let i = linear_workgroup(wg, num_wg) * WG + lid;
-    if i >= em.splat_count {
+    let invocation = linear_workgroup(wg, num_wg) * WG + lid;
+    if (em.flags & EM_SMOOTH_APPLY) != 0u {
+        if invocation < em.splat_count {
+            apply_choice(invocation);
+        }
         return;
     }
-    var l = light_at(i);
-    // Lobes the photon fit wrote carry their own irradiance (as em_coverage leaves them).
-    let unlit = l.photons == 0u || l.lobes > 0u;
-    if (em.flags & EM_SMOOTH_APPLY) != 0u {
-        if !unlit {
-            l.irradiance = smoothed_at(i).xyz;
-            light_put(i, l);
-        }
+    if invocation >= em.active_count {
+        return;
+    }
+    let g = invocation;
+    let i = cover_at(em.splat_count + g);
+    let l = light_at(i);
+    var chosen: array<vec4<f32>, 3>;
+    if !smoothable(l) {
+        choice_put(g, chosen);
         return;
     }
     let own = l.irradiance;
     let level = (own.x + own.y + own.z) / 3.0;
-    if unlit {
-        smoothed_put(i, vec4<f32>(own, 0.0));
-        return;
-    }
-    if !(level > 0.0) || l.photons >= SMOOTH_PHOTONS_ENOUGH {
-        smoothed_put(i, vec4<f32>(own, 0.0));
-        atomicAdd(&counters[0], 1u);
-        return;
-    }
     let s = splats_at(i);
     let f = frame_of(s.normal);
     let slab = em.slab * s.radius;
@@ -138,16 +201,33 @@ fn main(@builtin(workgroup_id) wg: vec3<u32>, @builtin(num_workgroups) num_wg: v
     var half: Moments;
     var full: Moments;
     // Past the budget, every stride-th record of the box (bin order is the order of space, so
-    // the subset is even and the same on every run).
+    // the subset is even and the same on every run). The untrimmed rows bound the count: the
+    // trimmed count is needed only past the budget. Rows empty untrimmed (most of the box on a
+    // flat scan) are skipped before trimming.
     let rows = bin_row_count(box);
     var records_in = 0u;
     for (var r = 0u; r < rows; r++) {
-        let row = bin_row(box, r, bins);
-        records_in += cell_start[row.y] - cell_start[row.x];
+        let all = bin_row_untrimmed(box, r, bins);
+        records_in += cell_start[all.y] - cell_start[all.x];
+    }
+    if records_in > SMOOTH_BUDGET {
+        records_in = 0u;
+        for (var r = 0u; r < rows; r++) {
+            let all = bin_row_untrimmed(box, r, bins);
+            if cell_start[all.y] == cell_start[all.x] {
+                continue;
+            }
+            let row = bin_row(box, r, bins);
+            records_in += cell_start[row.y] - cell_start[row.x];
+        }
     }
     let stride = max(1u, (records_in + SMOOTH_BUDGET - 1u) / SMOOTH_BUDGET);
     var skip = 0u;
     for (var r = 0u; r < rows; r++) {
+        let all = bin_row_untrimmed(box, r, bins);
+        if cell_start[all.y] == cell_start[all.x] {
+            continue;
+        }
         let row = bin_row(box, r, bins);
         let end = cell_start[row.y];
         var k = cell_start[row.x] + skip;
@@ -166,27 +246,28 @@ fn main(@builtin(workgroup_id) wg: vec3<u32>, @builtin(num_workgroups) num_wg: v
             moments_add(&half, w.x, u, v, e);
             moments_add(&full, w.y, u, v, e);
         }
+        // An empty trimmed row leaves k at its start plus skip: the skip carries over.
         skip = k - end;
     }
     // The chosen scale: of those whose intervals meet every narrower one's, the least noisy.
     let sigma = level / sqrt(f32(l.photons));
     var lo = level - SMOOTH_CONFIDENCE * sigma;
     var hi = level + SMOOTH_CONFIDENCE * sigma;
-    var chosen = vec4<f32>(own, 0.0);
     var narrowest = SMOOTH_CONFIDENCE * sigma;
     for (var k = 0u; k < 2u; k++) {
-        var fit: vec4<f32>;
+        var fit: array<vec4<f32>, 3>;
         if k == 0u {
             fit = moments_solve(half);
         } else {
             fit = moments_solve(full);
         }
-        if fit.w < 0.0 {
+        if fit[0].w < 0.0 {
             break;
         }
         let ratio = em.smooth_radii * f32(k + 1u) * 0.5;
-        let m = (fit.x + fit.y + fit.z) / 3.0;
-        let half_width = SMOOTH_CONFIDENCE * sigma * sqrt(fit.w / (1.0 + 0.75 * ratio * ratio));
+        let e = fit[0].xyz;
+        let m = (e.x + e.y + e.z) / 3.0;
+        let half_width = SMOOTH_CONFIDENCE * sigma * sqrt(fit[0].w / (1.0 + 0.75 * ratio * ratio));
         lo = max(lo, m - half_width);
         hi = min(hi, m + half_width);
         if lo > hi {
@@ -194,13 +275,11 @@ fn main(@builtin(workgroup_id) wg: vec3<u32>, @builtin(num_workgroups) num_wg: v
         }
         // A fit noisier than the choice so far (one-sided neighbours) is no better.
         if half_width < narrowest {
-            chosen = vec4<f32>(fit.xyz, f32(k + 1u));
+            chosen = fit;
+            chosen[0].w = f32(k + 1u);
             narrowest = half_width;
         }
     }
-    smoothed_put(i, chosen);
-    atomicAdd(&counters[u32(chosen.w)], 1u);
-    if stride > 1u {
-        atomicAdd(&counters[3], 1u);
-    }
+    chosen[1].w = select(0.0, 1.0, stride > 1u);
+    choice_put(g, chosen);
 }

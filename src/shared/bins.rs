@@ -104,6 +104,17 @@ pub fn bin_axis_gap(i: u32, q: f32, dim: u32) -> f32 {
     below.max(above).max(0.0)
 }
 
+/// Row `row` of the box untrimmed: the lists [x, y) of all its cells, a superset of
+/// `bin_row`'s. One index and no distance: a search whose rows are mostly empty (a flat scan
+/// in a box of 9 × 9 rows) tests emptiness here before trimming.
+pub fn bin_row_untrimmed(bx: &BinBox, row: u32, b: &BinParams) -> UVec2 {
+    let y = bx.lo.y + row % bx.size.y;
+    let z = bx.lo.z + row / bx.size.y;
+    let first = bin_index(UVec3::new(bx.lo.x, y, z), b);
+    let per_cell = lists_per_cell(b);
+    UVec2::new(first * per_cell, (first + bx.size.x) * per_cell)
+}
+
 /// Row `row` of the box: the lists [x, y) of its cells, trimmed at both ends to the cells
 /// within reach (the rest is contiguous: the ball is convex); possibly empty.
 pub fn bin_row(bx: &BinBox, row: u32, b: &BinParams) -> UVec2 {

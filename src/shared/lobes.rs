@@ -44,7 +44,7 @@ pub const SMOOTH_PHOTONS_ENOUGH: u32 = 40_000;
 /// 100–200 in their boxes; past the budget (a dense scan, whose every R holds thousands of
 /// splats) an even subset, every ⌈records / budget⌉-th, so that the stage's time follows the
 /// splats, not their density, and stays within lavapipe's loop limit.
-pub const SMOOTH_BUDGET: u32 = 512;
+pub const SMOOTH_BUDGET: u32 = 128;
 /// `em_smooth`: the least determinant of a scale's moments (over the cube of its total weight)
 /// for a plane through the neighbours' light: below it they lie along a line, or are too few.
 pub const SMOOTH_DET_MIN: f32 = 1e-6;

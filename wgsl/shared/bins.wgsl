@@ -91,6 +91,16 @@ fn bin_axis_gap(i: u32, q: f32, dim: u32) -> f32 {
     return max(max(below, above), 0.0);
 }
 
+// Row `row` of the box untrimmed: the lists of all its cells, a superset of bin_row's, with no
+// distance (a search whose rows are mostly empty tests emptiness here before trimming).
+fn bin_row_untrimmed(box: BinBox, row: u32, b: BinParams) -> vec2<u32> {
+    let y = box.lo.y + row % box.size.y;
+    let z = box.lo.z + row / box.size.y;
+    let first = bin_index(vec3<u32>(box.lo.x, y, z), b);
+    let per_cell = lists_per_cell(b);
+    return vec2<u32>(first * per_cell, (first + box.size.x) * per_cell);
+}
+
 fn bin_row(box: BinBox, row: u32, b: BinParams) -> vec2<u32> {
     let y = box.lo.y + row % box.size.y;
     let z = box.lo.z + row / box.size.y;

@@ -43,7 +43,7 @@ const EM_SMOOTH_APPLY: u32 = 256u;
 const SMOOTH_COS_MIN: f32 = 0.98;
 const SMOOTH_CONFIDENCE: f32 = 2.0;
 const SMOOTH_PHOTONS_ENOUGH: u32 = 40000u;
-const SMOOTH_BUDGET: u32 = 512u;
+const SMOOTH_BUDGET: u32 = 128u;
 const SMOOTH_DET_MIN: f32 = 1e-6;
 const SMOOTH_SPAN: u32 = 8u;
 // A splat's word in the groups when another splat's fit serves it.
