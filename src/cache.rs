@@ -39,8 +39,8 @@ impl Fnv {
 /// 1: photons end at the lights they meet; 2: a box's and a quad's disks end at its edges;
 /// 3: the splats' irradiance from photon deposits; 4: the covered share on every path; 5:
 /// shared fits; 6: the photons' estimate smoothed where the light is smooth; 7: smoothing
-/// chosen once a coverage group.
-const BAKE_REVISION: u32 = 7;
+/// chosen once a coverage group; 8: the deposits summed once a coverage group.
+const BAKE_REVISION: u32 = 8;
 
 /// The hash of what the bake depends on.
 pub fn bake_key(scene: &Scene) -> u64 {

@@ -24,7 +24,9 @@ use crate::shaders::Stage;
 use crate::shaders::stage_shape;
 use crate::shared::bins::list_count;
 use crate::shared::dispatch::groups_for;
-use crate::shared::lobes::{EM_COVER_APPLY, EM_DEFER_FIT, EM_GROUPS, EM_SHARE, EM_SMOOTH_APPLY};
+use crate::shared::lobes::{
+    EM_COVER_APPLY, EM_DEFER_FIT, EM_GROUPS, EM_SHARE, EM_SHARE_COPY, EM_SMOOTH_APPLY,
+};
 use crate::timing::ms_since;
 use crate::tone::{ToneConfig, reduce_levels};
 use crate::types::{
@@ -716,29 +718,26 @@ pub fn fit_lobes<E: Executor>(
     let select_ms = ms_since(t);
     match &input.deposits {
         // Every splat's irradiance from the deposits around it.
+        // Summed once a coverage group, at its leader, then copied to the members.
         Some(d) => {
-            let share = ex.uniform(
-                "em share params",
-                &cfg.params(splat_count, splat_count, shape),
-            )?;
-            let bindings = [
-                &share,
-                d.params,
-                input.bin_params,
-                input.splats,
-                input.materials,
-                &counters,
-                input.cell_start,
-                d.keys,
-                input.geom,
-                input.power,
-                d.spread,
-                &light,
-            ];
-            ex.dispatch(
-                Stage::EmShare,
-                &bindings,
-                groups(Stage::EmShare, splat_count)?,
+            let deposits = SharedDeposits {
+                deposit_params: d.params,
+                bin_params: input.bin_params,
+                splats: input.splats,
+                materials: input.materials,
+                cell_start: input.cell_start,
+                keys: d.keys,
+                geom: input.geom,
+                power: input.power,
+                spread: d.spread,
+            };
+            let every = cfg.params(splat_count, splat_count, shape);
+            share_light(
+                ex,
+                &every,
+                &deposits,
+                (&light, &counters),
+                input.cover.as_ref(),
             )?;
         }
         None => {
@@ -853,6 +852,56 @@ pub fn fit_lobes<E: Executor>(
     })
 }
 
+/// What `em_share` reads: the binned deposits (their parameters, the bins' parameters, list
+/// starts, keys, geometry and power, each splat's spread) and the splats and materials.
+pub struct SharedDeposits<'a, B> {
+    pub deposit_params: &'a B,
+    pub bin_params: &'a B,
+    pub splats: &'a B,
+    pub materials: &'a B,
+    pub cell_start: &'a B,
+    pub keys: &'a B,
+    pub geom: &'a B,
+    pub power: &'a B,
+    pub spread: &'a B,
+}
+
+/// `em_share`: each of `params.splat_count` splats' photon irradiance from the deposits around
+/// it into `light`, summed once a group of `cover` (once a splat without) at its leader and
+/// copied to the members; the splats lit that are not fitted counted in `counters[3]`.
+pub fn share_light<E: Executor>(
+    ex: &mut E,
+    params: &EmParams,
+    d: &SharedDeposits<E::Buffer>,
+    (light, counters): (&E::Buffer, &E::Buffer),
+    cover: Option<&CoverInput<'_, E::Buffer>>,
+) -> Result<()> {
+    let n = params.splat_count;
+    let mut own = None;
+    let (words, count) = group_words(ex, cover, n, &mut own)?;
+    for (p, invocations) in group_passes(params, count, EM_SHARE_COPY) {
+        let uniform = ex.uniform("em share params", &p)?;
+        let bindings = [
+            &uniform,
+            d.deposit_params,
+            d.bin_params,
+            d.splats,
+            d.materials,
+            counters,
+            d.cell_start,
+            d.keys,
+            d.geom,
+            d.power,
+            d.spread,
+            light,
+            words,
+        ];
+        let groups = groups(Stage::EmShare, invocations)?;
+        ex.dispatch(Stage::EmShare, &bindings, groups)?;
+    }
+    Ok(())
+}
+
 /// `em_coverage`: each of `params.splat_count` splats' photon irradiance in `light` divided by
 /// the share of its gather disk (radius and slab from `params`) that its surface covers,
 /// measured once a group of `cover` (once a splat without); a splat whose lobes the photon fit
@@ -864,40 +913,50 @@ pub fn cover_light<E: Executor>(
     light: &E::Buffer,
     cover: Option<&CoverInput<'_, E::Buffer>>,
 ) -> Result<()> {
-    let own;
-    let (words, count) = match cover {
-        Some(c) => (c.words, c.groups),
-        None => {
-            own = ex.upload("coverage groups", &own_groups(params.splat_count))?;
-            (&own, params.splat_count)
-        }
-    };
+    let mut own = None;
+    let (words, count) = group_words(ex, cover, params.splat_count, &mut own)?;
     let shares = ex.zeroed("coverage shares", count.max(1) as u64 * 4)?;
-    let measure = EmParams {
-        active_count: count,
-        flags: params.flags & !EM_COVER_APPLY,
-        ..*params
-    };
-    let uniform = ex.uniform("em coverage params", &measure)?;
-    let bindings = [&uniform, light, words, &shares];
-    ex.dispatch_traced(
-        Stage::EmCoverage,
-        &bindings,
-        groups(Stage::EmCoverage, count)?,
-    )?;
-    let apply = EmParams {
-        flags: params.flags | EM_COVER_APPLY,
-        ..*params
-    };
-    let uniform = ex.uniform("em coverage params", &apply)?;
-    let bindings = [&uniform, light, words, &shares];
-    let groups = groups(Stage::EmCoverage, params.splat_count)?;
-    ex.dispatch_traced(Stage::EmCoverage, &bindings, groups)
+    for (p, invocations) in group_passes(params, count, EM_COVER_APPLY) {
+        let uniform = ex.uniform("em coverage params", &p)?;
+        let bindings = [&uniform, light, words, &shares];
+        let groups = groups(Stage::EmCoverage, invocations)?;
+        ex.dispatch_traced(Stage::EmCoverage, &bindings, groups)?;
+    }
+    Ok(())
 }
 
-/// Coverage groups of one splat each, each its own leader (`CoverGroups::words`' layout).
-fn own_groups(n: u32) -> Vec<u32> {
-    (0..n).chain(0..n).collect()
+/// A stage's two passes over coverage groups, each pass's uniform and invocations: the first
+/// once a group (`groups` of them, at the leaders, `second` unset), the second once a splat
+/// (`second` set).
+fn group_passes(params: &EmParams, groups: u32, second: u32) -> [(EmParams, u32); 2] {
+    let first = EmParams {
+        active_count: groups,
+        flags: params.flags & !second,
+        ..*params
+    };
+    let every = EmParams {
+        flags: params.flags | second,
+        ..*params
+    };
+    [(first, groups), (every, params.splat_count)]
+}
+
+/// The coverage groups' words and their count: `cover`'s, else groups of one splat each, its
+/// own leader (`CoverGroups::words`' layout), uploaded into `own`.
+fn group_words<'b, E: Executor>(
+    ex: &mut E,
+    cover: Option<&CoverInput<'b, E::Buffer>>,
+    n: u32,
+    own: &'b mut Option<E::Buffer>,
+) -> Result<(&'b E::Buffer, u32)> {
+    match cover {
+        Some(c) => Ok((c.words, c.groups)),
+        None => {
+            let words: Vec<u32> = (0..n).chain(0..n).collect();
+            let buffer = own.insert(ex.upload("one splat a group", &words)?);
+            Ok((&*buffer, n))
+        }
+    }
 }
 
 /// `em_smooth` (design §6, "Smoothing"): each splat's photon irradiance, the least noisy of
@@ -915,26 +974,11 @@ pub fn smooth_light<E: Executor>(
     cover: Option<&CoverInput<'_, E::Buffer>>,
 ) -> Result<[u32; 4]> {
     let n = params.splat_count;
-    let own;
-    let (words, count) = match cover {
-        Some(c) => (c.words, c.groups),
-        None => {
-            own = ex.upload("smoothing groups", &own_groups(n))?;
-            (&own, n)
-        }
-    };
+    let mut own = None;
+    let (words, count) = group_words(ex, cover, n, &mut own)?;
     let smoothed = ex.zeroed("smoothing choices", count.max(1) as u64 * 48)?;
     let counters = ex.zeroed("smoothing counters", 16)?;
-    let choose = EmParams {
-        active_count: count,
-        flags: params.flags & !EM_SMOOTH_APPLY,
-        ..*params
-    };
-    let apply = EmParams {
-        flags: params.flags | EM_SMOOTH_APPLY,
-        ..*params
-    };
-    for (p, invocations) in [(choose, count), (apply, n)] {
+    for (p, invocations) in group_passes(params, count, EM_SMOOTH_APPLY) {
         let uniform = ex.uniform("em smooth params", &p)?;
         let bindings = [
             &uniform,

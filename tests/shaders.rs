@@ -399,6 +399,7 @@ fn em_flags_match_the_wgsl() {
         ("EM_GROUPS", EM_GROUPS),
         ("EM_COVER_APPLY", EM_COVER_APPLY),
         ("EM_SMOOTH_APPLY", EM_SMOOTH_APPLY),
+        ("EM_SHARE_COPY", EM_SHARE_COPY),
         ("FOLLOWER_BIT", FOLLOWER_BIT),
     ] {
         assert_eq!(wgsl_const_u32(&source, name), value, "{name}");

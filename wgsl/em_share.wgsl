@@ -7,11 +7,14 @@
 // photons spread as cosine about the deposit's normal). In flat surroundings that is the
 // photons' estimate with each photon's position smoothed over its deposit's disk.
 // The deposits are em_deposit_list's records, binned (cells of deposit.reach, which bounds
-// how far a deposit's photons lie from its mean, plus R). One invocation per splat, in splat
-// order (a list of the splats with deposits near them saves nothing: the reach holds hundreds
-// of splats, and the list's scheduling order cost a 3 M-splat terrain 0.8 s); every splat's
-// light is written, and counters[3] counts those lit that are not fitted (em_select lists and
-// counts those). CPU mirror: src/cpu/em_share.rs.
+// how far a deposit's photons lie from its mean, plus R). The sum is made once a coverage
+// group (splats within R/16 of each other facing within 11 degrees: a dense scan's R holds
+// thousands, whose sums differ by little), at its leader, in the leaders' order (a list of the
+// splats with deposits near them saves nothing: the reach holds hundreds of splats, and the
+// list's scheduling order cost a 3 M-splat terrain 0.8 s). Two passes: the first (one
+// invocation a group) writes each leader's light; the second (EM_SHARE_COPY, one a splat)
+// copies it to the members, and counters[3] counts the splats lit that are not fitted
+// (em_select lists and counts those). CPU mirror: src/cpu/em_share.rs.
 
 // #import types
 // #import dispatch
@@ -38,16 +41,26 @@
 @group(0) @binding(10) var<storage, read> spread: array<vec2<f32>>;
 // #paged
 @group(0) @binding(11) var<storage, read_write> light: array<SplatLight>;
+// em_coverage's groups: each splat's group, then each group's leader.
+// #paged
+@group(0) @binding(12) var<storage, read> cover: array<u32>;
 
 const WG: u32 = 64u;
 
 @compute @workgroup_size(64)
 fn main(@builtin(workgroup_id) wg: vec3<u32>, @builtin(num_workgroups) num_wg: vec3<u32>,
         @builtin(local_invocation_index) lid: u32) {
-    let i = linear_workgroup(wg, num_wg) * WG + lid;
-    if i >= em.splat_count {
+    let invocation = linear_workgroup(wg, num_wg) * WG + lid;
+    if (em.flags & EM_SHARE_COPY) != 0u {
+        if invocation < em.splat_count {
+            copy_from_leader(invocation);
+        }
         return;
     }
+    if invocation >= em.active_count {
+        return;
+    }
+    let i = cover_at(em.splat_count + invocation);
     let s = splats_at(i);
     let slab = em.slab * s.radius;
     let reach2 = deposit.reach * deposit.reach;
@@ -84,9 +97,18 @@ fn main(@builtin(workgroup_id) wg: vec3<u32>, @builtin(num_workgroups) num_wg: v
     out.lobes = 0u;
     out.first_lobe = 0u;
     light_put(i, out);
-    // The splats lit and not fitted: em_select listed the fitted ones (counters[2]).
-    let glossy = any(materials[s.material].specular > vec3<f32>(0.0));
-    if count > 0.0 && !glossy && (em.flags & EM_FIT_ALL) == 0u {
+}
+
+// The second pass: splat i's light, its group's leader's, and whether it counts as lit and
+// not fitted (em_select listed the fitted ones, counters[2]).
+fn copy_from_leader(i: u32) {
+    let leader = cover_at(em.splat_count + cover_at(i));
+    let l = light_at(leader);
+    if leader != i {
+        light_put(i, l);
+    }
+    let glossy = any(materials[splats_at(i).material].specular > vec3<f32>(0.0));
+    if l.photons > 0u && !glossy && (em.flags & EM_FIT_ALL) == 0u {
         atomicAdd(&counters[3], 1u);
     }
 }

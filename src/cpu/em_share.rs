@@ -1,5 +1,6 @@
-//! Mirror of `wgsl/em_share.wgsl`: each splat's photon irradiance from the binned deposits
-//! around it, in the candidates' order, and the count of splats lit.
+//! Mirror of `wgsl/em_share.wgsl`: each coverage group's photon irradiance from the binned
+//! deposits around its leader, in the candidates' order (first pass), then each splat's, its
+//! leader's, and the count of splats lit (second pass, `EM_SHARE_COPY`).
 
 use super::bindings::{Bindings, view, view_mut};
 use crate::error::Result;
@@ -8,7 +9,7 @@ use rayon::prelude::*;
 
 use crate::shared::bins::{SURFACE_COS_MIN, bin_box, bin_row, bin_row_count, photon_weight};
 use crate::shared::deposits::{disk_share, front_share};
-use crate::shared::lobes::EM_FIT_ALL;
+use crate::shared::lobes::{EM_FIT_ALL, EM_SHARE_COPY};
 use crate::shared::octahedral::surface_decode;
 use crate::types::{BinParams, BinnedPhoton, DepositParams, EmParams, Material, Splat, SplatLight};
 
@@ -24,6 +25,58 @@ pub struct BinnedDeposits<'a> {
     pub spread: &'a [[f32; 2]],
 }
 
+/// Splat `s`'s light: the deposits within reach of its centre, each by the share of its
+/// photons in the gather disk and at the splat's front.
+fn share(
+    em: &EmParams,
+    deposit: &DepositParams,
+    bins: &BinParams,
+    splats: &[Splat],
+    d: &BinnedDeposits,
+    s: &Splat,
+) -> SplatLight {
+    let reach2 = deposit.reach * deposit.reach;
+    let (center, normal) = (Vec3::from(s.center), Vec3::from(s.normal));
+    let slab = em.slab * s.radius;
+    let bx = bin_box(center, deposit.reach, bins);
+    let mut rgb = Vec3::ZERO;
+    let mut photons = 0.0f32;
+    let mut weight = 0.0f32;
+    for r in 0..bin_row_count(&bx) {
+        let row = bin_row(&bx, r, bins);
+        for k in d.cell_start[row.x as usize]..d.cell_start[row.y as usize] {
+            let k = k as usize;
+            let dv = Vec3::from(d.geom[k].position) - center;
+            let l2 = dv.dot(dv);
+            if l2 > reach2 || dv.dot(normal).abs() > slab {
+                continue;
+            }
+            let power = d.power[k];
+            if surface_decode(power[3]).dot(normal) < SURFACE_COS_MIN {
+                continue;
+            }
+            let j = d.keys[k][0] as usize;
+            let form = d.spread[j];
+            let share = disk_share(l2.sqrt(), em.radius, form[0])
+                * front_share(normal, Vec3::from(splats[j].normal));
+            rgb += Vec3::new(power[0], power[1], power[2]) * share;
+            photons += form[1] * share;
+            weight += photon_weight(power) * share;
+        }
+    }
+    SplatLight {
+        irradiance: (rgb * em.inv_area).into(),
+        photons: photons.ceil() as u32,
+        log_likelihood: 0.0,
+        weight,
+        lobes: 0,
+        first_lobe: 0,
+    }
+}
+
+/// The first pass: each of `em.active_count` groups' light, at its leader (`cover`'s words
+/// after the splats'); the second (`EM_SHARE_COPY`): each splat's light its leader's, and the
+/// splats lit that are not fitted counted.
 #[allow(clippy::too_many_arguments)]
 pub fn em_share(
     em: &EmParams,
@@ -32,53 +85,30 @@ pub fn em_share(
     splats: &[Splat],
     d: &BinnedDeposits,
     materials: &[Material],
-    light: &mut [SplatLight],
+    (light, cover): (&mut [SplatLight], &[u32]),
     counters: &mut [u32; 4],
     groups: u32,
 ) {
-    let count = (groups * WG).min(em.splat_count) as usize;
-    let reach2 = deposit.reach * deposit.reach;
+    let invocations = (groups * WG) as usize;
+    let leaders = &cover[em.splat_count as usize..];
+    if em.flags & EM_SHARE_COPY == 0 {
+        let count = invocations.min(em.active_count as usize);
+        let sums: Vec<SplatLight> = leaders[..count]
+            .par_iter()
+            .map(|&leader| share(em, deposit, bins, splats, d, &splats[leader as usize]))
+            .collect();
+        for (&leader, l) in leaders.iter().zip(sums) {
+            light[leader as usize] = l;
+        }
+        return;
+    }
+    let count = invocations.min(em.splat_count as usize);
+    // The leaders' light apart, a group's a word (the pass writes members, never leaders).
+    let led: Vec<SplatLight> = leaders.iter().map(|&l| light[l as usize]).collect();
     light[..count]
         .par_iter_mut()
-        .zip(&splats[..count])
-        .for_each(|(out, s)| {
-            let (center, normal) = (Vec3::from(s.center), Vec3::from(s.normal));
-            let slab = em.slab * s.radius;
-            let bx = bin_box(center, deposit.reach, bins);
-            let mut rgb = Vec3::ZERO;
-            let mut photons = 0.0f32;
-            let mut weight = 0.0f32;
-            for r in 0..bin_row_count(&bx) {
-                let row = bin_row(&bx, r, bins);
-                for k in d.cell_start[row.x as usize]..d.cell_start[row.y as usize] {
-                    let k = k as usize;
-                    let dv = Vec3::from(d.geom[k].position) - center;
-                    let l2 = dv.dot(dv);
-                    if l2 > reach2 || dv.dot(normal).abs() > slab {
-                        continue;
-                    }
-                    let power = d.power[k];
-                    if surface_decode(power[3]).dot(normal) < SURFACE_COS_MIN {
-                        continue;
-                    }
-                    let j = d.keys[k][0] as usize;
-                    let form = d.spread[j];
-                    let share = disk_share(l2.sqrt(), em.radius, form[0])
-                        * front_share(normal, Vec3::from(splats[j].normal));
-                    rgb += Vec3::new(power[0], power[1], power[2]) * share;
-                    photons += form[1] * share;
-                    weight += photon_weight(power) * share;
-                }
-            }
-            *out = SplatLight {
-                irradiance: (rgb * em.inv_area).into(),
-                photons: photons.ceil() as u32,
-                log_likelihood: 0.0,
-                weight,
-                lobes: 0,
-                first_lobe: 0,
-            };
-        });
+        .zip(&cover[..count])
+        .for_each(|(l, &g)| *l = led[g as usize]);
     let fitted = |s: &Splat| {
         let glossy = materials[s.material as usize]
             .specular
@@ -107,6 +137,7 @@ pub fn dispatch(b: &Bindings, groups: u32) -> Result<()> {
     let power = b.get(9)?;
     let spread = b.get(10)?;
     let mut light = b.get_mut(11)?;
+    let cover = b.get(12)?;
     let counters = b.counters::<4>(&mut counters)?;
     let binned = BinnedDeposits {
         cell_start: &cell_start,
@@ -122,7 +153,7 @@ pub fn dispatch(b: &Bindings, groups: u32) -> Result<()> {
         view(&splats),
         &binned,
         view(&materials),
-        view_mut(&mut light),
+        (view_mut(&mut light), view(&cover)),
         counters,
         groups,
     );

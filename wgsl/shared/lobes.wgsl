@@ -36,6 +36,7 @@ const EM_GROUPS: u32 = 64u;
 const EM_COVER_APPLY: u32 = 128u;
 // em_smooth's second pass: each splat's chosen irradiance copied into its light.
 const EM_SMOOTH_APPLY: u32 = 256u;
+const EM_SHARE_COPY: u32 = 512u;
 // em_smooth (src/shared/lobes.rs says why each): a neighbour faces within this cosine of the
 // splat (11 degrees), the intervals' half width in standard deviations,
 // the photons past which the own estimate is kept, the records a splat's fit visits, and the
