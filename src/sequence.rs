@@ -716,9 +716,12 @@ pub fn fit_lobes<E: Executor>(
         _ => return Err(Error::Gpu("em counters readback was short".into())),
     };
     let select_ms = ms_since(t);
+    // The passes over every splat (deposits, coverage, smoothing) leave the photon fit's lobes
+    // as they are.
+    let every_splat = cfg.params(splat_count, splat_count, shape);
     match &input.deposits {
-        // Every splat's irradiance from the deposits around it.
-        // Summed once a coverage group, at its leader, then copied to the members.
+        // Every splat's irradiance from the deposits around it, summed once a coverage group,
+        // at its leader, then copied to the members.
         Some(d) => {
             let deposits = SharedDeposits {
                 deposit_params: d.params,
@@ -731,10 +734,9 @@ pub fn fit_lobes<E: Executor>(
                 power: input.power,
                 spread: d.spread,
             };
-            let every = cfg.params(splat_count, splat_count, shape);
             share_light(
                 ex,
-                &every,
+                &every_splat,
                 &deposits,
                 (&light, &counters),
                 input.cover.as_ref(),
@@ -801,8 +803,6 @@ pub fn fit_lobes<E: Executor>(
     // The photons' estimate where the gather disk leaves the surface, on every path that has
     // the scene's geometry: before final gathering's rays read it, and where no fit follows
     // (an all-diffuse scene fits nothing, yet its edges darkened as the glossy scene's did).
-    // Both passes read every splat, the photon fit's lobes left as they are.
-    let every_splat = cfg.params(splat_count, splat_count, shape);
     if input.gathering.is_some() {
         cover_light(ex, &every_splat, &light, input.cover.as_ref())?;
     }
