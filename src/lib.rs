@@ -4,9 +4,9 @@
 //! as the reference in tests. The modules, from the bottom up (each uses only those above it
 //! in this list; docs/architecture.md):
 //!
-//! - `error`, `types` (the `#[repr(C)]` records shared with WGSL), `shared` (math shared by
-//!   the mirrors and the host), `shaders` (the WGSL sources, the stage table and what naga
-//!   reads of them);
+//! - `error`, `large_pages` (the command's allocator), `types` (the `#[repr(C)]` records
+//!   shared with WGSL), `shared` (math shared by the mirrors and the host), `shaders` (the WGSL
+//!   sources, the stage table and what naga reads of them);
 //! - `grid`, `photons`, `bins`, `em`, `tone` (each stage's settings, limits and host-side
 //!   data), `fit_groups` (the splats that share a lobe fit), `lobe_norms` (the lobe-norm table every frame's shading divides by, and its
 //!   quadrature), `convolution` (the lobe × BRDF shading study), `lod` (the level of detail's
@@ -45,6 +45,7 @@ pub mod fit_groups;
 pub mod frame;
 pub mod gpu;
 pub mod grid;
+pub mod large_pages;
 pub mod lobe_norms;
 pub mod lod;
 pub mod objects;

@@ -4,6 +4,7 @@ use super::bindings::Bindings;
 use crate::error::Result;
 use crate::grid::DIST_CAP;
 use crate::types::{DistanceParams, GridParams};
+use rayon::prelude::*;
 
 pub const WG: u32 = 64;
 
@@ -27,29 +28,34 @@ pub fn grid_distance(
     groups: u32,
 ) {
     let [dx, dy, _] = grid.dims;
-    for wg in 0..groups {
-        for lid in 0..WG {
-            let c = wg * WG + lid;
-            if c >= grid.cell_count {
-                continue;
-            }
-            let coord = [c % dx, (c / dx) % dy, c / (dx * dy)];
-            let strides = [1, dx, dx * dy];
-            let axis = params.axis as usize;
-            let pos = coord[axis] as i32;
-            let len = grid.dims[axis] as i32;
-            let stride = strides[axis] as i32;
-            let mut best = DIST_CAP;
-            for o in -(DIST_CAP as i32)..=DIST_CAP as i32 {
-                let q = pos + o;
-                if q >= 0 && q < len {
-                    let v = value_at(params, cell_start, src, (c as i32 + o * stride) as usize);
-                    best = best.min((o.unsigned_abs()).max(v));
+    let invocations = (groups * WG).min(grid.cell_count) as usize;
+    // Each cell's invocation writes its own cell alone: the cells run a z-plane a task, each
+    // plane in the invocations' order (one cell at a time, the three passes took 5.8 s on a
+    // 10 M-splat terrain's 2^24 cells; 3.1–3.3 s so).
+    let plane = (dx * dy) as usize;
+    dst[..invocations]
+        .par_chunks_mut(plane)
+        .enumerate()
+        .for_each(|(z, out)| {
+            for (k, slot) in out.iter_mut().enumerate() {
+                let c = (z * plane + k) as u32;
+                let coord = [c % dx, (c / dx) % dy, c / (dx * dy)];
+                let strides = [1, dx, dx * dy];
+                let axis = params.axis as usize;
+                let pos = coord[axis] as i32;
+                let len = grid.dims[axis] as i32;
+                let stride = strides[axis] as i32;
+                let mut best = DIST_CAP;
+                for o in -(DIST_CAP as i32)..=DIST_CAP as i32 {
+                    let q = pos + o;
+                    if q >= 0 && q < len {
+                        let v = value_at(params, cell_start, src, (c as i32 + o * stride) as usize);
+                        best = best.min((o.unsigned_abs()).max(v));
+                    }
                 }
+                *slot = best;
             }
-            dst[c as usize] = best;
-        }
-    }
+        });
 }
 
 /// The executor's entry: `grid_distance`'s bindings, unpacked in the order its WGSL declares them.
