@@ -7,8 +7,8 @@
 //! page fault. Where the system leaves huge pages to the program's choice (`madvise`, the
 //! usual default), advising each large block onto them made the mirror's render of a 10 M
 //! glossy terrain about 8 % faster, its photons 10–20 % (docs/measurements.md, "Dense scans on
-//! the mirror: huge pages"). Blocks below
-//! `LARGE` are left as they are: a few pages' misses are not worth a system call.
+//! the mirror: huge pages, and where the 10 M EM goes"). Blocks below `LARGE` are left as they
+//! are: a few pages' misses are not worth a system call.
 
 use std::alloc::{GlobalAlloc, Layout, System};
 
