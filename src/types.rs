@@ -469,7 +469,9 @@ pub struct DepositParams {
     /// disk: R plus the most a deposit's disk reaches past its mean (`em_share`'s box).
     pub reach: f32,
     pub first_splat: u32,
-    pub _pad0: u32,
+    /// The widest a deposit's disk is taken to be (`em_deposit_list` clamps its spread to it):
+    /// the reach past R, sized by nearly every splat's radius, not by the largest one's.
+    pub spread_max: f32,
     pub _pad1: u32,
     pub _pad2: u32,
 }

@@ -417,6 +417,7 @@ fn shared_light_of_a_flat_field_is_the_photons_estimate() {
         photon_count: 0,
         splat_count: n,
         reach: r + lobelight::em::DEPOSIT_REACH * radius,
+        spread_max: lobelight::em::DEPOSIT_REACH * radius,
         ..Default::default()
     };
     let d: DepositBins = cpu::deposit_photons(&deposit, &photons, &splats, &grid).unwrap();

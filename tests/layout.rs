@@ -182,7 +182,7 @@ fn rust_layouts() -> Vec<RustLayout> {
             splat_count,
             reach,
             first_splat,
-            _pad0,
+            spread_max,
             _pad1,
             _pad2
         }),

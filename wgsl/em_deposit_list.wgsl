@@ -3,9 +3,10 @@
 // position of its photons, with their total power, the splat's normal for a direction and
 // the splat's index for its key, so that the binned list comes out in splat order whatever
 // order this pass writes in. Beside it, in `spread` at the splat's index: the radius of the
-// uniform disk with its photons' spread about their mean (rho^2 = 2 E|x - mean|^2) and their
-// count. One invocation per splat of one range (deposit.first_splat on; see em_deposit), whose
-// records go to the range's own list. CPU mirror: src/cpu/em_deposit_list.rs.
+// uniform disk with its photons' spread about their mean (rho^2 = 2 E|x - mean|^2, at most
+// deposit.spread_max) and their count. One invocation per splat of one range
+// (deposit.first_splat on; see em_deposit), whose records go to the range's own list.
+// CPU mirror: src/cpu/em_deposit_list.rs.
 
 // #import types
 // #import dispatch
@@ -50,7 +51,8 @@ fn main(@builtin(workgroup_id) wg: vec3<u32>, @builtin(num_workgroups) num_wg: v
             - DEPOSIT_OFFSET;
     }
     let square = wide(base + DEPOSIT_SQUARE_SUM) / DEPOSIT_POSITION_UNITS * per_photon;
-    let rho = s.radius * sqrt(2.0 * max(square - dot(mean, mean), 0.0));
+    // A large splat's photons are taken to spread no wider than the reach (spread_max).
+    let rho = min(s.radius * sqrt(2.0 * max(square - dot(mean, mean), 0.0)), deposit.spread_max);
     let slot = atomicAdd(&listed[0], 1u);
     deposit_list_put(slot, Photon(s.center + mean * s.radius, 0u, s.normal, j, power, j));
     spread_put(j, vec2<f32>(rho, f32(count)));

@@ -43,7 +43,8 @@ pub fn em_deposit_list(
                 - DEPOSIT_OFFSET;
         }
         let square = wide(base + DEPOSIT_SQUARE_SUM as usize) / DEPOSIT_POSITION_UNITS * per_photon;
-        let rho = s.radius * (2.0 * (square - mean.dot(mean)).max(0.0)).sqrt();
+        let rho =
+            (s.radius * (2.0 * (square - mean.dot(mean)).max(0.0)).sqrt()).min(deposit.spread_max);
         deposit_list[*listed as usize] = Photon {
             position: (Vec3::from(s.center) + mean * s.radius).into(),
             bounce: 0,

@@ -248,7 +248,7 @@ struct DepositParams {
     splat_count: u32,
     reach: f32,
     first_splat: u32,
-    _pad0: u32,
+    spread_max: f32,
     _pad1: u32,
     _pad2: u32,
 }
