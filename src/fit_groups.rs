@@ -1,17 +1,17 @@
 //! Shared lobe fits (docs/design.md §6, "Shared fits"): neighbouring splats of a smooth surface
 //! see nearly the same incident light, so the fitted splats are grouped — within one cell of
 //! a grid of `EmConfig::share` search radii, facing within `GROUP_COS_MIN` of the group's
-//! first splat — and each group is fitted once. Final gathering casts the group's rays from
+//! leader — and each group is fitted once. Final gathering casts the group's rays from
 //! all its members in turn (ray j from member j mod n), so the one fit sees the group's mean
 //! incident light, and every member shades with its lobes. The fit's cost then follows the
 //! glossy surface's area in cells, not its splat count.
 //!
-//! The groups are made once per bake on the host, from the splats alone, in splat order, so
+//! The groups are made once per bake on the host, from the splats alone, so
 //! that both executors read the same groups and the result does not depend on scheduling.
 //! They travel as one array of words (`FitGroups::words`), which `em_select` and
 //! `final_gather` read: one word a splat (`FOLLOWER_BIT | leader` for a splat that uses
-//! another's fit, its group's index for a leader, all ones for a splat not fitted), then each
-//! group's first member, then the members.
+//! another's fit, its group's index for a leader, all ones for a splat not fitted), then where
+//! each group's members start, then the members, each group's leader first.
 //!
 //! The covered share of a splat's gather disk (`em_coverage`) is shared the same way, in
 //! smaller cells (`CoverGroups`): a dense scan's every search radius holds thousands of splats,
@@ -83,8 +83,13 @@ impl FitGroups {
         }
         let mut members = vec![0u32; starts[g] as usize];
         let mut next = starts.clone();
+        // Each group's leader first (it need not be its first splat), then its followers.
+        for (k, &l) in cells.leaders.iter().enumerate() {
+            members[next[k] as usize] = l;
+            next[k] += 1;
+        }
         for (i, &group) in (0u32..).zip(&cells.group) {
-            if group != UNGROUPED {
+            if group != UNGROUPED && cells.leaders[group as usize] != i {
                 members[next[group as usize] as usize] = i;
                 next[group as usize] += 1;
             }
@@ -166,15 +171,20 @@ impl CoverGroups {
     }
 }
 
-/// Splats grouped by cell and facing: each splat that `include` takes joins the first group of
-/// its cell (in a grid of `cell` scene units), in splat order, whose first splat faces within
-/// `cos_min` of it, else leads a new one. Groups are numbered in their leaders' splat order,
-/// so the grouping depends on the splats alone.
+/// The most splats of a cell weighed as its next leader: a dense scan's cell of a search
+/// radius holds thousands, and each candidate's count visits them all.
+const LEADER_CANDIDATES: usize = 16;
+
+/// Splats grouped by cell and facing: the splats that `include` takes, by cell (a grid of
+/// `cell` scene units), each in the group of a leader of its cell that faces within `cos_min`
+/// of it. A cell's leaders are chosen in turn to take the most of its splats still open (see
+/// `CellGroups::new`). Groups are numbered in their leaders' splat order, so the grouping
+/// depends on the splats alone.
 #[derive(Clone, Debug, Default, PartialEq)]
 pub struct CellGroups {
     /// Each splat's group (`UNGROUPED` where `include` left it out).
     pub group: Vec<u32>,
-    /// Each group's first splat, its leader.
+    /// Each group's leader.
     pub leaders: Vec<u32>,
 }
 
@@ -205,18 +215,39 @@ impl CellGroups {
         keyed.par_sort_unstable();
         // Each splat's leader, cell by cell.
         let mut leader_of = vec![UNGROUPED; splats.len()];
-        let mut leaders: Vec<u32> = Vec::new();
+        let normal = |i: u32| Vec3::from(splats[i as usize].normal);
+        let mut open: Vec<u32> = Vec::new();
         for run in keyed.chunk_by(|a, b| a.0 == b.0) {
-            leaders.clear();
-            for &(_, i) in run {
-                let normal = Vec3::from(splats[i as usize].normal);
-                let joined = leaders
-                    .iter()
-                    .copied()
-                    .find(|&l| Vec3::from(splats[l as usize].normal).dot(normal) >= cos_min);
-                leader_of[i as usize] = joined.unwrap_or_else(|| {
-                    leaders.push(i);
-                    i
+            open.clear();
+            open.extend(run.iter().map(|&(_, i)| i));
+            // Leaders chosen to cover the most: of up to LEADER_CANDIDATES of the cell's open
+            // splats (evenly strided, in splat order), the one whose cone holds the most open
+            // splats, the first of them on a tie; it takes them all, and again until none is
+            // open. On a curved surface a cell's first splat may face one edge of the cell's
+            // normals, and then the ones facing the other edge lead groups of their own.
+            while !open.is_empty() {
+                let stride = open.len().div_ceil(LEADER_CANDIDATES);
+                let held = |l: u32| {
+                    let n = normal(l);
+                    open.iter()
+                        .filter(|&&j| normal(j).dot(n) >= cos_min)
+                        .count()
+                };
+                let mut best = (open[0], held(open[0]));
+                for &c in open.iter().step_by(stride).skip(1) {
+                    let h = held(c);
+                    if h > best.1 {
+                        best = (c, h);
+                    }
+                }
+                let (l, n) = (best.0, normal(best.0));
+                leader_of[l as usize] = l;
+                open.retain(|&j| {
+                    let joins = j == l || normal(j).dot(n) >= cos_min;
+                    if joins {
+                        leader_of[j as usize] = l;
+                    }
+                    !joins
                 });
             }
         }
@@ -224,12 +255,14 @@ impl CellGroups {
         let mut group = vec![UNGROUPED; splats.len()];
         let mut leaders = Vec::new();
         for i in 0..splats.len() {
-            let l = leader_of[i];
-            if l == i as u32 {
+            if leader_of[i] == i as u32 {
                 group[i] = leaders.len() as u32;
-                leaders.push(l);
-            } else if l != UNGROUPED {
-                // A leader comes before its followers, so its group is numbered already.
+                leaders.push(i as u32);
+            }
+        }
+        for i in 0..splats.len() {
+            let l = leader_of[i];
+            if l != UNGROUPED && l != i as u32 {
                 group[i] = group[l as usize];
             }
         }

@@ -36,7 +36,7 @@ fn lobe_light(map: &LobeMap, i: usize) -> f32 {
 }
 
 /// The default scene's groups: every glossy splat in exactly one group, led by the first of
-/// its members in splat order, all in the leader's cell and facing within `GROUP_COS_MIN` of
+/// its members in the members' list, all in the leader's cell and facing within `GROUP_COS_MIN` of
 /// it; no diffuse splat in any. The cell of one search radius puts about four of the block's
 /// splats (spacing half a radius) in a group.
 #[test]
@@ -66,7 +66,6 @@ fn groups_hold_near_splats_that_face_alike() {
             let m = m as usize;
             assert!(glossy(&scene, m) && !seen[m], "splat {m} twice, or diffuse");
             seen[m] = true;
-            assert!(m >= leader, "group {k} not led by its first member");
             assert_eq!(
                 cell_of(m),
                 cell_of(leader),
@@ -111,6 +110,42 @@ fn splats_that_face_apart_or_lie_apart_do_not_share() {
     for bad in [0.0, -1.0, f32::NAN, f32::INFINITY] {
         assert!(FitGroups::new(&splats, &materials, false, bad).is_err());
     }
+}
+
+/// A cell whose normals fan over 40° makes one group, led by the splat in the fan's middle,
+/// whichever splat comes first: led by the first in splat order (the fan's edge), the far
+/// side's splats, 30° and 40° from it, would lead a second group.
+#[test]
+fn a_curved_cell_is_led_from_its_middle() {
+    let materials = [Material {
+        specular: [0.3; 3],
+        ..Default::default()
+    }];
+    let fan: Vec<Splat> = [20.0f32, 10.0, 0.0, -10.0, -20.0]
+        .iter()
+        .enumerate()
+        .map(|(k, deg)| {
+            let (sin, cos) = deg.to_radians().sin_cos();
+            Splat {
+                center: [0.1 + 0.1 * k as f32, 0.5, 0.5],
+                normal: [sin, 0.0, cos],
+                radius: 0.01,
+                ..Default::default()
+            }
+        })
+        .collect();
+    let g = FitGroups::new(&fan, &materials, false, 1.0).unwrap();
+    assert_eq!((g.groups, g.followers), (1, 4));
+    assert_eq!(g.words[2], 0, "the middle splat leads group 0");
+    for i in [0, 1, 3, 4] {
+        assert_eq!(g.leader(i), Some(2), "splat {i}");
+    }
+    let members = &g.words[g.members_at() as usize..];
+    assert_eq!(
+        members,
+        [2, 0, 1, 3, 4],
+        "the leader first, then the rest in splat order"
+    );
 }
 
 /// The shared fit on the device against the mirror's, from the same bins: the same leaders
