@@ -444,10 +444,10 @@ pub const DEPOSIT_POWER_UNITS: f32 = 1_048_576.0;
 pub const DEPOSIT_REACH: f32 = std::f32::consts::SQRT_2;
 
 /// The share of splats whose radius bounds the deposits' reach. A mesh's few large triangles
-/// (the bunny's base: 24 of its 34,835 vertices cover radii 3–10× the median) would otherwise
-/// size every splat's search: sized by the largest radius, `em_share` visited 22× the box's
-/// deposits a splat. The deposits of the larger splats keep their photons within the reach
-/// (`spread_max`), a narrower disk about the same mean.
+/// (the bunny's base: 113 of its 34,835 vertices cover radii 3–10× the median) would otherwise
+/// size every splat's search: sized by the largest radius, the bunny scene's `em_share`
+/// visited 48 M records, the box's 2.2 M. The deposits of the larger splats keep their photons
+/// within the reach (`spread_max`), a narrower disk about the same mean.
 pub const SPREAD_QUANTILE: f64 = 0.99;
 
 /// Splat radii sampled for `SPREAD_QUANTILE`: at most about this many, evenly strided.

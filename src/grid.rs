@@ -68,9 +68,18 @@ pub fn disk_cell_range(s: &Splat, g: &GridParams) -> (UVec3, UVec3) {
 
 /// The cell that holds point `p`, unclamped: outside the grid where `p` is.
 pub fn point_cell(p: Vec3, g: &GridParams) -> IVec3 {
-    ((p - Vec3::from(g.origin)) * g.inv_cell_size)
-        .floor()
-        .as_ivec3()
+    floor_cell((p - Vec3::from(g.origin)) * g.inv_cell_size)
+}
+
+/// `v.floor().as_ivec3()`, the same for every f32 (NaN to 0, saturating past i32), without a
+/// call to `floorf` a lane: x86-64's baseline has no rounding instruction, and the mirror's
+/// rays step cells with it (4 % of the bunny's render went to `floorf`).
+pub fn floor_cell(v: Vec3) -> IVec3 {
+    let floor = |x: f32| {
+        let t = x as i32;
+        if x < t as f32 { t.saturating_sub(1) } else { t }
+    };
+    IVec3::new(floor(v.x), floor(v.y), floor(v.z))
 }
 
 pub fn cell_index(c: UVec3, g: &GridParams) -> u32 {

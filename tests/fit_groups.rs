@@ -35,9 +35,9 @@ fn lobe_light(map: &LobeMap, i: usize) -> f32 {
         .sum()
 }
 
-/// The default scene's groups: every glossy splat in exactly one group, led by the first of
-/// its members in the members' list, all in the leader's cell and facing within `GROUP_COS_MIN` of
-/// it; no diffuse splat in any. The cell of one search radius puts about four of the block's
+/// The default scene's groups: every glossy splat in exactly one group, led by the first in
+/// its members' list, all in the leader's cell and facing within `GROUP_COS_MIN` of it; no
+/// diffuse splat in any. The cell of one search radius puts about four of the block's
 /// splats (spacing half a radius) in a group.
 #[test]
 fn groups_hold_near_splats_that_face_alike() {

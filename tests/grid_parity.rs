@@ -4,7 +4,9 @@ mod common;
 
 use lobelight::cpu;
 use lobelight::gpu::grid::build_grid;
-use lobelight::grid::{DIST_CAP, GridConfig, SplatGrid, cell_index, disk_cell_range, grid_params};
+use lobelight::grid::{
+    DIST_CAP, GridConfig, SplatGrid, cell_index, disk_cell_range, floor_cell, grid_params,
+};
 use lobelight::types::Splat;
 
 fn gpu_grid(
@@ -203,5 +205,46 @@ fn too_many_coincident_splats_is_a_clear_error() {
         .to_string();
     for msg in [cpu_err, gpu_err] {
         assert!(msg.contains("4097 splats overlap one grid cell"), "{msg}");
+    }
+}
+
+/// `floor_cell`, the mirror's cell of a point without `floorf`, is `floor` then the saturating
+/// cast for every kind of value: integers and their neighbours, both zeros, halves, NaN, the
+/// infinities, the edges of i32, and a sweep of ordinary coordinates.
+#[test]
+fn floor_cell_is_floor_for_every_kind_of_value() {
+    let mut values = vec![
+        0.0f32,
+        -0.0,
+        0.5,
+        -0.5,
+        1.0,
+        -1.0,
+        f32::NAN,
+        f32::INFINITY,
+        f32::NEG_INFINITY,
+        f32::MAX,
+        f32::MIN,
+        f32::MIN_POSITIVE,
+        -f32::MIN_POSITIVE,
+        2147483648.0,
+        -2147483648.0,
+        2147483520.0,
+        -2147483904.0,
+        16777217.0,
+    ];
+    for k in -2000..2000 {
+        let x = k as f32 * 0.37;
+        values.extend([
+            x,
+            x.next_up(),
+            x.next_down(),
+            x.round(),
+            x.round().next_down(),
+        ]);
+    }
+    for x in values {
+        let v = glam::Vec3::new(x, -x, x * 0.5);
+        assert_eq!(floor_cell(v), v.floor().as_ivec3(), "{x}");
     }
 }

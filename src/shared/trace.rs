@@ -6,7 +6,7 @@
 
 use glam::{BVec3, IVec3, Vec3};
 
-use crate::grid::SplatGrid;
+use crate::grid::{SplatGrid, floor_cell};
 use crate::types::{Hit, NO_SPLAT, Splat, SurfaceClip};
 
 pub const PARALLEL_COS: f32 = 1e-6;
@@ -98,10 +98,7 @@ pub fn trace_ray(geo: &Geometry, o: Vec3, d: Vec3, skip: u32, t_max: f32, budget
         moving,
     );
     let p0 = o + t_enter * d;
-    let mut c = ((p0 - lo) * g.inv_cell_size)
-        .floor()
-        .as_ivec3()
-        .clamp(IVec3::ZERO, dims - 1);
+    let mut c = floor_cell((p0 - lo) * g.inv_cell_size).clamp(IVec3::ZERO, dims - 1);
     let mut t = t_enter;
     loop {
         if *budget == 0 {
@@ -161,7 +158,7 @@ pub fn trace_ray(geo: &Geometry, o: Vec3, d: Vec3, skip: u32, t_max: f32, budget
             return hit;
         }
         t = t.max(t_exit);
-        let at = ((o + t * d - lo) * g.inv_cell_size).floor().as_ivec3();
+        let at = floor_cell((o + t * d - lo) * g.inv_cell_size);
         let mut n = select_i(at.clamp(c, c + k), at.clamp(c - k, c), negative & moving);
         n = select_i(n, c, !moving);
         let exit_x = tf.x <= tf.y && tf.x <= tf.z;
