@@ -235,13 +235,17 @@ impl CellGroups {
                 };
                 let mut best = (open[0], held(open[0]));
                 for &c in open.iter().step_by(stride).skip(1) {
+                    // A leader that holds every open splat cannot be bettered (a flat cell's
+                    // first): the other candidates' counts are not needed.
+                    if best.1 == open.len() {
+                        break;
+                    }
                     let h = held(c);
                     if h > best.1 {
                         best = (c, h);
                     }
                 }
                 let (l, n) = (best.0, normal(best.0));
-                leader_of[l as usize] = l;
                 open.retain(|&j| {
                     let joins = j == l || normal(j).dot(n) >= cos_min;
                     if joins {
