@@ -122,16 +122,7 @@ pub fn tone_map<E: Executor>(
     cfg: &ToneConfig,
 ) -> Result<Toned<E::Buffer>> {
     cfg.validate()?;
-    let block = stage_shape(Stage::TonemapReduce)?.per_group(Stage::TonemapReduce)?;
-    let mut sums_in = ex.zeroed("tone sums", 8)?;
-    for (level, &count) in reduce_levels(pixels, block).iter().enumerate() {
-        let blocks = groups_for(count, block).max(1);
-        let sums_out = ex.zeroed("tone sums", blocks as u64 * 8)?;
-        let params = ex.uniform("tone params", &cfg.params(count, level as u32))?;
-        let bindings = [&params, hdr, &sums_in, &sums_out];
-        ex.dispatch(Stage::TonemapReduce, &bindings, blocks)?;
-        sums_in = sums_out;
-    }
+    let sums_in = log_sum(ex, hdr, pixels, cfg)?;
     let rgba = ex.zeroed("tone-mapped image", pixels.max(1) as u64 * 4)?;
     let params = ex.uniform("tone params", &cfg.params(pixels, 0))?;
     let bindings = [&params, hdr, &sums_in, &rgba];
@@ -146,6 +137,27 @@ pub fn tone_map<E: Executor>(
     })
 }
 
+/// The log-average's sum of `pixels` HDR pixels, (Σ log(ε + Y), count) over the finite ones, in
+/// a buffer of one `vec2<f32>`: `tonemap_reduce` level by level down to one.
+pub fn log_sum<E: Executor>(
+    ex: &mut E,
+    hdr: &E::Buffer,
+    pixels: u32,
+    cfg: &ToneConfig,
+) -> Result<E::Buffer> {
+    let block = stage_shape(Stage::TonemapReduce)?.per_group(Stage::TonemapReduce)?;
+    let mut sums_in = ex.zeroed("tone sums", 8)?;
+    for (level, &count) in reduce_levels(pixels, block).iter().enumerate() {
+        let blocks = groups_for(count, block).max(1);
+        let sums_out = ex.zeroed("tone sums", blocks as u64 * 8)?;
+        let params = ex.uniform("tone params", &cfg.params(count, level as u32))?;
+        let bindings = [&params, hdr, &sums_in, &sums_out];
+        ex.dispatch(Stage::TonemapReduce, &bindings, blocks)?;
+        sums_in = sums_out;
+    }
+    Ok(sums_in)
+}
+
 /// The moving frames' history buffers of one frame: the resolved image (w: the frames it
 /// holds) and the surface each pixel kept.
 pub struct TemporalHistory<'a, B> {
@@ -155,7 +167,7 @@ pub struct TemporalHistory<'a, B> {
 
 /// Temporal anti-aliasing of a moving frame (`temporal`): `hdr` and its `surface`, drawn with
 /// `cam`, blended into `last` (drawn with `prev`), resolved into `next`, whose image is then
-/// copied into `hdr`.
+/// copied into `hdr`. The frame's log-average (`log_sum`) sets the scale of the pass's weights.
 #[allow(clippy::too_many_arguments)]
 pub fn temporal<E: Executor>(
     ex: &mut E,
@@ -171,6 +183,7 @@ pub fn temporal<E: Executor>(
     let cam_buf = ex.uniform("camera", cam)?;
     let prev_buf = ex.uniform("last camera", prev)?;
     let params_buf = ex.uniform("temporal params", params)?;
+    let frame_log_sum = log_sum(ex, hdr, pixels, &ToneConfig::default())?;
     let bindings = [
         &cam_buf,
         &prev_buf,
@@ -181,6 +194,7 @@ pub fn temporal<E: Executor>(
         last.surface,
         next.image,
         next.surface,
+        &frame_log_sum,
     ];
     ex.dispatch(Stage::Temporal, &bindings, groups(Stage::Temporal, pixels)?)?;
     ex.copy(next.image, 0, hdr, 0, pixels as u64 * 16)

@@ -25,6 +25,8 @@ pub struct TemporalInput<'a> {
     pub surface: &'a [[f32; 4]],
     pub history: &'a [[f32; 4]],
     pub history_surface: &'a [[f32; 4]],
+    /// This frame's (Σ log(ε + Y), count), as `tonemap_reduce` sums it.
+    pub log_sum: [f32; 2],
 }
 
 /// Resolves every pixel into `resolved` and `resolved_surface`.
@@ -45,10 +47,23 @@ pub fn temporal(
         });
 }
 
-/// A colour's weight in the resampling and the blend: bright pixels resampled every frame
-/// would otherwise bleed into the dim ones around them.
-fn weight_of(c: Vec3) -> f32 {
-    1.0 / (1.0 + luminance(c).max(0.0))
+/// The key of the weights' exposure: the tone map's default key.
+const WEIGHT_KEY: f32 = 0.18;
+
+/// The exposure that displays the frame of log-average sum `log_sum` (Σ log(ε + Y), count):
+/// `WEIGHT_KEY` over its log-average luminance (1 where it has no finite pixel).
+pub fn frame_exposure(log_sum: [f32; 2]) -> f32 {
+    if log_sum[1] <= 0.0 {
+        return 1.0;
+    }
+    WEIGHT_KEY / (log_sum[0] / log_sum[1]).exp()
+}
+
+/// A colour's weight in the resampling and the blend, its luminance scaled by the frame's
+/// `exposure` (as displayed): bright pixels resampled every frame would otherwise bleed into
+/// the dim ones around them.
+fn weight_of(c: Vec3, exposure: f32) -> f32 {
+    1.0 / (1.0 + exposure * luminance(c).max(0.0))
 }
 
 /// Surface `s` (normal, distance along its ray) that pixel `q` shows, as (normal, distance from
@@ -124,6 +139,7 @@ fn resolve(input: &TemporalInput, i: u32) -> ([f32; 4], [f32; 4]) {
     }
     let mut out = current.extend(1.0);
     if params.reset == 0 {
+        let exposure = frame_exposure(input.log_sum);
         // Where the surface is now and was in the last frame's image: a point, or where the
         // pixel shows none, a direction (the same from either eye).
         let d = pixel_ray(cam, px.as_vec2() + 0.5);
@@ -162,7 +178,7 @@ fn resolve(input: &TemporalInput, i: u32) -> ([f32; 4], [f32; 4]) {
                 let wy = if k >= 2 { f.y } else { 1.0 - f.y };
                 let b = wx * wy;
                 let h = Vec4::from(input.history[j]);
-                let w = b * weight_of(h.truncate());
+                let w = b * weight_of(h.truncate(), exposure);
                 sum += (w * h.truncate()).extend(b * h.w);
                 weight += w;
                 bilinear += b;
@@ -171,8 +187,8 @@ fn resolve(input: &TemporalInput, i: u32) -> ([f32; 4], [f32; 4]) {
         if weight > 0.0 {
             let kept = (sum.truncate() / weight).clamp(lo, hi);
             let frames = (sum.w / bilinear + 1.0).min(params.max_frames as f32);
-            let wc = weight_of(current) / frames;
-            let wh = weight_of(kept) * (1.0 - 1.0 / frames);
+            let wc = weight_of(current, exposure) / frames;
+            let wh = weight_of(kept, exposure) * (1.0 - 1.0 / frames);
             out = ((wc * current + wh * kept) / (wc + wh)).extend(frames);
         }
     }
@@ -188,6 +204,10 @@ pub fn dispatch(b: &Bindings, _groups: u32) -> Result<()> {
     let (history, history_surface) = (b.get(5)?, b.get(6)?);
     let mut resolved = b.get_mut(7)?;
     let mut resolved_surface = b.get_mut(8)?;
+    let log_sum = view::<[f32; 2]>(&b.get(9)?)
+        .first()
+        .copied()
+        .unwrap_or_default();
     let input = TemporalInput {
         cam: &cam,
         prev: &prev,
@@ -196,6 +216,7 @@ pub fn dispatch(b: &Bindings, _groups: u32) -> Result<()> {
         surface: view(&surface),
         history: view(&history),
         history_surface: view(&history_surface),
+        log_sum,
     };
     temporal(
         &input,
