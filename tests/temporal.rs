@@ -8,7 +8,7 @@ mod common;
 use glam::{Vec2, Vec3};
 use lobelight::camera::View;
 use lobelight::cpu::exec::CpuExecutor;
-use lobelight::cpu::temporal::{clip_range, frame_exposure};
+use lobelight::cpu::temporal::frame_exposure;
 use lobelight::frame::temporal_params;
 use lobelight::gpu::Gpu;
 use lobelight::gpu::exec::GpuExecutor;
@@ -324,13 +324,6 @@ fn an_edge_the_jitter_crosses_keeps_its_history() {
                 let lo = around.iter().copied().fold(Vec3::MAX, Vec3::min);
                 let hi = around.iter().copied().fold(Vec3::MIN, Vec3::max);
                 let current = around[0];
-                // Cut to the mean ± CLIP_SIGMAS deviations (variance clipping).
-                let d1: Vec3 = around[1..].iter().map(|&c| c - current).sum();
-                let d2: Vec3 = around[1..]
-                    .iter()
-                    .map(|&c| (c - current) * (c - current))
-                    .sum();
-                let (lo, hi) = clip_range(current, lo, hi, d1, d2);
                 let kept = Vec3::from_slice(&last.0[i][..3]).clamp(lo, hi);
                 let (wc, wh) = (weight(current) / 16.0, weight(kept) * 15.0 / 16.0);
                 let expected = (wc * current + wh * kept) / (wc + wh);

@@ -13,8 +13,7 @@
 //   normal reversed (shade.wgsl), so a light and the ceiling it lies on are two surfaces;
 // - the clamp: the history's colour limited to the range of the frame's neighbourhood (the
 //   pixel and its four edge neighbours), so that what moved or changed light leaves no trail
-//   beyond it, and to within CLIP_SIGMAS standard deviations of its mean (variance clipping:
-//   the bunny's 20-frame orbit 0.0103 -> 0.0099, the box's and the dragon's a little lower);
+//   beyond it;
 // - the blend: the running mean of the history's frames and this one, counting at most
 //   max_frames (then an exponential mean of weight 1 / max_frames).
 // The resampling and the blend weigh each colour by 1 / (1 + its luminance as displayed):
@@ -26,7 +25,8 @@
 // radiances lie well below 1 and were blended nearly unweighted: its 20-frame orbit read
 // 0.0120 (median relMSE), 0.0103 weighed as displayed. (Tried and not kept, on the box's
 // orbit: the nearest surface of the 3x3 neighbourhood in place of the pixel's own, which
-// haloed every silhouette with the object in front; Catmull-Rom resampling, no better.)
+// haloed every silhouette with the object in front; Catmull-Rom resampling, no better; on the
+// bunny's, variance clipping, which pulled a row's history across the light's edge.)
 // Writes the resolved image (w: the frames it holds) and each pixel's surface, the next
 // frame's history. Twin: src/cpu/temporal.rs.
 
@@ -51,9 +51,6 @@
 @group(0) @binding(9) var<storage, read> log_sum: array<vec2<f32>>;
 
 const WG: u32 = 64u;
-// The history's clamp: within the neighbourhood's range and within this many standard
-// deviations of its mean (five colours lie within 2 of theirs: below 2 it cuts).
-const CLIP_SIGMAS: f32 = 1.5;
 // A distance at least this large is no surface (shade writes FAR there).
 const NO_SURFACE: f32 = 1.0e37;
 
@@ -145,22 +142,12 @@ fn main(@builtin(workgroup_id) wg: vec3<u32>, @builtin(num_workgroups) num_wg: v
     // square's corners cost llvmpipe a third of the pass for a range hardly wider).
     var lo = current;
     var hi = current;
-    // Sums of the neighbours' differences from the pixel, for their spread.
-    var d1 = vec3<f32>(0.0);
-    var d2 = vec3<f32>(0.0);
     for (var k = 0; k < 4; k++) {
         let q = edge_neighbour(px, k, size);
         let c = hdr[pixel_index(q.x, q.y)].xyz;
         lo = min(lo, c);
         hi = max(hi, c);
-        d1 += c - current;
-        d2 += (c - current) * (c - current);
     }
-    // Variance clipping: the range cut to the five colours' mean +- CLIP_SIGMAS deviations.
-    let mean_d = d1 / 5.0;
-    let spread = CLIP_SIGMAS * sqrt(max(d2 / 5.0 - mean_d * mean_d, vec3<f32>(0.0)));
-    lo = max(lo, current + mean_d - spread);
-    hi = min(hi, current + mean_d + spread);
     var out = vec4<f32>(current, 1.0);
     if params.reset == 0u {
         let exposure = frame_exposure();

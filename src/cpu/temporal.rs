@@ -1,8 +1,7 @@
 //! Mirror of `wgsl/temporal.wgsl`: a moving frame blended into the last resolved image,
 //! reprojected through the surface each pixel shows, the history kept where it showed a surface
 //! the pixel shows now (or an edge neighbour does, within the pixel's footprint) and clamped to
-//! the colour range of the pixel and its four edge neighbours, cut to within `CLIP_SIGMAS`
-//! standard deviations of their mean.
+//! the colour range of the pixel and its four edge neighbours.
 
 use glam::{IVec2, Vec3, Vec4};
 use rayon::prelude::*;
@@ -65,22 +64,6 @@ pub fn frame_exposure(log_sum: [f32; 2]) -> f32 {
 /// the dim ones around them.
 fn weight_of(c: Vec3, exposure: f32) -> f32 {
     1.0 / (1.0 + exposure * luminance(c).max(0.0))
-}
-
-/// The history's clamp: within the neighbourhood's range and within this many standard
-/// deviations of its mean (five colours lie within 2 of theirs: below 2 it cuts).
-pub const CLIP_SIGMAS: f32 = 1.5;
-
-/// Variance clipping: the neighbourhood's range `lo..hi` cut to its five colours' mean ±
-/// `CLIP_SIGMAS` deviations, from the sums of the four neighbours' differences from the pixel
-/// `current` (`d1`) and of their squares (`d2`).
-pub fn clip_range(current: Vec3, lo: Vec3, hi: Vec3, d1: Vec3, d2: Vec3) -> (Vec3, Vec3) {
-    let mean_d = d1 / 5.0;
-    let spread = CLIP_SIGMAS * (d2 / 5.0 - mean_d * mean_d).max(Vec3::ZERO).map(f32::sqrt);
-    (
-        lo.max(current + mean_d - spread),
-        hi.min(current + mean_d + spread),
-    )
 }
 
 /// Surface `s` (normal, distance along its ray) that pixel `q` shows, as (normal, distance from
@@ -149,16 +132,11 @@ fn resolve(input: &TemporalInput, i: u32) -> ([f32; 4], [f32; 4]) {
     let shows = own.w < NO_SURFACE;
     // The neighbourhood's colour range: the pixel and its four edge neighbours.
     let (mut lo, mut hi) = (current, current);
-    // Sums of the neighbours' differences from the pixel, for their spread.
-    let (mut d1, mut d2) = (Vec3::ZERO, Vec3::ZERO);
     for k in 0..4 {
         let c = Vec4::from(input.hdr[index(edge_neighbour(px, k, size))]).truncate();
         lo = lo.min(c);
         hi = hi.max(c);
-        d1 += c - current;
-        d2 += (c - current) * (c - current);
     }
-    (lo, hi) = clip_range(current, lo, hi, d1, d2);
     let mut out = current.extend(1.0);
     if params.reset == 0 {
         let exposure = frame_exposure(input.log_sum);
