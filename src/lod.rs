@@ -11,13 +11,13 @@
 
 use std::num::NonZeroUsize;
 
-use glam::Vec3;
+use glam::{Vec3, Vec4};
 use kiddo::{ImmutableKdTree, SquaredEuclidean};
 use rayon::prelude::*;
 
 use crate::shared::rng::pcg_hash;
-use crate::shared::splat::LOD_MAX_LEVEL;
-use crate::types::{LOD_LEVELS, Splat, SplatChunk, SplatLod};
+use crate::shared::splat::{LOD_MAX_LEVEL, LOD_SPREAD_SCALE};
+use crate::types::{LOD_LEVELS, LodSpread, Splat, SplatChunk, SplatLod};
 
 /// Splats merge only where their normals lie within about 37° of each other: a disk stands in
 /// for its neighbours only along their surface. Across a thin part or a sharp edge it would
@@ -35,6 +35,11 @@ const PRIORITY_SALT: u32 = 0x2545_f491;
 
 /// The merge tree of `splats` (see the module's doc); one record per splat, in their order.
 pub fn splat_lods(splats: &[Splat]) -> Vec<SplatLod> {
+    merge_tree(splats).0
+}
+
+/// The merge tree of `splats` and their normals' spread at each level, one of each per splat.
+pub fn merge_tree(splats: &[Splat]) -> (Vec<SplatLod>, Vec<LodSpread>) {
     let n = splats.len();
     let centre = |i: u32| Vec3::from(splats[i as usize].center);
     // extent[i][L]: splat i's disk at level L, for L up to top[i].
@@ -42,6 +47,8 @@ pub fn splat_lods(splats: &[Splat]) -> Vec<SplatLod> {
         splats.iter().map(|s| [s.radius; LOD_LEVELS]).collect();
     let mut top = vec![0u32; n];
     let mut parent = vec![NONE; n];
+    // Filled level by level.
+    let mut spread: Vec<LodSpread> = vec![[0; 2]; n];
     // Each splat's ancestor at the level last built.
     let mut ancestor: Vec<u32> = (0..n as u32).collect();
     // The splats of the level last built, in priority order.
@@ -65,17 +72,30 @@ pub fn splat_lods(splats: &[Splat]) -> Vec<SplatLod> {
                 parent[i as usize] = r;
             }
         }
-        // A kept disk's reach at this level: every splat whose ancestor merged into it.
+        // A kept disk's reach at this level: every splat whose ancestor merged into it; and
+        // their normals' sum weighted by their areas (by the kept splat's position).
+        let mut normals = vec![Vec4::ZERO; members.len()];
         for j in 0..n {
             let r = rep(ancestor[j]);
             ancestor[j] = r;
-            let reach = (Vec3::from(splats[j].center) - centre(r)).length() + splats[j].radius;
+            let s = &splats[j];
+            let reach = (Vec3::from(s.center) - centre(r)).length() + s.radius;
             let e = &mut extent[r as usize][level as usize];
             *e = e.max(reach);
+            let area = s.radius * s.radius;
+            normals[position[r as usize] as usize] += (Vec3::from(s.normal) * area).extend(area);
+        }
+        let (word, shift) = (((level - 1) / 4) as usize, 8 * ((level - 1) % 4));
+        for (&i, sum) in members.iter().zip(&normals) {
+            if top[i as usize] == level {
+                let mean = sum.truncate().length() / sum.w;
+                let byte = (normal_spread(mean) * LOD_SPREAD_SCALE).round().min(255.0) as u32;
+                spread[i as usize][word] |= byte << shift;
+            }
         }
         members.retain(|&i| top[i as usize] == level);
     }
-    (0..n)
+    let lods = (0..n)
         .map(|i| {
             let t = top[i] as usize;
             let mut lod = SplatLod {
@@ -89,7 +109,20 @@ pub fn splat_lods(splats: &[Splat]) -> Vec<SplatLod> {
             }
             lod
         })
-        .collect()
+        .collect();
+    (lods, spread)
+}
+
+/// The Ward roughness that stands for the spread of the normals a merged disk replaces, whose
+/// area-weighted mean has length `mean_length` (1 where they agree): shaded with one normal, the
+/// disk's highlight is as sharp as a single splat's where its surface's would be blurred by
+/// the normals' spread (a mottle of bright and dark disks on a curved glossy model). For a small
+/// spread, 1 − |n̄| ≈ ⟨θ²⟩ / 2 is the variance of the slopes along each axis (Toksvig's
+/// filtering of normal maps), and a Ward lobe's α² is twice its slopes' variance along an
+/// axis, so the disk's lobe is widened to α² + 2 (1 − |n̄|) / |n̄| (`lod_roughness`).
+pub fn normal_spread(mean_length: f32) -> f32 {
+    let m = mean_length.clamp(1e-3, 1.0);
+    (2.0 * (1.0 - m) / m).sqrt()
 }
 
 /// Splats a chunk holds: a frame's selection visits the chunks, and within a chunk it visits,
@@ -104,6 +137,8 @@ pub struct LodTree {
     /// Per splat, its place in the merge tree (in the splats' order); without one, a single
     /// stand-in record (level 0, no parent) for every splat, as the device binds it.
     pub lods: Vec<SplatLod>,
+    /// Per splat, its normals' spread at each merged level (`merge_tree`); a stand-in likewise.
+    pub spreads: Vec<LodSpread>,
     /// The splats chunk by chunk, each chunk's sorted by top level.
     pub order: Vec<u32>,
     pub chunks: Vec<SplatChunk>,
@@ -112,12 +147,12 @@ pub struct LodTree {
 impl LodTree {
     /// The merge tree of `splats`, and their chunks along a Morton curve of their centres.
     pub fn build(splats: &[Splat]) -> LodTree {
-        let lods = splat_lods(splats);
+        let (lods, spreads) = merge_tree(splats);
         let mut order = morton_order(splats);
         for run in order.chunks_mut(CHUNK) {
             run.sort_by_key(|&i| lods[i as usize].top);
         }
-        LodTree::chunked(splats, true, lods, order)
+        LodTree::chunked(splats, true, (lods, spreads), order)
     }
 
     /// Without a merge tree (the level of detail off): the chunks alone, each splat at level
@@ -126,7 +161,7 @@ impl LodTree {
         LodTree::chunked(
             splats,
             false,
-            vec![SplatLod::default()],
+            (vec![SplatLod::default()], vec![[0; 2]]),
             morton_order(splats),
         )
     }
@@ -136,10 +171,21 @@ impl LodTree {
         &self.lods[if self.merged { i as usize } else { 0 }]
     }
 
-    fn chunked(splats: &[Splat], merged: bool, lods: Vec<SplatLod>, order: Vec<u32>) -> LodTree {
+    /// Splat `i`'s normal spread (the stand-in's without a merge tree).
+    pub fn spread(&self, i: u32) -> &LodSpread {
+        &self.spreads[if self.merged { i as usize } else { 0 }]
+    }
+
+    fn chunked(
+        splats: &[Splat],
+        merged: bool,
+        (lods, spreads): (Vec<SplatLod>, Vec<LodSpread>),
+        order: Vec<u32>,
+    ) -> LodTree {
         let mut tree = LodTree {
             merged,
             lods,
+            spreads,
             order,
             chunks: Vec::new(),
         };

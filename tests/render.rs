@@ -27,13 +27,18 @@ fn cpu_bake(scene: &Scene, grid: &SplatGrid) -> LobeMap {
         .lobes
 }
 
-/// The default scene with 100 k photons, baked on the CPU.
-fn glossy_cornell() -> (Scene, SplatGrid, LobeMap) {
-    let mut scene = scene::load(Path::new("scenes/cornell.toml")).unwrap();
-    scene.bake.photons = 100_000;
+/// The scene of file `path` with `photons` photons, baked on the CPU.
+fn baked_scene(path: &str, photons: u64) -> (Scene, SplatGrid, LobeMap) {
+    let mut scene = scene::load(Path::new(path)).unwrap();
+    scene.bake.photons = photons;
     let grid = common::host_grid(&scene);
     let lobes = cpu_bake(&scene, &grid);
     (scene, grid, lobes)
+}
+
+/// The default scene with 100 k photons, baked on the CPU.
+fn glossy_cornell() -> (Scene, SplatGrid, LobeMap) {
+    baked_scene("scenes/cornell.toml", 100_000)
 }
 
 fn views(scene: &Scene, size: u32) -> Vec<View> {
@@ -76,6 +81,15 @@ fn cpu_hdr(
     .unwrap()
 }
 
+/// Moving frames by the raster passes with merged disks of up to 2 pixels.
+fn merged_raster() -> FrameConfig {
+    FrameConfig {
+        splatter: Splatter::Raster,
+        lod: 2.0,
+        ..FrameConfig::default()
+    }
+}
+
 /// The level of detail of moving frames (`--lod`): the device merges the same splats as the
 /// mirror (the frames agree within the parity tolerances), and at 96 pixels, where the box's
 /// far splats are about half a pixel, it does merge them: a thousand or more splats are left
@@ -86,11 +100,7 @@ fn level_of_detail_matches_the_mirror_and_thins() {
     let gpu = common::gpu();
     let (scene, grid, lobes) = glossy_cornell();
     let lods = lobelight::lod::splat_lods(&scene.splats);
-    let cfg = FrameConfig {
-        splatter: Splatter::Raster,
-        lod: 2.0,
-        ..FrameConfig::default()
-    };
+    let cfg = merged_raster();
     for view in views(&scene, 96) {
         let cam = camera_uniform(&view, scene.bounds(), &cfg);
         let left_out = (0..scene.splats.len())
@@ -108,6 +118,38 @@ fn level_of_detail_matches_the_mirror_and_thins() {
         eprintln!("against every splat: {e:?}");
         assert!(e.within_5_percent < 1.0, "{e:?}");
         assert!(e.energy.abs() <= 0.05, "{e:?}");
+    }
+}
+
+/// Merged disks of curved glossy surfaces (the spheres' box), shaded with their lobes widened
+/// by the spread of their normals (`lod::merge_tree`): the device and the mirror agree within
+/// the parity tolerances, in views where hundreds of glossy splats are drawn merged with a
+/// spread above nothing.
+#[test]
+fn merged_glossy_disks_match_the_mirror() {
+    use lobelight::shared::splat::{lod_level, lod_radius, lod_roughness};
+    let gpu = common::gpu();
+    let (scene, grid, lobes) = baked_scene("scenes/cornell_spheres.toml", 50_000);
+    let (lods, spreads) = lobelight::lod::merge_tree(&scene.splats);
+    let cfg = merged_raster();
+    for view in views(&scene, 96) {
+        let cam = camera_uniform(&view, scene.bounds(), &cfg);
+        let widened = (0..scene.splats.len())
+            .filter(|&i| {
+                let (s, lod) = (&scene.splats[i], &lods[i]);
+                let level = lod_level(&cam, s, lod);
+                scene.materials[s.material as usize].is_glossy()
+                    && lod_radius(&cam, s, lod) > 0.0
+                    && lod_roughness(0.0, &spreads[i], level) > 0.0
+            })
+            .count();
+        assert!(widened >= 200, "{widened} widened");
+        let a = gpu_frame(&gpu, &scene, &lobes, &view, &cfg);
+        let b = cpu_hdr(&scene, &grid, &lobes, &view, &cfg);
+        let d = difference(&a, &b).unwrap();
+        eprintln!("{widened} widened, {}x{}: {d:?}", view.width, view.height);
+        assert!(d.mean_relative <= MEAN_RELATIVE, "{d:?}");
+        assert!(d.within_5_percent >= WITHIN_5_PERCENT, "{d:?}");
     }
 }
 
@@ -467,10 +509,7 @@ fn gpu_bake_and_frame_are_deterministic() {
 fn shown_light_terms_add_up_to_the_full_frame() {
     use lobelight::frame::Terms;
     let gpu = common::gpu();
-    let mut scene = scene::load(Path::new("scenes/cornell.toml")).unwrap();
-    scene.bake.photons = 60_000;
-    let grid = common::host_grid(&scene);
-    let lobes = cpu_bake(&scene, &grid);
+    let (scene, grid, lobes) = baked_scene("scenes/cornell.toml", 60_000);
     let view = View::new(&scene.camera, 64, 64);
     let with = |show: Terms, direct: Direct| FrameConfig {
         show,

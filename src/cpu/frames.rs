@@ -102,12 +102,13 @@ pub fn cpu_frame_into(
                 true => crate::lod::LodTree::build(&scene.splats),
                 false => crate::lod::LodTree::flat(&scene.splats),
             };
-            Some(cpu::splat_select::selection(cam, &scene.splats, &tree))
+            let selection = cpu::splat_select::selection(cam, &scene.splats, &tree);
+            Some((selection, tree))
         }
         false => None,
     };
     let drawn = match (&selection, cam.lod > 0.0) {
-        (Some(sel), true) => {
+        (Some((sel, _)), true) => {
             std::borrow::Cow::Owned(cpu::splat_select::drawn_splats(&scene.splats, &sel.drawn))
         }
         _ => std::borrow::Cow::Borrowed(&scene.splats[..]),
@@ -128,9 +129,10 @@ pub fn cpu_frame_into(
         },
     };
     let shaded = match &selection {
-        Some(sel) => {
+        Some((sel, tree)) => {
             let (splats, materials) = (&scene.splats, &scene.materials);
-            cpu::splat_shade::splat_shade(cam, splats, materials, &shading, &sel.selected)
+            let listed = (&sel.selected[..], tree);
+            cpu::splat_shade::splat_shade(cam, splats, materials, &shading, listed)
         }
         None => Vec::new(),
     };

@@ -1,11 +1,15 @@
 //! Mirror of `wgsl/splat_shade.wgsl`: per splat `splat_select` listed, the radiance it sends
 //! towards the eye from its centre by its indirect and baked direct light; 0 for the others
-//! (the device leaves their slots as they were; nothing draws them).
+//! (the device leaves their slots as they were; nothing draws them). A glossy splat drawn as a
+//! merged disk is shaded with its lobe widened by the spread of the normals it stands for.
 
 use glam::Vec3;
 use rayon::prelude::*;
 
 use super::splat_shading::Shading;
+use crate::lod::LodTree;
+use crate::shared::lights::MIN_ALPHA;
+use crate::shared::splat::{lod_level, lod_roughness};
 use crate::types::{Camera, Material, Splat};
 
 pub const WG: u32 = 64;
@@ -15,15 +19,19 @@ pub fn splat_shade(
     splats: &[Splat],
     materials: &[Material],
     shading: &Shading,
-    selected: &[u32],
+    (selected, tree): (&[u32], &LodTree),
 ) -> Vec<[f32; 4]> {
     let eye = Vec3::from(cam.eye);
     let shade = |&i: &u32| {
         let s = &splats[i as usize];
         let centre = Vec3::from(s.center);
         let wo = (eye - centre).normalize();
-        let m = &materials[s.material as usize];
-        let l = shading.indirect(i, s, m, wo) + shading.baked_direct(i, s, m, centre, wo);
+        let mut m = materials[s.material as usize];
+        if cam.lod > 0.0 && m.roughness >= MIN_ALPHA {
+            let level = lod_level(cam, s, tree.lod(i));
+            m.roughness = lod_roughness(m.roughness, tree.spread(i), level);
+        }
+        let l = shading.indirect(i, s, &m, wo) + shading.baked_direct(i, s, &m, centre, wo);
         (i, l.extend(0.0).to_array())
     };
     let mut out = vec![[0.0; 4]; splats.len()];

@@ -95,6 +95,7 @@ pub struct SceneBuffers<'a> {
 /// A `lod::LodTree` on the device.
 pub struct TreeBuffers {
     pub lods: wgpu::Buffer,
+    pub spreads: wgpu::Buffer,
     pub chunks: wgpu::Buffer,
     pub order: wgpu::Buffer,
     /// Whether it holds the merge tree (`LodTree::build`) or the chunks alone (`flat`).
@@ -105,6 +106,7 @@ impl TreeBuffers {
     fn upload(gpu: &Gpu, tree: &crate::lod::LodTree) -> Result<TreeBuffers> {
         Ok(TreeBuffers {
             lods: gpu.storage("level of detail", &tree.lods)?,
+            spreads: gpu.storage("level of detail's normal spread", &tree.spreads)?,
             chunks: gpu.storage("splat chunks", &tree.chunks)?,
             order: gpu.storage("splats by chunk", &tree.order)?,
             merged: tree.merged,
@@ -128,6 +130,19 @@ impl<'a> SceneBuffers<'a> {
             self.direct,
             self.visibility,
         ]
+    }
+}
+
+/// The level of detail's tree a frame of baked direct light selects by and shades with: the
+/// merge tree with the level of detail on, the chunks alone with it off.
+fn frame_tree<'a>(scene: &SceneBuffers<'a>, uniforms: &Uniforms) -> Result<&'a TreeBuffers> {
+    match scene.tree {
+        Some(t) if t.merged == (uniforms.camera.lod > 0.0) => Ok(t),
+        _ => Err(Error::Internal(
+            "a frame of baked direct light was drawn before the tree it selects by was built \
+             (FrameScene::ensure_tree)"
+                .into(),
+        )),
     }
 }
 
@@ -852,16 +867,7 @@ impl SplatPipelines {
         scene: &SceneBuffers,
         uniforms: &Uniforms,
     ) -> Result<()> {
-        let tree = match scene.tree {
-            Some(t) if t.merged == (uniforms.camera.lod > 0.0) => t,
-            _ => {
-                return Err(Error::Internal(
-                    "a frame of baked direct light was drawn before the tree it selects by was \
-                     built (FrameScene::ensure_tree)"
-                        .into(),
-                ));
-            }
-        };
+        let tree = frame_tree(scene, uniforms)?;
         let select = [
             &uniforms.cam,
             scene.splats,
@@ -900,8 +906,15 @@ impl SplatPipelines {
         uniforms: &Uniforms,
     ) -> Result<()> {
         let stage = Stage::SplatShade;
+        let tree = frame_tree(scene, uniforms)?;
         let mut buffers = scene.shading(&uniforms.cam, &uniforms.params).to_vec();
-        buffers.extend([scene.shaded, scene.selected_count, scene.selected]);
+        buffers.extend([
+            scene.shaded,
+            scene.selected_count,
+            scene.selected,
+            &tree.lods,
+            &tree.spreads,
+        ]);
         if self.indirect {
             // As many workgroups as the list needs (`splat_list` wrote them), not the scene.
             return gpu.dispatch_indirect(encoder, stage, &buffers, (scene.draw_args, 16));

@@ -7,7 +7,9 @@ use glam::{Vec2, Vec3, Vec4};
 
 use super::lobes::FAMILY_WARD;
 use super::sampling::frame_of;
-use crate::types::{Camera, LOD_LEVELS, Material, Splat, SplatChunk, SplatLod, SurfaceClip};
+use crate::types::{
+    Camera, LOD_LEVELS, LodSpread, Material, Splat, SplatChunk, SplatLod, SurfaceClip,
+};
 
 pub const KERNEL_SHARPNESS: f32 = 2.0;
 
@@ -53,19 +55,58 @@ pub fn lod_radius(cam: &Camera, s: &Splat, lod: &SplatLod) -> f32 {
     if !(cam.lod > 0.0) {
         return s.radius;
     }
-    let z = (Vec3::from(s.center) - Vec3::from(cam.eye)).dot(Vec3::from(cam.forward));
-    let fits = |extent: f32, depth: f32| lod_fits(cam, extent, depth);
-    let (mut radius, mut level) = (s.radius, 0);
-    for k in 1..=lod.top.min(LOD_MAX_LEVEL) {
-        if fits(lod.extent[k as usize - 1], z) {
-            (radius, level) = (lod.extent[k as usize - 1], k);
-        }
-    }
+    let level = lod_level(cam, s, lod);
     // The parent lies at least `parent_gap` nearer: if its disk fits even there, it fits.
-    if level == lod.top && lod.parent_extent > 0.0 && fits(lod.parent_extent, z - lod.parent_gap) {
+    let z = lod_depth(cam, s);
+    if level == lod.top
+        && lod.parent_extent > 0.0
+        && lod_fits(cam, lod.parent_extent, z - lod.parent_gap)
+    {
         return 0.0;
     }
-    radius
+    match level {
+        0 => s.radius,
+        k => lod.extent[k as usize - 1],
+    }
+}
+
+/// The level of the merge tree splat `s` is drawn at this frame where `lod_radius` draws it:
+/// the coarsest of its levels whose disk projects within `cam.lod` pixels; 0 (its own disk)
+/// with the level of detail off.
+pub fn lod_level(cam: &Camera, s: &Splat, lod: &SplatLod) -> u32 {
+    if !(cam.lod > 0.0) {
+        return 0;
+    }
+    let z = lod_depth(cam, s);
+    let mut level = 0;
+    for k in 1..=lod.top.min(LOD_MAX_LEVEL) {
+        if lod_fits(cam, lod.extent[k as usize - 1], z) {
+            level = k;
+        }
+    }
+    level
+}
+
+/// The depth of splat `s`'s centre along the view, as the level of detail measures it.
+fn lod_depth(cam: &Camera, s: &Splat) -> f32 {
+    (Vec3::from(s.center) - Vec3::from(cam.eye)).dot(Vec3::from(cam.forward))
+}
+
+/// `LodSpread`'s unit: a byte of 255 is this much Ward roughness.
+pub const LOD_SPREAD_SCALE: f32 = 255.0;
+
+/// The Ward roughness a glossy splat of roughness `alpha` and normal spread `spread_bytes` is
+/// shaded with where it is drawn at `level` of the merge tree: its own, widened by the spread of
+/// the normals its disk stands for there (`lod::normal_spread`), as the slopes' variances add.
+/// At level 0, its own.
+pub fn lod_roughness(alpha: f32, spread_bytes: &LodSpread, level: u32) -> f32 {
+    if level == 0 {
+        return alpha;
+    }
+    let k = level - 1;
+    let byte = (spread_bytes[(k / 4) as usize] >> (8 * (k % 4))) & 0xff;
+    let widen = byte as f32 / LOD_SPREAD_SCALE;
+    (alpha * alpha + widen * widen).sqrt()
 }
 
 /// Whether a disk of radius `extent` at `depth` projects within the level of detail.

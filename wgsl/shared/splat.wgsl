@@ -121,21 +121,52 @@ fn lod_radius(cam: Camera, s: Splat, lod: SplatLod) -> f32 {
     if !(cam.lod > 0.0) {
         return s.radius;
     }
-    let z = dot(s.center - cam.eye, cam.forward);
-    var radius = s.radius;
-    var level = 0u;
-    for (var k = 1u; k <= min(lod.top, LOD_MAX_LEVEL); k++) {
-        if lod_fits(cam, lod.extent[k - 1u], z) {
-            radius = lod.extent[k - 1u];
-            level = k;
-        }
-    }
+    let level = lod_level(cam, s, lod);
     // The parent lies at least parent_gap nearer: if its disk fits even there, it fits.
+    let z = dot(s.center - cam.eye, cam.forward);
     if level == lod.top && lod.parent_extent > 0.0
         && lod_fits(cam, lod.parent_extent, z - lod.parent_gap) {
         return 0.0;
     }
-    return radius;
+    if level == 0u {
+        return s.radius;
+    }
+    return lod.extent[level - 1u];
+}
+
+// The level of the merge tree splat s is drawn at where lod_radius draws it: the coarsest of
+// its levels whose disk projects within cam.lod pixels; 0 (its own disk) with the level of
+// detail off.
+fn lod_level(cam: Camera, s: Splat, lod: SplatLod) -> u32 {
+    if !(cam.lod > 0.0) {
+        return 0u;
+    }
+    let z = dot(s.center - cam.eye, cam.forward);
+    var level = 0u;
+    for (var k = 1u; k <= min(lod.top, LOD_MAX_LEVEL); k++) {
+        if lod_fits(cam, lod.extent[k - 1u], z) {
+            level = k;
+        }
+    }
+    return level;
+}
+
+// The unit of a splat's normal spread (LodSpread in src/types.rs: a byte a level 1 to 5, levels
+// 1-4 in x from its lowest byte, level 5 in y's): a byte of 255 is this much Ward roughness.
+const LOD_SPREAD_SCALE: f32 = 255.0;
+
+// The Ward roughness a glossy splat of roughness alpha and normal spread `spread_bytes` is
+// shaded with where it is drawn at `level` of the merge tree: its own, widened by the spread of
+// the normals its disk stands for there (src/lod.rs, normal_spread), as the slopes' variances
+// add. At level 0, its own.
+fn lod_roughness(alpha: f32, spread_bytes: vec2<u32>, level: u32) -> f32 {
+    if level == 0u {
+        return alpha;
+    }
+    let k = level - 1u;
+    let byte = (spread_bytes[k / 4u] >> (8u * (k % 4u))) & 0xffu;
+    let widen = f32(byte) / LOD_SPREAD_SCALE;
+    return sqrt(alpha * alpha + widen * widen);
 }
 
 // The radius splat s is drawn with in a frame of baked direct light (splat_select): at its
