@@ -46,9 +46,9 @@ fn the_spread_of_gaussian_slopes_is_their_ward_roughness() {
 }
 
 /// Splats on a flat square spread nothing at any level; splats on a sphere of radius R spread
-/// at every merged level where the disk took others in, by more than nothing and by no more than normals turned by the
-/// merged extent's angle e / R each would (2 % for the small-angle relation, one step of the
-/// byte); and coarser levels, whose disks are larger, spread more.
+/// at every merged level where the disk took others in, by more than nothing and by no more
+/// than normals turned by the merged extent's angle e / R each would (2 % for the small-angle
+/// relation, one step of the byte); and coarser levels, whose disks are larger, spread more.
 #[test]
 fn a_merged_disk_spreads_as_its_surface_curves() {
     let radius = 0.01;
