@@ -15,6 +15,7 @@ use glam::{Vec3, Vec4};
 use kiddo::{ImmutableKdTree, SquaredEuclidean};
 use rayon::prelude::*;
 
+use crate::shared::octahedral::oct_encode;
 use crate::shared::rng::pcg_hash;
 use crate::shared::splat::{LOD_MAX_LEVEL, LOD_SPREAD_SCALE};
 use crate::types::{LOD_LEVELS, LodSpread, Splat, SplatChunk, SplatLod};
@@ -38,7 +39,8 @@ pub fn splat_lods(splats: &[Splat]) -> Vec<SplatLod> {
     merge_tree(splats).0
 }
 
-/// The merge tree of `splats` and their normals' spread at each level, one of each per splat.
+/// The merge tree of `splats` and at each level the normals each disk stands for (their mean
+/// direction and spread), one of each per splat.
 pub fn merge_tree(splats: &[Splat]) -> (Vec<SplatLod>, Vec<LodSpread>) {
     let n = splats.len();
     let centre = |i: u32| Vec3::from(splats[i as usize].center);
@@ -48,7 +50,7 @@ pub fn merge_tree(splats: &[Splat]) -> (Vec<SplatLod>, Vec<LodSpread>) {
     let mut top = vec![0u32; n];
     let mut parent = vec![NONE; n];
     // Filled level by level.
-    let mut spread: Vec<LodSpread> = vec![[0; 2]; n];
+    let mut spread: Vec<LodSpread> = vec![[0; LOD_MAX_LEVEL as usize]; n];
     // Each splat's ancestor at the level last built.
     let mut ancestor: Vec<u32> = (0..n as u32).collect();
     // The splats of the level last built, in priority order.
@@ -85,12 +87,9 @@ pub fn merge_tree(splats: &[Splat]) -> (Vec<SplatLod>, Vec<LodSpread>) {
             let area = s.radius * s.radius;
             normals[position[r as usize] as usize] += (Vec3::from(s.normal) * area).extend(area);
         }
-        let (word, shift) = (((level - 1) / 4) as usize, 8 * ((level - 1) % 4));
         for (&i, sum) in members.iter().zip(&normals) {
             if top[i as usize] == level {
-                let mean = sum.truncate().length() / sum.w;
-                let byte = (normal_spread(mean) * LOD_SPREAD_SCALE).round().min(255.0) as u32;
-                spread[i as usize][word] |= byte << shift;
+                spread[i as usize][level as usize - 1] = spread_word(sum.truncate(), sum.w);
             }
         }
         members.retain(|&i| top[i as usize] == level);
@@ -125,6 +124,17 @@ pub fn normal_spread(mean_length: f32) -> f32 {
     (2.0 * (1.0 - m) / m).sqrt()
 }
 
+/// A level's word of `LodSpread` for normals whose area-weighted sum is `sum` over the area
+/// `area`: the spread's byte, and above it the sum's direction in 24 bits.
+fn spread_word(sum: Vec3, area: f32) -> u32 {
+    let byte = (normal_spread(sum.length() / area) * LOD_SPREAD_SCALE)
+        .round()
+        .min(255.0) as u32;
+    let code = oct_encode(sum.normalize_or(Vec3::Z));
+    let (x, y) = ((code & 0xffff) >> 4, code >> 20);
+    byte | (x << 8) | (y << 20)
+}
+
 /// Splats a chunk holds: a frame's selection visits the chunks, and within a chunk it visits,
 /// the levels its bounds cannot rule out (`shared::splat::chunk_visits`). 256 keeps the
 /// chunks' records under 0.5 byte a splat, and one invocation's walk of a chunk short.
@@ -137,7 +147,8 @@ pub struct LodTree {
     /// Per splat, its place in the merge tree (in the splats' order); without one, a single
     /// stand-in record (level 0, no parent) for every splat, as the device binds it.
     pub lods: Vec<SplatLod>,
-    /// Per splat, its normals' spread at each merged level (`merge_tree`); a stand-in likewise.
+    /// Per splat, its merged normals at each level (`merge_tree`): their mean and spread; a
+    /// stand-in likewise.
     pub spreads: Vec<LodSpread>,
     /// The splats chunk by chunk, each chunk's sorted by top level.
     pub order: Vec<u32>,
@@ -161,7 +172,7 @@ impl LodTree {
         LodTree::chunked(
             splats,
             false,
-            (vec![SplatLod::default()], vec![[0; 2]]),
+            (vec![SplatLod::default()], vec![[0; LOD_MAX_LEVEL as usize]]),
             morton_order(splats),
         )
     }

@@ -132,12 +132,13 @@ pub struct SplatLod {
     pub parent_gap: f32,
 }
 
-/// How far the normals of the splats merged into a splat's disk spread, per level 1 to 5 of
-/// the merge tree, as the Ward roughness a glossy disk is shaded with beyond its own
-/// (`lod::normal_spread`, `shared::splat::lod_roughness`): a byte a level, levels 1–4 in the
-/// first word from its lowest byte, level 5 in the second's lowest, in units of
-/// `1 / LOD_SPREAD_SCALE`. Apart from `SplatLod`: only the shading of glossy disks reads it.
-pub type LodSpread = [u32; 2];
+/// The normals of the splats merged into a splat's disk, per level 1 to 5 of the merge tree,
+/// as a glossy disk is shaded there (`shared::splat::lod_roughness`, `lod_normal`): a word a
+/// level, its lowest byte how far they spread as Ward roughness beyond the splat's own
+/// (`lod::normal_spread`, in units of `1 / LOD_SPREAD_SCALE`), its upper 24 bits their mean
+/// direction (the octahedral code's two snorm16 cut to 12 bits each). Apart from `SplatLod`:
+/// only the shading of glossy disks reads it.
+pub type LodSpread = [u32; 5];
 
 /// Levels of the merge tree, the splats' own included (0 to `LOD_MAX_LEVEL`).
 pub const LOD_LEVELS: usize = 6;

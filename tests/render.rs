@@ -127,7 +127,7 @@ fn level_of_detail_matches_the_mirror_and_thins() {
 /// spread above nothing.
 #[test]
 fn merged_glossy_disks_match_the_mirror() {
-    use lobelight::shared::splat::{lod_level, lod_radius, lod_roughness};
+    use lobelight::shared::splat::{lod_level, lod_radius, lod_roughness, lod_word};
     let gpu = common::gpu();
     let (scene, grid, lobes) = baked_scene("scenes/cornell_spheres.toml", 50_000);
     let (lods, spreads) = lobelight::lod::merge_tree(&scene.splats);
@@ -140,7 +140,7 @@ fn merged_glossy_disks_match_the_mirror() {
                 let level = lod_level(&cam, s, lod);
                 scene.materials[s.material as usize].is_glossy()
                     && lod_radius(&cam, s, lod) > 0.0
-                    && lod_roughness(0.0, &spreads[i], level) > 0.0
+                    && lod_roughness(0.0, lod_word(&spreads[i], level)) > 0.0
             })
             .count();
         assert!(widened >= 200, "{widened} widened");

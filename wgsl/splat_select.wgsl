@@ -2,7 +2,8 @@
 // the level of detail's tree: one invocation a chunk of splats near one another, which visits
 // the levels of its splats that chunk_visits cannot rule out (none outside the view), so that
 // the frame's work follows what it draws rather than the scene. For each splat it visits it
-// writes the radius it is drawn with (drawn_radius; 0: not drawn); per chunk, its count of drawn
+// writes the radius it is drawn with (drawn_radius; 0: not drawn) and the word of its merged
+// normals at that level (LodSpread; 0 at its own); per chunk, its count of drawn
 // splats and the levels it visited, for splat_list, which lists them for splat_shade and the
 // raster passes. Entries not visited keep an earlier frame's radius: nothing reads them. One
 // invocation, not a workgroup, a chunk: a chunk holds a few hundred visited entries at most,
@@ -28,6 +29,12 @@
 @group(0) @binding(6) var<storage, read> order: array<u32>;
 // Per chunk, the levels it visited (bit t: its splats whose top level is t).
 @group(0) @binding(7) var<storage, read_write> visits: array<u32>;
+// The merge tree's words of merged normals (LodSpread: LOD_MAX_LEVEL a splat), and per splat
+// the word of the level it is drawn at (0 at its own), which splat_shade shades glossy disks by.
+// #paged
+@group(0) @binding(8) var<storage, read> lod_spreads: array<u32>;
+// #paged
+@group(0) @binding(9) var<storage, read_write> drawn_normals: array<u32>;
 
 const WG: u32 = 64u;
 
@@ -47,9 +54,17 @@ fn main(@builtin(workgroup_id) wg: vec3<u32>, @builtin(num_workgroups) num_wg: v
         if (visited >> t & 1u) != 0u {
             for (var e = start; e < end; e++) {
                 let i = order_at(ch.first + e);
-                let r = drawn_radius(cam, splats_at(i), lods_at(i));
+                let s = splats_at(i);
+                let lod = lods_at(i);
+                let r = drawn_radius(cam, s, lod);
                 count += select(0u, 1u, r > 0.0);
                 drawn_put(i, r);
+                let level = lod_level(cam, s, lod);
+                var word = 0u;
+                if level > 0u {
+                    word = lod_spreads_at(LOD_MAX_LEVEL * i + level - 1u);
+                }
+                drawn_normals_put(i, word);
             }
         }
         start = end;

@@ -6,8 +6,9 @@
 // takes 11 ms. The view direction varies across a disk by its angular size alone.
 // Splats not listed (turned away, outside the view, left out by the level of detail) are not
 // drawn: their slots keep what they held. A glossy splat drawn as a merged disk is shaded with
-// its lobe widened by the spread of the normals the disk stands for (lod_roughness): one
-// normal's sharp highlight over a disk of several splats' surface mottled curved models.
+// the mean of the normals the disk stands for and its lobe widened by their spread (lod_normal,
+// lod_roughness): one normal's sharp highlight over a disk of several splats' surface mottled
+// curved models.
 // Twin: src/cpu/splat_shade.rs.
 
 // #import dispatch
@@ -23,12 +24,9 @@
 @group(0) @binding(11) var<storage, read> selected_count: array<u32>;
 // #paged
 @group(0) @binding(12) var<storage, read> selected: array<u32>;
-// The level of detail's merge tree and its normals' spread (read only with it on; stand-ins
-// before it is built).
+// splat_select's word of each drawn splat's merged normals (LodSpread; 0 at its own level).
 // #paged
-@group(0) @binding(13) var<storage, read> lods: array<SplatLod>;
-// #paged
-@group(0) @binding(14) var<storage, read> lod_spreads: array<vec2<u32>>;
+@group(0) @binding(13) var<storage, read> drawn_normals: array<u32>;
 
 const WG: u32 = 64u;
 
@@ -43,9 +41,12 @@ fn main(@builtin(workgroup_id) wg: vec3<u32>, @builtin(num_workgroups) num_wg: v
     let s = splats_at(i);
     let wo = normalize(cam.eye - s.center);
     var m = materials[s.material];
-    if cam.lod > 0.0 && m.roughness >= MIN_ALPHA {
-        let level = lod_level(cam, s, lods_at(i));
-        m.roughness = lod_roughness(m.roughness, lod_spreads_at(i), level);
+    var s_shaded = s;
+    let word = drawn_normals_at(i);
+    if word != 0u && m.roughness >= MIN_ALPHA {
+        m.roughness = lod_roughness(m.roughness, word);
+        s_shaded.normal = lod_normal(word, s.normal);
     }
-    shaded_put(i, vec4<f32>(indirect(i, s, m, wo) + baked_direct(i, s, m, s.center, wo), 0.0));
+    let l = indirect(i, s_shaded, m, wo) + baked_direct(i, s_shaded, m, s.center, wo);
+    shaded_put(i, vec4<f32>(l, 0.0));
 }

@@ -102,13 +102,12 @@ pub fn cpu_frame_into(
                 true => crate::lod::LodTree::build(&scene.splats),
                 false => crate::lod::LodTree::flat(&scene.splats),
             };
-            let selection = cpu::splat_select::selection(cam, &scene.splats, &tree);
-            Some((selection, tree))
+            Some(cpu::splat_select::selection(cam, &scene.splats, &tree))
         }
         false => None,
     };
     let drawn = match (&selection, cam.lod > 0.0) {
-        (Some((sel, _)), true) => {
+        (Some(sel), true) => {
             std::borrow::Cow::Owned(cpu::splat_select::drawn_splats(&scene.splats, &sel.drawn))
         }
         _ => std::borrow::Cow::Borrowed(&scene.splats[..]),
@@ -129,9 +128,9 @@ pub fn cpu_frame_into(
         },
     };
     let shaded = match &selection {
-        Some((sel, tree)) => {
+        Some(sel) => {
             let (splats, materials) = (&scene.splats, &scene.materials);
-            let listed = (&sel.selected[..], tree);
+            let listed = (&sel.selected[..], &sel.normals[..]);
             cpu::splat_shade::splat_shade(cam, splats, materials, &shading, listed)
         }
         None => Vec::new(),

@@ -1,12 +1,12 @@
 //! Mirror of `wgsl/splat_select.wgsl`: chunk by chunk of the level of detail's tree, the radius
 //! each splat of the levels the chunk visits is drawn with in a frame of baked direct light
-//! (`drawn_radius`; 0: not drawn), each chunk's count of drawn splats and the levels it
-//! visited. `selection` adds `splat_list` for the list.
+//! (`drawn_radius`; 0: not drawn) and the word of its merged normals there, each chunk's count
+//! of drawn splats and the levels it visited. `selection` adds `splat_list` for the list.
 
 use rayon::prelude::*;
 
 use crate::lod::{LodTree, visited};
-use crate::shared::splat::{chunk_visits, drawn_radius};
+use crate::shared::splat::{chunk_visits, drawn_radius, lod_level, lod_word};
 use crate::types::{Camera, Splat};
 
 pub const WG: u32 = 64;
@@ -15,12 +15,18 @@ pub const WG: u32 = 64;
 /// chunk did not visit it), and per chunk its count of drawn splats and the levels it visited.
 pub struct Selected {
     pub drawn: Vec<f32>,
+    /// Per splat, the word of its merged normals at the level it is drawn at (`LodSpread`; 0
+    /// at its own level or where not visited).
+    pub normals: Vec<u32>,
     pub counts: Vec<u32>,
     pub visits: Vec<u32>,
 }
 
+/// A visited splat: its index, drawn radius and word of merged normals.
+type Visited = (u32, f32, u32);
+
 pub fn splat_select(cam: &Camera, splats: &[Splat], tree: &LodTree) -> Selected {
-    let per_chunk: Vec<(u32, Vec<(u32, f32)>)> = tree
+    let per_chunk: Vec<(u32, Vec<Visited>)> = tree
         .chunks
         .par_iter()
         .map(|ch| {
@@ -28,24 +34,29 @@ pub fn splat_select(cam: &Camera, splats: &[Splat], tree: &LodTree) -> Selected 
             let radii = visited(ch, visits)
                 .map(|e| {
                     let i = tree.order[e as usize];
-                    (i, drawn_radius(cam, &splats[i as usize], tree.lod(i)))
+                    let (s, lod) = (&splats[i as usize], tree.lod(i));
+                    let word = lod_word(tree.spread(i), lod_level(cam, s, lod));
+                    (i, drawn_radius(cam, s, lod), word)
                 })
                 .collect();
             (visits, radii)
         })
         .collect();
     let mut drawn = vec![0.0; splats.len()];
+    let mut normals = vec![0; splats.len()];
     let mut counts = Vec::with_capacity(per_chunk.len());
     let mut visits = Vec::with_capacity(per_chunk.len());
     for (v, radii) in per_chunk {
-        counts.push(radii.iter().filter(|(_, r)| *r > 0.0).count() as u32);
+        counts.push(radii.iter().filter(|(_, r, _)| *r > 0.0).count() as u32);
         visits.push(v);
-        for (i, r) in radii {
+        for (i, r, word) in radii {
             drawn[i as usize] = r;
+            normals[i as usize] = word;
         }
     }
     Selected {
         drawn,
+        normals,
         counts,
         visits,
     }
@@ -56,6 +67,8 @@ pub fn splat_select(cam: &Camera, splats: &[Splat], tree: &LodTree) -> Selected 
 pub struct Selection {
     pub selected: Vec<u32>,
     pub drawn: Vec<f32>,
+    /// `Selected::normals`.
+    pub normals: Vec<u32>,
 }
 
 /// `splat_select`, the scan of its counts and `splat_list`, as the device runs them.
@@ -74,6 +87,7 @@ pub fn selection(cam: &Camera, splats: &[Splat], tree: &LodTree) -> Selection {
     Selection {
         selected,
         drawn: chosen.drawn,
+        normals: chosen.normals,
     }
 }
 

@@ -1,15 +1,15 @@
 //! Mirror of `wgsl/splat_shade.wgsl`: per splat `splat_select` listed, the radiance it sends
 //! towards the eye from its centre by its indirect and baked direct light; 0 for the others
 //! (the device leaves their slots as they were; nothing draws them). A glossy splat drawn as a
-//! merged disk is shaded with its lobe widened by the spread of the normals it stands for.
+//! merged disk is shaded with the mean of the normals it stands for, its lobe widened by their
+//! spread.
 
 use glam::Vec3;
 use rayon::prelude::*;
 
 use super::splat_shading::Shading;
-use crate::lod::LodTree;
 use crate::shared::lights::MIN_ALPHA;
-use crate::shared::splat::{lod_level, lod_roughness};
+use crate::shared::splat::{lod_normal, lod_roughness};
 use crate::types::{Camera, Material, Splat};
 
 pub const WG: u32 = 64;
@@ -19,7 +19,7 @@ pub fn splat_shade(
     splats: &[Splat],
     materials: &[Material],
     shading: &Shading,
-    (selected, tree): (&[u32], &LodTree),
+    (selected, normals): (&[u32], &[u32]),
 ) -> Vec<[f32; 4]> {
     let eye = Vec3::from(cam.eye);
     let shade = |&i: &u32| {
@@ -27,10 +27,13 @@ pub fn splat_shade(
         let centre = Vec3::from(s.center);
         let wo = (eye - centre).normalize();
         let mut m = materials[s.material as usize];
-        if cam.lod > 0.0 && m.roughness >= MIN_ALPHA {
-            let level = lod_level(cam, s, tree.lod(i));
-            m.roughness = lod_roughness(m.roughness, tree.spread(i), level);
+        let mut shaded = *s;
+        let word = normals[i as usize];
+        if word != 0 && m.roughness >= MIN_ALPHA {
+            m.roughness = lod_roughness(m.roughness, word);
+            shaded.normal = lod_normal(word, Vec3::from(s.normal)).to_array();
         }
+        let s = &shaded;
         let l = shading.indirect(i, s, &m, wo) + shading.baked_direct(i, s, &m, centre, wo);
         (i, l.extend(0.0).to_array())
     };

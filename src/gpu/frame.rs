@@ -90,6 +90,8 @@ pub struct SceneBuffers<'a> {
     /// splats' chunks without it; and the radius it chose for each splat this frame.
     pub tree: Option<&'a TreeBuffers>,
     pub drawn: &'a wgpu::Buffer,
+    /// Per splat, the word of its merged normals at the level it is drawn at (`LodSpread`).
+    pub drawn_normals: &'a wgpu::Buffer,
 }
 
 /// A `lod::LodTree` on the device.
@@ -201,6 +203,7 @@ pub struct FrameScene {
     pub tree: OnceLock<TreeBuffers>,
     pub flat: OnceLock<TreeBuffers>,
     pub drawn: wgpu::Buffer,
+    pub drawn_normals: wgpu::Buffer,
 }
 
 impl FrameScene {
@@ -231,6 +234,7 @@ impl FrameScene {
             tree: OnceLock::new(),
             flat: OnceLock::new(),
             drawn: gpu.storage_zeroed("drawn radii", splats * 4)?,
+            drawn_normals: gpu.storage_zeroed("drawn merged normals", splats * 4)?,
         })
     }
 
@@ -279,6 +283,7 @@ impl FrameScene {
             draw_args: &self.draw_args,
             tree: if merged { &self.tree } else { &self.flat }.get(),
             drawn: &self.drawn,
+            drawn_normals: &self.drawn_normals,
         }
     }
 }
@@ -877,6 +882,8 @@ impl SplatPipelines {
             &tree.chunks,
             &tree.order,
             scene.visits,
+            &tree.spreads,
+            scene.drawn_normals,
         ];
         // One invocation a chunk, in both passes.
         let chunks = scene.splat_count.div_ceil(crate::lod::CHUNK as u32);
@@ -906,14 +913,12 @@ impl SplatPipelines {
         uniforms: &Uniforms,
     ) -> Result<()> {
         let stage = Stage::SplatShade;
-        let tree = frame_tree(scene, uniforms)?;
         let mut buffers = scene.shading(&uniforms.cam, &uniforms.params).to_vec();
         buffers.extend([
             scene.shaded,
             scene.selected_count,
             scene.selected,
-            &tree.lods,
-            &tree.spreads,
+            scene.drawn_normals,
         ]);
         if self.indirect {
             // As many workgroups as the list needs (`splat_list` wrote them), not the scene.

@@ -95,18 +95,31 @@ fn lod_depth(cam: &Camera, s: &Splat) -> f32 {
 /// `LodSpread`'s unit: a byte of 255 is this much Ward roughness.
 pub const LOD_SPREAD_SCALE: f32 = 255.0;
 
-/// The Ward roughness a glossy splat of roughness `alpha` and normal spread `spread_bytes` is
-/// shaded with where it is drawn at `level` of the merge tree: its own, widened by the spread of
-/// the normals its disk stands for there (`lod::normal_spread`), as the slopes' variances add.
-/// At level 0, its own.
-pub fn lod_roughness(alpha: f32, spread_bytes: &LodSpread, level: u32) -> f32 {
-    if level == 0 {
-        return alpha;
+/// The word of `spread` for `level` of the merge tree (`LodSpread`); 0 at level 0, the splat
+/// itself.
+pub fn lod_word(spread: &LodSpread, level: u32) -> u32 {
+    match level {
+        0 => 0,
+        k => spread[k as usize - 1],
     }
-    let k = level - 1;
-    let byte = (spread_bytes[(k / 4) as usize] >> (8 * (k % 4))) & 0xff;
-    let widen = byte as f32 / LOD_SPREAD_SCALE;
+}
+
+/// The Ward roughness a glossy splat of roughness `alpha` is shaded with where it is drawn at
+/// the level whose word is `word` (`lod_word`): its own, widened by the spread of the normals
+/// its disk stands for there (`lod::normal_spread`), as the slopes' variances add.
+pub fn lod_roughness(alpha: f32, word: u32) -> f32 {
+    let widen = (word & 0xff) as f32 / LOD_SPREAD_SCALE;
     (alpha * alpha + widen * widen).sqrt()
+}
+
+/// The normal a glossy splat of normal `own` is shaded with at the level whose word is `word`:
+/// the mean direction of the normals its disk stands for, where they spread; else its own.
+pub fn lod_normal(word: u32, own: Vec3) -> Vec3 {
+    if word & 0xff == 0 {
+        return own;
+    }
+    let (x, y) = (((word >> 8) & 0xfff) << 4, (word >> 20) << 4);
+    super::octahedral::oct_decode(x | (y << 16))
 }
 
 /// Whether a disk of radius `extent` at `depth` projects within the level of detail.

@@ -151,22 +151,29 @@ fn lod_level(cam: Camera, s: Splat, lod: SplatLod) -> u32 {
     return level;
 }
 
-// The unit of a splat's normal spread (LodSpread in src/types.rs: a byte a level 1 to 5, levels
-// 1-4 in x from its lowest byte, level 5 in y's): a byte of 255 is this much Ward roughness.
+// The unit of the spread in a level's word of a splat's merged normals (LodSpread in
+// src/types.rs: a word a level 1 to 5, its lowest byte the spread, its upper 24 bits the mean
+// direction, the octahedral code's two snorm16 cut to 12 bits): a byte of 255 is this much Ward
+// roughness.
 const LOD_SPREAD_SCALE: f32 = 255.0;
 
-// The Ward roughness a glossy splat of roughness alpha and normal spread `spread_bytes` is
-// shaded with where it is drawn at `level` of the merge tree: its own, widened by the spread of
-// the normals its disk stands for there (src/lod.rs, normal_spread), as the slopes' variances
-// add. At level 0, its own.
-fn lod_roughness(alpha: f32, spread_bytes: vec2<u32>, level: u32) -> f32 {
-    if level == 0u {
-        return alpha;
-    }
-    let k = level - 1u;
-    let byte = (spread_bytes[k / 4u] >> (8u * (k % 4u))) & 0xffu;
-    let widen = f32(byte) / LOD_SPREAD_SCALE;
+// The Ward roughness a glossy splat of roughness alpha is shaded with where it is drawn at the
+// level whose word is `word` (0 at level 0): its own, widened by the spread of the normals its
+// disk stands for there (src/lod.rs, normal_spread), as the slopes' variances add.
+fn lod_roughness(alpha: f32, word: u32) -> f32 {
+    let widen = f32(word & 0xffu) / LOD_SPREAD_SCALE;
     return sqrt(alpha * alpha + widen * widen);
+}
+
+// The normal a glossy splat of normal `own` is shaded with at the level whose word is `word`: the
+// mean direction of the normals its disk stands for, where they spread; else its own.
+fn lod_normal(word: u32, own: vec3<f32>) -> vec3<f32> {
+    if (word & 0xffu) == 0u {
+        return own;
+    }
+    let x = ((word >> 8u) & 0xfffu) << 4u;
+    let y = (word >> 20u) << 4u;
+    return oct_decode(x | (y << 16u));
 }
 
 // The radius splat s is drawn with in a frame of baked direct light (splat_select): at its
