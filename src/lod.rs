@@ -15,6 +15,7 @@ use glam::{Vec3, Vec4};
 use kiddo::{ImmutableKdTree, SquaredEuclidean};
 use rayon::prelude::*;
 
+use crate::scene::Scene;
 use crate::shared::octahedral::oct_encode;
 use crate::shared::rng::pcg_hash;
 use crate::shared::splat::{LOD_MAX_LEVEL, LOD_SPREAD_SCALE};
@@ -34,14 +35,11 @@ const MERGE_FACTOR: f32 = 0.86;
 /// order in which a file listed its points.
 const PRIORITY_SALT: u32 = 0x2545_f491;
 
-/// The merge tree of `splats` (see the module's doc); one record per splat, in their order.
-pub fn splat_lods(splats: &[Splat]) -> Vec<SplatLod> {
-    merge_tree(splats).0
-}
-
-/// The merge tree of `splats` and at each level the normals each disk stands for (their mean
-/// direction and spread), one of each per splat.
-pub fn merge_tree(splats: &[Splat]) -> (Vec<SplatLod>, Vec<LodSpread>) {
+/// The merge tree of `splats` (see the module's doc), one record per splat in their order; and
+/// with `normals`, at each level the normals each disk stands for (their mean direction and
+/// spread), one of each per splat, else a single stand-in of zeros: only glossy disks are
+/// shaded by them, and a diffuse scan would carry 20 bytes a splat for nothing.
+pub fn merge_tree(splats: &[Splat], normals: bool) -> (Vec<SplatLod>, Vec<LodSpread>) {
     let n = splats.len();
     let centre = |i: u32| Vec3::from(splats[i as usize].center);
     // extent[i][L]: splat i's disk at level L, for L up to top[i].
@@ -50,7 +48,7 @@ pub fn merge_tree(splats: &[Splat]) -> (Vec<SplatLod>, Vec<LodSpread>) {
     let mut top = vec![0u32; n];
     let mut parent = vec![NONE; n];
     // Filled level by level.
-    let mut spread: Vec<LodSpread> = vec![[0; LOD_MAX_LEVEL as usize]; n];
+    let mut spread: Vec<LodSpread> = vec![[0; LOD_MAX_LEVEL as usize]; if normals { n } else { 1 }];
     // Each splat's ancestor at the level last built.
     let mut ancestor: Vec<u32> = (0..n as u32).collect();
     // The splats of the level last built, in priority order.
@@ -76,7 +74,7 @@ pub fn merge_tree(splats: &[Splat]) -> (Vec<SplatLod>, Vec<LodSpread>) {
         }
         // A kept disk's reach at this level: every splat whose ancestor merged into it; and
         // their normals' sum weighted by their areas (by the kept splat's position).
-        let mut normals = vec![Vec4::ZERO; members.len()];
+        let mut sums = vec![Vec4::ZERO; if normals { members.len() } else { 0 }];
         for j in 0..n {
             let r = rep(ancestor[j]);
             ancestor[j] = r;
@@ -84,10 +82,12 @@ pub fn merge_tree(splats: &[Splat]) -> (Vec<SplatLod>, Vec<LodSpread>) {
             let reach = (Vec3::from(s.center) - centre(r)).length() + s.radius;
             let e = &mut extent[r as usize][level as usize];
             *e = e.max(reach);
-            let area = s.radius * s.radius;
-            normals[position[r as usize] as usize] += (Vec3::from(s.normal) * area).extend(area);
+            if let Some(sum) = sums.get_mut(position[r as usize] as usize) {
+                let area = s.radius * s.radius;
+                *sum += (Vec3::from(s.normal) * area).extend(area);
+            }
         }
-        for (&i, sum) in members.iter().zip(&normals) {
+        for (&i, sum) in members.iter().zip(&sums) {
             if top[i as usize] == level {
                 spread[i as usize][level as usize - 1] = spread_word(sum.truncate(), sum.w);
             }
@@ -147,8 +147,10 @@ pub struct LodTree {
     /// Per splat, its place in the merge tree (in the splats' order); without one, a single
     /// stand-in record (level 0, no parent) for every splat, as the device binds it.
     pub lods: Vec<SplatLod>,
-    /// Per splat, its merged normals at each level (`merge_tree`): their mean and spread; a
-    /// stand-in likewise.
+    /// Whether it holds the merged normals (`merge_tree`); without them, a stand-in.
+    pub normals: bool,
+    /// Per splat, its merged normals at each level: their mean and spread; without them, a
+    /// single stand-in of zeros, as the device binds it.
     pub spreads: Vec<LodSpread>,
     /// The splats chunk by chunk, each chunk's sorted by top level.
     pub order: Vec<u32>,
@@ -156,14 +158,24 @@ pub struct LodTree {
 }
 
 impl LodTree {
-    /// The merge tree of `splats`, and their chunks along a Morton curve of their centres.
-    pub fn build(splats: &[Splat]) -> LodTree {
-        let (lods, spreads) = merge_tree(splats);
+    /// What frames of `scene` select by: with the level of detail on (`merged`), its merge
+    /// tree, with the merged normals where a material is glossy; else its chunks alone.
+    pub fn of_scene(scene: &Scene, merged: bool) -> LodTree {
+        match merged {
+            true => LodTree::build(&scene.splats, scene.has_glossy()),
+            false => LodTree::flat(&scene.splats),
+        }
+    }
+
+    /// The merge tree of `splats`, with its merged normals or not (`merge_tree`), and their
+    /// chunks along a Morton curve of their centres.
+    pub fn build(splats: &[Splat], normals: bool) -> LodTree {
+        let (lods, spreads) = merge_tree(splats, normals);
         let mut order = morton_order(splats);
         for run in order.chunks_mut(CHUNK) {
             run.sort_by_key(|&i| lods[i as usize].top);
         }
-        LodTree::chunked(splats, true, (lods, spreads), order)
+        LodTree::chunked(splats, true, normals, (lods, spreads), order)
     }
 
     /// Without a merge tree (the level of detail off): the chunks alone, each splat at level
@@ -171,6 +183,7 @@ impl LodTree {
     pub fn flat(splats: &[Splat]) -> LodTree {
         LodTree::chunked(
             splats,
+            false,
             false,
             (vec![SplatLod::default()], vec![[0; LOD_MAX_LEVEL as usize]]),
             morton_order(splats),
@@ -182,19 +195,21 @@ impl LodTree {
         &self.lods[if self.merged { i as usize } else { 0 }]
     }
 
-    /// Splat `i`'s normal spread (the stand-in's without a merge tree).
+    /// Splat `i`'s merged normals (the stand-in's without them).
     pub fn spread(&self, i: u32) -> &LodSpread {
-        &self.spreads[if self.merged { i as usize } else { 0 }]
+        &self.spreads[if self.normals { i as usize } else { 0 }]
     }
 
     fn chunked(
         splats: &[Splat],
         merged: bool,
+        normals: bool,
         (lods, spreads): (Vec<SplatLod>, Vec<LodSpread>),
         order: Vec<u32>,
     ) -> LodTree {
         let mut tree = LodTree {
             merged,
+            normals,
             lods,
             spreads,
             order,

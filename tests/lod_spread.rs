@@ -66,7 +66,7 @@ fn a_merged_disk_spreads_as_its_surface_curves() {
             disk(Vec3::new(x * 0.015, y * 0.015, 0.0), Vec3::Z)
         })
         .collect();
-    let (lods, spreads) = merge_tree(&flat);
+    let (lods, spreads) = merge_tree(&flat, true);
     let merged = lods.iter().filter(|l| l.top > 0).count();
     assert!(merged > 100, "{merged} merged");
     for s in &spreads {
@@ -78,7 +78,7 @@ fn a_merged_disk_spreads_as_its_surface_curves() {
         .into_iter()
         .map(|n| disk(n * sphere_radius, n))
         .collect();
-    let (lods, spreads) = merge_tree(&sphere);
+    let (lods, spreads) = merge_tree(&sphere, true);
     let mut means = Vec::new();
     for level in 1..=3u32 {
         let at: Vec<(f32, f32)> = lods

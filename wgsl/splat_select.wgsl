@@ -30,7 +30,8 @@
 // Per chunk, the levels it visited (bit t: its splats whose top level is t).
 @group(0) @binding(7) var<storage, read_write> visits: array<u32>;
 // The merge tree's words of merged normals (LodSpread: LOD_MAX_LEVEL a splat), and per splat
-// the word of the level it is drawn at (0 at its own), which splat_shade shades glossy disks by.
+// the word of the level it is drawn at (0 at its own), which splat_shade shades glossy disks
+// by; stand-ins where the scene has nothing glossy (lod::merge_tree).
 // #paged
 @group(0) @binding(8) var<storage, read> lod_spreads: array<u32>;
 // #paged
@@ -47,6 +48,10 @@ fn main(@builtin(workgroup_id) wg: vec3<u32>, @builtin(num_workgroups) num_wg: v
     }
     let ch = chunks[c];
     let visited = chunk_visits(cam, ch);
+    // The merge tree's merged normals, or a stand-in (one splat's words) where the scene has
+    // nothing glossy or the level of detail is off: then drawn_normals is not written (and may
+    // be a stand-in too). A glossy scene of one splat merges nothing: its words are all 0.
+    let normals = lod_spreads_len() > LOD_MAX_LEVEL;
     var count = 0u;
     var start = 0u;
     for (var t = 0u; t < LOD_LEVELS; t++) {
@@ -56,15 +61,17 @@ fn main(@builtin(workgroup_id) wg: vec3<u32>, @builtin(num_workgroups) num_wg: v
                 let i = order_at(ch.first + e);
                 let s = splats_at(i);
                 let lod = lods_at(i);
-                let r = drawn_radius(cam, s, lod);
+                let level = lod_level(cam, s, lod);
+                let r = drawn_radius(cam, s, lod, level);
                 count += select(0u, 1u, r > 0.0);
                 drawn_put(i, r);
-                let level = lod_level(cam, s, lod);
-                var word = 0u;
-                if level > 0u {
-                    word = lod_spreads_at(LOD_MAX_LEVEL * i + level - 1u);
+                if normals {
+                    var word = 0u;
+                    if level > 0u {
+                        word = lod_spreads_at(LOD_MAX_LEVEL * i + level - 1u);
+                    }
+                    drawn_normals_put(i, word);
                 }
-                drawn_normals_put(i, word);
             }
         }
         start = end;

@@ -24,7 +24,8 @@
 @group(0) @binding(11) var<storage, read> selected_count: array<u32>;
 // #paged
 @group(0) @binding(12) var<storage, read> selected: array<u32>;
-// splat_select's word of each drawn splat's merged normals (LodSpread; 0 at its own level).
+// splat_select's word of each drawn splat's merged normals (LodSpread; 0 at its own level); a
+// stand-in where the scene has nothing glossy.
 // #paged
 @group(0) @binding(13) var<storage, read> drawn_normals: array<u32>;
 
@@ -42,10 +43,15 @@ fn main(@builtin(workgroup_id) wg: vec3<u32>, @builtin(num_workgroups) num_wg: v
     let wo = normalize(cam.eye - s.center);
     var m = materials[s.material];
     var s_shaded = s;
-    let word = drawn_normals_at(i);
-    if word != 0u && m.roughness >= MIN_ALPHA {
-        m.roughness = lod_roughness(m.roughness, word);
-        s_shaded.normal = lod_normal(word, s.normal);
+    // Only where drawn with the level of detail, and only glossy splats: a scene with nothing
+    // glossy binds a stand-in (lod::merge_tree), and frames without it leave the words as an
+    // earlier frame wrote them.
+    if cam.lod > 0.0 && any(m.specular > vec3<f32>(0.0)) && m.roughness >= MIN_ALPHA {
+        let word = drawn_normals_at(i);
+        if word != 0u {
+            m.roughness = lod_roughness(m.roughness, word);
+            s_shaded.normal = lod_normal(word, s.normal);
+        }
     }
     let l = indirect(i, s_shaded, m, wo) + baked_direct(i, s_shaded, m, s.center, wo);
     shaded_put(i, vec4<f32>(l, 0.0));

@@ -98,10 +98,7 @@ pub fn cpu_frame_into(
     let baked = Direct::of_code(params.direct) == Direct::Baked;
     let selection = match baked {
         true => {
-            let tree = match cam.lod > 0.0 {
-                true => crate::lod::LodTree::build(&scene.splats),
-                false => crate::lod::LodTree::flat(&scene.splats),
-            };
+            let tree = crate::lod::LodTree::of_scene(scene, cam.lod > 0.0);
             Some(cpu::splat_select::selection(cam, &scene.splats, &tree))
         }
         false => None,

@@ -16,7 +16,7 @@ pub const WG: u32 = 64;
 pub struct Selected {
     pub drawn: Vec<f32>,
     /// Per splat, the word of its merged normals at the level it is drawn at (`LodSpread`; 0
-    /// at its own level or where not visited).
+    /// at its own level, where not visited or where the tree holds none).
     pub normals: Vec<u32>,
     pub counts: Vec<u32>,
     pub visits: Vec<u32>,
@@ -35,8 +35,13 @@ pub fn splat_select(cam: &Camera, splats: &[Splat], tree: &LodTree) -> Selected 
                 .map(|e| {
                     let i = tree.order[e as usize];
                     let (s, lod) = (&splats[i as usize], tree.lod(i));
-                    let word = lod_word(tree.spread(i), lod_level(cam, s, lod));
-                    (i, drawn_radius(cam, s, lod), word)
+                    let level = lod_level(cam, s, lod);
+                    // Without merged normals, words of 0 (the device writes none; see WGSL).
+                    let word = match tree.normals {
+                        true => lod_word(tree.spread(i), level),
+                        false => 0,
+                    };
+                    (i, drawn_radius(cam, s, lod, level), word)
                 })
                 .collect();
             (visits, radii)

@@ -28,10 +28,13 @@ pub fn splat_shade(
         let wo = (eye - centre).normalize();
         let mut m = materials[s.material as usize];
         let mut shaded = *s;
-        let word = normals[i as usize];
-        if word != 0 && m.roughness >= MIN_ALPHA {
-            m.roughness = lod_roughness(m.roughness, word);
-            shaded.normal = lod_normal(word, Vec3::from(s.normal)).to_array();
+        // Only where drawn with the level of detail, and only glossy splats (see WGSL).
+        if cam.lod > 0.0 && m.is_glossy() && m.roughness >= MIN_ALPHA {
+            let word = normals[i as usize];
+            if word != 0 {
+                m.roughness = lod_roughness(m.roughness, word);
+                shaded.normal = lod_normal(word, Vec3::from(s.normal)).to_array();
+            }
         }
         let s = &shaded;
         let l = shading.indirect(i, s, &m, wo) + shading.baked_direct(i, s, &m, centre, wo);

@@ -135,19 +135,6 @@ impl<'a> SceneBuffers<'a> {
     }
 }
 
-/// The level of detail's tree a frame of baked direct light selects by and shades with: the
-/// merge tree with the level of detail on, the chunks alone with it off.
-fn frame_tree<'a>(scene: &SceneBuffers<'a>, uniforms: &Uniforms) -> Result<&'a TreeBuffers> {
-    match scene.tree {
-        Some(t) if t.merged == (uniforms.camera.lod > 0.0) => Ok(t),
-        _ => Err(Error::Internal(
-            "a frame of baked direct light was drawn before the tree it selects by was built \
-             (FrameScene::ensure_tree)"
-                .into(),
-        )),
-    }
-}
-
 /// The passes of a frame, in order.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub enum SplatPass {
@@ -234,7 +221,11 @@ impl FrameScene {
             tree: OnceLock::new(),
             flat: OnceLock::new(),
             drawn: gpu.storage_zeroed("drawn radii", splats * 4)?,
-            drawn_normals: gpu.storage_zeroed("drawn merged normals", splats * 4)?,
+            // Read for glossy splats alone (`lod::merge_tree`).
+            drawn_normals: gpu.storage_zeroed(
+                "drawn merged normals",
+                if scene.has_glossy() { splats * 4 } else { 4 },
+            )?,
         })
     }
 
@@ -244,14 +235,15 @@ impl FrameScene {
         let slot = if merged { &self.tree } else { &self.flat };
         if slot.get().is_none() {
             let start = std::time::Instant::now();
-            let tree = match merged {
-                true => crate::lod::LodTree::build(&scene.splats),
-                false => crate::lod::LodTree::flat(&scene.splats),
-            };
+            let tree = crate::lod::LodTree::of_scene(scene, merged);
             let ms = crate::timing::ms_since(start);
             log::info!(
                 "level of detail: {} of {} splats in {ms:.0} ms",
-                if merged { "merge tree" } else { "chunks" },
+                match (merged, tree.normals) {
+                    (true, true) => "merge tree and merged normals",
+                    (true, false) => "merge tree",
+                    (false, _) => "chunks",
+                },
                 tree.order.len()
             );
             // Set once: a second caller's tree would be the same.
@@ -872,7 +864,17 @@ impl SplatPipelines {
         scene: &SceneBuffers,
         uniforms: &Uniforms,
     ) -> Result<()> {
-        let tree = frame_tree(scene, uniforms)?;
+        // The merge tree with the level of detail on, the chunks alone with it off.
+        let tree = match scene.tree {
+            Some(t) if t.merged == (uniforms.camera.lod > 0.0) => t,
+            _ => {
+                return Err(Error::Internal(
+                    "a frame of baked direct light was drawn before the tree it selects by was \
+                     built (FrameScene::ensure_tree)"
+                        .into(),
+                ));
+            }
+        };
         let select = [
             &uniforms.cam,
             scene.splats,

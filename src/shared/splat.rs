@@ -47,15 +47,13 @@ pub fn instances(count: u32) -> u32 {
 /// themselves (`lod`); see `wgsl/shared/splat.wgsl`.
 pub const LOD_MAX_LEVEL: u32 = 5;
 
-/// The radius splat `s` is drawn with this frame: its disk at the coarsest of its levels
-/// (`lod`) that projects within `cam.lod` pixels, its own radius with the level of detail off,
-/// or 0 where its parent's disk may project within it too (and then covers it). Products, no
-/// quotient, so that the device and the mirror decide alike.
-pub fn lod_radius(cam: &Camera, s: &Splat, lod: &SplatLod) -> f32 {
+/// The radius splat `s` is drawn with this frame at its `level` (`lod_level`): that level's
+/// disk (`lod`), its own radius with the level of detail off, or 0 where its parent's disk may
+/// project within it too (and then covers it).
+pub fn lod_radius(cam: &Camera, s: &Splat, lod: &SplatLod, level: u32) -> f32 {
     if !(cam.lod > 0.0) {
         return s.radius;
     }
-    let level = lod_level(cam, s, lod);
     // The parent lies at least `parent_gap` nearer: if its disk fits even there, it fits.
     let z = lod_depth(cam, s);
     if level == lod.top
@@ -70,9 +68,8 @@ pub fn lod_radius(cam: &Camera, s: &Splat, lod: &SplatLod) -> f32 {
     }
 }
 
-/// The level of the merge tree splat `s` is drawn at this frame where `lod_radius` draws it:
-/// the coarsest of its levels whose disk projects within `cam.lod` pixels; 0 (its own disk)
-/// with the level of detail off.
+/// The level of the merge tree splat `s` is drawn at this frame: the coarsest of its levels
+/// whose disk projects within `cam.lod` pixels; 0 (its own disk) with the level of detail off.
 pub fn lod_level(cam: &Camera, s: &Splat, lod: &SplatLod) -> u32 {
     if !(cam.lod > 0.0) {
         return 0;
@@ -122,18 +119,19 @@ pub fn lod_normal(word: u32, own: Vec3) -> Vec3 {
     super::octahedral::oct_decode(x | (y << 16))
 }
 
-/// Whether a disk of radius `extent` at `depth` projects within the level of detail.
+/// Whether a disk of radius `extent` at `depth` projects within the level of detail. Products,
+/// no quotient, so that the device and the mirror decide alike.
 pub fn lod_fits(cam: &Camera, extent: f32, depth: f32) -> bool {
     depth > cam.near && extent * cam.size[1] <= cam.lod * 2.0 * cam.tan_y * depth
 }
 
-/// The radius splat `s` is drawn with in a frame of baked direct light (`splat_select`): at
-/// its level of detail where it is on, 0 where it faces away, lies outside the view or its
-/// parent's disk stands in for it.
-pub fn drawn_radius(cam: &Camera, s: &Splat, lod: &SplatLod) -> f32 {
+/// The radius splat `s` is drawn with in a frame of baked direct light (`splat_select`) at
+/// its `level` (`lod_level`): that level's disk where the level of detail is on, 0 where it
+/// faces away, lies outside the view or its parent's disk stands in for it.
+pub fn drawn_radius(cam: &Camera, s: &Splat, lod: &SplatLod, level: u32) -> f32 {
     let mut s = *s;
     if cam.lod > 0.0 {
-        s.radius = lod_radius(cam, &s, lod);
+        s.radius = lod_radius(cam, &s, lod, level);
     }
     match faces_camera(&s, Vec3::from(cam.eye)) && s.radius > 0.0 && in_view(cam, &s) {
         true => s.radius,

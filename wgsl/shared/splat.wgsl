@@ -109,19 +109,19 @@ fn drawn_splat(s: Splat, radius: f32) -> Splat {
     return out;
 }
 
-// The radius splat s is drawn with this frame: its disk at the coarsest of its levels that
-// projects within cam.lod pixels, its own radius with the level of detail off, or 0 where its
-// parent's disk may project within it too (and then covers it). Products, no quotient, so
-// that the device and the mirror decide alike.
+// Whether a disk of radius extent at depth projects within the level of detail. Products, no
+// quotient, so that the device and the mirror decide alike.
 fn lod_fits(cam: Camera, extent: f32, depth: f32) -> bool {
     return depth > cam.near && extent * cam.size.y <= cam.lod * 2.0 * cam.tan_y * depth;
 }
 
-fn lod_radius(cam: Camera, s: Splat, lod: SplatLod) -> f32 {
+// The radius splat s is drawn with this frame at its level (lod_level): that level's disk, its
+// own radius with the level of detail off, or 0 where its parent's disk may project within it
+// too (and then covers it).
+fn lod_radius(cam: Camera, s: Splat, lod: SplatLod, level: u32) -> f32 {
     if !(cam.lod > 0.0) {
         return s.radius;
     }
-    let level = lod_level(cam, s, lod);
     // The parent lies at least parent_gap nearer: if its disk fits even there, it fits.
     let z = dot(s.center - cam.eye, cam.forward);
     if level == lod.top && lod.parent_extent > 0.0
@@ -134,9 +134,8 @@ fn lod_radius(cam: Camera, s: Splat, lod: SplatLod) -> f32 {
     return lod.extent[level - 1u];
 }
 
-// The level of the merge tree splat s is drawn at where lod_radius draws it: the coarsest of
-// its levels whose disk projects within cam.lod pixels; 0 (its own disk) with the level of
-// detail off.
+// The level of the merge tree splat s is drawn at this frame: the coarsest of its levels whose
+// disk projects within cam.lod pixels; 0 (its own disk) with the level of detail off.
 fn lod_level(cam: Camera, s: Splat, lod: SplatLod) -> u32 {
     if !(cam.lod > 0.0) {
         return 0u;
@@ -176,13 +175,13 @@ fn lod_normal(word: u32, own: vec3<f32>) -> vec3<f32> {
     return oct_decode(x | (y << 16u));
 }
 
-// The radius splat s is drawn with in a frame of baked direct light (splat_select): at its
-// level of detail where it is on, 0 where it faces away, lies outside the view or its parent's
-// disk stands in for it.
-fn drawn_radius(cam: Camera, s_in: Splat, lod: SplatLod) -> f32 {
+// The radius splat s is drawn with in a frame of baked direct light (splat_select) at its
+// level (lod_level): that level's disk where the level of detail is on, 0 where it faces away,
+// lies outside the view or its parent's disk stands in for it.
+fn drawn_radius(cam: Camera, s_in: Splat, lod: SplatLod, level: u32) -> f32 {
     var s = s_in;
     if cam.lod > 0.0 {
-        s.radius = lod_radius(cam, s, lod);
+        s.radius = lod_radius(cam, s, lod, level);
     }
     let shown = faces_camera(s, cam.eye) && s.radius > 0.0 && in_view(cam, s);
     return select(0.0, s.radius, shown);
