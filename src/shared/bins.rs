@@ -108,18 +108,21 @@ pub fn bin_axis_gap(i: u32, q: f32, dim: u32) -> f32 {
 /// `bin_row`'s. One index and no distance: a search whose rows are mostly empty (a flat scan
 /// in a box of 9 × 9 rows) tests emptiness here before trimming.
 pub fn bin_row_untrimmed(bx: &BinBox, row: u32, b: &BinParams) -> UVec2 {
-    let y = bx.lo.y + row % bx.size.y;
-    let z = bx.lo.z + row / bx.size.y;
+    let (y, z) = bin_row_cell(bx, row);
     let first = bin_index(UVec3::new(bx.lo.x, y, z), b);
     let per_cell = lists_per_cell(b);
     UVec2::new(first * per_cell, (first + bx.size.x) * per_cell)
 }
 
+/// The y and z cell of row `row` of the box (rows run along x, y fastest).
+fn bin_row_cell(bx: &BinBox, row: u32) -> (u32, u32) {
+    (bx.lo.y + row % bx.size.y, bx.lo.z + row / bx.size.y)
+}
+
 /// Row `row` of the box: the lists [x, y) of its cells, trimmed at both ends to the cells
 /// within reach (the rest is contiguous: the ball is convex); possibly empty.
 pub fn bin_row(bx: &BinBox, row: u32, b: &BinParams) -> UVec2 {
-    let y = bx.lo.y + row % bx.size.y;
-    let z = bx.lo.z + row / bx.size.y;
+    let (y, z) = bin_row_cell(bx, row);
     let gy = bin_axis_gap(y, bx.center.y, b.dims[1]);
     let gz = bin_axis_gap(z, bx.center.z, b.dims[2]);
     let left = bx.reach2 - gy * gy - gz * gz;
@@ -135,10 +138,10 @@ pub fn bin_row(bx: &BinBox, row: u32, b: &BinParams) -> UVec2 {
     while x1 > x0 && !within(x1 - 1) {
         x1 -= 1;
     }
-    let first = bin_index(UVec3::new(bx.lo.x, y, z), b);
+    let all = bin_row_untrimmed(bx, row, b);
     let per_cell = lists_per_cell(b);
     UVec2::new(
-        (first + x0 - bx.lo.x) * per_cell,
-        (first + x1 - bx.lo.x) * per_cell,
+        all.x + (x0 - bx.lo.x) * per_cell,
+        all.x + (x1 - bx.lo.x) * per_cell,
     )
 }

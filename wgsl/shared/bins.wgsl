@@ -94,18 +94,21 @@ fn bin_axis_gap(i: u32, q: f32, dim: u32) -> f32 {
 // Row `row` of the box untrimmed: the lists of all its cells, a superset of bin_row's, with no
 // distance (a search whose rows are mostly empty tests emptiness here before trimming).
 fn bin_row_untrimmed(box: BinBox, row: u32, b: BinParams) -> vec2<u32> {
-    let y = box.lo.y + row % box.size.y;
-    let z = box.lo.z + row / box.size.y;
-    let first = bin_index(vec3<u32>(box.lo.x, y, z), b);
+    let yz = bin_row_cell(box, row);
+    let first = bin_index(vec3<u32>(box.lo.x, yz.x, yz.y), b);
     let per_cell = lists_per_cell(b);
     return vec2<u32>(first * per_cell, (first + box.size.x) * per_cell);
 }
 
+// The y and z cell of row `row` of the box (rows run along x, y fastest).
+fn bin_row_cell(box: BinBox, row: u32) -> vec2<u32> {
+    return vec2<u32>(box.lo.y + row % box.size.y, box.lo.z + row / box.size.y);
+}
+
 fn bin_row(box: BinBox, row: u32, b: BinParams) -> vec2<u32> {
-    let y = box.lo.y + row % box.size.y;
-    let z = box.lo.z + row / box.size.y;
-    let gy = bin_axis_gap(y, box.center.y, b.dims.y);
-    let gz = bin_axis_gap(z, box.center.z, b.dims.z);
+    let yz = bin_row_cell(box, row);
+    let gy = bin_axis_gap(yz.x, box.center.y, b.dims.y);
+    let gz = bin_axis_gap(yz.y, box.center.z, b.dims.z);
     let left = box.reach2 - gy * gy - gz * gz;
     var x0 = box.lo.x;
     var x1 = box.lo.x + box.size.x;
@@ -122,7 +125,7 @@ fn bin_row(box: BinBox, row: u32, b: BinParams) -> vec2<u32> {
             break;
         }
     }
-    let first = bin_index(vec3<u32>(box.lo.x, y, z), b);
+    let all = bin_row_untrimmed(box, row, b);
     let per_cell = lists_per_cell(b);
-    return vec2<u32>((first + x0 - box.lo.x) * per_cell, (first + x1 - box.lo.x) * per_cell);
+    return vec2<u32>(all.x + (x0 - box.lo.x) * per_cell, all.x + (x1 - box.lo.x) * per_cell);
 }
