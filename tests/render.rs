@@ -81,6 +81,24 @@ fn cpu_hdr(
     .unwrap()
 }
 
+/// The frame of `view` drawn on the device and on the mirror agrees within the parity
+/// tolerances (`label` names it in the log); returns the mirror's.
+fn frames_agree(
+    gpu: &Gpu,
+    (scene, grid, lobes): (&Scene, &SplatGrid, &LobeMap),
+    view: &View,
+    cfg: &FrameConfig,
+    label: &str,
+) -> Vec<[f32; 4]> {
+    let a = gpu_frame(gpu, scene, lobes, view, cfg);
+    let b = cpu_hdr(scene, grid, lobes, view, cfg);
+    let d = difference(&a, &b).unwrap();
+    eprintln!("{label} {}x{}: {d:?}", view.width, view.height);
+    assert!(d.mean_relative <= MEAN_RELATIVE, "{label}: {d:?}");
+    assert!(d.within_5_percent >= WITHIN_5_PERCENT, "{label}: {d:?}");
+    b
+}
+
 /// Moving frames by the raster passes with merged disks of up to 2 pixels.
 fn merged_raster() -> FrameConfig {
     FrameConfig {
@@ -110,12 +128,7 @@ fn level_of_detail_matches_the_mirror_and_thins() {
             })
             .count();
         assert!(left_out >= 1000, "{left_out} left out");
-        let a = gpu_frame(&gpu, &scene, &lobes, &view, &cfg);
-        let b = cpu_hdr(&scene, &grid, &lobes, &view, &cfg);
-        let d = difference(&a, &b).unwrap();
-        eprintln!("lod {}x{}: {d:?}", view.width, view.height);
-        assert!(d.mean_relative <= MEAN_RELATIVE, "{d:?}");
-        assert!(d.within_5_percent >= WITHIN_5_PERCENT, "{d:?}");
+        let b = frames_agree(&gpu, (&scene, &grid, &lobes), &view, &cfg, "lod");
         let full = FrameConfig { lod: 0.0, ..cfg };
         let e = difference(&b, &cpu_hdr(&scene, &grid, &lobes, &view, &full)).unwrap();
         eprintln!("against every splat: {e:?}");
@@ -147,12 +160,8 @@ fn merged_glossy_disks_match_the_mirror() {
             })
             .count();
         assert!(widened >= 200, "{widened} widened");
-        let a = gpu_frame(&gpu, &scene, &lobes, &view, &cfg);
-        let b = cpu_hdr(&scene, &grid, &lobes, &view, &cfg);
-        let d = difference(&a, &b).unwrap();
-        eprintln!("{widened} widened, {}x{}: {d:?}", view.width, view.height);
-        assert!(d.mean_relative <= MEAN_RELATIVE, "{d:?}");
-        assert!(d.within_5_percent >= WITHIN_5_PERCENT, "{d:?}");
+        let label = format!("{widened} widened,");
+        frames_agree(&gpu, (&scene, &grid, &lobes), &view, &cfg, &label);
     }
 }
 
@@ -176,12 +185,13 @@ fn a_diffuse_scene_merges_without_normals() {
     assert!(tree.normals && tree.spreads.len() == glossy.splats.len());
     let cfg = merged_raster();
     for view in views(&scene, 96) {
-        let a = gpu_frame(&gpu, &scene, &lobes, &view, &cfg);
-        let b = cpu_hdr(&scene, &grid, &lobes, &view, &cfg);
-        let d = difference(&a, &b).unwrap();
-        eprintln!("diffuse, merged, {}x{}: {d:?}", view.width, view.height);
-        assert!(d.mean_relative <= MEAN_RELATIVE, "{d:?}");
-        assert!(d.within_5_percent >= WITHIN_5_PERCENT, "{d:?}");
+        frames_agree(
+            &gpu,
+            (&scene, &grid, &lobes),
+            &view,
+            &cfg,
+            "diffuse, merged,",
+        );
     }
 }
 
@@ -250,15 +260,8 @@ fn splat_passes_match_the_cpu_mirror() {
             ..FrameConfig::default()
         };
         for view in views(&scene, 96) {
-            let a = gpu_frame(&gpu, &scene, &lobes, &view, &cfg);
-            let b = cpu_hdr(&scene, &grid, &lobes, &view, &cfg);
-            let d = difference(&a, &b).unwrap();
-            eprintln!(
-                "{direct:?} {splatter:?} {}x{}: {d:?}",
-                view.width, view.height
-            );
-            assert!(d.mean_relative <= MEAN_RELATIVE, "{d:?}");
-            assert!(d.within_5_percent >= WITHIN_5_PERCENT, "{d:?}");
+            let label = format!("{direct:?} {splatter:?}");
+            let b = frames_agree(&gpu, (&scene, &grid, &lobes), &view, &cfg, &label);
             let lit = b.iter().filter(|p| p[0] + p[1] + p[2] > 0.0).count();
             assert!(lit > b.len() / 2, "most of the image shows the box");
         }

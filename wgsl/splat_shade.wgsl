@@ -46,7 +46,7 @@ fn main(@builtin(workgroup_id) wg: vec3<u32>, @builtin(num_workgroups) num_wg: v
     // Only where drawn with the level of detail, and only glossy splats: a scene with nothing
     // glossy binds a stand-in (lod::merge_tree), and frames without it leave the words as an
     // earlier frame wrote them.
-    if cam.lod > 0.0 && any(m.specular > vec3<f32>(0.0)) && m.roughness >= MIN_ALPHA {
+    if cam.lod > 0.0 && glossy_lobe(m) {
         let word = drawn_normals_at(i);
         if word != 0u {
             m.roughness = lod_roughness(m.roughness, word);

@@ -36,11 +36,9 @@ pub fn splat_select(cam: &Camera, splats: &[Splat], tree: &LodTree) -> Selected 
                     let i = tree.order[e as usize];
                     let (s, lod) = (&splats[i as usize], tree.lod(i));
                     let level = lod_level(cam, s, lod);
-                    // Without merged normals, words of 0 (the device writes none; see WGSL).
-                    let word = match tree.normals {
-                        true => lod_word(tree.spread(i), level),
-                        false => 0,
-                    };
+                    // Without merged normals the stand-in's words are 0 (the device, which
+                    // cannot index the stand-in per splat, writes none; see WGSL).
+                    let word = lod_word(tree.spread(i), level);
                     (i, drawn_radius(cam, s, lod, level), word)
                 })
                 .collect();

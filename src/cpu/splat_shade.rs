@@ -7,8 +7,7 @@
 use glam::Vec3;
 use rayon::prelude::*;
 
-use super::splat_shading::Shading;
-use crate::shared::lights::MIN_ALPHA;
+use super::splat_shading::{Shading, glossy_lobe};
 use crate::shared::splat::{lod_normal, lod_roughness};
 use crate::types::{Camera, Material, Splat};
 
@@ -29,7 +28,7 @@ pub fn splat_shade(
         let mut m = materials[s.material as usize];
         let mut shaded = *s;
         // Only where drawn with the level of detail, and only glossy splats (see WGSL).
-        if cam.lod > 0.0 && m.is_glossy() && m.roughness >= MIN_ALPHA {
+        if cam.lod > 0.0 && glossy_lobe(&m) {
             let word = normals[i as usize];
             if word != 0 {
                 m.roughness = lod_roughness(m.roughness, word);

@@ -81,8 +81,7 @@ impl Shading<'_> {
             out = Vec3::from(s.diffuse) * (Vec4::from(baked.direct[i as usize]).truncate() / PI);
         }
         let specular = Vec3::from(m.specular);
-        let glossy = m.roughness >= MIN_ALPHA && specular.cmpgt(Vec3::ZERO).any();
-        if params.show & SHOW_DIRECT_SPECULAR == 0 || !glossy {
+        if params.show & SHOW_DIRECT_SPECULAR == 0 || !glossy_lobe(m) {
             return out;
         }
         let normal = Vec3::from(s.normal);
@@ -109,6 +108,12 @@ impl Shading<'_> {
         }
         out + specular * spec
     }
+}
+
+/// Whether material `m` reflects by a glossy lobe: a specular part, rough enough for Ward's
+/// BRDF (the baked direct light's glossy part, and merged disks' normals in `splat_shade`).
+pub fn glossy_lobe(m: &Material) -> bool {
+    m.roughness >= MIN_ALPHA && Vec3::from(m.specular).cmpgt(Vec3::ZERO).any()
 }
 
 /// The specular light one light sample reflects towards `wo`, unshadowed.

@@ -62,6 +62,12 @@ fn specular_sample(n: vec3<f32>, wo: vec3<f32>, alpha: f32, ls: LightSample) -> 
     return ward_specular(n, ls.wi, wo, alpha) * ls.e * cos_i;
 }
 
+// Whether material m reflects by a glossy lobe: a specular part, rough enough for Ward's BRDF
+// (the baked direct light's glossy part, and merged disks' normals in splat_shade).
+fn glossy_lobe(m: Material) -> bool {
+    return m.roughness >= MIN_ALPHA && any(m.specular > vec3<f32>(0.0));
+}
+
 // Radiance leaving splat i at p towards wo by the baked direct light: the diffuse part from
 // the shadowed irradiance, the glossy part from the BRDF towards each light (an area light's
 // n x n strata centres) times the light's visibility.
@@ -70,8 +76,7 @@ fn baked_direct(i: u32, s: Splat, m: Material, p: vec3<f32>, wo: vec3<f32>) -> v
     if (params.show & SHOW_DIRECT_DIFFUSE) != 0u {
         out = s.diffuse * (direct_at(i).xyz / PI);
     }
-    let glossy = m.roughness >= MIN_ALPHA && any(m.specular > vec3<f32>(0.0));
-    if (params.show & SHOW_DIRECT_SPECULAR) == 0u || !glossy {
+    if (params.show & SHOW_DIRECT_SPECULAR) == 0u || !glossy_lobe(m) {
         return out;
     }
     var spec = vec3<f32>(0.0);
