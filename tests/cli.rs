@@ -701,8 +701,9 @@ fn views_render_a_sequence_and_shards_split_it() {
 }
 
 /// `bench scale` on two small generated clouds: its JSON keys (a contract), one row per size in
-/// ascending order with the splats it asked for, positive times, and the clouds and scene
-/// files left in the output folder. A size of 0 is a clear error.
+/// ascending order with the splats it asked for, positive times, the frame ratio of the rows and
+/// of frames in turn, and the clouds and scene files left in the output folder. A size of 0 is
+/// a clear error.
 #[test]
 fn bench_scale_reports_each_size() {
     let dir = std::env::temp_dir().join("lobelight-bench-scale");
@@ -744,12 +745,27 @@ fn bench_scale_reports_each_size() {
         assert!(dir.join(format!("terrain_{n}.ply")).is_file());
         assert!(dir.join(format!("terrain_{n}.toml")).is_file());
     }
-    for key in ["load", "grid", "bake", "frame", "frame_ratio"] {
+    for key in [
+        "load",
+        "grid",
+        "bake",
+        "frame",
+        "frame_ratio",
+        "frame_ratio_interleaved",
+    ] {
         assert!(
             v["growth"][key].as_f64().is_some_and(f64::is_finite),
             "{key}: {v}"
         );
     }
+    // Frames in turn: a ratio of two positive times.
+    assert!(
+        v["growth"]["frame_ratio_interleaved"]
+            .as_f64()
+            .unwrap_or(0.0)
+            > 0.0,
+        "{v}"
+    );
     let (first, last) = (&rows[0]["frame_ms"], &rows[rows.len() - 1]["frame_ms"]);
     let ratio = last.as_f64().unwrap_or(0.0) / first.as_f64().unwrap_or(1.0);
     let said = v["growth"]["frame_ratio"].as_f64().unwrap_or(0.0);

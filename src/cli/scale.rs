@@ -131,6 +131,10 @@ pub struct Growth {
     /// The largest cloud's frame time over the smallest's (a frame whose work followed what it
     /// draws, not the scene, would keep it near 1).
     pub frame_ratio: f64,
+    /// The same ratio from frames drawn in turn: the median over rounds of one frame of each,
+    /// the smallest cloud loaded and baked again beside the largest after the rows. Where the
+    /// machine's load drifts, this is the figure to quote. None with one size.
+    pub frame_ratio_interleaved: Option<f64>,
 }
 
 /// Bake settings from the command line, applied to each generated scene.
@@ -154,12 +158,27 @@ pub fn scale(
     let mut sizes = sizes.to_vec();
     sizes.sort_unstable();
     let mut rows = Vec::new();
+    let (mut largest, mut paths) = (None, Vec::new());
     for &n in &sizes {
         eprintln!("bench scale: {n} {} splats", material.name());
         let scene_path = write_terrain(dir, n, material)?;
-        rows.push(measure(gpu, engine, &scene_path, n, settings)?);
+        paths.push(scene_path.clone());
+        // One cloud on the device at a time, so that each row's peak memory is its own.
+        drop(largest.take());
+        let (row, drawn) = measure(gpu, engine, &scene_path, n, settings)?;
+        rows.push(row);
+        largest = Some(drawn);
     }
-    let growth = growth(&rows);
+    let mut growth = growth(&rows);
+    if let (Some(large), [smallest, _, ..], Some(path)) =
+        (largest.as_mut(), sizes.as_slice(), paths.first())
+    {
+        eprintln!(
+            "bench scale: the {smallest}-splat cloud again, its frames and the largest's in turn"
+        );
+        let (mut small, _) = bake_cloud(gpu, engine, path, *smallest, settings)?;
+        growth.frame_ratio_interleaved = Some(interleaved_ratio(gpu, &mut small, large)?);
+    }
     Ok(ScaleBench {
         adapter: gpu.info.name.clone(),
         backend: gpu.backend_name().into(),
@@ -170,13 +189,69 @@ pub fn scale(
     })
 }
 
+/// A generated cloud loaded, baked and ready to draw.
+struct Drawn {
+    scene: crate::scene::Scene,
+    renderer: FrameRenderer,
+}
+
+impl Drawn {
+    /// One moving frame at `FRAME_SIZE`, tone map included, waited for: its milliseconds.
+    fn frame_ms(&mut self, gpu: &Gpu) -> Result<f64> {
+        let view = View::new(&self.scene.camera, FRAME_SIZE.0, FRAME_SIZE.1);
+        let t = Instant::now();
+        self.renderer
+            .draw(gpu, &self.scene, &view, &FrameConfig::default())?;
+        self.renderer
+            .tone_map(gpu, &crate::tone::ToneConfig::default())?;
+        Ok(ms_since(t))
+    }
+}
+
+/// Rounds of the smallest and largest clouds' frames in turn (`interleaved_ratio`).
+const INTERLEAVED_ROUNDS: usize = 7;
+
+/// The median over `INTERLEAVED_ROUNDS` of the largest cloud's frame time over the smallest's,
+/// each round one frame of each, after one untimed frame of each: a busy machine's load
+/// drifts over the minutes between the two rows' frames, not between two frames in turn.
+fn interleaved_ratio(gpu: &Gpu, small: &mut Drawn, large: &mut Drawn) -> Result<f64> {
+    small.frame_ms(gpu)?;
+    large.frame_ms(gpu)?;
+    let mut ratios = Vec::with_capacity(INTERLEAVED_ROUNDS);
+    for _ in 0..INTERLEAVED_ROUNDS {
+        let a = small.frame_ms(gpu)?;
+        let b = large.frame_ms(gpu)?;
+        ratios.push(b / a.max(1e-9));
+    }
+    Ok(median(ratios))
+}
+
+/// Loads, bakes and times cloud `n`'s frames: its row, and the cloud ready to draw again.
 fn measure(
     gpu: &Gpu,
     engine: BakeEngine,
     scene_path: &Path,
     n: u64,
     settings: Settings,
-) -> Result<ScaleRow> {
+) -> Result<(ScaleRow, Drawn)> {
+    let (mut drawn, mut row) = bake_cloud(gpu, engine, scene_path, n, settings)?;
+    let mut times = Vec::new();
+    for _ in 0..=TIMED_FRAMES {
+        times.push(drawn.frame_ms(gpu)?);
+    }
+    row.frame_ms = median(times[1..].to_vec());
+    row.peak_rss_bytes = crate::cli::measure::peak_rss_bytes();
+    Ok((row, drawn))
+}
+
+/// Loads and bakes cloud `n`: the cloud ready to draw, and its row but for the frames.
+fn bake_cloud(
+    gpu: &Gpu,
+    engine: BakeEngine,
+    scene_path: &Path,
+    n: u64,
+    settings: Settings,
+) -> Result<(Drawn, ScaleRow)> {
     let ply = terrain_file(scene_path.parent().unwrap_or(Path::new(".")), n);
     let file_bytes = std::fs::metadata(&ply)
         .map_err(|e| Error::io(&ply, e))?
@@ -228,16 +303,6 @@ fn measure(
         stage(&baked.binning),
         stage(&baked.em),
     );
-    let view = View::new(&scene.camera, FRAME_SIZE.0, FRAME_SIZE.1);
-    let cfg = FrameConfig::default();
-    let tone = crate::tone::ToneConfig::default();
-    let mut times = Vec::new();
-    for _ in 0..=TIMED_FRAMES {
-        let t = Instant::now();
-        renderer.draw(gpu, &scene, &view, &cfg)?;
-        renderer.tone_map(gpu, &tone)?;
-        times.push(ms_since(t));
-    }
     let row = ScaleRow {
         splats: scene.splats.len() as u64,
         file: ply.display().to_string(),
@@ -256,10 +321,10 @@ fn measure(
         coverages: baked.em.coverages.unwrap_or(0),
         direct_ms,
         bake_ms: photons_ms + binning_ms + em_ms + direct_ms,
-        frame_ms: median(times[1..].to_vec()),
-        peak_rss_bytes: crate::cli::measure::peak_rss_bytes(),
+        frame_ms: 0.0,
+        peak_rss_bytes: None,
     };
-    Ok(row)
+    Ok((Drawn { scene, renderer }, row))
 }
 
 /// The exponent k of time ∝ splats^k between the first and last rows.
@@ -279,6 +344,7 @@ fn growth(rows: &[ScaleRow]) -> Growth {
         em: k(a.em_ms, b.em_ms),
         frame: k(a.frame_ms, b.frame_ms),
         frame_ratio: b.frame_ms / a.frame_ms.max(1e-9),
+        frame_ratio_interleaved: None,
         peak_rss: match (a.peak_rss_bytes, b.peak_rss_bytes) {
             (Some(x), Some(y)) => Some(k(x as f64, y as f64)),
             _ => None,
@@ -406,6 +472,9 @@ impl std::fmt::Display for ScaleBench {
              ({:.2}x from the smallest cloud to the largest)",
             g.load, g.grid, g.bake, g.em, g.frame, g.frame_ratio
         )?;
+        if let Some(r) = g.frame_ratio_interleaved {
+            write!(f, "; frames in turn {r:.2}x")?;
+        }
         if let Some(m) = g.peak_rss {
             write!(f, ", peak memory {m:.2}")?;
         }
