@@ -158,11 +158,13 @@ pub fn scale(
     let mut sizes = sizes.to_vec();
     sizes.sort_unstable();
     let mut rows = Vec::new();
-    let (mut largest, mut paths) = (None, Vec::new());
+    // The largest cloud stays loaded and the smallest's scene file is kept, for their frames
+    // in turn after the rows.
+    let (mut largest, mut smallest_scene) = (None, None);
     for &n in &sizes {
         eprintln!("bench scale: {n} {} splats", material.name());
         let scene_path = write_terrain(dir, n, material)?;
-        paths.push(scene_path.clone());
+        smallest_scene.get_or_insert_with(|| scene_path.clone());
         // One cloud on the device at a time, so that each row's peak memory is its own.
         drop(largest.take());
         let (row, drawn) = measure(gpu, engine, &scene_path, n, settings)?;
@@ -171,7 +173,7 @@ pub fn scale(
     }
     let mut growth = growth(&rows);
     if let (Some(large), [smallest, _, ..], Some(path)) =
-        (largest.as_mut(), sizes.as_slice(), paths.first())
+        (largest.as_mut(), sizes.as_slice(), &smallest_scene)
     {
         eprintln!(
             "bench scale: the {smallest}-splat cloud again, its frames and the largest's in turn"
