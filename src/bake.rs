@@ -595,7 +595,7 @@ pub fn fit<E: Executor>(
         Some(g) => Some((g, ex.upload("fit groups", &g.words)?)),
         None => None,
     };
-    let cover = CoverGroups::new(&scene.splats, plan.em.radius)?;
+    let cover = CoverGroups::new(&scene.splats, plan.em.radius, plan.groups.as_ref())?;
     let cover_words = ex.upload("coverage groups", &cover.words)?;
     let input = FitInput {
         bin_params: &bins.params_buf,

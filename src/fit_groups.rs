@@ -55,10 +55,10 @@ impl FitGroups {
         fit_all: bool,
         cell: f32,
     ) -> Result<FitGroups> {
-        let fitted = |s: &Splat| {
+        let fitted = |i: usize| {
             fit_all
                 || materials
-                    .get(s.material as usize)
+                    .get(splats[i].material as usize)
                     .is_some_and(Material::is_glossy)
         };
         let cells = CellGroups::new(splats, fitted, cell, GROUP_COS_MIN)?;
@@ -157,11 +157,24 @@ pub struct CoverGroups {
 }
 
 impl CoverGroups {
-    /// Groups in cells of `COVER_CELL` × `radius`, the photons' search radius.
-    pub fn new(splats: &[Splat], radius: f32) -> Result<CoverGroups> {
-        let cells = CellGroups::new(splats, |_| true, COVER_CELL * radius, COVER_COS_MIN)?;
+    /// Groups in cells of `COVER_CELL` × `radius`, the photons' search radius. With shared
+    /// fits (`fits`), a follower joins the group of its fit's leader instead: its own estimate
+    /// would be measured only for final gathering's rays that meet it (`serve` then gives it
+    /// its leader's light whole), and its leader's, read at its place, serves them as well as
+    /// the leader's fit serves its shading. On a glossy scan that is half the splats or more,
+    /// and the curved ones whose coverage costs the most to measure.
+    pub fn new(splats: &[Splat], radius: f32, fits: Option<&FitGroups>) -> Result<CoverGroups> {
+        let leader = |i: usize| fits.and_then(|f| f.leader(i));
+        let include = |i: usize| leader(i).is_none();
+        let cells = CellGroups::new(splats, include, COVER_CELL * radius, COVER_COS_MIN)?;
         let (splats, groups) = (cells.group.len() as u32, cells.leaders.len() as u32);
         let mut words = cells.group;
+        // A fit's leader is never a follower, so its group is one of the cells'.
+        for i in 0..words.len() {
+            if let Some(l) = leader(i) {
+                words[i] = words[l];
+            }
+        }
         words.extend_from_slice(&cells.leaders);
         Ok(CoverGroups {
             words,
@@ -191,7 +204,7 @@ pub struct CellGroups {
 impl CellGroups {
     pub fn new(
         splats: &[Splat],
-        include: impl Fn(&Splat) -> bool + Sync,
+        include: impl Fn(usize) -> bool + Sync,
         cell: f32,
         cos_min: f32,
     ) -> Result<CellGroups> {
@@ -206,7 +219,7 @@ impl CellGroups {
         // lists: ten million splats are ten million cells where the cells are small).
         let mut keyed: Vec<([i32; 3], u32)> = (0..n)
             .into_par_iter()
-            .filter(|&i| include(&splats[i as usize]))
+            .filter(|&i| include(i as usize))
             .map(|i| {
                 let c = Vec3::from(splats[i as usize].center) / cell;
                 (c.floor().as_ivec3().to_array(), i)

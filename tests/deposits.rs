@@ -224,7 +224,7 @@ fn shared_light_once_a_group_on_the_device_equals_the_mirror() {
     let d = cpu::deposit_photons(&params, &map.photons, &scene.splats, &grid.params).unwrap();
     let n = scene.splats.len() as u32;
     let em = EmConfig::from_scene(&scene).params(n, n, FitShape::default());
-    let coarse = CoverGroups::new(&scene.splats, 32.0 * r).unwrap();
+    let coarse = CoverGroups::new(&scene.splats, 32.0 * r, None).unwrap();
     assert!(coarse.groups * 4 < n, "{} groups", coarse.groups);
     fn run<E: Executor>(
         ex: &mut E,

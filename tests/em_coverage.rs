@@ -134,7 +134,7 @@ fn a_dense_quad_shares_its_coverage_within_the_bound() {
     let radius = 0.1f32;
     let (scene, em) = lit_quad("size = [0.4, 0.4]\nspacing = 0.003\n", radius);
     let n = scene.splats.len();
-    let groups = CoverGroups::new(&scene.splats, radius).unwrap();
+    let groups = CoverGroups::new(&scene.splats, radius, None).unwrap();
     assert!(
         groups.groups as usize * 4 <= n,
         "{} groups of {n} splats",

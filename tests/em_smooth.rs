@@ -73,7 +73,7 @@ fn smoothed<E: Executor>(
 /// Coverage groups in cells of 2 R, 32 times the bake's side: groups of several splats on
 /// the default box, whose splats are too far apart to share the bake's cells.
 fn coarse_groups(scene: &Scene, em: &EmParams) -> CoverGroups {
-    let groups = CoverGroups::new(&scene.splats, 32.0 * em.radius).unwrap();
+    let groups = CoverGroups::new(&scene.splats, 32.0 * em.radius, None).unwrap();
     assert!(
         groups.groups * 2 < groups.splats,
         "{} groups for {} splats",

@@ -9,7 +9,7 @@ use glam::Vec3;
 
 use lobelight::bake::{self, BakeDevice, Progress, bake, on_device, on_mirror};
 use lobelight::em::LobeMap;
-use lobelight::fit_groups::{FOLLOWER_BIT, FitGroups, GROUP_COS_MIN};
+use lobelight::fit_groups::{CoverGroups, FOLLOWER_BIT, FitGroups, GROUP_COS_MIN};
 use lobelight::gpu::bins::GpuBins;
 use lobelight::gpu::scene::GpuScene;
 use lobelight::plan::BakePlan;
@@ -80,6 +80,45 @@ fn groups_hold_near_splats_that_face_alike() {
         }
     }
     assert!((0..n).all(|i| seen[i] == glossy(&scene, i)));
+}
+
+/// With shared fits, the coverage groups (`em_share`, `em_coverage` and `em_smooth` sum,
+/// measure and choose once one) are made of the splats no fit serves, and each follower joins
+/// its fit leader's: no group is led by a follower, so the measures follow the fits and the
+/// diffuse splats, not every glossy splat.
+#[test]
+fn followers_join_their_leaders_coverage_group() {
+    let scene = cornell(1000);
+    let plan = BakePlan::new(&scene, lobelight::plan::BakeLimits::host()).unwrap();
+    let fits = plan.groups.as_ref().expect("shared fits by default");
+    let n = scene.splats.len();
+    let alone = CoverGroups::new(&scene.splats, plan.em.radius, None).unwrap();
+    let cover = CoverGroups::new(&scene.splats, plan.em.radius, Some(fits)).unwrap();
+    assert_eq!(cover.splats as usize, n);
+    let leaders = &cover.words[n..];
+    assert_eq!(leaders.len(), cover.groups as usize);
+    for (g, &l) in leaders.iter().enumerate() {
+        assert_eq!(fits.leader(l as usize), None, "group {g} led by a follower");
+        assert_eq!(cover.words[l as usize], g as u32);
+    }
+    for i in 0..n {
+        let led = cover.words[i] as usize;
+        assert!(led < leaders.len(), "splat {i} in no group");
+        if let Some(l) = fits.leader(i) {
+            assert_eq!(
+                cover.words[i], cover.words[l],
+                "follower {i} apart from its leader"
+            );
+        }
+    }
+    // The box's glossy block: its followers' measures are the ones saved.
+    assert!(cover.groups as usize <= n - fits.followers as usize);
+    assert!(
+        cover.groups < alone.groups,
+        "{} groups with fits, {} without",
+        cover.groups,
+        alone.groups
+    );
 }
 
 /// Two splats at one point that face apart, and one just across a cell's face, each lead their
