@@ -50,6 +50,10 @@ pub struct StageReport {
     /// EM: final gathering's rays.
     #[serde(skip_serializing_if = "Option::is_none")]
     pub rays: Option<u64>,
+    /// EM: the direct bake final gathering's rays read, in `ms` (every splat's; the frames
+    /// take it).
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub direct_bake_ms: Option<f64>,
     /// EM: measures of a gather disk's covered share, one a coverage group (shared by the
     /// splats of a cell of R/16 that face alike).
     #[serde(skip_serializing_if = "Option::is_none")]
@@ -401,7 +405,7 @@ pub fn bake(scene: &Scene, device: BakeDevice, progress: &Progress) -> Result<Ba
         "em",
         s.ms,
         &format!(
-            "{} of {} splats with photons fitted{} ({:.0} fits/s, {:.2} M rays/s)",
+            "{} of {} splats with photons fitted{} ({:.0} fits/s, {:.2} M rays/s){}",
             s.fitted,
             lit,
             match s.served {
@@ -410,6 +414,10 @@ pub fn bake(scene: &Scene, device: BakeDevice, progress: &Progress) -> Result<Ba
             },
             s.fitted as f64 / (s.ms / 1e3).max(1e-9),
             s.rays as f64 / (s.final_gather_ms * 1e3).max(1e-9),
+            match s.direct_bake_ms {
+                0.0 => String::new(),
+                ms => format!("; every splat's direct bake {ms:.0} ms of it"),
+            },
         ),
     );
     let em = StageReport {
@@ -417,6 +425,7 @@ pub fn bake(scene: &Scene, device: BakeDevice, progress: &Progress) -> Result<Ba
         splats_lit: Some(lit),
         splats_served: Some(s.served),
         rays: Some(s.rays),
+        direct_bake_ms: Some(s.direct_bake_ms),
         coverages: Some(s.coverages),
         splats_smoothed: Some(s.smoothed[1] + s.smoothed[2]),
         splats_smoothed_widest: Some(s.smoothed[2]),

@@ -317,6 +317,9 @@ pub struct EmStats {
     pub fit_ms: f64,
     /// With final gathering: the direct bake and the rays (`final_gather`).
     pub final_gather_ms: f64,
+    /// The direct bake's part of `final_gather_ms`: every splat's, so it grows with the
+    /// splats where the rest of final gathering grows with the fits.
+    pub direct_bake_ms: f64,
     /// Final gathering's rays (`fitted` × gather²).
     pub rays: u64,
     /// Splats served by another's fit (shared fits), besides the `fitted`.

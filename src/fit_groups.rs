@@ -15,7 +15,8 @@
 //!
 //! The covered share of a splat's gather disk (`em_coverage`) is shared the same way, in
 //! smaller cells (`CoverGroups`): a dense scan's every search radius holds thousands of splats,
-//! whose shares differ by little.
+//! whose shares differ by little. A follower joins its fit leader's coverage group: only the
+//! rays that meet it read its own estimate before `serve` replaces it.
 
 use glam::Vec3;
 use rayon::prelude::*;

@@ -616,6 +616,8 @@ pub struct Fit<B> {
     pub gather_ms: f64,
     pub fit_ms: f64,
     pub final_gather_ms: f64,
+    /// The direct bake's part of `final_gather_ms`.
+    pub direct_bake_ms: f64,
     /// With final gathering, the direct bake its rays read: every splat's, of the setup's
     /// lights, the same as the frames bake (`bake_direct`), so they may take it.
     pub direct: Option<Direct<B>>,
@@ -637,6 +639,7 @@ impl<B> Fit<B> {
             gather_ms: self.gather_ms,
             fit_ms: self.fit_ms,
             final_gather_ms: self.final_gather_ms,
+            direct_bake_ms: self.direct_bake_ms,
             rays: 0,
             served: 0,
             coverages: 0,
@@ -835,6 +838,7 @@ pub fn fit_lobes<E: Executor>(
     ex.read::<u32>(&counters, 1)?;
     let mut fit_ms = ms_since(t) - select_ms - gather_ms;
     let mut final_gather_ms = 0.0;
+    let mut direct_bake_ms = 0.0;
     let mut direct = None;
     if let Some(g) = gathering {
         let refit = Refit {
@@ -843,8 +847,10 @@ pub fn fit_lobes<E: Executor>(
             listed,
             groups: fit_groups,
         };
-        let (more, gather_rays_ms, refit_ms, baked) = fit_to_rays(ex, cfg, shape, g, &refit)?;
-        direct = Some(baked);
+        let rays = fit_to_rays(ex, cfg, shape, g, &refit)?;
+        let (more, gather_rays_ms, refit_ms) = (rays.dispatches, rays.rays_ms, rays.fit_ms);
+        direct = Some(rays.direct);
+        direct_bake_ms = rays.direct_ms;
         dispatches += more;
         final_gather_ms = gather_rays_ms;
         fit_ms += refit_ms;
@@ -861,6 +867,7 @@ pub fn fit_lobes<E: Executor>(
         gather_ms,
         fit_ms,
         final_gather_ms,
+        direct_bake_ms,
         direct,
         smoothed,
     })
@@ -1025,17 +1032,26 @@ struct Refit<'a, B> {
     groups: &'a B,
 }
 
+/// What `fit_to_rays` did: the `em_fit` dispatches, the milliseconds of the rays (with the
+/// direct bake), of their fit and of the direct bake alone, and the direct bake.
+struct Rays<B> {
+    dispatches: u32,
+    rays_ms: f64,
+    fit_ms: f64,
+    direct_ms: f64,
+    direct: Direct<B>,
+}
+
 /// Final gathering and the fit to it (design §6), after the photon fit gave every splat its
 /// irradiance: the direct bake, then per batch of the fit list `final_gather` and `em_fit` over
-/// its samples. Returns the `em_fit` dispatches, the milliseconds of the rays (with the
-/// direct bake) and of their fit, and the direct bake.
+/// its samples.
 fn fit_to_rays<E: Executor>(
     ex: &mut E,
     cfg: &EmConfig,
     shape: FitShape,
     g: &Gathering<E::Buffer>,
     refit: &Refit<E::Buffer>,
-) -> Result<(u32, f64, f64, Direct<E::Buffer>)> {
+) -> Result<Rays<E::Buffer>> {
     let (input, light, counters, listed) = (
         refit.fit_input.input,
         refit.fit_input.light,
@@ -1045,6 +1061,10 @@ fn fit_to_rays<E: Executor>(
     let n = input.splat_count as u64;
     let t = std::time::Instant::now();
     let direct = bake_direct(ex, g.lights, &g.setup.direct)?;
+    // A readback waits for the bake, so that its time is told apart: it grows with every
+    // splat, where the rays and their fit grow with the fits.
+    ex.read::<u32>(counters, 1)?;
+    let direct_ms = ms_since(t);
     // The rays read the photons' irradiance where they meet a splat, also a glossy one that
     // an earlier batch has refitted: a copy keeps the result the same for any batch size.
     let photon_light = ex.zeroed("photon light", n.max(1) * 32)?;
@@ -1103,7 +1123,13 @@ fn fit_to_rays<E: Executor>(
         ex.read::<u32>(counters, 1)?;
         fit_ms += ms_since(t);
     }
-    Ok((dispatches, rays_ms, fit_ms, direct))
+    Ok(Rays {
+        dispatches,
+        rays_ms,
+        fit_ms,
+        direct_ms,
+        direct,
+    })
 }
 
 /// The buffers of `em_fit`'s dispatches.
