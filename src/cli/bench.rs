@@ -229,6 +229,8 @@ pub struct EmSkipping {
     pub fit_ms: f64,
     /// With final gathering: the direct bake and the rays (their fit is in `fit_ms`).
     pub final_gather_ms: f64,
+    /// The direct bake's part of `final_gather_ms` (every splat's).
+    pub direct_bake_ms: f64,
     pub splats_fitted: u32,
     /// Glossy splats served by another's fit (shared fits), and final gathering's rays.
     pub splats_served: u32,
@@ -320,6 +322,7 @@ pub fn em(
             gather_ms: skipping.stats.gather_ms,
             fit_ms: skipping.stats.fit_ms,
             final_gather_ms: skipping.stats.final_gather_ms,
+            direct_bake_ms: skipping.stats.direct_bake_ms,
             splats_fitted: skipping.stats.fitted,
             splats_served: skipping.stats.served,
             rays: skipping.stats.rays,
@@ -449,8 +452,14 @@ impl std::fmt::Display for EmBench {
             write!(
                 f,
                 "\nshared fits  cells of {} R: {} fits serve {} more glossy splats, {} rays \
-                 (rays {:.1} ms, fit {:.1} ms)",
-                k.share, k.splats_fitted, k.splats_served, k.rays, k.final_gather_ms, k.fit_ms
+                 (rays {:.1} ms with the direct bake's {:.1} ms, fit {:.1} ms)",
+                k.share,
+                k.splats_fitted,
+                k.splats_served,
+                k.rays,
+                k.final_gather_ms,
+                k.direct_bake_ms,
+                k.fit_ms
             )?;
         }
         let p = &self.pruning;
