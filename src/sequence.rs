@@ -592,6 +592,8 @@ pub struct GroupInput<'a, B> {
 pub struct Gathering<'a, B> {
     pub setup: &'a GatherSetup<'a>,
     pub lights: &'a B,
+    /// The order the direct bake takes the splats in (`direct::splat_order`).
+    pub order: &'a B,
     /// The most bytes of samples one batch of splats holds (the rays of the fit list are
     /// cast and fitted a batch at a time).
     pub batch_bytes: u64,
@@ -1060,7 +1062,7 @@ fn fit_to_rays<E: Executor>(
     );
     let n = input.splat_count as u64;
     let t = std::time::Instant::now();
-    let direct = bake_direct(ex, g.lights, &g.setup.direct)?;
+    let direct = bake_direct(ex, g.lights, g.order, &g.setup.direct)?;
     // A readback waits for the bake, so that its time is told apart: it grows with every
     // splat, where the rays and their fit grow with the fits.
     ex.read::<u32>(counters, 1)?;
@@ -1417,10 +1419,12 @@ pub struct DirectMap {
 }
 
 /// Bakes the direct light of `lights` (`params.light_count` of them) into every splat of the
-/// executor's geometry: one `direct_bake` dispatch over the splats.
+/// executor's geometry: one `direct_bake` dispatch over the splats, taken in `order`
+/// (`direct::splat_order`).
 pub fn bake_direct<E: Executor>(
     ex: &mut E,
     lights: &E::Buffer,
+    order: &E::Buffer,
     params: &DirectParams,
 ) -> Result<Direct<E::Buffer>> {
     let n = params.splat_count as u64;
@@ -1430,7 +1434,7 @@ pub fn bake_direct<E: Executor>(
         (n * params.light_count as u64).max(1) * 4,
     )?;
     let uniform = ex.uniform("direct params", params)?;
-    let bindings = [&uniform, lights, &direct, &visibility];
+    let bindings = [&uniform, lights, &direct, &visibility, order];
     let groups = groups(Stage::DirectBake, params.splat_count)?;
     ex.dispatch_traced(Stage::DirectBake, &bindings, groups)?;
     Ok(Direct { direct, visibility })

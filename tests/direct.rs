@@ -9,11 +9,16 @@ use std::path::Path;
 use lobelight::bake::{BakeDevice, Progress, bake};
 use lobelight::camera::View;
 use lobelight::cli::compare::difference;
+use lobelight::cpu::CpuExecutor;
 use lobelight::cpu::frames::{cpu_direct, cpu_frame, cpu_refined};
+use lobelight::direct::{direct_params, splat_order};
 use lobelight::em::LobeMap;
 use lobelight::frame::{Direct, FrameConfig, Show, camera_uniform, shade_params};
+use lobelight::gpu::exec::GpuExecutor;
+use lobelight::gpu::scene::GpuScene;
 use lobelight::renderer::FrameRenderer;
 use lobelight::scene::{self, Scene};
+use lobelight::sequence::{Executor, bake_direct};
 
 fn cornell(photons: u64) -> Scene {
     let mut scene = scene::load(Path::new("scenes/cornell.toml")).unwrap();
@@ -89,6 +94,47 @@ fn direct_bake_matches_the_cpu_mirror() {
         dark > 100 && partial > 100,
         "shadows: {dark} dark, {partial} partial"
     );
+}
+
+/// The direct bake takes its splats in `direct::splat_order` (a permutation of them), and the
+/// order only schedules the invocations: in reverse order it writes the same bytes, on the
+/// mirror and on the device.
+#[test]
+fn the_direct_bake_is_the_same_in_any_order() {
+    let scene = cornell(1000);
+    let order = splat_order(&scene.splats);
+    let mut seen = vec![false; scene.splats.len()];
+    for &i in &order {
+        assert!(
+            !std::mem::replace(&mut seen[i as usize], true),
+            "splat {i} twice"
+        );
+    }
+    assert!(seen.iter().all(|&s| s), "not every splat in the order");
+    assert_ne!(order, (0..order.len() as u32).collect::<Vec<_>>());
+    let reversed: Vec<u32> = (0..scene.splats.len() as u32).rev().collect();
+    let grid = common::host_grid(&scene);
+    let params = direct_params(&scene);
+    let bake_in = |order: &[u32]| {
+        let mut ex = CpuExecutor::tracing(scene.geometry(&grid));
+        let lights = ex.upload("lights", &scene.lights).unwrap();
+        let order = ex.upload("order", order).unwrap();
+        let baked = bake_direct(&mut ex, &lights, &order, &params).unwrap();
+        baked.read_back(&mut ex, &params).unwrap()
+    };
+    let on_cpu = cpu_direct(&scene, &grid).unwrap();
+    assert_eq!(bake_in(&reversed), on_cpu);
+    let gpu = common::gpu();
+    let on_gpu = GpuScene::upload(&gpu, &scene).unwrap();
+    let bake_on_device = |order: &[u32]| {
+        let mut encoder = gpu.encoder("direct bake");
+        let mut ex = GpuExecutor::new(&gpu, &mut encoder).tracing(on_gpu.geometry());
+        let lights = ex.upload("lights", &scene.lights).unwrap();
+        let order = ex.upload("order", order).unwrap();
+        let baked = bake_direct(&mut ex, &lights, &order, &params).unwrap();
+        baked.read_back(&mut ex, &params).unwrap()
+    };
+    assert_eq!(bake_on_device(&reversed), bake_on_device(&order));
 }
 
 /// The baked direct light against shadow rays per pixel, on the CPU mirror of the Cornell

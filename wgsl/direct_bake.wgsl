@@ -4,7 +4,7 @@
 // - the shadowed irradiance, summed over the lights: what the diffuse part needs;
 // - the light's visibility, the shadowed share of its unshadowed irradiance: what the glossy
 //   part needs, times the BRDF towards the light, which follows the view.
-// One invocation per splat. CPU mirror: src/cpu/direct_bake.rs.
+// One invocation per splat, in `order`. CPU mirror: src/cpu/direct_bake.rs.
 
 // #import types
 // #import dispatch
@@ -21,16 +21,22 @@
 // Per splat and light, at splat * light_count + light: visibility in [0, 1].
 // #paged
 @group(0) @binding(3) var<storage, read_write> visibility: array<f32>;
+// The splats in the order the invocations take them: neighbours in space side by side, so
+// that a SIMD group's shadow rays walk the same cells (direct::splat_order). Each splat's
+// result depends on its index alone.
+// #paged
+@group(0) @binding(4) var<storage, read> order: array<u32>;
 
 const WG: u32 = 64u;
 
 @compute @workgroup_size(64)
 fn main(@builtin(workgroup_id) wg: vec3<u32>, @builtin(num_workgroups) num_wg: vec3<u32>,
         @builtin(local_invocation_index) lid: u32) {
-    let i = linear_workgroup(wg, num_wg) * WG + lid;
-    if i >= params.splat_count {
+    let k = linear_workgroup(wg, num_wg) * WG + lid;
+    if k >= params.splat_count {
         return;
     }
+    let i = order_at(k);
     let s = splats_at(i);
     let o = s.center + params.shadow_bias * s.normal;
     let key = pcg_hash(pcg_hash(params.seed) + i);

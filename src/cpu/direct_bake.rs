@@ -16,10 +16,12 @@ use crate::types::{DirectParams, Light, NO_SPLAT, light_kind};
 
 pub const WG: u32 = 64;
 
-/// Fills `direct` (one `[E, 0]` per splat) and `visibility` (splat × light).
+/// Fills `direct` (one `[E, 0]` per splat) and `visibility` (splat × light), invocation k
+/// taking splat `order[k]`.
 pub fn direct_bake(
     params: &DirectParams,
     lights: &[Light],
+    order: &[u32],
     direct: &mut [[f32; 4]],
     visibility: &mut [f32],
     geo: &Geometry,
@@ -30,14 +32,16 @@ pub fn direct_bake(
         direct[..count].fill([0.0; 4]);
         return;
     }
-    // Each splat writes its own row in place: a row collected a splat (and a vector of its
-    // lights') cost two allocations a splat, 10 M of them on a 10 M-splat scan.
-    direct[..count]
-        .par_iter_mut()
-        .zip(visibility[..count * lc].par_chunks_mut(lc))
-        .enumerate()
-        .for_each(|(i, (out, seen_by))| {
-            let i = i as u32;
+    // Invocation k writes its rows at k of two arrays, then each row goes to its splat's
+    // place: a row collected an invocation (and a vector of its lights') cost two allocations
+    // a splat, 10 M of them on a 10 M-splat scan.
+    let order = &order[..count];
+    let mut rows = vec![[0.0f32; 4]; count];
+    let mut seen_rows = vec![0.0f32; count * lc];
+    rows.par_iter_mut()
+        .zip(seen_rows.par_chunks_mut(lc))
+        .zip(order.par_iter())
+        .for_each(|((out, seen_by), &i)| {
             let s = &geo.splats[i as usize];
             let (centre, normal) = (Vec3::from(s.center), Vec3::from(s.normal));
             let o = centre + params.shadow_bias * normal;
@@ -78,6 +82,11 @@ pub fn direct_bake(
             }
             *out = total.extend(0.0).to_array();
         });
+    for ((&i, row), seen) in order.iter().zip(rows).zip(seen_rows.chunks(lc)) {
+        let i = i as usize;
+        direct[i] = row;
+        visibility[i * lc..(i + 1) * lc].copy_from_slice(seen);
+    }
 }
 
 /// The executor's entry: `direct_bake`'s bindings, unpacked in the order its WGSL declares them.
@@ -86,7 +95,8 @@ pub fn dispatch(b: &Bindings, geo: &Geometry, _groups: u32) -> Result<()> {
     let lights = b.get(1)?;
     let mut direct = b.get_mut(2)?;
     let mut visibility = b.get_mut(3)?;
+    let order = b.get(4)?;
     let (direct, visibility) = (view_mut(&mut direct), view_mut(&mut visibility));
-    direct_bake(&p, view(&lights), direct, visibility, geo);
+    direct_bake(&p, view(&lights), view(&order), direct, visibility, geo);
     Ok(())
 }

@@ -205,7 +205,10 @@ fn fit_binned(
         None => CpuExecutor::default(),
     };
     let lights = match gathering {
-        Some((_, g)) => Some(ex.upload("lights", g.lights)?),
+        Some((_, g)) => Some((
+            ex.upload("lights", g.lights)?,
+            ex.upload("direct order", &crate::direct::splat_order(splats))?,
+        )),
         None => None,
     };
     let bin_params = ex.uniform("bin params", &bins.params)?;
@@ -232,9 +235,10 @@ fn fit_binned(
         splat_count,
         gathering: gathering
             .zip(lights.as_ref())
-            .map(|((_, setup), lights)| Gathering {
+            .map(|((_, setup), (lights, order))| Gathering {
                 setup,
                 lights,
+                order,
                 batch_bytes: GATHER_BATCH_BYTES,
             }),
         deposits: deposit_bufs
