@@ -600,7 +600,6 @@ pub fn fit<E: Executor>(
     let t = Instant::now();
     let setup = plan.gather_setup(scene);
     let lights = ex.upload("lights", &scene.lights)?;
-    let order = ex.upload("direct order", &crate::direct::splat_order(&scene.splats))?;
     let words = match &plan.groups {
         Some(g) => Some((g, ex.upload("fit groups", &g.words)?)),
         None => None,
@@ -618,7 +617,7 @@ pub fn fit<E: Executor>(
         gathering: Some(Gathering {
             setup: &setup,
             lights: &lights,
-            order: &order,
+            splats: &scene.splats,
             batch_bytes: plan.limits.gather_batch_bytes,
         }),
         deposits: deposits.map(|d| DepositInput {

@@ -2,9 +2,6 @@
 //! how many rays a splat casts at each area light, and the bake's uniform. The bake, the frames
 //! (which refine with shadow rays from the same bias) and the path tracer share them.
 
-use glam::Vec3;
-use rayon::prelude::*;
-
 use crate::scene::Scene;
 use crate::types::{DirectParams, Splat};
 
@@ -38,42 +35,4 @@ pub fn direct_params_biased(scene: &Scene, shadow_bias: f32) -> DirectParams {
         shadow_bias,
         ..Default::default()
     }
-}
-
-/// The order in which the direct bake's invocations take the splats: along a Morton curve of
-/// their centres (10 bits an axis over the splats' bounds), ties in splat order. Each splat's
-/// result depends on its index alone, so any order gives the same bytes; this one gives a SIMD
-/// group of invocations neighbouring splats, whose shadow rays walk the same cells. A cloud
-/// whose points come in no order in space (a Fibonacci sphere, merged or thinned scans) took
-/// lavapipe's direct bake 1.7–2.5× longer in its own order (docs/measurements.md).
-pub fn splat_order(splats: &[Splat]) -> Vec<u32> {
-    let (lo, hi) = splats.iter().fold(
-        (Vec3::splat(f32::MAX), Vec3::splat(f32::MIN)),
-        |(lo, hi), s| {
-            let c = Vec3::from(s.center);
-            (lo.min(c), hi.max(c))
-        },
-    );
-    let scale = 1023.0 / (hi - lo).max(Vec3::splat(f32::MIN_POSITIVE));
-    let mut keyed: Vec<(u32, u32)> = (0..splats.len())
-        .into_par_iter()
-        .map(|i| {
-            let q = ((Vec3::from(splats[i].center) - lo) * scale)
-                .clamp(Vec3::ZERO, Vec3::splat(1023.0))
-                .as_uvec3();
-            let key = spread_bits(q.x) | spread_bits(q.y) << 1 | spread_bits(q.z) << 2;
-            (key, i as u32)
-        })
-        .collect();
-    keyed.par_sort_unstable();
-    keyed.into_iter().map(|(_, i)| i).collect()
-}
-
-/// The 10 low bits of `x` spread to every third bit.
-fn spread_bits(x: u32) -> u32 {
-    let mut x = x & 0x3ff;
-    x = (x | x << 16) & 0x030000ff;
-    x = (x | x << 8) & 0x0300f00f;
-    x = (x | x << 4) & 0x030c30c3;
-    (x | x << 2) & 0x09249249
 }

@@ -162,16 +162,12 @@ impl FrameRenderer {
         let start = std::time::Instant::now();
         self.set_lights(gpu, scene)?;
         let params = direct_params_biased(scene, self.extent.shadow_bias);
-        if self.frame_scene.direct_order.get().is_none() {
-            let order = crate::direct::splat_order(&scene.splats);
-            let order = gpu.storage("direct order", &order)?;
-            self.frame_scene.direct_order.get_or_init(|| order);
-        }
-        let order = self
-            .frame_scene
-            .direct_order
-            .get()
-            .ok_or_else(|| Error::internal("the direct bake's order was not made"))?;
+        let order = match &mut self.frame_scene.direct_order {
+            Some(order) => order,
+            none => {
+                none.insert(gpu.storage("direct order", &crate::grid::splat_order(&scene.splats))?)
+            }
+        };
         let mut encoder = gpu.encoder("direct bake");
         let mut ex = GpuExecutor::new(gpu, &mut encoder).tracing(self.on_gpu.geometry());
         let lights = &self.frame_scene.lights;

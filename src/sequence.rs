@@ -31,8 +31,8 @@ use crate::timing::ms_since;
 use crate::tone::{ToneConfig, reduce_levels};
 use crate::types::{
     BinParams, Camera, DepositParams, DirectParams, DistanceParams, EmParams, Emitter,
-    GatherParams, GridParams, Lobe, PathParams, Photon, PhotonViewParams, ScanParams, SplatLight,
-    TemporalParams, TileParams, TraceCounters,
+    GatherParams, GridParams, Lobe, PathParams, Photon, PhotonViewParams, ScanParams, Splat,
+    SplatLight, TemporalParams, TileParams, TraceCounters,
 };
 
 /// Where a sequence runs: buffers, uniforms, dispatches by stage name, copies and readbacks.
@@ -592,8 +592,9 @@ pub struct GroupInput<'a, B> {
 pub struct Gathering<'a, B> {
     pub setup: &'a GatherSetup<'a>,
     pub lights: &'a B,
-    /// The order the direct bake takes the splats in (`direct::splat_order`).
-    pub order: &'a B,
+    /// The splats on the host, whose order in space the direct bake takes them in
+    /// (`grid::splat_order`, made only where final gathering runs).
+    pub splats: &'a [Splat],
     /// The most bytes of samples one batch of splats holds (the rays of the fit list are
     /// cast and fitted a batch at a time).
     pub batch_bytes: u64,
@@ -1062,7 +1063,8 @@ fn fit_to_rays<E: Executor>(
     );
     let n = input.splat_count as u64;
     let t = std::time::Instant::now();
-    let direct = bake_direct(ex, g.lights, g.order, &g.setup.direct)?;
+    let order = ex.upload("direct order", &crate::grid::splat_order(g.splats))?;
+    let direct = bake_direct(ex, g.lights, &order, &g.setup.direct)?;
     // A readback waits for the bake, so that its time is told apart: it grows with every
     // splat, where the rays and their fit grow with the fits.
     ex.read::<u32>(counters, 1)?;
@@ -1420,7 +1422,7 @@ pub struct DirectMap {
 
 /// Bakes the direct light of `lights` (`params.light_count` of them) into every splat of the
 /// executor's geometry: one `direct_bake` dispatch over the splats, taken in `order`
-/// (`direct::splat_order`).
+/// (`grid::splat_order`).
 pub fn bake_direct<E: Executor>(
     ex: &mut E,
     lights: &E::Buffer,

@@ -11,11 +11,12 @@ use lobelight::camera::View;
 use lobelight::cli::compare::difference;
 use lobelight::cpu::CpuExecutor;
 use lobelight::cpu::frames::{cpu_direct, cpu_frame, cpu_refined};
-use lobelight::direct::{direct_params, splat_order};
+use lobelight::direct::direct_params;
 use lobelight::em::LobeMap;
 use lobelight::frame::{Direct, FrameConfig, Show, camera_uniform, shade_params};
 use lobelight::gpu::exec::GpuExecutor;
 use lobelight::gpu::scene::GpuScene;
+use lobelight::grid::splat_order;
 use lobelight::renderer::FrameRenderer;
 use lobelight::scene::{self, Scene};
 use lobelight::sequence::{Executor, bake_direct};
@@ -96,7 +97,7 @@ fn direct_bake_matches_the_cpu_mirror() {
     );
 }
 
-/// The direct bake takes its splats in `direct::splat_order` (a permutation of them), and the
+/// The direct bake takes its splats in `grid::splat_order` (a permutation of them), and the
 /// order only schedules the invocations: in reverse order it writes the same bytes, on the
 /// mirror and on the device.
 #[test]

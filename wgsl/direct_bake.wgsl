@@ -22,7 +22,7 @@
 // #paged
 @group(0) @binding(3) var<storage, read_write> visibility: array<f32>;
 // The splats in the order the invocations take them: neighbours in space side by side, so
-// that a SIMD group's shadow rays walk the same cells (direct::splat_order). Each splat's
+// that a SIMD group's shadow rays walk the same cells (grid::splat_order). Each splat's
 // result depends on its index alone.
 // #paged
 @group(0) @binding(4) var<storage, read> order: array<u32>;

@@ -24,7 +24,7 @@ pub fn cpu_direct(scene: &Scene, grid: &SplatGrid) -> Result<DirectMap> {
     let params = direct_params(scene);
     let mut ex = cpu::CpuExecutor::tracing(geo);
     let lights = ex.upload("lights", &scene.lights)?;
-    let order = ex.upload("direct order", &crate::direct::splat_order(&scene.splats))?;
+    let order = ex.upload("direct order", &crate::grid::splat_order(&scene.splats))?;
     let baked = crate::sequence::bake_direct(&mut ex, &lights, &order, &params)?;
     baked.read_back(&mut ex, &params)
 }

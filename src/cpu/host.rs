@@ -205,10 +205,7 @@ fn fit_binned(
         None => CpuExecutor::default(),
     };
     let lights = match gathering {
-        Some((_, g)) => Some((
-            ex.upload("lights", g.lights)?,
-            ex.upload("direct order", &crate::direct::splat_order(splats))?,
-        )),
+        Some((_, g)) => Some(ex.upload("lights", g.lights)?),
         None => None,
     };
     let bin_params = ex.uniform("bin params", &bins.params)?;
@@ -235,10 +232,10 @@ fn fit_binned(
         splat_count,
         gathering: gathering
             .zip(lights.as_ref())
-            .map(|((_, setup), (lights, order))| Gathering {
+            .map(|((_, setup), lights)| Gathering {
                 setup,
                 lights,
-                order,
+                splats,
                 batch_bytes: GATHER_BATCH_BYTES,
             }),
         deposits: deposit_bufs

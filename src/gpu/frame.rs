@@ -172,9 +172,9 @@ pub struct FrameScene {
     pub lights: wgpu::Buffer,
     /// The direct bake of `lights` (zeroed until `FrameRenderer::bake_direct`).
     pub direct: Direct<wgpu::Buffer>,
-    /// The order the device's direct bake takes the splats in (`direct::splat_order`), made
+    /// The order the device's direct bake takes the splats in (`grid::splat_order`), made
     /// for its first bake.
-    pub direct_order: OnceLock<wgpu::Buffer>,
+    pub direct_order: Option<wgpu::Buffer>,
     /// Per splat, the radiance towards the eye of the frame being drawn (`splat_shade`).
     pub shaded: wgpu::Buffer,
     /// The splats a frame of baked direct light draws and shades (`splat_list`): how many, and
@@ -210,7 +210,7 @@ impl FrameScene {
                 direct: gpu.storage_zeroed("direct light", splats * 16)?,
                 visibility: gpu.storage_zeroed("light visibility", visibility)?,
             },
-            direct_order: OnceLock::new(),
+            direct_order: None,
             shaded: gpu.storage_zeroed("shaded splats", splats * 16)?,
             selected_count: gpu.storage_zeroed("selected splat count", 4)?,
             selected: gpu.storage_zeroed("selected splats", splats * 4)?,
