@@ -4,7 +4,7 @@
 
 use crate::error::{Error, Result};
 use crate::types::{GridParams, Splat};
-use glam::{IVec3, UVec3, Vec3};
+use glam::{IVec3, UVec3, Vec2, Vec3};
 use rayon::prelude::*;
 
 /// How the grid resolution is chosen.
@@ -95,6 +95,55 @@ pub const MAX_CELL_LEN: u32 = 4096;
 
 /// Cap of the grid's distance field (in cells), as `DIST_CAP` in `wgsl/shared/grid.wgsl`.
 pub const DIST_CAP: u32 = 16;
+
+/// The low bits of a cell's distance word that hold its distance (`SplatGrid::cell_dist`); a
+/// listed cell's upper 24 bits hold its facing cone (`cone_faces_away`).
+pub const DIST_MASK: u32 = 0xff;
+
+/// Steps of the facing cone's axis (per octahedral axis) and of its bound, as in
+/// `wgsl/shared/grid.wgsl`.
+pub const CONE_STEPS: f32 = 255.0;
+
+/// How far past its bound a ray's direction must lie before a cone turns it away, and how much
+/// the cone's widest cosine is lowered when it is made: room for rounding on either side.
+pub const CONE_MARGIN: f32 = 1e-3;
+
+fn cone_sign(p: Vec2) -> Vec2 {
+    Vec2::new(
+        if p.x >= 0.0 { 1.0 } else { -1.0 },
+        if p.y >= 0.0 { 1.0 } else { -1.0 },
+    )
+}
+
+/// The facing cone's axis bits (8-23 of the word) for a nonzero direction `m`.
+pub fn cone_axis_encode(m: Vec3) -> u32 {
+    let p = Vec2::new(m.x, m.y) / (m.x.abs() + m.y.abs() + m.z.abs());
+    let q = if m.z < 0.0 {
+        (Vec2::ONE - Vec2::new(p.y, p.x).abs()) * cone_sign(p)
+    } else {
+        p
+    };
+    // WGSL's round() takes ties to even.
+    let u = (q.clamp(Vec2::splat(-1.0), Vec2::ONE) * 0.5 + 0.5) * CONE_STEPS;
+    ((u.x.round_ties_even() as u32) << 8) | ((u.y.round_ties_even() as u32) << 16)
+}
+
+/// The facing cone's axis in a cell's distance word.
+pub fn cone_axis(word: u32) -> Vec3 {
+    let u = Vec2::new(((word >> 8) & 0xff) as f32, ((word >> 16) & 0xff) as f32);
+    let p = u * (2.0 / CONE_STEPS) - 1.0;
+    let z = 1.0 - p.x.abs() - p.y.abs();
+    let fold = (-z).max(0.0);
+    let xy = p - fold * cone_sign(p);
+    Vec3::new(xy.x, xy.y, z).normalize()
+}
+
+/// Whether every disk of the listed cell whose distance word is `word` faces away from `d`
+/// (`wgsl/shared/grid.wgsl`): one-sided disks a ray cannot hit, none of them read.
+pub fn cone_faces_away(word: u32, d: Vec3) -> bool {
+    let open = word >> 24;
+    open != 0 && cone_axis(word).dot(d) > 1.0 - open as f32 / CONE_STEPS + CONE_MARGIN
+}
 
 pub fn check_cell_len(max_cell_len: u32) -> Result<()> {
     if max_cell_len > MAX_CELL_LEN {
@@ -211,8 +260,9 @@ pub fn grid_params(splats: &[Splat], cfg: &GridConfig) -> Result<GridParams> {
 
 /// A built grid: `cell_splats[cell_start[c]..cell_start[c + 1]]` lists the splats touching
 /// cell `c`, in increasing splat index. `cell_start` has `cell_count + 1` entries.
-/// `cell_dist[c]` is the Chebyshev distance in cells from `c` to the nearest cell with a
-/// non-empty list, capped at `DIST_CAP` (0 for such cells): rays skip empty space with it.
+/// `cell_dist[c] & DIST_MASK` is the Chebyshev distance in cells from `c` to the nearest cell
+/// with a non-empty list, capped at `DIST_CAP` (0 for such cells): rays skip empty space with
+/// it. A listed cell's upper 24 bits hold its facing cone (`cone_faces_away`, `grid_cone`).
 #[derive(Clone, Debug, PartialEq)]
 pub struct SplatGrid {
     pub params: GridParams,

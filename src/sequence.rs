@@ -226,7 +226,8 @@ impl<B> BuiltGrid<B> {
 }
 
 /// The grid build: count → exclusive scan → (split: the entry total sizes the list, the
-/// longest cell is checked) → scatter → rank → the distance field's passes x, y, z.
+/// longest cell is checked) → scatter → rank → the distance field's passes x, y, z → the
+/// listed cells' facing cones.
 pub fn build_grid<E: Executor>(
     ex: &mut E,
     params: &GridParams,
@@ -286,6 +287,12 @@ pub fn build_grid<E: Executor>(
         groups(Stage::GridRank, entries)?,
     )?;
     let cell_dist = distance_field(ex, &params_buf, &params, &cell_start)?;
+    let bindings = [&params_buf, splats, &cell_start, &cell_splats, &cell_dist];
+    ex.dispatch(
+        Stage::GridCone,
+        &bindings,
+        groups(Stage::GridCone, params.cell_count)?,
+    )?;
     Ok(BuiltGrid {
         params,
         params_buf,

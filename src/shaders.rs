@@ -74,6 +74,7 @@ stages! {
     GridScatter => "grid_scatter",
     GridRank => "grid_rank",
     GridDistance => "grid_distance",
+    GridCone => "grid_cone",
     TraceRays => "trace_rays",
     PhotonTrace => "photon_trace",
     BinCount => "bin_count",

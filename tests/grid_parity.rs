@@ -2,10 +2,12 @@
 
 mod common;
 
+use glam::Vec3;
 use lobelight::cpu;
 use lobelight::gpu::grid::build_grid;
 use lobelight::grid::{
-    DIST_CAP, GridConfig, SplatGrid, cell_index, disk_cell_range, floor_cell, grid_params,
+    CONE_STEPS, DIST_CAP, DIST_MASK, GridConfig, SplatGrid, cell_index, cone_axis, cone_faces_away,
+    disk_cell_range, floor_cell, grid_params,
 };
 use lobelight::types::Splat;
 
@@ -76,6 +78,51 @@ fn check_grid(grid: &SplatGrid, splats: &[Splat]) {
         assert_eq!(grid.cell(c as u32), &list[..], "cell {c}");
     }
     check_distance(grid);
+    check_cones(grid, splats);
+}
+
+/// Independent check of the facing cones: an empty cell has none, and where a listed cell's
+/// cone turns a direction away, every disk it lists faces away from that direction (tried with
+/// the cone's axis and directions around it), the disks' normals within the cone's angle.
+fn check_cones(grid: &SplatGrid, splats: &[Splat]) {
+    let mut cones = 0;
+    for c in 0..grid.params.cell_count {
+        let word = grid.cell_dist[c as usize];
+        let list = grid.cell(c);
+        if list.is_empty() {
+            assert_eq!(word >> 8, 0, "empty cell {c} has a cone");
+            continue;
+        }
+        let open = word >> 24;
+        if open == 0 {
+            continue;
+        }
+        cones += 1;
+        let axis = cone_axis(word);
+        let sin_bound = 1.0 - open as f32 / CONE_STEPS;
+        let cos_bound = (1.0 - sin_bound * sin_bound).max(0.0).sqrt();
+        let tilt = |v: Vec3| (axis + v).normalize();
+        let tries = [
+            axis,
+            tilt(Vec3::X * 0.3),
+            tilt(Vec3::Y * -0.5),
+            tilt(Vec3::Z * 0.8),
+        ];
+        for &i in list {
+            let n = Vec3::from(splats[i as usize].normal);
+            assert!(
+                axis.dot(n) >= cos_bound - 1e-5,
+                "cell {c}: splat {i}'s normal lies outside the cone"
+            );
+            for d in tries.iter().filter(|&&d| cone_faces_away(word, d)) {
+                assert!(n.dot(*d) > 0.0, "cell {c} turns {d:?} away from splat {i}");
+            }
+        }
+    }
+    assert!(
+        grid.params.cell_count < 64 || cones > 0,
+        "no listed cell has a facing cone"
+    );
 }
 
 /// Independent check of the distance field: for each cell, the Chebyshev distance to the
@@ -103,7 +150,8 @@ fn check_distance(grid: &SplatGrid) {
             }
         }
         assert_eq!(
-            grid.cell_dist[c as usize], best as u32,
+            grid.cell_dist[c as usize] & DIST_MASK,
+            best as u32,
             "distance of cell {c}"
         );
     }

@@ -152,6 +152,7 @@ fn mirror_workgroup_shapes_match_the_wgsl() {
         (Stage::GridScatter, grid_scatter::WG, 1),
         (Stage::GridRank, grid_rank::WG, 1),
         (Stage::GridDistance, grid_distance::WG, 1),
+        (Stage::GridCone, grid_cone::WG, 1),
         (Stage::TraceRays, trace_rays::WG, 1),
         (Stage::PhotonTrace, photon_trace::WG, 1),
         (Stage::DirectBake, direct_bake::WG, 1),

@@ -10,7 +10,9 @@ use lobelight::cpu::{self, groups_for, trace_rays};
 use lobelight::gpu::Gpu;
 use lobelight::gpu::grid::build_grid;
 use lobelight::gpu::scene::device_clips;
-use lobelight::grid::{GridConfig, SplatGrid, grid_params};
+use lobelight::grid::{
+    DIST_MASK, GridConfig, SplatGrid, cell_index, cone_faces_away, grid_params, point_cell,
+};
 use lobelight::photons::ITERATION_BUDGET;
 use lobelight::shaders::Stage;
 use lobelight::shared::trace::{Geometry, intersect_disk, trace_ray};
@@ -429,4 +431,97 @@ fn box_disks_end_at_the_box_edges() {
     // Without the clips the overhang stops the first ray.
     let unclipped = cpu_trace(&scene.splats, &[], &rays[..1], ITERATION_BUDGET);
     assert!(top(&unclipped[0]), "the overhang did not reach the ray");
+}
+
+/// Rays leaving surfaces, the rays the facing cones are for: from each of `count` disks of
+/// `splats`, just off its centre, into the hemisphere its normal faces (a shadow ray or a
+/// bounce), skipping the disk it leaves.
+fn leaving_rays(splats: &[Splat], count: usize, seed: u64) -> Vec<Ray> {
+    let mut rng = common::Rng(seed);
+    (0..count)
+        .map(|_| {
+            let i = (rng.next_u64() % splats.len() as u64) as u32;
+            let s = &splats[i as usize];
+            let n = Vec3::from(s.normal);
+            let d = Vec3::from(rng.unit_vector());
+            let d = if d.dot(n) < 0.0 { -d } else { d };
+            Ray {
+                origin: (Vec3::from(s.center) + 0.5 * s.radius * n).to_array(),
+                t_max: 1e30,
+                direction: d.to_array(),
+                skip: i,
+            }
+        })
+        .collect()
+}
+
+/// The facing cones change no ray: on the Cornell box and on a sphere of disks, rays leaving
+/// the surfaces meet the same disk at the same distance, with the same budget left and the
+/// same aborted flag, as through the same grid with its cones taken out, also with a budget
+/// that runs out; many of them start in a cell whose cone turns them away; and the device
+/// (whose grid build makes its own cones) agrees with the mirror.
+#[test]
+fn facing_cones_change_no_ray() {
+    let gpu = common::gpu();
+    let cornell = lobelight::scene::load(std::path::Path::new("scenes/cornell.toml")).unwrap();
+    let sphere: Vec<Splat> = common::fibonacci_sphere(20_000)
+        .into_iter()
+        .map(|p| disk(p.to_array(), 0.025, p.to_array()))
+        .collect();
+    for (name, splats, clips) in [
+        ("cornell", cornell.splats.clone(), cornell.clips.clone()),
+        ("sphere", sphere, vec![]),
+    ] {
+        let grid = cpu_grid(&splats);
+        let mut bare = grid.clone();
+        bare.cell_dist.iter_mut().for_each(|w| *w &= DIST_MASK);
+        let (with, without) = (
+            Geometry {
+                grid: &grid,
+                splats: &splats,
+                clips: &clips,
+            },
+            Geometry {
+                grid: &bare,
+                splats: &splats,
+                clips: &clips,
+            },
+        );
+        let rays = leaving_rays(&splats, 4_000, 71);
+        let mut turned = 0;
+        for (k, r) in rays.iter().enumerate() {
+            let (o, d) = (Vec3::from(r.origin), Vec3::from(r.direction));
+            let c = point_cell(o, &grid.params)
+                .max(glam::IVec3::ZERO)
+                .as_uvec3();
+            turned +=
+                cone_faces_away(grid.cell_dist[cell_index(c, &grid.params) as usize], d) as usize;
+            for start_budget in [ITERATION_BUDGET, 40] {
+                let (mut a, mut b) = (start_budget, start_budget);
+                let ha = trace_ray(&with, o, d, r.skip, r.t_max, &mut a);
+                let hb = trace_ray(&without, o, d, r.skip, r.t_max, &mut b);
+                assert_eq!((ha, a), (hb, b), "{name}: ray {k}, budget {start_budget}");
+            }
+        }
+        eprintln!(
+            "{name}: {turned} of {} rays start in a cell that turns them away",
+            rays.len()
+        );
+        assert!(turned * 4 > rays.len(), "{name}: too few rays meet a cone");
+        let on_cpu = cpu_trace(&splats, &clips, &rays, ITERATION_BUDGET);
+        let on_gpu = gpu_trace(&gpu, &splats, &clips, &rays, ITERATION_BUDGET);
+        let differ = on_cpu
+            .iter()
+            .zip(&on_gpu)
+            .filter(|(a, b)| {
+                a.splat != b.splat
+                    || a.aborted != b.aborted
+                    || (a.t - b.t).abs() > t_tolerance(a.t, 1e-3)
+            })
+            .count();
+        assert!(
+            differ * 1_000 <= rays.len(),
+            "{name}: {differ} rays differ on the device"
+        );
+    }
 }

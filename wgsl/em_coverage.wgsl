@@ -176,7 +176,7 @@ fn cell_at(p: vec3<f32>) -> u32 {
 fn covered_in_cell(ci: u32, q: vec3<f32>, c: vec3<f32>, n: vec3<f32>, slab: f32,
                    budget: ptr<function, u32>) -> f32 {
     // An empty cell (the distance field's nonzero) lists no disk.
-    if cell_dist[ci] != 0u {
+    if (cell_dist[ci] & DIST_MASK) != 0u {
         return -1.0;
     }
     var e = cell_start[ci];

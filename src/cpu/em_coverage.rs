@@ -9,7 +9,7 @@ use crate::error::Result;
 use glam::{IVec3, UVec3, Vec2, Vec3};
 use rayon::prelude::*;
 
-use crate::grid::{cell_index, point_cell};
+use crate::grid::{DIST_MASK, cell_index, point_cell};
 use crate::shared::bins::SURFACE_COS_MIN;
 use crate::shared::lobes::EM_COVER_APPLY;
 use crate::shared::sampling::frame_of;
@@ -163,7 +163,7 @@ fn covered_in_cell(
     budget: &mut u32,
 ) -> Option<f32> {
     // An empty cell (the distance field's nonzero) lists no disk.
-    if geo.grid.cell_dist[ci as usize] != 0 {
+    if geo.grid.cell_dist[ci as usize] & DIST_MASK != 0 {
         return None;
     }
     // The next disk that reaches over q, then its clip (as the WGSL twin reads it).

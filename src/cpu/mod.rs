@@ -21,6 +21,7 @@ pub mod em_smooth;
 pub mod exec;
 pub mod final_gather;
 pub mod frames;
+pub mod grid_cone;
 pub mod grid_count;
 pub mod grid_distance;
 pub mod grid_rank;
@@ -88,6 +89,7 @@ pub fn mirror(stage: Stage) -> Option<Mirror> {
         Stage::FinalGather => Mirror::Traced(final_gather::dispatch),
         Stage::GridCount => Mirror::Plain(grid_count::dispatch),
         Stage::GridDistance => Mirror::Plain(grid_distance::dispatch),
+        Stage::GridCone => Mirror::Plain(grid_cone::dispatch),
         Stage::GridRank => Mirror::Plain(grid_rank::dispatch),
         Stage::GridScatter => Mirror::Plain(grid_scatter::dispatch),
         Stage::PathTrace => Mirror::Traced(path_trace::dispatch),

@@ -6,7 +6,7 @@
 
 use glam::{BVec3, IVec3, Vec3};
 
-use crate::grid::{SplatGrid, floor_cell};
+use crate::grid::{DIST_MASK, SplatGrid, cone_faces_away, floor_cell};
 use crate::types::{Hit, NO_SPLAT, Splat, SurfaceClip};
 
 pub const PARALLEL_COS: f32 = 1e-6;
@@ -107,7 +107,8 @@ pub fn trace_ray(geo: &Geometry, o: Vec3, d: Vec3, skip: u32, t_max: f32, budget
         }
         *budget -= 1;
         let ci = (c.x + dims.x * (c.y + dims.y * c.z)) as usize;
-        let dist = geo.grid.cell_dist[ci];
+        let word = geo.grid.cell_dist[ci];
+        let dist = word & DIST_MASK;
         let k = (dist.max(1) - 1) as i32;
         let face = select_i(c - k, c + k + 1, step.cmpgt(IVec3::ZERO));
         let tf = Vec3::select(
@@ -116,7 +117,20 @@ pub fn trace_ray(geo: &Geometry, o: Vec3, d: Vec3, skip: u32, t_max: f32, budget
             Vec3::splat(FAR),
         );
         let t_exit = tf.x.min(tf.y.min(tf.z));
-        if dist == 0 {
+        // A listed cell whose disks all face away from the ray: none read, the budget spent
+        // as if each had been (as the WGSL twin).
+        let mut search = dist == 0;
+        if search && cone_faces_away(word, d) {
+            let listed = geo.grid.cell_start[ci + 1] - geo.grid.cell_start[ci];
+            if *budget < listed {
+                *budget = 0;
+                hit.aborted = 1;
+                return hit;
+            }
+            *budget -= listed;
+            search = false;
+        }
+        if search {
             let limit = t_exit + 1e-4 * cs;
             let (start, end) = (geo.grid.cell_start[ci], geo.grid.cell_start[ci + 1]);
             // The cell's nearest disk in (t, list position) order, searched again past one its

@@ -18,7 +18,9 @@
 //   exit (plus a 1e-4 cell tolerance), so a farther disk met early never hides a nearer one.
 // Traversal: 3D DDA (Amanatides & Woo) with empty-space skipping: `cell_dist` holds the
 // Chebyshev distance (in cells, capped) to the nearest listed cell, so a ray in an empty cell
-// at distance d jumps out of the empty (2d - 1)^3 box around it in one step. Each step moves
+// at distance d jumps out of the empty (2d - 1)^3 box around it in one step; a listed cell's
+// word also holds its facing cone (grid_cone.wgsl), with which a ray passes a cell whose disks
+// all face away from it without reading them. Each step moves
 // at least one cell forward and never back, so a ray ends within the sum of the grid's dims.
 // Every cell step and disk test spends one unit of `budget`; at zero the ray stops with
 // `aborted` set (llvmpipe silently ends an invocation's loops after ~65k iterations).
@@ -108,13 +110,28 @@ fn trace_ray(o: vec3<f32>, d: vec3<f32>, skip: u32, t_max: f32, budget: ptr<func
         }
         *budget -= 1u;
         let ci = u32(c.x + dims.x * (c.y + dims.y * c.z));
-        let dist = cell_dist[ci];
+        let word = cell_dist[ci];
+        let dist = word & DIST_MASK;
         let k = i32(max(dist, 1u) - 1u);
         // Exit of the empty box [c - k, c + k + 1) (just the cell when it lists splats).
         let face = select(c - k, c + k + 1, step > vec3<i32>(0));
         let tf = select(vec3<f32>(FAR), (lo + vec3<f32>(face) * cs - o) * inv, moving);
         let t_exit = min(tf.x, min(tf.y, tf.z));
-        if dist == 0u {
+        // Where every disk of a listed cell faces away from the ray (its facing cone: the
+        // cells of the surface a ray leaves), none is read, and the budget is spent as if each
+        // had been, so that a ray ends where it would have.
+        var search = dist == 0u;
+        if search && cone_faces_away(word, d) {
+            let listed = cell_start[ci + 1u] - cell_start[ci];
+            if *budget < listed {
+                *budget = 0u;
+                hit.aborted = 1u;
+                return hit;
+            }
+            *budget -= listed;
+            search = false;
+        }
+        if search {
             let limit = t_exit + 1e-4 * cs;
             let start = cell_start[ci];
             let end = cell_start[ci + 1u];
