@@ -2,7 +2,8 @@
 // moving frame is drawn with its own sub-pixel jitter and blended into the last resolved image,
 // found where the surface a pixel shows was in the last frame's camera. Per pixel:
 // - the history: the four last-frame pixels around where the pixel's surface was (where it
-//   shows none, its view direction's, a point at infinity), each kept only where it showed a
+//   shows none, the nearest surface an edge neighbour shows, else its view direction, a point
+//   at infinity: moved_point), each kept only where it showed a
 //   surface the pixel shows now (its distance from the last eye within depth_tolerance of
 //   that surface's, its normal within normal_cos; what the motion uncovered starts anew), or
 //   one an edge neighbour shows where what it showed lies within the pixel's footprint now,
@@ -126,6 +127,31 @@ fn in_footprint(px: vec2<i32>, q: vec2<i32>, was: vec4<f32>) -> bool {
     return now.z > 0.0 && all(vec2<i32>(floor(now.xy)) == px);
 }
 
+// What pixel px's history moved with, as (point, 1), or (direction, 0) for a point at
+// infinity: the surface it shows (own, at p along its ray d); where it shows none, the nearest
+// surface an edge neighbour shows; else its view direction. A pixel that shows nothing beside
+// a surface is an edge the jittered samples cover in part: following the view direction there
+// fetched the history of pixels that showed nothing, and every sample that missed the
+// surface set the pixel back to black (the box's outline read 0 where the still image has
+// two thirds of the floor).
+fn moved_point(px: vec2<i32>, size: vec2<i32>, own: vec4<f32>, d: vec3<f32>,
+               p: vec3<f32>) -> vec4<f32> {
+    if own.w < NO_SURFACE {
+        return vec4<f32>(p, 1.0);
+    }
+    var nearest = vec4<f32>(d, 0.0);
+    var t = NO_SURFACE;
+    for (var k = 0; k < 4; k++) {
+        let q = edge_neighbour(px, k, size);
+        let s = surface[pixel_index(q.x, q.y)];
+        if s.w < t {
+            t = s.w;
+            nearest = vec4<f32>(cam.eye + s.w * pixel_ray(cam, vec2<f32>(q) + 0.5), 1.0);
+        }
+    }
+    return nearest;
+}
+
 @compute @workgroup_size(64)
 fn main(@builtin(workgroup_id) wg: vec3<u32>, @builtin(num_workgroups) num_wg: vec3<u32>,
         @builtin(local_invocation_index) lid: u32) {
@@ -157,8 +183,9 @@ fn main(@builtin(workgroup_id) wg: vec3<u32>, @builtin(num_workgroups) num_wg: v
         let p = cam.eye + own.w * d;
         // The pixel's own surface as seen_from_last_eye gives it, from the ray already cast.
         let seen = vec4<f32>(own.xyz, select(NO_SURFACE, length(p - prev.eye), shows));
-        let now = project_point(cam, select(cam.eye + d, p, shows));
-        let was = project_point(prev, select(prev.eye + d, p, shows));
+        let moved = moved_point(px, size, own, d, p);
+        let now = project_point(cam, select(cam.eye + moved.xyz, moved.xyz, moved.w > 0.0));
+        let was = project_point(prev, select(prev.eye + moved.xyz, moved.xyz, moved.w > 0.0));
         // The pixel's centre moved as the surface did; pixel k's centre is at k + 0.5.
         let at = vec2<f32>(px) + (was.xy - now.xy);
         let base = floor(at);

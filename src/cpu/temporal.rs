@@ -120,6 +120,28 @@ fn in_footprint(input: &TemporalInput, px: IVec2, q: IVec2, was: Vec4) -> bool {
     now.z > 0.0 && now.truncate().floor().as_ivec2() == px
 }
 
+/// What pixel `px`'s history moved with: the point it shows (`own`, at `p`); where it shows
+/// none, the nearest surface an edge neighbour shows; else `None`, its view direction (a
+/// point at infinity). See `moved_point` in the WGSL.
+fn moved_point(input: &TemporalInput, px: IVec2, size: IVec2, own: Vec4, p: Vec3) -> Option<Vec3> {
+    if own.w < NO_SURFACE {
+        return Some(p);
+    }
+    let params = input.params;
+    let mut nearest = None;
+    let mut t = NO_SURFACE;
+    for k in 0..4 {
+        let q = edge_neighbour(px, k, size);
+        let s = input.surface[(q.y as u32 * params.width + q.x as u32) as usize];
+        if s[3] < t {
+            t = s[3];
+            nearest =
+                Some(Vec3::from(input.cam.eye) + s[3] * pixel_ray(input.cam, q.as_vec2() + 0.5));
+        }
+    }
+    nearest
+}
+
 fn resolve(input: &TemporalInput, i: u32) -> ([f32; 4], [f32; 4]) {
     let TemporalInput {
         cam, prev, params, ..
@@ -151,8 +173,13 @@ fn resolve(input: &TemporalInput, i: u32) -> ([f32; 4], [f32; 4]) {
         } else {
             NO_SURFACE
         });
-        let now = project_point(cam, if shows { p } else { eye + d });
-        let was = project_point(prev, if shows { p } else { prev_eye + d });
+        let (now, was) = match moved_point(input, px, size, own, p) {
+            Some(m) => (project_point(cam, m), project_point(prev, m)),
+            None => (
+                project_point(cam, eye + d),
+                project_point(prev, prev_eye + d),
+            ),
+        };
         // The pixel's centre moved as the surface did; pixel k's centre is at k + 0.5.
         let at = px.as_vec2() + (was.truncate() - now.truncate());
         let base = at.floor();
