@@ -554,12 +554,12 @@ fn an_outline_keeps_its_coverage() {
         }
     }
     let run = |on: &mut Resolver| {
+        let params = temporal_params(SIZE, SIZE, false);
         let mut prev = at(0, temporal_jitter(0));
         let (mut history, mut kept) = frame(&prev);
         for k in 1..FRAMES {
             let cam = at(k, temporal_jitter(k));
             let now = frame(&cam);
-            let params = temporal_params(SIZE, SIZE, false);
             (history, kept) = on(&cam, &prev, &params, (&now.0, &now.1), (&history, &kept));
             prev = cam;
         }

@@ -77,14 +77,18 @@ fn weight_of(c: vec3<f32>, exposure: f32) -> f32 {
     return 1.0 / (1.0 + exposure * max(luminance(c), 0.0));
 }
 
+// The point at distance t along pixel q's ray in this frame's camera.
+fn point_shown(q: vec2<i32>, t: f32) -> vec3<f32> {
+    return cam.eye + t * pixel_ray(cam, vec2<f32>(q) + 0.5);
+}
+
 // Surface s (normal, distance along its ray) that pixel q shows, as (normal, distance from
 // the last frame's eye); NO_SURFACE where it shows none.
 fn seen_from_last_eye(q: vec2<i32>, s: vec4<f32>) -> vec4<f32> {
     if s.w >= NO_SURFACE {
         return vec4<f32>(s.xyz, NO_SURFACE);
     }
-    let p = cam.eye + s.w * pixel_ray(cam, vec2<f32>(q) + 0.5);
-    return vec4<f32>(s.xyz, length(p - prev.eye));
+    return vec4<f32>(s.xyz, length(point_shown(q, s.w) - prev.eye));
 }
 
 // Whether the last frame's surface `was` (normal, distance from its eye) is the surface
@@ -146,7 +150,7 @@ fn moved_point(px: vec2<i32>, size: vec2<i32>, own: vec4<f32>, d: vec3<f32>,
         let s = surface[pixel_index(q.x, q.y)];
         if s.w < t {
             t = s.w;
-            nearest = vec4<f32>(cam.eye + s.w * pixel_ray(cam, vec2<f32>(q) + 0.5), 1.0);
+            nearest = vec4<f32>(point_shown(q, t), 1.0);
         }
     }
     return nearest;

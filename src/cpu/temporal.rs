@@ -66,13 +66,18 @@ fn weight_of(c: Vec3, exposure: f32) -> f32 {
     1.0 / (1.0 + exposure * luminance(c).max(0.0))
 }
 
+/// The point at distance `t` along pixel `q`'s ray in this frame's camera.
+fn point_shown(input: &TemporalInput, q: IVec2, t: f32) -> Vec3 {
+    Vec3::from(input.cam.eye) + t * pixel_ray(input.cam, q.as_vec2() + 0.5)
+}
+
 /// Surface `s` (normal, distance along its ray) that pixel `q` shows, as (normal, distance from
 /// the last frame's eye); `NO_SURFACE` where it shows none.
 fn seen_from_last_eye(input: &TemporalInput, q: IVec2, s: Vec4) -> Vec4 {
     if s.w >= NO_SURFACE {
         return s.truncate().extend(NO_SURFACE);
     }
-    let p = Vec3::from(input.cam.eye) + s.w * pixel_ray(input.cam, q.as_vec2() + 0.5);
+    let p = point_shown(input, q, s.w);
     s.truncate()
         .extend((p - Vec3::from(input.prev.eye)).length())
 }
@@ -127,16 +132,14 @@ fn moved_point(input: &TemporalInput, px: IVec2, size: IVec2, own: Vec4, p: Vec3
     if own.w < NO_SURFACE {
         return Some(p);
     }
-    let params = input.params;
     let mut nearest = None;
     let mut t = NO_SURFACE;
     for k in 0..4 {
         let q = edge_neighbour(px, k, size);
-        let s = input.surface[(q.y as u32 * params.width + q.x as u32) as usize];
+        let s = input.surface[(q.y * size.x + q.x) as usize];
         if s[3] < t {
             t = s[3];
-            nearest =
-                Some(Vec3::from(input.cam.eye) + s[3] * pixel_ray(input.cam, q.as_vec2() + 0.5));
+            nearest = Some(point_shown(input, q, t));
         }
     }
     nearest
