@@ -140,7 +140,12 @@ fn spread_word(sum: Vec3, area: f32) -> u32 {
 /// chunks' records under 0.5 byte a splat, and one invocation's walk of a chunk short.
 pub const CHUNK: usize = 256;
 
-/// What a frame's selection walks: the merge tree, and the splats in chunks near one another.
+/// Children a node of the chunks' hierarchy holds (`LodTree::nodes`): a node stands for 16
+/// consecutive records of the level below, so that its children are found by position.
+pub const NODE_FANOUT: usize = 16;
+
+/// What a frame's selection walks: the merge tree, the splats in chunks near one another, and
+/// a hierarchy of nodes over the chunks that a frame walks from the top.
 pub struct LodTree {
     /// Whether it holds the merge tree (`build`) or the chunks alone (`flat`).
     pub merged: bool,
@@ -155,6 +160,11 @@ pub struct LodTree {
     /// The splats chunk by chunk, each chunk's sorted by top level.
     pub order: Vec<u32>,
     pub chunks: Vec<SplatChunk>,
+    /// The hierarchy over the chunks, from the level just above them to the top, which holds
+    /// one node: node j of a level stands for records `NODE_FANOUT·j ..` of the level below
+    /// (`first`: the first of them), and bounds them all as a chunk bounds its splats
+    /// (`node_of`), so that `chunk_visits` of a node rules out a level for its whole subtree.
+    pub nodes: Vec<Vec<SplatChunk>>,
 }
 
 impl LodTree {
@@ -214,10 +224,79 @@ impl LodTree {
             spreads,
             order,
             chunks: Vec::new(),
+            nodes: Vec::new(),
         };
         tree.chunks = chunks(splats, &tree);
+        tree.nodes = nodes(&tree.chunks);
         tree
     }
+}
+
+/// The levels of nodes over `chunks` (`LodTree::nodes`), up to a level of one node.
+fn nodes(chunks: &[SplatChunk]) -> Vec<Vec<SplatChunk>> {
+    let mut levels: Vec<Vec<SplatChunk>> = Vec::new();
+    loop {
+        let below = levels.last().map_or(chunks, |l| l.as_slice());
+        let level: Vec<SplatChunk> = below
+            .chunks(NODE_FANOUT)
+            .enumerate()
+            .map(|(k, run)| node_of(run, (k * NODE_FANOUT) as u32))
+            .collect();
+        let top = level.len() <= 1;
+        levels.push(level);
+        if top {
+            return levels;
+        }
+    }
+}
+
+/// A node over `children` (records of the level below, the first at position `first`): a
+/// sphere holding theirs, and per level the counts of splats below it (`ends`, as a chunk's)
+/// and the largest of the children's disks, parents' disks and gaps among those that hold
+/// splats of that level (a root among them keeps the level visited). A level `chunk_visits`
+/// keeps for a child it keeps for the node: the sphere holds the child's, its bounds are the
+/// children's largest, and its nearest depth is theirs or nearer.
+fn node_of(children: &[SplatChunk], first: u32) -> SplatChunk {
+    let (lo, hi) = children.iter().fold(
+        (Vec3::splat(f32::INFINITY), Vec3::splat(f32::NEG_INFINITY)),
+        |(lo, hi), ch| {
+            let (c, r) = (Vec3::from(ch.center), Vec3::splat(ch.centre_reach));
+            (lo.min(c - r), hi.max(c + r))
+        },
+    );
+    let center = (lo + hi) * 0.5;
+    let mut node = SplatChunk {
+        center: center.to_array(),
+        first,
+        ..SplatChunk::default()
+    };
+    let mut below = [0u32; LOD_LEVELS];
+    for ch in children {
+        let reach = (Vec3::from(ch.center) - center).length() + ch.centre_reach;
+        // A little wider than the arithmetic says, so that rounding (of the reach, and of the
+        // centre's coordinates, some ulps of their size) never leaves a child's sphere outside.
+        let slack = 1e-5 * reach + 1e-6 * center.abs().max_element();
+        node.centre_reach = node.centre_reach.max(reach + slack);
+        for (t, sum) in below.iter_mut().enumerate() {
+            let held = ch.ends[t] - if t == 0 { 0 } else { ch.ends[t - 1] };
+            if held == 0 {
+                continue;
+            }
+            *sum += held;
+            node.level_fit[t] = node.level_fit[t].max(ch.level_fit[t]);
+            node.parent_gap[t] = node.parent_gap[t].max(ch.parent_gap[t]);
+            node.parent_fit[t] = match ch.parent_fit[t] > 0.0 && node.parent_fit[t] >= 0.0 {
+                true => node.parent_fit[t].max(ch.parent_fit[t]),
+                false => -1.0,
+            };
+        }
+    }
+    let mut sum = 0;
+    for (end, held) in node.ends.iter_mut().zip(below) {
+        sum += held;
+        *end = sum;
+    }
+    node
 }
 
 /// The entries of `ch` (positions in the tree's order) that a frame visits, level by level
@@ -234,14 +313,16 @@ pub fn visited(ch: &SplatChunk, visits: u32) -> impl Iterator<Item = u32> + '_ {
     })
 }
 
-/// The splats' indices along a Morton curve of their centres in the bounds (21 bits an axis;
-/// the index breaks ties), so that each run of `CHUNK` lies close together.
+/// The splats' indices along a Morton curve of their centres in the bounds' cube (21 bits an
+/// axis; the index breaks ties), so that each run of `CHUNK`, and each node's runs, lie close
+/// together: in a cube, not in a box of the bounds' shape, whose cells a long scan (a street,
+/// a corridor) would stretch along its length.
 fn morton_order(splats: &[Splat]) -> Vec<u32> {
     let (lo, hi) = splats.iter().fold(
         (Vec3::splat(f32::INFINITY), Vec3::splat(f32::NEG_INFINITY)),
         |(lo, hi), s| (lo.min(s.center.into()), hi.max(s.center.into())),
     );
-    let scale = (hi - lo).max(Vec3::splat(1e-30)).recip() * ((1u32 << 21) - 1) as f32;
+    let scale = ((1u32 << 21) - 1) as f32 / (hi - lo).max_element().max(1e-30);
     let spread = |v: u32| {
         // The 21 bits of v, two zero bits between each.
         let mut x = v as u64 & 0x1f_ffff;

@@ -94,6 +94,7 @@ stages! {
     TonemapReduce => "tonemap_reduce",
     TonemapApply => "tonemap_apply",
     SplatVisibility => "splat_visibility",
+    SplatNodes => "splat_nodes",
     SplatSelect => "splat_select",
     SplatList => "splat_list",
     SplatShade => "splat_shade",

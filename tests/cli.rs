@@ -739,6 +739,7 @@ fn bench_scale_reports_each_size() {
             "direct_ms",
             "bake_ms",
             "frame_ms",
+            "corner_frame_ms",
         ] {
             assert!(row[key].as_f64().is_some_and(|x| x > 0.0), "{key}: {row}");
         }

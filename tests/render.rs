@@ -774,6 +774,7 @@ fn a_drawn_box_ends_at_its_edges() {
 /// front view visits fewer than it would without it.
 #[test]
 fn selection_by_chunks_draws_what_every_splat_would() {
+    use lobelight::cpu::splat_nodes::walk;
     use lobelight::cpu::splat_select::{selection, splat_select};
     use lobelight::frame::{Splatting, frame_camera};
     use lobelight::lod::{LodTree, visited};
@@ -828,7 +829,8 @@ fn selection_by_chunks_draws_what_every_splat_would() {
                 got.len(),
                 want.len()
             );
-            let selected = splat_select(&cam, &scene.splats, t);
+            let walked = walk(&cam, t);
+            let selected = splat_select(&cam, &scene.splats, t, &walked[0]);
             let visited: usize = t
                 .chunks
                 .iter()
@@ -879,5 +881,99 @@ fn selection_by_chunks_draws_what_every_splat_would() {
         if v == 0 {
             assert!(visits_at[2] < visits_at[0], "lod 4 visits {visits_at:?}");
         }
+    }
+}
+
+/// A frame walks the chunks' nodes from the top and culls whole subtrees: of two patches of
+/// splats far apart, the one outside the view costs the walk one node, whose children read a
+/// word each and no record, and no chunk of it is read. The patch in view is selected as the
+/// per-splat rule selects it.
+#[test]
+fn the_walk_skips_a_patch_outside_the_view() {
+    use lobelight::cpu::splat_nodes::walk;
+    use lobelight::cpu::splat_select::selection;
+    use lobelight::frame::{Splatting, frame_camera};
+    use lobelight::lod::{CHUNK, LodTree, NODE_FANOUT};
+    use lobelight::shared::splat::{drawn_radius, lod_level};
+    use lobelight::types::Splat;
+    // Two 256 × 256 grids of disks facing +z, one round the origin and one 100 units along x:
+    // 256 chunks each, 16 nodes each above them.
+    let side = 256;
+    let splats: Vec<Splat> = (0..2 * side * side)
+        .map(|k| {
+            let (patch, i) = (k / (side * side), k % (side * side));
+            let step = 2.0 / side as f32;
+            Splat {
+                center: [
+                    -1.0 + (i % side) as f32 * step + 100.0 * patch as f32,
+                    -1.0 + (i / side) as f32 * step,
+                    0.0,
+                ],
+                radius: step,
+                normal: [0.0, 0.0, 1.0],
+                ..Splat::default()
+            }
+        })
+        .collect();
+    let far = |i: u32| splats[i as usize].center[0] > 50.0;
+    let tree = LodTree::build(&splats, false);
+    assert_eq!(tree.chunks.len(), 2 * side * side / CHUNK);
+    let (scene, _, lobes) = glossy_cornell();
+    let mut camera = scene.camera.clone();
+    camera.eye = [0.0, 0.0, 3.0];
+    camera.target = [0.0, 0.0, 0.0];
+    let view = View::new(&camera, 128, 128);
+    let bounds = lobelight::grid::splat_bounds(&splats).unwrap();
+    for lod in [0.0, 1.5] {
+        let cfg = FrameConfig {
+            lod,
+            ..FrameConfig::default()
+        };
+        let params = shade_params(&scene, &lobes, &cfg);
+        let cam = frame_camera(
+            &camera_uniform(&view, bounds, &cfg),
+            &params,
+            Splatting::Raster,
+        );
+        let t = if lod > 0.0 {
+            &tree
+        } else {
+            &LodTree::flat(&splats)
+        };
+        let walked = walk(&cam, t);
+        // Per level, from the chunks up: the records read (a parent that visits something).
+        let mut read = Vec::new();
+        for (level, visits) in walked.iter().enumerate() {
+            let below = match level {
+                0 => t.chunks.len(),
+                _ => t.nodes[level - 1].len(),
+            };
+            read.push((0..below).filter(|j| visits[j / NODE_FANOUT] != 0).count());
+        }
+        read.push(walked.last().map_or(0, |v| v.len()));
+        eprintln!("lod {lod}: records read per level, chunks first: {read:?}");
+        // The far patch's chunks: none read.
+        let far_chunks: Vec<usize> = (0..t.chunks.len())
+            .filter(|&c| far(t.order[c * CHUNK]))
+            .collect();
+        assert_eq!(far_chunks.len(), t.chunks.len() / 2);
+        assert!(
+            far_chunks.iter().all(|&c| walked[0][c / NODE_FANOUT] == 0),
+            "lod {lod}: a chunk of the far patch was read"
+        );
+        // Above the chunks, the far patch's 16 nodes read a word each: their parent, one
+        // node for the whole patch, visits nothing.
+        assert_eq!(read[0], t.chunks.len() / 2, "lod {lod}: {read:?}");
+        assert_eq!(read[1], t.nodes[0].len() / 2, "lod {lod}: {read:?}");
+        let want: Vec<u32> = (0..splats.len() as u32)
+            .filter(|&i| {
+                let (s, l) = (&splats[i as usize], t.lod(i));
+                drawn_radius(&cam, s, l, lod_level(&cam, s, l)) > 0.0
+            })
+            .collect();
+        let mut got = selection(&cam, &splats, t).selected;
+        got.sort_unstable();
+        assert!(!want.is_empty() && !want.iter().any(|&i| far(i)));
+        assert_eq!(got, want, "lod {lod}");
     }
 }

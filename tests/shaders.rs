@@ -161,6 +161,7 @@ fn mirror_workgroup_shapes_match_the_wgsl() {
         (Stage::SplatTileCount, splat_tiles::WG, 1),
         (Stage::SplatTileScatter, splat_tiles::WG, 1),
         (Stage::SplatCompute, splat_tiles::WG, 1),
+        (Stage::SplatNodes, splat_nodes::WG, 1),
         (Stage::SplatSelect, splat_select::WG, 1),
         (Stage::SplatList, splat_list::WG, 1),
         (Stage::SplatShade, splat_shade::WG, 1),
@@ -330,6 +331,17 @@ fn wgsl_const_u32(source: &str, name: &str) -> u32 {
     match digits.strip_prefix("0x") {
         Some(hex) => u32::from_str_radix(hex, 16).unwrap(),
         None => digits.parse().unwrap(),
+    }
+}
+
+/// The walk down the chunks' nodes finds a node's parent by position: the host's and the
+/// stages' fan-out must be one number.
+#[test]
+fn node_fanout_matches_the_wgsl() {
+    for stage in [Stage::SplatNodes, Stage::SplatSelect] {
+        let source = shaders::resolve_stage(stage).unwrap();
+        let fanout = wgsl_const_u32(&source, "NODE_FANOUT") as usize;
+        assert_eq!(fanout, lobelight::lod::NODE_FANOUT, "{stage}");
     }
 }
 

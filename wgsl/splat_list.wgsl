@@ -38,22 +38,25 @@ fn main(@builtin(workgroup_id) wg: vec3<u32>, @builtin(num_workgroups) num_wg: v
     if c >= n {
         return;
     }
-    let ch = chunks[c];
     let visited = visits[c];
     var at = offsets[c];
-    var start = 0u;
-    for (var t = 0u; t < LOD_LEVELS; t++) {
-        let end = ch.ends[t];
-        if (visited >> t & 1u) != 0u {
-            for (var e = start; e < end; e++) {
-                let i = order_at(ch.first + e);
-                if drawn_at(i) > 0.0 {
-                    selected_put(at, i);
-                    at += 1u;
+    // A chunk that visits nothing lists nothing: its record is not read.
+    if visited != 0u {
+        let ch = chunks[c];
+        var start = 0u;
+        for (var t = 0u; t < LOD_LEVELS; t++) {
+            let end = ch.ends[t];
+            if (visited >> t & 1u) != 0u {
+                for (var e = start; e < end; e++) {
+                    let i = order_at(ch.first + e);
+                    if drawn_at(i) > 0.0 {
+                        selected_put(at, i);
+                        at += 1u;
+                    }
                 }
             }
+            start = end;
         }
-        start = end;
     }
     if c == n - 1u {
         selected_count[0] = at;

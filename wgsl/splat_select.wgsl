@@ -1,7 +1,7 @@
 // Splat pass 0, the splats a frame of baked direct light draws (docs/design.md section 8), by
 // the level of detail's tree: one invocation a chunk of splats near one another, which visits
-// the levels of its splats that chunk_visits cannot rule out (none outside the view), so that
-// the frame's work follows what it draws rather than the scene. For each splat it visits it
+// the levels of its splats that its node's walk (splat_nodes) and chunk_visits cannot rule out
+// (none outside the view), so that the frame's work follows what it draws rather than the scene. For each splat it visits it
 // writes the radius it is drawn with (drawn_radius; 0: not drawn) and the word of its merged
 // normals at that level (LodSpread; 0 at its own); per chunk, its count of drawn
 // splats and the levels it visited, for splat_list, which lists them for splat_shade and the
@@ -36,6 +36,8 @@
 @group(0) @binding(8) var<storage, read> lod_spreads: array<u32>;
 // #paged
 @group(0) @binding(9) var<storage, read_write> drawn_normals: array<u32>;
+// The levels the node above each chunk visits (splat_nodes; chunk c's is c / NODE_FANOUT).
+@group(0) @binding(10) var<storage, read> parent_visits: array<u32>;
 
 const WG: u32 = 64u;
 
@@ -46,8 +48,15 @@ fn main(@builtin(workgroup_id) wg: vec3<u32>, @builtin(num_workgroups) num_wg: v
     if c >= arrayLength(&chunks) {
         return;
     }
+    // A chunk whose node visits nothing is not read: its subtree was ruled out above.
+    let up = parent_visits[c / NODE_FANOUT];
+    if up == 0u {
+        group_counts[c] = 0u;
+        visits[c] = 0u;
+        return;
+    }
     let ch = chunks[c];
-    let visited = chunk_visits(cam, ch);
+    let visited = chunk_visits(cam, ch) & up;
     // The merge tree's merged normals, or a stand-in (one splat's words) where the scene has
     // nothing glossy or the level of detail is off: then drawn_normals is not written (and may
     // be a stand-in too). A glossy scene of one splat merges nothing: its words are all 0.

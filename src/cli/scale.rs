@@ -21,6 +21,7 @@ use crate::frame::FrameConfig;
 use crate::gpu::Gpu;
 use crate::renderer::FrameRenderer;
 use crate::scene;
+use crate::scene::file::CameraDesc;
 use crate::timing::ms_since;
 
 /// The splat counts `bench scale` measures unless told.
@@ -117,6 +118,10 @@ pub struct ScaleRow {
     pub bake_ms: f64,
     /// Median moving-camera frame at 512², tone map included.
     pub frame_ms: f64,
+    /// The same of a close view straight down on a corner (`CORNER_VIEW`), which shows about
+    /// a twelfth of the cloud: where most of a scan lies outside the view, the frame should
+    /// cost what the part in view costs.
+    pub corner_frame_ms: f64,
     /// Peak resident memory of the process so far (sizes run smallest first, so it is this
     /// size's peak): on lavapipe device buffers live in it too. `None` off Linux.
     pub peak_rss_bytes: Option<u64>,
@@ -203,10 +208,31 @@ struct Drawn {
     renderer: FrameRenderer,
 }
 
+/// `ScaleRow::corner_frame_ms`'s view: 0.7 above the terrain's corner quarter's centre, looking
+/// straight down (45°: 0.58 × 0.58 of its 2 × 2).
+const CORNER_VIEW: ([f32; 3], [f32; 3]) = ([-0.5, 0.7, -0.5], [-0.5, 0.0, -0.5]);
+
 impl Drawn {
-    /// One moving frame at `FRAME_SIZE`, tone map included, waited for: its milliseconds.
+    /// One moving frame at `FRAME_SIZE` from the scene's camera, tone map included, waited
+    /// for: its milliseconds.
     fn frame_ms(&mut self, gpu: &Gpu) -> Result<f64> {
-        let view = View::new(&self.scene.camera, FRAME_SIZE.0, FRAME_SIZE.1);
+        let camera = self.scene.camera.clone();
+        self.frame_ms_from(gpu, &camera)
+    }
+
+    /// The same from `CORNER_VIEW`.
+    fn corner_frame_ms(&mut self, gpu: &Gpu) -> Result<f64> {
+        let camera = CameraDesc {
+            eye: CORNER_VIEW.0,
+            target: CORNER_VIEW.1,
+            up: [0.0, 0.0, -1.0],
+            ..self.scene.camera.clone()
+        };
+        self.frame_ms_from(gpu, &camera)
+    }
+
+    fn frame_ms_from(&mut self, gpu: &Gpu, camera: &CameraDesc) -> Result<f64> {
+        let view = View::new(camera, FRAME_SIZE.0, FRAME_SIZE.1);
         let t = Instant::now();
         self.renderer
             .draw(gpu, &self.scene, &view, &FrameConfig::default())?;
@@ -248,6 +274,11 @@ fn measure(
         times.push(drawn.frame_ms(gpu)?);
     }
     row.frame_ms = median(times[1..].to_vec());
+    let mut times = Vec::new();
+    for _ in 0..=TIMED_FRAMES {
+        times.push(drawn.corner_frame_ms(gpu)?);
+    }
+    row.corner_frame_ms = median(times[1..].to_vec());
     row.peak_rss_bytes = crate::cli::measure::peak_rss_bytes();
     Ok((row, drawn))
 }
@@ -331,6 +362,7 @@ fn bake_cloud(
         em_direct_ms: baked.em.direct_bake_ms.unwrap_or(0.0),
         bake_ms: photons_ms + binning_ms + em_ms + direct_ms,
         frame_ms: 0.0,
+        corner_frame_ms: 0.0,
         peak_rss_bytes: None,
     };
     Ok((Drawn { scene, renderer }, row))
@@ -443,7 +475,7 @@ impl std::fmt::Display for ScaleBench {
         )?;
         writeln!(
             f,
-            "{:>10} {:>8} {:>8} {:>8} {:>8} {:>9} {:>8} {:>8} {:>8} {:>9} {:>9} {:>9}",
+            "{:>10} {:>8} {:>8} {:>8} {:>8} {:>9} {:>8} {:>8} {:>8} {:>9} {:>9} {:>9} {:>9}",
             "splats",
             "read ms",
             "MB/s",
@@ -455,12 +487,13 @@ impl std::fmt::Display for ScaleBench {
             "fits",
             "direct ms",
             "frame ms",
+            "corner ms",
             "peak"
         )?;
         for r in &self.rows {
             writeln!(
                 f,
-                "{:>10} {:>8.0} {:>8.0} {:>8.0} {:>8.0} {:>9.0} {:>8.0} {:>8.0} {:>8} {:>9.0} {:>9.0} {:>9}",
+                "{:>10} {:>8.0} {:>8.0} {:>8.0} {:>8.0} {:>9.0} {:>8.0} {:>8.0} {:>8} {:>9.0} {:>9.0} {:>9.0} {:>9}",
                 r.splats,
                 r.read_ms,
                 r.read_mb_per_s,
@@ -472,6 +505,7 @@ impl std::fmt::Display for ScaleBench {
                 r.splats_fitted,
                 r.direct_ms,
                 r.frame_ms,
+                r.corner_frame_ms,
                 r.peak_rss_bytes.map_or("-".into(), mib)
             )?;
         }

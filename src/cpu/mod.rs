@@ -38,6 +38,7 @@ pub mod scan_reduce;
 pub mod shade;
 pub mod splat_attributes;
 pub mod splat_list;
+pub mod splat_nodes;
 pub mod splat_select;
 pub mod splat_shade;
 pub mod splat_shading;
@@ -105,6 +106,7 @@ pub fn mirror(stage: Stage) -> Option<Mirror> {
         Stage::TonemapReduce => Mirror::Plain(tonemap_reduce::dispatch),
         Stage::TraceRays
         | Stage::SplatVisibility
+        | Stage::SplatNodes
         | Stage::SplatSelect
         | Stage::SplatList
         | Stage::SplatShade

@@ -1,11 +1,12 @@
-//! Mirror of `wgsl/splat_select.wgsl`: chunk by chunk of the level of detail's tree, the radius
-//! each splat of the levels the chunk visits is drawn with in a frame of baked direct light
+//! Mirror of `wgsl/splat_select.wgsl`: chunk by chunk of the level of detail's tree, under the
+//! levels its node visits (`splat_nodes`), the radius each splat of the levels the chunk
+//! visits is drawn with in a frame of baked direct light
 //! (`drawn_radius`; 0: not drawn) and the word of its merged normals there, each chunk's count
 //! of drawn splats and the levels it visited. `selection` adds `splat_list` for the list.
 
 use rayon::prelude::*;
 
-use crate::lod::{LodTree, visited};
+use crate::lod::{LodTree, NODE_FANOUT, visited};
 use crate::shared::splat::{chunk_visits, drawn_radius, lod_level, lod_word};
 use crate::types::{Camera, Splat};
 
@@ -25,12 +26,24 @@ pub struct Selected {
 /// A visited splat: its index, drawn radius and word of merged normals.
 type Visited = (u32, f32, u32);
 
-pub fn splat_select(cam: &Camera, splats: &[Splat], tree: &LodTree) -> Selected {
+/// `parent_visits`: the levels each node of the level above the chunks visits
+/// (`splat_nodes::walk`'s first).
+pub fn splat_select(
+    cam: &Camera,
+    splats: &[Splat],
+    tree: &LodTree,
+    parent_visits: &[u32],
+) -> Selected {
     let per_chunk: Vec<(u32, Vec<Visited>)> = tree
         .chunks
         .par_iter()
-        .map(|ch| {
-            let visits = chunk_visits(cam, ch);
+        .enumerate()
+        .map(|(c, ch)| {
+            // A chunk whose node visits nothing is not read.
+            let visits = match parent_visits[c / NODE_FANOUT] {
+                0 => 0,
+                up => chunk_visits(cam, ch) & up,
+            };
             let radii = visited(ch, visits)
                 .map(|e| {
                     let i = tree.order[e as usize];
@@ -74,9 +87,11 @@ pub struct Selection {
     pub normals: Vec<u32>,
 }
 
-/// `splat_select`, the scan of its counts and `splat_list`, as the device runs them.
+/// The walk down the chunks' nodes (`splat_nodes`), `splat_select`, the scan of its counts
+/// and `splat_list`, as the device runs them.
 pub fn selection(cam: &Camera, splats: &[Splat], tree: &LodTree) -> Selection {
-    let chosen = splat_select(cam, splats, tree);
+    let nodes = super::splat_nodes::walk(cam, tree);
+    let chosen = splat_select(cam, splats, tree, &nodes[0]);
     let offsets: Vec<u32> = chosen
         .counts
         .iter()

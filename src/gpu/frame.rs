@@ -18,7 +18,7 @@ use crate::sequence::{Direct, TileLists, bin_splat_tiles};
 use crate::shaders::Stage;
 use crate::shaders::{PAGE_BINDING_STEP, Paging};
 use crate::shared::splat::{SPLAT_CORNERS, SPLATS_PER_INSTANCE, instances};
-use crate::types::{Camera, ShadeParams};
+use crate::types::{Camera, ShadeParams, SplatChunk};
 
 /// The format of the blended targets: f32 where the device can blend it, else f16.
 pub fn accumulation_format(gpu: &Gpu) -> wgpu::TextureFormat {
@@ -100,17 +100,38 @@ pub struct TreeBuffers {
     pub spreads: wgpu::Buffer,
     pub chunks: wgpu::Buffer,
     pub order: wgpu::Buffer,
+    /// The hierarchy over the chunks (`LodTree::nodes`: the level above the chunks first);
+    /// above the top, one word that visits all.
+    pub nodes: Vec<NodeLevel>,
+    pub visit_all: wgpu::Buffer,
     /// Whether it holds the merge tree (`LodTree::build`) or the chunks alone (`flat`).
     pub merged: bool,
 }
 
+/// One level of `lod::LodTree::nodes` on the device.
+pub struct NodeLevel {
+    pub nodes: wgpu::Buffer,
+    pub count: u32,
+    /// The levels each node visits in the frame being drawn (`splat_nodes`).
+    pub visits: wgpu::Buffer,
+}
+
 impl TreeBuffers {
     fn upload(gpu: &Gpu, tree: &crate::lod::LodTree) -> Result<TreeBuffers> {
+        let level = |nodes: &Vec<SplatChunk>| -> Result<NodeLevel> {
+            Ok(NodeLevel {
+                nodes: gpu.storage("chunks' nodes", nodes)?,
+                count: nodes.len() as u32,
+                visits: gpu.storage_zeroed("levels visited per node", nodes.len() as u64 * 4)?,
+            })
+        };
         Ok(TreeBuffers {
             lods: gpu.storage("level of detail", &tree.lods)?,
             spreads: gpu.storage("level of detail's normal spread", &tree.spreads)?,
             chunks: gpu.storage("splat chunks", &tree.chunks)?,
             order: gpu.storage("splats by chunk", &tree.order)?,
+            nodes: tree.nodes.iter().map(level).collect::<Result<_>>()?,
+            visit_all: gpu.storage("levels visited above the top", &[u32::MAX])?,
             merged: tree.merged,
         })
     }
@@ -890,7 +911,16 @@ impl SplatPipelines {
             scene.visits,
             &tree.spreads,
             scene.drawn_normals,
+            // `LodTree::nodes` holds one level at least.
+            &tree.nodes[0].visits,
         ];
+        // The walk down the chunks' nodes, from the top: one invocation a node.
+        for (k, level) in tree.nodes.iter().enumerate().rev() {
+            let up = tree.nodes.get(k + 1).map_or(&tree.visit_all, |l| &l.visits);
+            let groups = level.count.div_ceil(crate::cpu::splat_nodes::WG);
+            let walk = [&uniforms.cam, &level.nodes, up, &level.visits];
+            gpu.dispatch(encoder, Stage::SplatNodes, &walk, groups)?;
+        }
         // One invocation a chunk, in both passes.
         let chunks = scene.splat_count.div_ceil(crate::lod::CHUNK as u32);
         let groups = chunks.div_ceil(crate::cpu::splat_select::WG);

@@ -141,10 +141,11 @@ pub fn drawn_radius(cam: &Camera, s: &Splat, lod: &SplatLod, level: u32) -> f32 
 
 const _: () = assert!(LOD_LEVELS == LOD_MAX_LEVEL as usize + 1);
 
-/// The levels of chunk `ch` whose splats a frame visits (bit t: those whose top level is t):
-/// not those that lie outside the view, and with the level of detail on, not those whose
-/// parents' disks project within it even at the chunk's nearest depth, and their own top-level
-/// disks too (then `lod_radius` gives every one of them 0). Conservative: a splat that
+/// The levels of chunk `ch` whose splats a frame visits (bit t: those whose top level is t), or
+/// of a node of chunks (`lod::LodTree::nodes`) whose subtree's splats it may visit: not levels
+/// it holds none of, not those that lie outside the view, and with the level of detail on, not
+/// those whose parents' disks project within it even at the chunk's nearest depth, and their
+/// own top-level disks too (then `lod_radius` gives every one of them 0). Conservative: a splat that
 /// `drawn_radius` draws is always visited (`in_view`'s test holds for a sphere that holds its
 /// splats' with the margin its gradient asks for, a small slack for rounding).
 pub fn chunk_visits(cam: &Camera, ch: &SplatChunk) -> u32 {
@@ -154,6 +155,11 @@ pub fn chunk_visits(cam: &Camera, ch: &SplatChunk) -> u32 {
     let nearest = z - d - 1e-4 * (z.abs() + d);
     let mut visits = 0;
     for t in 0..LOD_LEVELS {
+        // A level it holds no splat of is never visited, so that a node whose subtree holds
+        // none rules it out for all of it.
+        if ch.ends[t] == if t == 0 { 0 } else { ch.ends[t - 1] } {
+            continue;
+        }
         // Level t's splats are drawn no wider than their disk at level t.
         let r = 2.0 * ch.level_fit[t];
         let slack = 1e-4 * (z.abs() + d + r);

@@ -189,8 +189,11 @@ fn drawn_radius(cam: Camera, s_in: Splat, lod: SplatLod, level: u32) -> f32 {
 
 // Levels of the merge tree, the splats' own included.
 const LOD_LEVELS: u32 = 6u;
+// Children a node of the chunks' hierarchy holds (lod::NODE_FANOUT).
+const NODE_FANOUT: u32 = 16u;
 
-// The levels of chunk ch whose splats a frame visits (bit t: those whose top level is t): not
+// The levels of chunk ch whose splats a frame visits (bit t: those whose top level is t), or of
+// a node of chunks whose subtree's splats it may visit: not levels it holds none of, not
 // those that lie outside the view, and with the level of detail on, not those whose parents'
 // disks project within it even at the chunk's nearest depth, and their own top-level disks too
 // (then lod_radius gives every one of them 0). Conservative: a splat drawn_radius draws is
@@ -205,6 +208,11 @@ fn chunk_visits(cam: Camera, ch: SplatChunk) -> u32 {
     let ay = cam.tan_y * (1.0 + 2.0 / cam.size.y);
     var visits = 0u;
     for (var t = 0u; t < LOD_LEVELS; t++) {
+        // A level it holds no splat of is never visited, so that a node whose subtree holds
+        // none rules it out for all of it.
+        if ch.ends[t] == select(0u, ch.ends[max(t, 1u) - 1u], t > 0u) {
+            continue;
+        }
         // Level t's splats are drawn no wider than their disk at level t.
         let r = 2.0 * ch.level_fit[t];
         let slack = 1e-4 * (abs(z) + d + r);
