@@ -590,6 +590,23 @@ impl FrameRenderer {
         Ok([visibility, attributes, shade, temporal])
     }
 
+    /// The selection alone of the moving frame of `view` (`SplatPipelines::select_timed`):
+    /// its milliseconds, waited for (benchmarks).
+    pub fn select_timed(
+        &mut self,
+        gpu: &Gpu,
+        scene: &Scene,
+        view: &View,
+        cfg: &FrameConfig,
+    ) -> Result<f64> {
+        let cam = self.prepare(gpu, scene, view, cfg)?;
+        let params = shade_params_for(scene, self.lobes_per_splat, self.extent.shadow_bias, cfg);
+        let splatting = self.pipelines.splatting(cfg.splatter)?;
+        let buffers = self.frame_buffers(gpu, scene, &cam, &params, splatting)?;
+        self.pipelines
+            .select_timed(gpu, &buffers, &cam, &params, splatting)
+    }
+
     /// Records the tone mapping of the current targets' HDR image.
     pub fn record_tone_map(
         &self,

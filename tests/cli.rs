@@ -740,9 +740,24 @@ fn bench_scale_reports_each_size() {
             "bake_ms",
             "frame_ms",
             "corner_frame_ms",
+            "select_ms",
         ] {
             assert!(row[key].as_f64().is_some_and(|x| x > 0.0), "{key}: {row}");
         }
+        // The passes of the frame: visibility (the selection in it), attributes, shade, and
+        // no temporal pass.
+        let passes: Vec<f64> = (row["passes_ms"].as_array().unwrap().iter())
+            .map(|p| p.as_f64().unwrap_or(-1.0))
+            .collect();
+        assert!(
+            passes.len() == 4 && passes[..3].iter().all(|&p| p > 0.0),
+            "{row}"
+        );
+        assert_eq!(passes[3], 0.0, "{row}");
+        assert!(
+            row["select_ms"].as_f64().unwrap() <= 10.0 * passes[0],
+            "{row}"
+        );
         assert!(dir.join(format!("terrain_{n}.ply")).is_file());
         assert!(dir.join(format!("terrain_{n}.toml")).is_file());
     }

@@ -122,6 +122,12 @@ pub struct ScaleRow {
     /// a twelfth of the cloud: where most of a scan lies outside the view, the frame should
     /// cost what the part in view costs.
     pub corner_frame_ms: f64,
+    /// Of the whole view's frame, each pass waited for (median of 3): the visibility pass
+    /// with the selection before it, the attributes, the shade pass and the temporal pass (0);
+    /// and the selection alone (the walk down the nodes, `splat_select`, the scan,
+    /// `splat_list`), to tell what grows with the splats from what follows the pixels.
+    pub passes_ms: [f64; 4],
+    pub select_ms: f64,
     /// Peak resident memory of the process so far (sizes run smallest first, so it is this
     /// size's peak): on lavapipe device buffers live in it too. `None` off Linux.
     pub peak_rss_bytes: Option<u64>,
@@ -231,6 +237,18 @@ impl Drawn {
         self.frame_ms_from(gpu, &camera)
     }
 
+    /// The scene camera's frame with each pass waited for (`FrameRenderer::draw_timed`).
+    fn passes_ms(&mut self, gpu: &Gpu) -> Result<[f64; 4]> {
+        let view = View::new(&self.scene.camera, FRAME_SIZE.0, FRAME_SIZE.1);
+        (self.renderer).draw_timed(gpu, &self.scene, &view, &FrameConfig::default())
+    }
+
+    /// The scene camera's frame's selection alone (`FrameRenderer::select_timed`).
+    fn select_ms(&mut self, gpu: &Gpu) -> Result<f64> {
+        let view = View::new(&self.scene.camera, FRAME_SIZE.0, FRAME_SIZE.1);
+        (self.renderer).select_timed(gpu, &self.scene, &view, &FrameConfig::default())
+    }
+
     fn frame_ms_from(&mut self, gpu: &Gpu, camera: &CameraDesc) -> Result<f64> {
         let view = View::new(camera, FRAME_SIZE.0, FRAME_SIZE.1);
         let t = Instant::now();
@@ -279,6 +297,13 @@ fn measure(
         times.push(drawn.corner_frame_ms(gpu)?);
     }
     row.corner_frame_ms = median(times[1..].to_vec());
+    let (mut passes, mut selects) = (Vec::new(), Vec::new());
+    for _ in 0..=TIMED_FRAMES {
+        passes.push(drawn.passes_ms(gpu)?);
+        selects.push(drawn.select_ms(gpu)?);
+    }
+    row.passes_ms = std::array::from_fn(|k| median(passes[1..].iter().map(|p| p[k]).collect()));
+    row.select_ms = median(selects[1..].to_vec());
     row.peak_rss_bytes = crate::cli::measure::peak_rss_bytes();
     Ok((row, drawn))
 }
@@ -363,6 +388,8 @@ fn bake_cloud(
         bake_ms: photons_ms + binning_ms + em_ms + direct_ms,
         frame_ms: 0.0,
         corner_frame_ms: 0.0,
+        passes_ms: [0.0; 4],
+        select_ms: 0.0,
         peak_rss_bytes: None,
     };
     Ok((Drawn { scene, renderer }, row))
@@ -475,7 +502,7 @@ impl std::fmt::Display for ScaleBench {
         )?;
         writeln!(
             f,
-            "{:>10} {:>8} {:>8} {:>8} {:>8} {:>9} {:>8} {:>8} {:>8} {:>9} {:>9} {:>9} {:>9}",
+            "{:>10} {:>8} {:>8} {:>8} {:>8} {:>9} {:>8} {:>8} {:>8} {:>9} {:>9} {:>9} {:>9} {:>9}",
             "splats",
             "read ms",
             "MB/s",
@@ -487,13 +514,14 @@ impl std::fmt::Display for ScaleBench {
             "fits",
             "direct ms",
             "frame ms",
+            "select ms",
             "corner ms",
             "peak"
         )?;
         for r in &self.rows {
             writeln!(
                 f,
-                "{:>10} {:>8.0} {:>8.0} {:>8.0} {:>8.0} {:>9.0} {:>8.0} {:>8.0} {:>8} {:>9.0} {:>9.0} {:>9.0} {:>9}",
+                "{:>10} {:>8.0} {:>8.0} {:>8.0} {:>8.0} {:>9.0} {:>8.0} {:>8.0} {:>8} {:>9.0} {:>9.0} {:>9.1} {:>9.0} {:>9}",
                 r.splats,
                 r.read_ms,
                 r.read_mb_per_s,
@@ -505,6 +533,7 @@ impl std::fmt::Display for ScaleBench {
                 r.splats_fitted,
                 r.direct_ms,
                 r.frame_ms,
+                r.select_ms,
                 r.corner_frame_ms,
                 r.peak_rss_bytes.map_or("-".into(), mib)
             )?;

@@ -841,6 +841,28 @@ impl SplatPipelines {
         Ok(ms)
     }
 
+    /// The selection of a frame of baked direct light alone (`record_splat_select`: the walk
+    /// down the nodes, `splat_select`, the scan and `splat_list`), waited for: its
+    /// milliseconds; 0 for a frame that selects nothing (direct light by rays). Benchmarks.
+    pub fn select_timed(
+        &self,
+        gpu: &Gpu,
+        scene: &SceneBuffers,
+        cam: &Camera,
+        params: &ShadeParams,
+        splatting: Splatting,
+    ) -> Result<f64> {
+        let uniforms = self.uniforms(gpu, cam, params, splatting);
+        if DirectMode::of_code(uniforms.direct) != DirectMode::Baked {
+            return Ok(0.0);
+        }
+        let t = std::time::Instant::now();
+        let mut encoder = gpu.encoder("selection");
+        self.record_splat_select(gpu, &mut encoder, scene, &uniforms)?;
+        gpu.submit_and_wait(encoder)?;
+        Ok(crate::timing::ms_since(t))
+    }
+
     /// The frame's uniforms; the camera as `frame::frame_camera` gives it to the passes (the
     /// level of detail in moving frames of the raster passes only).
     fn uniforms(
