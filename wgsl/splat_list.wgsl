@@ -3,10 +3,11 @@
 // splat_select found) among the entries of the levels splat_select visited, from the chunk's
 // offset in the scanned counts and in the chunk's order, so that the raster passes, which draw
 // this list alone, blend in the same order in every run, and splat_shade's dispatch, sized by
-// the list rather than the scene (empty workgroups cost llvmpipe 1 s a frame at 10 M splats). A chunk's few hundred entries at most
-// are walked in order by one invocation: no barrier, no prefix over flags (a workgroup a chunk
-// with a barrier a round took 2.3x this on llvmpipe). The last chunk writes the list's length
-// and the raster passes' indirect draw. Twin: src/cpu/splat_list.rs.
+// the list rather than the scene (empty workgroups cost llvmpipe 1 s a frame at 10 M splats).
+// A chunk's few hundred entries at most are walked in order by one invocation: no barrier, no
+// prefix over flags (a workgroup a chunk with a barrier a round took 2.3x this on llvmpipe). A
+// chunk that visits nothing (its node's walk ruled it out) is not read. The last chunk writes
+// the list's length and the raster passes' indirect draw. Twin: src/cpu/splat_list.rs.
 
 // #import dispatch
 // #import splat

@@ -1,13 +1,14 @@
 // Splat pass 0, the splats a frame of baked direct light draws (docs/design.md section 8), by
 // the level of detail's tree: one invocation a chunk of splats near one another, which visits
 // the levels of its splats that its node's walk (splat_nodes) and chunk_visits cannot rule out
-// (none outside the view), so that the frame's work follows what it draws rather than the scene. For each splat it visits it
-// writes the radius it is drawn with (drawn_radius; 0: not drawn) and the word of its merged
-// normals at that level (LodSpread; 0 at its own); per chunk, its count of drawn
-// splats and the levels it visited, for splat_list, which lists them for splat_shade and the
-// raster passes. Entries not visited keep an earlier frame's radius: nothing reads them. One
-// invocation, not a workgroup, a chunk: a chunk holds a few hundred visited entries at most,
-// and llvmpipe spent 20 µs a workgroup on 10 M splats' 39 k chunks (their barriers).
+// (none outside the view), so that the frame's work follows what it draws rather than the
+// scene. For each splat it visits it writes the radius it is drawn with (drawn_radius; 0: not
+// drawn) and the word of its merged normals at that level (LodSpread; 0 at its own); per
+// chunk, its count of drawn splats and the levels it visited, for splat_list, which lists them
+// for splat_shade and the raster passes. Entries not visited keep an earlier frame's radius:
+// nothing reads them. One invocation, not a workgroup, a chunk: a chunk holds a few hundred
+// visited entries at most, and llvmpipe spent 20 µs a workgroup on 10 M splats' 39 k chunks
+// (their barriers).
 // Twin: src/cpu/splat_select.rs.
 
 // #import dispatch
