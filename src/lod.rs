@@ -278,7 +278,7 @@ fn node_of(children: &[SplatChunk], first: u32) -> SplatChunk {
         let slack = 1e-5 * reach + 1e-6 * center.abs().max_element();
         node.centre_reach = node.centre_reach.max(reach + slack);
         for (t, sum) in below.iter_mut().enumerate() {
-            let held = ch.ends[t] - if t == 0 { 0 } else { ch.ends[t - 1] };
+            let held = ch.level(t).len() as u32;
             if held == 0 {
                 continue;
             }
@@ -303,13 +303,11 @@ fn node_of(children: &[SplatChunk], first: u32) -> SplatChunk {
 /// (`visits`: bit t for its splats whose top level is t, as `shared::splat::chunk_visits` says).
 pub fn visited(ch: &SplatChunk, visits: u32) -> impl Iterator<Item = u32> + '_ {
     (0..LOD_LEVELS).flat_map(move |t| {
-        let start = if t == 0 { 0 } else { ch.ends[t - 1] };
-        let end = if visits >> t & 1 != 0 {
-            ch.ends[t]
-        } else {
-            start
+        let entries = match visits >> t & 1 {
+            0 => 0..0,
+            _ => ch.level(t),
         };
-        (start..end).map(move |e| ch.first + e)
+        entries.map(move |e| ch.first + e)
     })
 }
 

@@ -169,6 +169,15 @@ pub struct SplatChunk {
     pub _pad: [u32; 3],
 }
 
+impl SplatChunk {
+    /// The entries (from `first`) of its splats whose top level is `t`; for a node, the count
+    /// of its subtree's splats before and through that level.
+    pub fn level(&self, t: usize) -> std::ops::Range<u32> {
+        let start = if t == 0 { 0 } else { self.ends[t - 1] };
+        start..self.ends[t]
+    }
+}
+
 /// Isotropic Ward material (docs/design.md §3): the specular part; the diffuse albedo lives per splat.
 #[repr(C)]
 #[derive(Clone, Copy, Debug, Default, PartialEq, Pod, Zeroable)]

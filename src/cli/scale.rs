@@ -287,25 +287,20 @@ fn measure(
     settings: Settings,
 ) -> Result<(ScaleRow, Drawn)> {
     let (mut drawn, mut row) = bake_cloud(gpu, engine, scene_path, n, settings)?;
-    let mut times = Vec::new();
-    for _ in 0..=TIMED_FRAMES {
-        times.push(drawn.frame_ms(gpu)?);
-    }
-    row.frame_ms = median(times[1..].to_vec());
-    let mut times = Vec::new();
-    for _ in 0..=TIMED_FRAMES {
-        times.push(drawn.corner_frame_ms(gpu)?);
-    }
-    row.corner_frame_ms = median(times[1..].to_vec());
-    let (mut passes, mut selects) = (Vec::new(), Vec::new());
-    for _ in 0..=TIMED_FRAMES {
-        passes.push(drawn.passes_ms(gpu)?);
-        selects.push(drawn.select_ms(gpu)?);
-    }
-    row.passes_ms = std::array::from_fn(|k| median(passes[1..].iter().map(|p| p[k]).collect()));
-    row.select_ms = median(selects[1..].to_vec());
+    row.frame_ms = median(timed(|| drawn.frame_ms(gpu))?);
+    row.corner_frame_ms = median(timed(|| drawn.corner_frame_ms(gpu))?);
+    let passes = timed(|| drawn.passes_ms(gpu))?;
+    row.passes_ms = std::array::from_fn(|k| median(passes.iter().map(|p| p[k]).collect()));
+    row.select_ms = median(timed(|| drawn.select_ms(gpu))?);
     row.peak_rss_bytes = crate::cli::measure::peak_rss_bytes();
     Ok((row, drawn))
+}
+
+/// `TIMED_FRAMES` measures of `measure`, after one untimed (its first frame builds and
+/// compiles what later frames reuse).
+fn timed<T>(mut measure: impl FnMut() -> Result<T>) -> Result<Vec<T>> {
+    measure()?;
+    (0..TIMED_FRAMES).map(|_| measure()).collect()
 }
 
 /// Loads and bakes cloud `n`: the cloud ready to draw, and its row but for the frames.

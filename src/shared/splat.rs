@@ -145,9 +145,9 @@ const _: () = assert!(LOD_LEVELS == LOD_MAX_LEVEL as usize + 1);
 /// of a node of chunks (`lod::LodTree::nodes`) whose subtree's splats it may visit: not levels
 /// it holds none of, not those that lie outside the view, and with the level of detail on, not
 /// those whose parents' disks project within it even at the chunk's nearest depth, and their
-/// own top-level disks too (then `lod_radius` gives every one of them 0). Conservative: a splat that
-/// `drawn_radius` draws is always visited (`in_view`'s test holds for a sphere that holds its
-/// splats' with the margin its gradient asks for, a small slack for rounding).
+/// own top-level disks too (then `lod_radius` gives every one of them 0). Conservative: a splat
+/// that `drawn_radius` draws is always visited (`in_view`'s test holds for a sphere that holds
+/// its splats' with the margin its gradient asks for, a small slack for rounding).
 pub fn chunk_visits(cam: &Camera, ch: &SplatChunk) -> u32 {
     let c = Vec3::from(ch.center) - Vec3::from(cam.eye);
     let z = c.dot(Vec3::from(cam.forward));
@@ -157,7 +157,7 @@ pub fn chunk_visits(cam: &Camera, ch: &SplatChunk) -> u32 {
     for t in 0..LOD_LEVELS {
         // A level it holds no splat of is never visited, so that a node whose subtree holds
         // none rules it out for all of it.
-        if ch.ends[t] == if t == 0 { 0 } else { ch.ends[t - 1] } {
+        if ch.level(t).is_empty() {
             continue;
         }
         // Level t's splats are drawn no wider than their disk at level t.
