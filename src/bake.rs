@@ -16,6 +16,7 @@ use crate::error::{Error, Result};
 use crate::fit_groups::CoverGroups;
 use crate::gpu::Gpu;
 use crate::gpu::exec::GpuExecutor;
+use crate::gpu::renderer::FrameRenderer;
 use crate::gpu::scene::GpuScene;
 use crate::grid::SplatGrid;
 use crate::photons::{PhotonMap, PhotonStats};
@@ -742,4 +743,17 @@ fn progress_photons(progress: &Progress, s: &PhotonStats) {
             s.emitted as f64 / (s.trace_ms * 1e3).max(1e-9)
         ),
     );
+}
+
+/// Bakes on the device over the scene `frames` draws, and keeps the lobes for its frames
+/// (the viewer and the frame benchmarks, which draw on the device whichever engine bakes).
+pub fn bake_frames(
+    gpu: &Gpu,
+    frames: &mut FrameRenderer,
+    scene: &Scene,
+    progress: &Progress,
+) -> Result<Baked> {
+    let baked = bake(scene, BakeDevice::Gpu(gpu, &frames.on_gpu), progress)?;
+    frames.set_baked(gpu, scene, (&baked.lobes, baked.direct.as_ref()))?;
+    Ok(baked)
 }

@@ -10,7 +10,7 @@
 use glam::Vec3;
 
 use crate::error::{Error, Result};
-use crate::types::{BinParams, BinnedPhoton, GridParams};
+use crate::types::{BinParams, BinnedPhoton, DepositParams, GridParams};
 
 /// Bin cells per search radius along an axis.
 pub const CELLS_PER_RADIUS: f32 = 2.0;
@@ -90,4 +90,13 @@ pub fn check_binned(photons: u64, max_bytes: u64) -> Result<()> {
         )));
     }
     Ok(())
+}
+
+/// Photon deposits on the host (`sequence::deposit_photons`): the records binned, each
+/// splat's spread and count, and the passes' settings.
+#[derive(Clone, Debug, Default, PartialEq)]
+pub struct DepositBins {
+    pub params: DepositParams,
+    pub bins: PhotonBins,
+    pub spread: Vec<[f32; 2]>,
 }

@@ -1,34 +1,38 @@
 //! lobelight: global illumination on splats with per-splat Gaussian lobes of incident light.
 //!
 //! Every stage runs as a WGSL compute or render pass (`gpu`), and has a CPU mirror (`cpu`) used
-//! as the reference in tests. The modules, from the bottom up (each uses only those above it
-//! in this list; docs/architecture.md):
+//! as the reference in tests and as an engine of its own where there is no GPU driver. The
+//! modules, from the bottom up (each uses only those before it; `tests/layering.rs` holds the
+//! order, docs/architecture.md §2 explains it):
 //!
-//! - `error`, `large_pages` (the command's allocator), `types` (the `#[repr(C)]` records
-//!   shared with WGSL), `shared` (math shared by the mirrors and the host), `shaders` (the WGSL
-//!   sources, the stage table and what naga reads of them);
-//! - `grid`, `photons`, `bins`, `em`, `tone` (each stage's settings, limits and host-side
-//!   data), `fit_groups` (the splats that share a lobe fit), `lobe_norms` (the lobe-norm table every frame's shading divides by, and its
-//!   quadrature), `convolution` (the lobe × BRDF shading study), `lod` (the level of detail's
-//!   merge tree);
+//! - `error`, `large_pages` (the command's allocator), `timing`, `types` (the `#[repr(C)]`
+//!   records shared with WGSL), `grid` (the splat grid's cells), `shared` (math shared by the
+//!   mirrors and the host), `shaders` (the WGSL sources, the stage table and what naga reads);
+//! - `photons`, `em`, `bins`, `tone`, `lobe_norms`, `convolution`, `fit_groups`, `lod`: each
+//!   stage's settings, limits and host-side data;
 //! - `scene` (the scene file, procedural shapes and model files) and `camera`;
-//! - `sequence` (each multi-dispatch stage's dispatches, written once), run by `cpu` (the
-//!   mirrors) and `gpu` (the device host); `frame` (what a frame draws); `objects` (which
-//!   surface each pixel shows);
-//! - `bake` (photons → bins → lobes on either), `cache` (a bake on disk) and `renderer` (the
-//!   device's frame: bake, draw from a view, tone map, read back);
+//! - `sequence` (each multi-dispatch stage's dispatches, written once), `direct`, `frame` (what a
+//!   frame draws), `objects` (which surface each pixel shows), `plan` (the bake's plan), then the
+//!   two engines: `cpu` (the mirrors) and `gpu` (the device host);
+//! - `bake` (photons → bins → lobes on either engine), `cache` (a bake on disk) and `renderer`
+//!   (one renderer over either engine, chosen once);
 //! - `cli` (feature `app`): the `lobelight` commands.
 //!
-//! Baking a scene on the CPU mirror (the README's example, compiled by the doc tests):
+//! Rendering the default scene on whichever engine this machine has (the README's example,
+//! compiled by the doc tests):
 //!
 //! ```no_run
-//! use lobelight::bake::{BakeDevice, Progress, bake};
-//! use lobelight::{cpu, scene};
+//! use std::{path::Path, sync::Arc};
+//! use lobelight::bake::Progress;
+//! use lobelight::{camera::View, frame::FrameConfig};
+//! use lobelight::renderer::{BackendChoice, Engine, EngineChoice, Renderer};
 //!
-//! let scene = scene::load(std::path::Path::new("scenes/cornell.toml"))?;
-//! let grid = cpu::scene_grid(&scene)?;
-//! let baked = bake(&scene, BakeDevice::Cpu(&grid), &Progress::new(false))?;
-//! println!("{} splats lit", baked.em.splats_lit.unwrap_or(0));
+//! let scene = Arc::new(lobelight::scene::load(Path::new("scenes/cornell.toml"))?);
+//! let (engine, _) = Engine::open(EngineChoice::Auto, BackendChoice::Auto)?;
+//! let mut renderer = Renderer::new(scene.clone(), &engine)?;
+//! renderer.bake(&Progress::new(false))?;
+//! renderer.draw(&View::new(&scene.camera, 512, 512), &FrameConfig::default(), 16, |_| {})?;
+//! let hdr: Vec<[f32; 4]> = renderer.read_hdr()?;
 //! # Ok::<(), lobelight::Error>(())
 //! ```
 

@@ -15,7 +15,6 @@ use glam::{Vec3, Vec4};
 use kiddo::{ImmutableKdTree, SquaredEuclidean};
 use rayon::prelude::*;
 
-use crate::scene::Scene;
 use crate::shared::octahedral::oct_encode;
 use crate::shared::rng::pcg_hash;
 use crate::shared::splat::{LOD_MAX_LEVEL, LOD_SPREAD_SCALE};
@@ -168,15 +167,6 @@ pub struct LodTree {
 }
 
 impl LodTree {
-    /// What frames of `scene` select by: with the level of detail on (`merged`), its merge
-    /// tree, with the merged normals where a material is glossy; else its chunks alone.
-    pub fn of_scene(scene: &Scene, merged: bool) -> LodTree {
-        match merged {
-            true => LodTree::build(&scene.splats, scene.has_glossy()),
-            false => LodTree::flat(&scene.splats),
-        }
-    }
-
     /// The merge tree of `splats`, with its merged normals or not (`merge_tree`), and their
     /// chunks along a Morton curve of their centres.
     pub fn build(splats: &[Splat], normals: bool) -> LodTree {

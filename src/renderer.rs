@@ -1,647 +1,642 @@
-//! One frame renderer on the device. It owns what every frame needs — the scene's splats and
-//! grid on the device, the compiled splat passes, the bake's lobes and the lights, and targets
-//! for the image size (rebuilt only when the size changes) — and offers the frame's whole
-//! sequence: bake, draw from a view, tone map, read back. `render`, `view`, `bench frame`,
-//! `bench rebake`, `bench sweep` and the tests draw through it.
-//!
-//! `draw*` record, submit and wait; `record*` only record into a caller's encoder (the viewer
-//! adds its tone map and present pass to the same submission).
+//! One renderer over either engine. `Engine` is chosen once — the device, or the CPU mirror
+//! where there is none or where it is a software rasterizer the mirror outruns — and a
+//! `Renderer` made from it and a scene owns what every image needs on that engine: the
+//! scene's splats and grid, the bake's lobes and direct light, the reference's binned
+//! photons, the frame passes and the last image. It bakes, draws stills, references and
+//! path-traced images, tone-maps and reads back, with the same calls on either engine; the
+//! branch between the device (`gpu::renderer::FrameRenderer`) and the mirrors
+//! (`cpu::frames`) is taken here and nowhere above.
 
 use std::sync::Arc;
 
-use crate::bake::{BakeDevice, Baked, Binned, Progress, bake, bins_gpu};
+use crate::bake::{BakeDevice, Baked, Binned, Progress, StageReport, bake, bins_cpu, bins_gpu};
+use crate::bins::PhotonBins;
 use crate::camera::View;
-use crate::direct::{DirectMap, direct_params_biased};
+use crate::cpu;
+use crate::direct::DirectMap;
 use crate::em::LobeMap;
 use crate::error::{Error, Result};
-use crate::frame::{
-    Direct, FrameConfig, SceneExtent, Splatter, Splatting, Terms, camera_uniform, frame_camera,
-    jitter, path_params, refinement, shade_params_for, temporal_jitter, temporal_params,
-};
+use crate::frame::{FrameConfig, camera_uniform, shade_params};
 use crate::gpu::Gpu;
 use crate::gpu::bins::GpuBins;
-use crate::gpu::exec::GpuExecutor;
-use crate::gpu::frame::{FrameScene, FrameTargets, SceneBuffers, SplatPipelines};
-use crate::gpu::reference::ReferencePipeline;
+use crate::gpu::photon_view::photon_image;
+use crate::gpu::photons as gpu_photons;
+use crate::gpu::renderer::FrameRenderer;
 use crate::gpu::scene::GpuScene;
-use crate::gpu::tone::{GpuToned, tone_map};
+pub use crate::gpu::{BackendChoice, Compiled};
+use crate::grid::SplatGrid;
+use crate::photons::{PhotonConfig, PhotonStats};
 use crate::scene::Scene;
-use crate::sequence::{TemporalHistory, path_sample};
+use crate::timing::ms_since;
 use crate::tone::ToneConfig;
-use crate::types::{Camera, EmParams, Light, PathParams, ShadeParams};
 
-pub struct FrameRenderer {
-    /// The splats, materials and grid (shared with a bake on another thread).
-    pub on_gpu: Arc<GpuScene>,
-    pub pipelines: SplatPipelines,
-    /// Built the first time a reference is drawn.
-    reference: Option<ReferencePipeline>,
-    frame_scene: FrameScene,
-    /// The most lobes a splat of the uploaded map has (the shade pass's loop bound).
-    lobes_per_splat: u32,
-    /// How long the direct bake of the current lights took; none until it is made (after a
-    /// new scene or new lights).
-    direct_ms: Option<f64>,
-    /// The lights on the device.
-    lights: Vec<Light>,
-    /// The scene's bounds and shadow bias, walked once per scene, not per frame.
-    extent: SceneExtent,
-    targets: Option<FrameTargets>,
-    /// The targets of the size before, kept for a renderer that switches between two sizes
-    /// (the viewer's moving frames at a lower internal resolution, its still image at the
-    /// window's), so that a switch allocates nothing.
-    spare: Option<FrameTargets>,
-    /// The moving frames' history (`record_moving`); none after a reset.
-    history: Option<History>,
+/// Which engine to run on.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, serde::Serialize)]
+#[cfg_attr(feature = "cli", derive(clap::ValueEnum))]
+#[serde(rename_all = "lowercase")]
+pub enum EngineChoice {
+    /// The device, but the CPU mirror where none is found, or where the device is a software
+    /// rasterizer (lavapipe, llvmpipe) and no backend was named: there the mirror bakes and
+    /// draws still images in about half the time (docs/measurements.md).
+    #[default]
+    Auto,
+    /// The CPU mirrors.
+    Mirror,
+    /// The device, a software rasterizer too; the CPU mirror where none is found and no
+    /// backend was named.
+    Device,
 }
 
-/// A moving frame about to be drawn: the history it continues, and what it will be.
-struct Moving {
-    last: Option<History>,
-    next: History,
+/// Why `Engine::open` gave the mirror where a device was asked for or preferred.
+#[derive(Clone, Debug, PartialEq, Eq)]
+pub enum Fallback {
+    /// No adapter was found (why).
+    NoDevice(String),
+    /// The adapter (named) is a software rasterizer, which the mirror outruns.
+    Software(String),
 }
 
-/// What the last moving frame was drawn with, which the next one's history must share.
-#[derive(Clone, Copy)]
-struct History {
-    /// Its camera, jitter included.
-    cam: Camera,
-    params: ShadeParams,
-    splatting: Splatting,
-    /// Moving frames since the last reset: picks the jitter and which history buffer is the
-    /// last frame's.
-    frames: u32,
+impl std::fmt::Display for Fallback {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        match self {
+            Fallback::NoDevice(why) => write!(f, "running on the CPU mirror (slower): {why}"),
+            Fallback::Software(name) => write!(
+                f,
+                "{name} is a software rasterizer: the bake and the image run on the CPU mirror \
+                 ({} threads), faster here",
+                rayon::current_num_threads()
+            ),
+        }
+    }
 }
 
-impl FrameRenderer {
-    /// Uploads the scene and compiles the passes; no lobes until `bake` or `set_lobes`.
-    pub fn new(gpu: &Gpu, scene: &Scene) -> Result<FrameRenderer> {
-        Self::with_scene(gpu, scene, Arc::new(GpuScene::upload(gpu, scene)?))
+/// The engine stages run on: a device, or the CPU mirrors.
+#[derive(Clone)]
+pub enum Engine {
+    Mirror,
+    Device(Arc<Gpu>),
+}
+
+impl Engine {
+    /// Opens the engine `choice` names on `backend`, and why it is the mirror where the
+    /// device was asked for or preferred. A backend named that has no adapter stays an error.
+    pub fn open(
+        choice: EngineChoice,
+        backend: BackendChoice,
+    ) -> Result<(Engine, Option<Fallback>)> {
+        if choice == EngineChoice::Mirror {
+            return Ok((Engine::Mirror, None));
+        }
+        let gpu = match Gpu::new(backend) {
+            Ok(gpu) => gpu,
+            Err(Error::NoAdapter(why)) if backend == BackendChoice::Auto => {
+                return Ok((Engine::Mirror, Some(Fallback::NoDevice(why))));
+            }
+            Err(e) => return Err(e),
+        };
+        if choice == EngineChoice::Auto && backend == BackendChoice::Auto && gpu.is_software() {
+            let software = Fallback::Software(gpu.info.name.clone());
+            return Ok((Engine::Mirror, Some(software)));
+        }
+        Ok((Engine::Device(Arc::new(gpu)), None))
     }
 
-    /// A renderer over a scene already on the device.
-    pub fn with_scene(gpu: &Gpu, scene: &Scene, on_gpu: Arc<GpuScene>) -> Result<FrameRenderer> {
-        let lobes = LobeMap::default();
-        Ok(FrameRenderer {
-            frame_scene: FrameScene::upload(gpu, scene, &lobes)?,
-            pipelines: SplatPipelines::new(gpu)?,
-            reference: None,
-            on_gpu,
-            lobes_per_splat: lobes.lobes_per_splat,
-            direct_ms: None,
-            lights: scene.lights.clone(),
-            extent: SceneExtent::of(scene),
-            targets: None,
-            spare: None,
-            history: None,
+    /// The device, where this engine is one.
+    pub fn gpu(&self) -> Option<&Gpu> {
+        match self {
+            Engine::Device(gpu) => Some(gpu),
+            Engine::Mirror => None,
+        }
+    }
+
+    /// The adapter's name, or "CPU mirror".
+    pub fn adapter(&self) -> String {
+        self.gpu()
+            .map_or_else(|| "CPU mirror".to_string(), |g| g.info.name.clone())
+    }
+
+    /// The graphics API's name, or "cpu".
+    pub fn backend(&self) -> &'static str {
+        self.gpu().map_or("cpu", Gpu::backend_name)
+    }
+
+    /// Refuses an image the engine cannot hold (a device's texture and buffer limits).
+    pub fn check_image(&self, width: u32, height: u32) -> Result<()> {
+        match self.gpu() {
+            Some(gpu) => gpu.check_image(width, height),
+            None => Ok(()),
+        }
+    }
+
+    /// The compute pipelines the device compiled so far, and their time (none on the mirror).
+    pub fn compiled(&self) -> Option<Compiled> {
+        self.gpu().map(Gpu::compiled)
+    }
+}
+
+/// What a bake reports of its stages (its lobes stay in the renderer).
+#[derive(Clone, Debug)]
+pub struct BakeReport {
+    pub photons: StageReport,
+    pub binning: StageReport,
+    pub em: StageReport,
+}
+
+/// A tone-mapped image: RGBA8 pixels (red in the low byte), rows from the top, and
+/// (Σ log(ε + Y), count) of the log-average the operator keyed on.
+pub struct Toned {
+    pub rgba: Vec<u32>,
+    pub log_sum: [f32; 2],
+}
+
+/// The stored photons seen from a camera (`Renderer::photon_view`).
+pub struct PhotonView {
+    /// HDR pixels, rows from the top, scaled by the photons' power.
+    pub hdr: Vec<[f32; 4]>,
+    pub stats: PhotonStats,
+    /// Drawing them, after the trace.
+    pub draw_ms: f64,
+}
+
+/// What the renderer holds on a device.
+struct Device {
+    gpu: Arc<Gpu>,
+    scene: Arc<GpuScene>,
+    /// Made the first time a frame, a reference or a path-traced image is drawn (the photon
+    /// view needs none of its passes).
+    frames: Option<Box<FrameRenderer>>,
+    bins: Option<Binned<GpuBins>>,
+    /// The renderer's lobes are newer than the frames': uploaded before the next image.
+    stale: bool,
+    /// A direct bake of the current lights made by the bake, uploaded with the lobes.
+    direct: Option<DirectMap>,
+}
+
+impl Device {
+    /// The device, its frame passes (made the first time, `lobes` uploaded where they are
+    /// newer) and the binned photons.
+    fn parts(
+        &mut self,
+        scene: &Scene,
+        lobes: &LobeMap,
+    ) -> Result<(&Gpu, &mut FrameRenderer, Option<&Binned<GpuBins>>)> {
+        let Device {
+            gpu,
+            scene: on_gpu,
+            frames,
+            bins,
+            stale,
+            direct,
+        } = self;
+        let frames = match frames {
+            Some(frames) => frames,
+            none => none.insert(Box::new(FrameRenderer::with_scene(
+                gpu,
+                scene,
+                on_gpu.clone(),
+            )?)),
+        };
+        if *stale {
+            frames.set_lobes(gpu, scene, lobes)?;
+            *stale = false;
+        }
+        if let Some(direct) = direct.take() {
+            frames.set_direct(gpu, scene, &direct, 0.0)?;
+        }
+        Ok((gpu, frames, bins.as_ref()))
+    }
+
+    /// The frame passes an image was drawn with.
+    fn drawn(&self) -> Result<&FrameRenderer> {
+        self.frames
+            .as_deref()
+            .ok_or_else(|| Error::internal("an image was read before one was drawn"))
+    }
+}
+
+/// What the renderer holds on the CPU mirror.
+struct Mirror {
+    grid: SplatGrid,
+    grid_ms: f64,
+    bins: Option<Binned<PhotonBins>>,
+    /// Every splat's direct light of the scene's lights: final gathering's, or baked the
+    /// first time a frame reads it.
+    direct: Option<DirectMap>,
+    /// The last image drawn.
+    hdr: Vec<[f32; 4]>,
+}
+
+impl Mirror {
+    /// The direct bake where a frame `needs` it, baked now where the bake made none.
+    fn direct(&mut self, scene: &Scene, needed: bool) -> Result<Option<&DirectMap>> {
+        if needed && self.direct.is_none() {
+            self.direct = Some(cpu::frames::cpu_direct(scene, &self.grid)?);
+        }
+        Ok(self.direct.as_ref())
+    }
+}
+
+enum On {
+    Device(Device),
+    Mirror(Mirror),
+}
+
+/// A scene prepared on one engine, and everything drawn from it.
+pub struct Renderer {
+    scene: Arc<Scene>,
+    engine: Engine,
+    on: On,
+    /// The bake's lobes (an empty map until a bake or `set_lobes`).
+    lobes: LobeMap,
+}
+
+fn unbinned() -> Error {
+    Error::internal("a reference was drawn before its photons were binned")
+}
+
+impl Renderer {
+    /// Prepares `scene` on `engine`: its splats and grid uploaded to the device, or the grid
+    /// built on the host.
+    pub fn new(scene: Arc<Scene>, engine: &Engine) -> Result<Renderer> {
+        let on = match engine {
+            Engine::Device(gpu) => On::Device(Device {
+                scene: Arc::new(GpuScene::upload(gpu, &scene)?),
+                gpu: gpu.clone(),
+                frames: None,
+                bins: None,
+                stale: false,
+                direct: None,
+            }),
+            Engine::Mirror => {
+                let t = std::time::Instant::now();
+                let grid = cpu::scene_grid(&scene)?;
+                On::Mirror(Mirror {
+                    grid,
+                    grid_ms: ms_since(t),
+                    bins: None,
+                    direct: None,
+                    hdr: Vec::new(),
+                })
+            }
+        };
+        Ok(Renderer {
+            scene,
+            engine: engine.clone(),
+            on,
+            lobes: LobeMap::default(),
         })
     }
 
-    /// Draws another scene from now on, with the passes already compiled; no lobes until
-    /// `bake` or `set_lobes`.
-    pub fn set_scene(&mut self, gpu: &Gpu, scene: &Scene) -> Result<()> {
-        self.on_gpu = Arc::new(GpuScene::upload(gpu, scene)?);
-        self.frame_scene = FrameScene::upload(gpu, scene, &LobeMap::default())?;
-        self.lobes_per_splat = 0;
-        self.direct_ms = None;
-        self.lights = scene.lights.clone();
-        self.extent = SceneExtent::of(scene);
-        self.history = None;
-        Ok(())
+    pub fn scene(&self) -> &Scene {
+        &self.scene
     }
 
-    /// Bakes the scene's light on the device and keeps the lobes for the frames to come, with
-    /// the direct bake final gathering made where it ran.
-    pub fn bake(&mut self, gpu: &Gpu, scene: &Scene, progress: &Progress) -> Result<Baked> {
-        let baked = bake(scene, BakeDevice::Gpu(gpu, &self.on_gpu), progress)?;
-        self.set_baked(gpu, scene, &baked)?;
-        Ok(baked)
+    pub fn engine(&self) -> &Engine {
+        &self.engine
     }
 
-    /// Keeps a bake's lobes for the frames to come, and the direct bake final gathering made
-    /// where it ran (the frames' own: the same lights, samples, seed and shadow bias).
-    pub fn set_baked(&mut self, gpu: &Gpu, scene: &Scene, baked: &Baked) -> Result<()> {
-        self.set_lobes(gpu, scene, &baked.lobes)?;
-        if let Some(direct) = &baked.direct {
-            self.set_direct(gpu, scene, direct, 0.0)?;
+    /// The grid build's milliseconds.
+    pub fn grid_ms(&self) -> f64 {
+        match &self.on {
+            On::Device(d) => d.scene.grid_ms,
+            On::Mirror(m) => m.grid_ms,
         }
-        Ok(())
     }
 
-    /// Traces and bins the scene's photons on the device, for a reference (no lobes).
-    pub fn bins(&self, gpu: &Gpu, scene: &Scene, progress: &Progress) -> Result<Binned<GpuBins>> {
-        bins_gpu(scene, gpu, &self.on_gpu, progress)
+    /// The scene's splat grid in host memory: the mirror's, or read back from the device.
+    pub fn read_grid(&self) -> Result<std::borrow::Cow<'_, SplatGrid>> {
+        Ok(match &self.on {
+            On::Device(d) => std::borrow::Cow::Owned(d.scene.grid.download(&d.gpu)?),
+            On::Mirror(m) => std::borrow::Cow::Borrowed(&m.grid),
+        })
     }
 
-    /// Draws with `lobes` and the scene's lights from now on (a bake loaded from a cache or
-    /// made elsewhere).
-    pub fn set_lobes(&mut self, gpu: &Gpu, scene: &Scene, lobes: &LobeMap) -> Result<()> {
-        self.frame_scene.splat_light = gpu.storage("splat light", &lobes.light)?;
-        self.frame_scene.lobes = gpu.storage("lobes", &lobes.lobes)?;
-        self.lobes_per_splat = lobes.lobes_per_splat;
-        self.history = None;
-        self.set_lights(gpu, scene)
+    /// The lobes frames are drawn with (an empty map before a bake).
+    pub fn lobes(&self) -> &LobeMap {
+        &self.lobes
     }
 
-    /// Draws with the scene's lights from now on, the lobes unchanged (a moved light's direct
-    /// light, before its indirect bake is in). Lights that changed need a new direct bake,
-    /// made before the next frame that needs it, or at once by `bake_direct`.
-    pub fn set_lights(&mut self, gpu: &Gpu, scene: &Scene) -> Result<()> {
-        if self.lights != scene.lights {
-            self.frame_scene.lights = gpu.storage("lights", &scene.lights)?;
-            self.lights = scene.lights.clone();
-            self.direct_ms = None;
-            self.history = None;
-        }
-        Ok(())
-    }
-
-    /// Bakes the direct light of the current lights into every splat (`sequence::bake_direct`)
-    /// and waits; returns its milliseconds.
-    pub fn bake_direct(&mut self, gpu: &Gpu, scene: &Scene) -> Result<f64> {
-        let start = std::time::Instant::now();
-        self.set_lights(gpu, scene)?;
-        let params = direct_params_biased(scene, self.extent.shadow_bias);
-        let order = match &mut self.frame_scene.direct_order {
-            Some(order) => order,
-            none => {
-                none.insert(gpu.storage("direct order", &crate::grid::splat_order(&scene.splats))?)
+    /// Draws and bakes another scene from now on: its splats uploaded and its grid built
+    /// anew, the device's passes kept compiled; no lobes until a bake or `set_lobes`.
+    pub fn set_scene(&mut self, scene: Arc<Scene>) -> Result<()> {
+        match &mut self.on {
+            On::Device(d) => {
+                d.scene = match &mut d.frames {
+                    Some(frames) => {
+                        frames.set_scene(&d.gpu, &scene)?;
+                        frames.on_gpu.clone()
+                    }
+                    None => Arc::new(GpuScene::upload(&d.gpu, &scene)?),
+                };
+                (d.bins, d.direct, d.stale) = (None, None, false);
             }
-        };
-        let mut encoder = gpu.encoder("direct bake");
-        let mut ex = GpuExecutor::new(gpu, &mut encoder).tracing(self.on_gpu.geometry());
-        let lights = &self.frame_scene.lights;
-        let direct = crate::sequence::bake_direct(&mut ex, lights, order, &params)?;
-        gpu.submit_and_wait(encoder)?;
-        self.frame_scene.direct = direct;
-        self.history = None;
-        let ms = crate::timing::ms_since(start);
-        self.direct_ms = Some(ms);
-        Ok(ms)
-    }
-
-    /// Draws with a direct bake of the scene's lights made elsewhere (the CPU mirror's,
-    /// `cpu::frames::cpu_direct`, or the one final gathering made), which took `ms`.
-    pub fn set_direct(
-        &mut self,
-        gpu: &Gpu,
-        scene: &Scene,
-        baked: &DirectMap,
-        ms: f64,
-    ) -> Result<()> {
-        self.set_lights(gpu, scene)?;
-        self.frame_scene.direct = crate::sequence::Direct {
-            direct: gpu.storage("direct light", &baked.direct)?,
-            visibility: gpu.storage("light visibility", &baked.visibility)?,
-        };
-        self.direct_ms = Some(ms);
-        self.history = None;
+            On::Mirror(m) => {
+                let t = std::time::Instant::now();
+                m.grid = cpu::scene_grid(&scene)?;
+                m.grid_ms = ms_since(t);
+                (m.bins, m.direct) = (None, None);
+            }
+        }
+        self.scene = scene;
+        self.lobes = LobeMap::default();
         Ok(())
     }
 
-    /// The scene's bounds and shadow bias, as the frames read them.
-    pub fn extent(&self) -> SceneExtent {
-        self.extent
-    }
-
-    /// Whether the current lights' direct bake is made.
-    pub fn direct_is_baked(&self) -> bool {
-        self.direct_ms.is_some()
-    }
-
-    /// The direct bake's milliseconds, baking it first if the lights changed since.
-    pub fn ensure_direct(&mut self, gpu: &Gpu, scene: &Scene) -> Result<f64> {
-        match self.direct_ms {
-            Some(ms) => Ok(ms),
-            None => self.bake_direct(gpu, scene),
-        }
-    }
-
-    /// The direct bake of the current lights in host memory (tests, comparisons).
-    pub fn read_direct(&mut self, gpu: &Gpu, scene: &Scene) -> Result<DirectMap> {
-        self.ensure_direct(gpu, scene)?;
-        let params = direct_params_biased(scene, self.extent.shadow_bias);
-        let mut encoder = gpu.encoder("direct read");
-        let mut ex = GpuExecutor::new(gpu, &mut encoder);
-        self.frame_scene.direct.read_back(&mut ex, &params)
-    }
-
-    /// Targets of `width × height`: the current ones, the spare ones where they have that size
-    /// (the two swap), else made anew (the current ones become the spare).
-    pub fn resize(&mut self, gpu: &Gpu, width: u32, height: u32) -> Result<&FrameTargets> {
-        let fits = |t: &FrameTargets| t.width == width && t.height == height;
-        if !self.targets.as_ref().is_some_and(fits) {
-            let next = match self.spare.take() {
-                Some(spare) if fits(&spare) => spare,
-                _ => self.pipelines.targets(gpu, width, height)?,
-            };
-            self.spare = self.targets.replace(next);
-            self.history = None;
-        }
-        self.targets()
-    }
-
-    /// The current targets (after `resize` or a draw).
-    pub fn targets(&self) -> Result<&FrameTargets> {
-        self.targets
-            .as_ref()
-            .ok_or_else(|| Error::internal("the frame renderer has no targets yet"))
-    }
-
-    /// Records the lobes' frame of `cam` into the current targets; returns their HDR image.
-    pub fn record(
-        &self,
-        gpu: &Gpu,
-        encoder: &mut wgpu::CommandEncoder,
-        scene: &Scene,
-        cam: &Camera,
-        cfg: &FrameConfig,
-    ) -> Result<&wgpu::Buffer> {
-        let params = shade_params_for(scene, self.lobes_per_splat, self.extent.shadow_bias, cfg);
-        self.record_params(gpu, encoder, scene, cam, &params, cfg.splatter)
-    }
-
-    /// Records the moving frame of `cam`: with `cfg.temporal`, jittered and blended with the
-    /// moving frames before it (`sequence::temporal`; none before it after a reset: a new
-    /// scene, lobes, lights or size, or other shading), else as `record`. Returns the HDR
-    /// image, the resolved one.
-    pub fn record_moving(
-        &mut self,
-        gpu: &Gpu,
-        encoder: &mut wgpu::CommandEncoder,
-        scene: &Scene,
-        cam: &Camera,
-        cfg: &FrameConfig,
-    ) -> Result<&wgpu::Buffer> {
-        if !cfg.temporal {
-            self.history = None;
-            return self.record(gpu, encoder, scene, cam, cfg);
-        }
-        let moving = self.next_moving(scene, cam, cfg)?;
-        let next = &moving.next;
-        self.record_params(gpu, encoder, scene, &next.cam, &next.params, cfg.splatter)?;
-        self.record_temporal(gpu, encoder, &moving)?;
-        self.history = Some(moving.next);
-        Ok(&self.targets()?.hdr)
-    }
-
-    /// The next moving frame of `cam`: its jitter, and the history it continues where the
-    /// last moving frame was shaded alike.
-    fn next_moving(&self, scene: &Scene, cam: &Camera, cfg: &FrameConfig) -> Result<Moving> {
-        let params = shade_params_for(scene, self.lobes_per_splat, self.extent.shadow_bias, cfg);
-        let splatting = self.pipelines.splatting(cfg.splatter)?;
-        let last = self
-            .history
-            .filter(|h| h.params == params && h.splatting == splatting);
-        let frames = last.map_or(0, |h| h.frames);
-        let cam = Camera {
-            jitter: temporal_jitter(frames),
-            ..*cam
-        };
-        let next = History {
-            cam,
-            params,
-            splatting,
-            frames: frames + 1,
-        };
-        Ok(Moving { last, next })
-    }
-
-    /// Records the temporal pass of a moving frame, its splat passes recorded.
-    fn record_temporal(
-        &self,
-        gpu: &Gpu,
-        encoder: &mut wgpu::CommandEncoder,
-        moving: &Moving,
-    ) -> Result<()> {
-        let t = self.targets()?;
-        let (cam, last) = (&moving.next.cam, moving.last);
-        let params = temporal_params(t.width, t.height, last.is_none());
-        let prev = last.map_or(*cam, |h| h.cam);
-        // Frame k since the reset reads history buffer k % 2 and writes the other.
-        let k = moving.next.frames - 1;
-        let history = t.history(gpu)?;
-        let [from, to] = [k % 2, (k + 1) % 2].map(|b| TemporalHistory {
-            image: &history.image[b as usize],
-            surface: &history.surface[b as usize],
-        });
-        let mut ex = GpuExecutor::new(gpu, encoder);
-        crate::sequence::temporal(&mut ex, cam, &prev, &params, &t.hdr, &t.surface, from, to)
-    }
-
-    /// Records refinement frame `k` of `spp` of `cam` (`frame::refinement`): jittered, with
-    /// its share of shadow rays, added to the running mean in the HDR image, which holds the
-    /// still image once `k + 1 == spp`. Returns the HDR image.
-    #[allow(clippy::too_many_arguments)]
-    pub fn record_sample(
-        &self,
-        gpu: &Gpu,
-        encoder: &mut wgpu::CommandEncoder,
-        scene: &Scene,
-        cam: &Camera,
-        cfg: &FrameConfig,
-        k: u32,
-        spp: u32,
-    ) -> Result<&wgpu::Buffer> {
-        let base = shade_params_for(scene, self.lobes_per_splat, self.extent.shadow_bias, cfg);
-        let cam = Camera {
-            jitter: jitter(k, spp),
-            ..*cam
-        };
-        let params = refinement(&base, k, spp);
-        self.record_params(gpu, encoder, scene, &cam, &params, cfg.splatter)
-    }
-
-    fn record_params(
-        &self,
-        gpu: &Gpu,
-        encoder: &mut wgpu::CommandEncoder,
-        scene: &Scene,
-        cam: &Camera,
-        params: &ShadeParams,
-        splatter: Splatter,
-    ) -> Result<&wgpu::Buffer> {
-        if Direct::of_code(params.direct) == Direct::Baked && self.direct_ms.is_none() {
-            return Err(Error::Internal(
-                "baked direct light was asked for before the lights' direct bake".into(),
+    /// Draws and bakes `scene` from now on, which holds this one's splats, materials and
+    /// clips with other lights or other bake settings (a moved light, a preview bake): the
+    /// grid stays, the lobes stay until the next bake, and the direct light is baked again
+    /// where the lights changed. Other geometry needs a new renderer.
+    pub fn relight(&mut self, scene: Arc<Scene>) -> Result<()> {
+        let old = &self.scene;
+        let same = bytemuck::cast_slice::<_, u8>(&scene.splats)
+            == bytemuck::cast_slice::<_, u8>(&old.splats)
+            && bytemuck::cast_slice::<_, u8>(&scene.materials)
+                == bytemuck::cast_slice::<_, u8>(&old.materials)
+            && bytemuck::cast_slice::<_, u8>(&scene.clips)
+                == bytemuck::cast_slice::<_, u8>(&old.clips);
+        if !same {
+            return Err(Error::Invalid(
+                "relight keeps the scene's splats, materials and clips; another scene needs \
+                 a renderer of its own"
+                    .into(),
             ));
         }
-        let targets = self.targets()?;
-        let splatting = self.pipelines.splatting(splatter)?;
-        let buffers = self.frame_buffers(gpu, scene, cam, params, splatting)?;
-        self.pipelines
-            .draw(gpu, encoder, &buffers, cam, params, splatting, targets)?;
-        Ok(&targets.hdr)
+        let moved = scene.lights != old.lights;
+        match &mut self.on {
+            On::Device(d) => {
+                if let Some(frames) = &mut d.frames {
+                    frames.set_lights(&d.gpu, &scene)?;
+                }
+                if moved {
+                    (d.direct, d.bins) = (None, None);
+                }
+            }
+            On::Mirror(m) => {
+                if moved {
+                    (m.direct, m.bins) = (None, None);
+                }
+            }
+        }
+        self.scene = scene;
+        Ok(())
     }
 
-    /// What the splat passes bind for a frame of `cam`, the level of detail's merge tree built
-    /// first where the frame draws with it (`frame_camera`).
-    fn frame_buffers(
-        &self,
-        gpu: &Gpu,
-        scene: &Scene,
-        cam: &Camera,
-        params: &ShadeParams,
-        splatting: Splatting,
-    ) -> Result<SceneBuffers<'_>> {
-        let merged = frame_camera(cam, params, splatting).lod > 0.0;
-        if Direct::of_code(params.direct) == Direct::Baked {
-            self.frame_scene.ensure_tree(gpu, scene, merged)?;
-        }
-        Ok(self.frame_scene.buffers(&self.on_gpu, merged))
-    }
-
-    /// Records the reference image of `cam` from binned photons (`bins`, with the binning's
-    /// `em` parameters) into the current targets: the photon gather with the exact BRDF, then
-    /// the same shade pass with no lobes. Returns the HDR image.
-    #[allow(clippy::too_many_arguments)]
-    pub fn record_reference(
-        &mut self,
-        gpu: &Gpu,
-        encoder: &mut wgpu::CommandEncoder,
-        scene: &Scene,
-        bins: &GpuBins,
-        em: &EmParams,
-        cam: &Camera,
-        cfg: &FrameConfig,
-    ) -> Result<&wgpu::Buffer> {
-        if self.reference.is_none() {
-            self.reference = Some(ReferencePipeline::new(gpu, &self.pipelines)?);
-        }
-        let (Some(reference), Some(targets)) = (&self.reference, &self.targets) else {
-            return Err(Error::Internal(
-                "the frame renderer has no targets yet".into(),
-            ));
+    /// Bakes the scene's light (photons → deposits or bins → lobes) and keeps it for the
+    /// images to come.
+    pub fn bake(&mut self, progress: &Progress) -> Result<BakeReport> {
+        let scene = &self.scene;
+        let baked = match &self.on {
+            On::Device(d) => bake(scene, BakeDevice::Gpu(&d.gpu, &d.scene), progress)?,
+            On::Mirror(m) => bake(scene, BakeDevice::Cpu(&m.grid), progress)?,
         };
-        // The shade pass reads no lobes here: none per splat gives it its other settings, and
-        // the gather has no baked direct light to add: shadow rays. Its photons give the
-        // glossy light too, with the exact BRDF: no glossy rays.
-        let cfg = FrameConfig {
-            direct: Direct::Rays,
-            glossy_rays: 0,
-            ..cfg.clone()
+        let report = BakeReport {
+            photons: baked.photons.clone(),
+            binning: baked.binning.clone(),
+            em: baked.em.clone(),
         };
-        let params = shade_params_for(scene, 0, self.extent.shadow_bias, &cfg);
-        let buffers = self.frame_scene.buffers(&self.on_gpu, false);
-        reference.draw(
-            gpu,
-            encoder,
-            &self.pipelines,
-            &buffers,
-            bins,
-            em,
-            cam,
-            &params,
-            targets,
-        )?;
-        Ok(&targets.hdr)
+        self.set_baked(baked);
+        Ok(report)
     }
 
-    /// Targets of `view`'s size and the direct bake where `cfg` reads it; returns `view`'s
-    /// camera uniform.
-    fn prepare(
-        &mut self,
-        gpu: &Gpu,
-        scene: &Scene,
-        view: &View,
-        cfg: &FrameConfig,
-    ) -> Result<Camera> {
-        self.resize(gpu, view.width, view.height)?;
-        if cfg.needs_direct_bake() {
-            self.ensure_direct(gpu, scene)?;
+    /// Draws with a bake made elsewhere from now on: its lobes, and the direct bake final
+    /// gathering made where it ran (else the direct light of the lights as they are, made
+    /// already or when a frame first reads it).
+    pub fn set_baked(&mut self, baked: Baked) {
+        match &mut self.on {
+            On::Device(d) => {
+                d.stale = true;
+                if baked.direct.is_some() {
+                    d.direct = baked.direct;
+                }
+            }
+            On::Mirror(m) => {
+                if baked.direct.is_some() {
+                    m.direct = baked.direct;
+                }
+            }
         }
-        Ok(camera_uniform(view, self.extent.bounds, cfg))
+        self.lobes = baked.lobes;
     }
 
-    /// Draws the lobes' frame of `view` (its size and camera) and waits.
+    /// Draws with `lobes` from now on (a bake loaded from a cache, or kept from before).
+    pub fn set_lobes(&mut self, lobes: LobeMap) {
+        self.set_baked(Baked {
+            lobes,
+            direct: None,
+            photons: StageReport::default(),
+            binning: StageReport::default(),
+            em: StageReport::default(),
+        })
+    }
+
+    /// Bakes the direct light of the scene's lights into every splat now (frames that read
+    /// it would otherwise bake it first); returns its milliseconds.
+    pub fn bake_direct(&mut self) -> Result<f64> {
+        let scene = &self.scene;
+        match &mut self.on {
+            On::Device(d) => {
+                let (gpu, frames, _) = d.parts(scene, &self.lobes)?;
+                frames.bake_direct(gpu, scene)
+            }
+            On::Mirror(m) => {
+                let t = std::time::Instant::now();
+                m.direct = Some(cpu::frames::cpu_direct(scene, &m.grid)?);
+                Ok(ms_since(t))
+            }
+        }
+    }
+
+    /// Draws the lobes' frame of `view` with `spp` refinement frames (`frame::refinement`),
+    /// `each(k)` called after frame `k`; `spp` 0 is the frame a moving camera gets (direct
+    /// light as `cfg.direct` says). Keeps the HDR image for `read_hdr` and `tone_map`.
     pub fn draw(
         &mut self,
-        gpu: &Gpu,
-        scene: &Scene,
-        view: &View,
-        cfg: &FrameConfig,
-    ) -> Result<&FrameTargets> {
-        let cam = self.prepare(gpu, scene, view, cfg)?;
-        let mut encoder = gpu.encoder("frame");
-        self.record(gpu, &mut encoder, scene, &cam, cfg)?;
-        gpu.submit_and_wait(encoder)?;
-        self.targets()
-    }
-
-    /// Draws the moving frame of `view` (`record_moving`) and waits.
-    pub fn draw_moving(
-        &mut self,
-        gpu: &Gpu,
-        scene: &Scene,
-        view: &View,
-        cfg: &FrameConfig,
-    ) -> Result<&FrameTargets> {
-        let cam = self.prepare(gpu, scene, view, cfg)?;
-        let mut encoder = gpu.encoder("moving frame");
-        self.record_moving(gpu, &mut encoder, scene, &cam, cfg)?;
-        gpu.submit_and_wait(encoder)?;
-        self.targets()
-    }
-
-    /// Draws the still image of `view`: `spp` refinement frames, one submission each, with
-    /// `each(k)` called after frame `k` (progress). The HDR image holds their mean.
-    pub fn draw_refined(
-        &mut self,
-        gpu: &Gpu,
-        scene: &Scene,
         view: &View,
         cfg: &FrameConfig,
         spp: u32,
         mut each: impl FnMut(u32),
-    ) -> Result<&FrameTargets> {
-        let cam = self.prepare(gpu, scene, view, cfg)?;
-        for k in 0..spp.max(1) {
-            let mut encoder = gpu.encoder("refinement frame");
-            self.record_sample(gpu, &mut encoder, scene, &cam, cfg, k, spp)?;
-            gpu.submit_and_wait(encoder)?;
-            each(k);
+    ) -> Result<()> {
+        let scene = &self.scene;
+        match &mut self.on {
+            On::Device(d) => {
+                let (gpu, frames, _) = d.parts(scene, &self.lobes)?;
+                match spp {
+                    0 => frames.draw(gpu, scene, view, cfg)?,
+                    spp => frames.draw_refined(gpu, scene, view, cfg, spp, each)?,
+                };
+            }
+            On::Mirror(m) => {
+                // A refinement frame casts shadow rays; its glossy rays read the direct bake.
+                let needed = match spp {
+                    0 => cfg.needs_direct_bake(),
+                    _ => cfg.glossy_rays > 0,
+                };
+                m.direct(scene, needed)?;
+                let light = (&self.lobes, m.direct.as_ref());
+                let params = shade_params(scene, &self.lobes, cfg);
+                let cam = camera_uniform(view, scene.bounds(), cfg);
+                m.hdr = match spp {
+                    0 => cpu::frames::cpu_frame(scene, &m.grid, light, &cam, &params)?,
+                    spp => {
+                        let grid = &m.grid;
+                        let hdr = cpu::frames::cpu_refined(scene, grid, light, &cam, &params, spp)?;
+                        (0..spp).for_each(&mut each);
+                        hdr
+                    }
+                };
+            }
         }
-        self.targets()
+        Ok(())
     }
 
-    /// Draws the reference image of `view` from binned photons and waits.
-    pub fn draw_reference(
-        &mut self,
-        gpu: &Gpu,
-        scene: &Scene,
-        binned: &Binned<GpuBins>,
-        view: &View,
-        cfg: &FrameConfig,
-    ) -> Result<&FrameTargets> {
-        self.resize(gpu, view.width, view.height)?;
-        let cam = camera_uniform(view, self.extent.bounds, cfg);
-        let mut encoder = gpu.encoder("reference");
-        let (bins, em) = (&binned.bins, &binned.em);
-        self.record_reference(gpu, &mut encoder, scene, bins, em, &cam, cfg)?;
-        gpu.submit_and_wait(encoder)?;
-        self.targets()
+    /// Traces and bins the scene's photons for references (no lobes); returns the reports of
+    /// the trace and of the binning.
+    pub fn bin_photons(&mut self, progress: &Progress) -> Result<[StageReport; 2]> {
+        let scene = &self.scene;
+        Ok(match &mut self.on {
+            On::Device(d) => {
+                let binned = bins_gpu(scene, &d.gpu, &d.scene, progress)?;
+                let binned = d.bins.insert(binned);
+                [binned.photons.clone(), binned.binning.clone()]
+            }
+            On::Mirror(m) => {
+                let binned = m.bins.insert(bins_cpu(scene, &m.grid, progress)?);
+                [binned.photons.clone(), binned.binning.clone()]
+            }
+        })
     }
 
-    /// The path-traced image of `view` (`sequence::path_sample`): `spp` samples per pixel, one
-    /// submission each, with `each(k)` called after sample `k`, of the light terms `show`
-    /// (`FrameConfig::show`). Needs no bake; the HDR image holds their mean.
+    /// Draws the reference of `view` from the binned photons (`bin_photons` first): per pixel
+    /// the photons within the gather radius with the exact BRDF, the direct light by shadow
+    /// rays.
+    pub fn draw_reference(&mut self, view: &View, cfg: &FrameConfig) -> Result<()> {
+        let scene = &self.scene;
+        match &mut self.on {
+            On::Device(d) => {
+                let (gpu, frames, binned) = d.parts(scene, &self.lobes)?;
+                let binned = binned.ok_or_else(unbinned)?;
+                let bins = (&binned.bins, &binned.em);
+                frames.draw_reference(gpu, scene, bins, view, cfg)?;
+            }
+            On::Mirror(m) => {
+                let binned = m.bins.as_ref().ok_or_else(unbinned)?;
+                let cam = camera_uniform(view, scene.bounds(), cfg);
+                let (bins, em) = (&binned.bins, &binned.em);
+                m.hdr = cpu::frames::cpu_reference(scene, &m.grid, bins, em, &cam, cfg);
+            }
+        }
+        Ok(())
+    }
+
+    /// Path-traces `view`: `spp` samples per pixel of the light terms `cfg.show`, `each(k)`
+    /// called after sample `k`. Needs no bake.
     pub fn draw_path(
         &mut self,
-        gpu: &Gpu,
-        scene: &Scene,
         view: &View,
-        show: Terms,
+        cfg: &FrameConfig,
         spp: u32,
         mut each: impl FnMut(u32),
-    ) -> Result<&FrameTargets> {
-        self.resize(gpu, view.width, view.height)?;
-        self.set_lights(gpu, scene)?;
-        let cam = camera_uniform(view, self.extent.bounds, &FrameConfig::default());
-        let cam_buf = gpu.uniform("camera", &cam);
-        let targets = self
-            .targets
-            .as_ref()
-            .ok_or_else(|| Error::internal("the frame renderer has no targets yet"))?;
-        let first = path_params(scene, &cam, show, self.extent.shadow_bias);
-        for k in 0..spp.max(1) {
-            let mut encoder = gpu.encoder("path sample");
-            let mut ex = GpuExecutor::new(gpu, &mut encoder).tracing(self.on_gpu.geometry());
-            let params = PathParams { sample: k, ..first };
-            let (materials, lights) = (&self.on_gpu.materials, &self.frame_scene.lights);
-            path_sample(&mut ex, &params, &cam_buf, materials, lights, &targets.hdr)?;
-            gpu.submit_and_wait(encoder)?;
-            each(k);
+    ) -> Result<()> {
+        let scene = &self.scene;
+        match &mut self.on {
+            On::Device(d) => {
+                let (gpu, frames, _) = d.parts(scene, &self.lobes)?;
+                frames.draw_path(gpu, scene, view, cfg.show, spp, each)?;
+            }
+            On::Mirror(m) => {
+                let cam = camera_uniform(view, scene.bounds(), cfg);
+                m.hdr = cpu::frames::cpu_path(scene, &m.grid, &cam, cfg.show, spp)?;
+                (0..spp.max(1)).for_each(&mut each);
+            }
         }
-        self.targets()
+        Ok(())
     }
 
-    /// The moving frame of `view` (`draw_moving`) with a wait after each splat pass and after
-    /// the temporal pass: the milliseconds of each, the temporal pass's last (0 without it)
-    /// (benchmarks; slower than `draw_moving`, which waits once).
-    pub fn draw_timed(
+    /// Traces the scene's photons and draws the stored ones seen from `view` (thesis Fig.
+    /// 3.1); `on_batch` hears (paths done, total).
+    pub fn photon_view(
         &mut self,
-        gpu: &Gpu,
-        scene: &Scene,
         view: &View,
         cfg: &FrameConfig,
-    ) -> Result<[f64; 4]> {
-        let cam = self.prepare(gpu, scene, view, cfg)?;
-        let moving = match cfg.temporal {
-            true => Some(self.next_moving(scene, &cam, cfg)?),
-            false => None,
-        };
-        let cam = moving.as_ref().map_or(cam, |m| m.next.cam);
-        let params = shade_params_for(scene, self.lobes_per_splat, self.extent.shadow_bias, cfg);
-        let splatting = self.pipelines.splatting(cfg.splatter)?;
-        let buffers = self.frame_buffers(gpu, scene, &cam, &params, splatting)?;
-        let [visibility, attributes, shade] =
-            self.pipelines
-                .draw_timed(gpu, &buffers, &cam, &params, splatting, self.targets()?)?;
-        let mut temporal = 0.0;
-        self.history = None;
-        if let Some(moving) = moving {
-            let t = std::time::Instant::now();
-            let mut encoder = gpu.encoder("temporal");
-            self.record_temporal(gpu, &mut encoder, &moving)?;
-            gpu.submit_and_wait(encoder)?;
-            temporal = crate::timing::ms_since(t);
-            self.history = Some(moving.next);
+        on_batch: &mut dyn FnMut(u64, u64),
+    ) -> Result<PhotonView> {
+        let scene = &self.scene;
+        let photons = PhotonConfig::from_scene(scene);
+        let cam = camera_uniform(view, scene.bounds(), cfg);
+        let scale = cpu::photon_view::scene_scale(&scene.lights, photons.photons)?;
+        match &self.on {
+            On::Device(d) => {
+                let traced =
+                    gpu_photons::trace_photons(&d.gpu, scene, &d.scene, &photons, on_batch)?;
+                let t = std::time::Instant::now();
+                let gpu = &d.gpu;
+                let mut encoder = gpu.encoder("photon view");
+                let hdr = photon_image(gpu, &mut encoder, &d.scene, &traced, &cam, scale)?;
+                gpu.submit_and_wait(encoder)?;
+                let hdr = gpu.read::<[f32; 4]>(&hdr, (view.width * view.height) as usize)?;
+                let draw_ms = ms_since(t);
+                Ok(PhotonView {
+                    hdr,
+                    stats: traced.stats,
+                    draw_ms,
+                })
+            }
+            On::Mirror(m) => {
+                let geo = scene.geometry(&m.grid);
+                let (lights, materials) = (&scene.lights, &scene.materials);
+                let map = cpu::trace_photons(lights, materials, &geo, &photons, on_batch)?;
+                let t = std::time::Instant::now();
+                let hdr = cpu::photon_image(&cam, materials, &map.photons, &geo, scale)?;
+                let draw_ms = ms_since(t);
+                Ok(PhotonView {
+                    hdr,
+                    stats: map.stats,
+                    draw_ms,
+                })
+            }
         }
-        Ok([visibility, attributes, shade, temporal])
     }
 
-    /// The selection alone of the moving frame of `view` (`SplatPipelines::select_timed`):
-    /// its milliseconds, waited for (benchmarks).
-    pub fn select_timed(
-        &mut self,
-        gpu: &Gpu,
-        scene: &Scene,
-        view: &View,
-        cfg: &FrameConfig,
-    ) -> Result<f64> {
-        let cam = self.prepare(gpu, scene, view, cfg)?;
-        let params = shade_params_for(scene, self.lobes_per_splat, self.extent.shadow_bias, cfg);
-        let splatting = self.pipelines.splatting(cfg.splatter)?;
-        let buffers = self.frame_buffers(gpu, scene, &cam, &params, splatting)?;
-        self.pipelines
-            .select_timed(gpu, &buffers, &cam, &params, splatting)
+    /// Which scene surface each pixel of `view` shows (`objects::object_ids`, on the host).
+    pub fn object_ids(&self, view: &View, cfg: &FrameConfig) -> Result<Vec<u16>> {
+        let scene = &self.scene;
+        let cam = camera_uniform(view, scene.bounds(), cfg);
+        let samples = crate::objects::SAMPLES;
+        match &self.on {
+            On::Mirror(m) => crate::objects::object_ids(scene, &m.grid, &cam, samples),
+            On::Device(_) => {
+                let grid = cpu::scene_grid(scene)?;
+                crate::objects::object_ids(scene, &grid, &cam, samples)
+            }
+        }
     }
 
-    /// Records the tone mapping of the current targets' HDR image.
-    pub fn record_tone_map(
-        &self,
-        gpu: &Gpu,
-        encoder: &mut wgpu::CommandEncoder,
-        tone: &ToneConfig,
-    ) -> Result<GpuToned> {
-        let targets = self.targets()?;
-        let pixels = targets.width * targets.height;
-        tone_map(gpu, encoder, &targets.hdr, pixels, tone)
+    /// The last image's linear HDR pixels, rows from the top.
+    pub fn read_hdr(&self) -> Result<Vec<[f32; 4]>> {
+        match &self.on {
+            On::Device(d) => d.drawn()?.read_hdr(&d.gpu),
+            On::Mirror(m) => Ok(m.hdr.clone()),
+        }
     }
 
-    /// Tone-maps the last frame drawn and waits.
-    pub fn tone_map(&self, gpu: &Gpu, tone: &ToneConfig) -> Result<GpuToned> {
-        let mut encoder = gpu.encoder("tone map");
-        let toned = self.record_tone_map(gpu, &mut encoder, tone)?;
-        gpu.submit_and_wait(encoder)?;
-        Ok(toned)
-    }
-
-    /// The last frame's linear HDR pixels, rows from the top.
-    pub fn read_hdr(&self, gpu: &Gpu) -> Result<Vec<[f32; 4]>> {
-        let targets = self.targets()?;
-        gpu.read(&targets.hdr, (targets.width * targets.height) as usize)
-    }
-
-    /// The splats the last frame of baked direct light drew, as `splat_list` listed them, and
-    /// each one's drawn radius (the selection's parity with `cpu::splat_select::selection`).
-    pub fn read_selection(&self, gpu: &Gpu) -> Result<(Vec<u32>, Vec<f32>)> {
-        let fs = &self.frame_scene;
-        let count = gpu.read::<u32>(&fs.selected_count, 1)?[0] as usize;
-        let selected: Vec<u32> = gpu.read(&fs.selected, count)?;
-        let splats = self.on_gpu.grid.params.splat_count as usize;
-        let drawn: Vec<f32> = gpu.read(&fs.drawn, splats)?;
-        let radii = selected.iter().map(|&i| drawn[i as usize]).collect();
-        Ok((selected, radii))
+    /// The last image tone-mapped (`sequence::tone_map`) and read back.
+    pub fn tone_map(&self, tone: &ToneConfig) -> Result<Toned> {
+        match &self.on {
+            On::Device(d) => {
+                let (gpu, frames) = (&d.gpu, d.drawn()?);
+                let toned = frames.tone_map(gpu, tone)?;
+                let targets = frames.targets()?;
+                let pixels = (targets.width * targets.height) as usize;
+                let log_sum = gpu.read::<[f32; 2]>(&toned.log_sum, 1)?;
+                Ok(Toned {
+                    rgba: gpu.read::<u32>(&toned.rgba, pixels)?,
+                    log_sum: log_sum.first().copied().unwrap_or_default(),
+                })
+            }
+            On::Mirror(m) => {
+                let (rgba, log_sum) = cpu::tone_map(tone, &m.hdr)?;
+                Ok(Toned { rgba, log_sum })
+            }
+        }
     }
 }

@@ -15,9 +15,9 @@ use lobelight::direct::direct_params;
 use lobelight::em::LobeMap;
 use lobelight::frame::{Direct, FrameConfig, Show, camera_uniform, shade_params};
 use lobelight::gpu::exec::GpuExecutor;
+use lobelight::gpu::renderer::FrameRenderer;
 use lobelight::gpu::scene::GpuScene;
 use lobelight::grid::splat_order;
-use lobelight::renderer::FrameRenderer;
 use lobelight::scene::{self, Scene};
 use lobelight::sequence::{Executor, bake_direct};
 

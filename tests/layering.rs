@@ -229,3 +229,171 @@ fn the_library_does_not_import_the_application() {
         }
     }
 }
+
+/// The library's top-level modules from the bottom up: each uses only those before it
+/// (docs/architecture.md §2 gives the same list in its layers). A module missing here fails
+/// `every_module_has_its_place`.
+const ORDER: &[&str] = &[
+    // Records, errors and the WGSL with its Rust twins (the grid's cells, which the traversal
+    // twin walks, among them).
+    "error",
+    "large_pages",
+    "timing",
+    "types",
+    "grid",
+    "shared",
+    "shaders",
+    // Each stage's settings, limits and host data; nothing of scene files.
+    "photons",
+    "em",
+    "bins",
+    "tone",
+    "lobe_norms",
+    "convolution",
+    "fit_groups",
+    "lod",
+    // Scenes and views.
+    "scene",
+    "camera",
+    // The dispatch sequences, what frames and bakes derive from a scene, and the two
+    // engines that run them (neither reads the other).
+    "sequence",
+    "direct",
+    "frame",
+    "objects",
+    "plan",
+    "cpu",
+    "gpu",
+    // The bake over either engine, its cache, and the renderer that picks the engine once.
+    "bake",
+    "cache",
+    "renderer",
+    // The application.
+    "cli",
+];
+
+/// Each `(module, import)` of `root`'s top level where the import is listed after the module
+/// in `order`, or not listed at all.
+fn upward_imports(root: &Path, order: &[&str]) -> Vec<String> {
+    let place = |m: &str| order.iter().position(|o| *o == m);
+    let mut found = Vec::new();
+    for (module, uses) in sibling_graph(root) {
+        if module.len() != 1 {
+            continue;
+        }
+        for used in uses {
+            match (place(&module[0]), place(&used[0])) {
+                (Some(a), Some(b)) if b < a => {}
+                _ => found.push(format!("{} imports {}", module[0], used[0])),
+            }
+        }
+    }
+    found
+}
+
+#[test]
+fn every_module_uses_only_those_below_it() {
+    let found = upward_imports(Path::new("src"), ORDER);
+    assert!(found.is_empty(), "imports against the layers: {found:?}");
+}
+
+#[test]
+fn every_module_has_its_place() {
+    let lib = std::fs::read_to_string("src/lib.rs").expect("src/lib.rs");
+    let declared: Vec<&str> = lib
+        .lines()
+        .filter_map(|l| l.trim().strip_prefix("pub mod "))
+        .map(|l| l.trim_end_matches(';'))
+        .collect();
+    assert!(declared.len() > 20, "found only {declared:?}");
+    for m in &declared {
+        assert!(ORDER.contains(m), "`{m}` has no place in ORDER");
+    }
+    for m in ORDER {
+        assert!(
+            declared.contains(m),
+            "ORDER lists `{m}`, which src/lib.rs does not"
+        );
+    }
+}
+
+/// An import planted from a low module to a higher one is found, through `crate::` and a use
+/// group; the same tree without it has none.
+#[test]
+fn a_planted_upward_import_is_found() {
+    let root = std::env::temp_dir().join(format!("lobelight-layers-{}", std::process::id()));
+    let write = |rel: &str, text: &str| {
+        let path = root.join(rel);
+        std::fs::create_dir_all(path.parent().expect("a parent")).expect("temp folder");
+        std::fs::write(path, text).expect("temp file");
+    };
+    let order = ["low", "mid", "high"];
+    write("lib.rs", "pub mod low;\npub mod mid;\npub mod high;\n");
+    write("low.rs", "pub struct Low;\n");
+    write("mid/mod.rs", "pub mod part;\n");
+    write("mid/part.rs", "use crate::{low::Low, high::High};\n");
+    write("high.rs", "use crate::mid::part;\npub struct High;\n");
+    assert_eq!(upward_imports(&root, &order), vec!["mid imports high"]);
+    write("mid/part.rs", "use crate::low::Low;\n");
+    assert!(upward_imports(&root, &order).is_empty());
+    std::fs::remove_dir_all(&root).expect("temp folder removed");
+}
+
+/// Files of the application that still reach an engine themselves, until each draws through
+/// `renderer::Renderer`. The list only shrinks.
+const PICKS_ITS_ENGINE: &[&str] = &[
+    "src/cli/bench.rs",
+    "src/cli/mod.rs",
+    "src/cli/scale.rs",
+    "src/cli/view/baking.rs",
+    "src/cli/view/mod.rs",
+];
+
+/// The paths of `text` that name an engine: the mirrors (`cpu::`), the device (`gpu::`) or
+/// its frame passes.
+fn engine_paths(text: &str) -> Vec<String> {
+    let mut found = Vec::new();
+    for name in ["cpu::", "gpu::", "FrameRenderer"] {
+        for (i, _) in text.match_indices(name) {
+            let before = text[..i].chars().next_back();
+            if before.is_some_and(|c| c.is_ascii_alphanumeric() || c == '_') {
+                continue;
+            }
+            let line = text[..i].lines().count();
+            found.push(format!("{name} (line {line})"));
+        }
+    }
+    found
+}
+
+#[test]
+fn the_application_picks_no_engine() {
+    let mut files = module_files(Path::new("src/cli"));
+    files.retain(|(path, _)| {
+        let shown = Path::new("src/cli").join(path.strip_prefix("src/cli").expect("under"));
+        !PICKS_ITS_ENGINE.contains(&shown.to_string_lossy().as_ref())
+    });
+    assert!(files.len() >= 5, "found only {files:?}");
+    for (path, _) in files {
+        let text = std::fs::read_to_string(&path).expect("readable source");
+        let found = engine_paths(&text);
+        assert!(
+            found.is_empty(),
+            "{} reaches an engine itself: {found:?}",
+            path.display()
+        );
+    }
+    for listed in PICKS_ITS_ENGINE {
+        let text = std::fs::read_to_string(listed).expect("a listed file exists");
+        assert!(
+            !engine_paths(&text).is_empty(),
+            "{listed} no longer reaches an engine: take it off PICKS_ITS_ENGINE"
+        );
+    }
+}
+
+#[test]
+fn engine_paths_are_found() {
+    let text = "use crate::gpu::Gpu;\nfn f() { cpu::frames::cpu_frame(); my_gpu::x(); }\n";
+    assert_eq!(engine_paths(text), vec!["cpu:: (line 2)", "gpu:: (line 1)"]);
+}

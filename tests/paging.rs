@@ -13,9 +13,9 @@ use lobelight::frame::Terms;
 use lobelight::frame::{Direct, FrameConfig, Splatter};
 use lobelight::gpu::Gpu;
 use lobelight::gpu::grid::build_grid;
+use lobelight::gpu::renderer::FrameRenderer;
 use lobelight::gpu::scene::GpuScene;
 use lobelight::grid::{GridConfig, grid_params};
-use lobelight::renderer::FrameRenderer;
 use lobelight::scene::Scene;
 
 #[test]

@@ -10,7 +10,7 @@ use lobelight::camera::View;
 use lobelight::cpu::frames::cpu_path;
 use lobelight::frame::Terms;
 use lobelight::frame::{FrameConfig, camera_uniform};
-use lobelight::renderer::FrameRenderer;
+use lobelight::gpu::renderer::FrameRenderer;
 use lobelight::scene::{self, Scene};
 
 fn gpu_path(gpu: &lobelight::gpu::Gpu, scene: &Scene, view: &View, spp: u32) -> Vec<[f32; 4]> {

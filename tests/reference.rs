@@ -14,8 +14,8 @@ use lobelight::cpu::frames::{cpu_frame, cpu_reference};
 use lobelight::frame::{Direct, FrameConfig, camera_uniform, shade_params};
 use lobelight::gpu::Gpu;
 use lobelight::gpu::bins::GpuBins;
+use lobelight::gpu::renderer::FrameRenderer;
 use lobelight::grid::SplatGrid;
-use lobelight::renderer::FrameRenderer;
 use lobelight::scene::{self, Scene};
 
 /// The splat passes' parity tolerances (tests/render.rs).
@@ -45,7 +45,7 @@ fn gpu_reference(
         binning: binned.binning.clone(),
     };
     renderer
-        .draw_reference(gpu, scene, &on_device, view, &cfg)
+        .draw_reference(gpu, scene, (&on_device.bins, &on_device.em), view, &cfg)
         .unwrap();
     renderer.read_hdr(gpu).unwrap()
 }

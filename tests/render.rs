@@ -12,9 +12,9 @@ use lobelight::cpu::frames::cpu_frame;
 use lobelight::em::LobeMap;
 use lobelight::frame::{Direct, FrameConfig, Show, Splatter, camera_uniform, shade_params};
 use lobelight::gpu::Gpu;
+use lobelight::gpu::renderer::FrameRenderer;
 use lobelight::gpu::scene::GpuScene;
 use lobelight::grid::SplatGrid;
-use lobelight::renderer::FrameRenderer;
 use lobelight::scene::{self, Scene};
 
 /// Parity tolerances of the issue: mean relative difference and pixels within 5 %.
@@ -171,17 +171,16 @@ fn merged_glossy_disks_match_the_mirror() {
 /// tolerances, `splat_select` writing no word.
 #[test]
 fn a_diffuse_scene_merges_without_normals() {
-    use lobelight::lod::LodTree;
     let gpu = common::gpu();
     let (scene, grid, lobes) = baked_scene("scenes/diffuse.toml", 50_000);
-    let tree = LodTree::of_scene(&scene, true);
+    let tree = scene.lod_tree(true);
     assert!(
         !tree.normals && tree.spreads.len() == 1,
         "{}",
         tree.spreads.len()
     );
     let glossy = scene::load(Path::new("scenes/cornell.toml")).unwrap();
-    let tree = LodTree::of_scene(&glossy, true);
+    let tree = glossy.lod_tree(true);
     assert!(tree.normals && tree.spreads.len() == glossy.splats.len());
     let cfg = merged_raster();
     for view in views(&scene, 96) {
@@ -204,7 +203,7 @@ fn level_of_detail_leaves_no_hole() {
     use lobelight::cpu::splat_select::{drawn_splats, selection};
     use lobelight::cpu::splat_visibility::{bin_tiles, splat_visibility};
     let scene = scene::load(Path::new("scenes/cornell.toml")).unwrap();
-    let tree = lobelight::lod::LodTree::of_scene(&scene, true);
+    let tree = scene.lod_tree(true);
     let covered = |cam: &lobelight::types::Camera, splats: &[lobelight::types::Splat]| {
         let visible = splat_visibility(cam, splats, &scene.clips, &bin_tiles(cam, splats));
         visible.iter().map(|v| v.depth > 0.0).collect::<Vec<bool>>()
@@ -777,14 +776,11 @@ fn selection_by_chunks_draws_what_every_splat_would() {
     use lobelight::cpu::splat_nodes::walk;
     use lobelight::cpu::splat_select::{selection, splat_select};
     use lobelight::frame::{Splatting, frame_camera};
-    use lobelight::lod::{LodTree, visited};
+    use lobelight::lod::visited;
     use lobelight::shared::splat::{drawn_radius, lod_level};
     let gpu = common::gpu();
     let (scene, _, lobes) = glossy_cornell();
-    let (tree, flat) = (
-        LodTree::of_scene(&scene, true),
-        LodTree::of_scene(&scene, false),
-    );
+    let (tree, flat) = (scene.lod_tree(true), scene.lod_tree(false));
     let mut renderer = FrameRenderer::new(&gpu, &scene).unwrap();
     renderer.set_lobes(&gpu, &scene, &lobes).unwrap();
     let mut views = views(&scene, 96);

@@ -18,8 +18,8 @@ use lobelight::cpu::frames::cpu_frame;
 use lobelight::em::{LobeFamily, LobeMap};
 use lobelight::frame::{FrameConfig, camera_uniform, shade_params};
 use lobelight::gpu::Gpu;
+use lobelight::gpu::renderer::FrameRenderer;
 use lobelight::gpu::scene::GpuScene;
-use lobelight::renderer::FrameRenderer;
 use lobelight::scene::{self, Scene};
 use lobelight::types::{Lobe, SplatLight};
 

@@ -7,6 +7,7 @@ use std::path::Path;
 
 use lobelight::cli::sweep::{SweepPlan, sweep, thin};
 use lobelight::em::LobeFamily;
+use lobelight::renderer::Engine;
 use lobelight::scene;
 
 fn small_plan() -> SweepPlan {
@@ -31,11 +32,11 @@ fn small_plan() -> SweepPlan {
 
 #[test]
 fn a_small_sweep_writes_its_tables_and_charts() {
-    let gpu = common::gpu();
+    let engine = Engine::Device(std::sync::Arc::new(common::gpu()));
     let scene = scene::load(Path::new("scenes/cornell.toml")).unwrap();
     let dir = std::env::temp_dir().join(format!("lobelight-sweep-{}", std::process::id()));
     let plan = small_plan();
-    let r = sweep(&[("cornell".into(), scene)], Some(&gpu), &plan, &dir).unwrap();
+    let r = sweep(&[("cornell".into(), scene)], &engine, &plan, &dir).unwrap();
     assert_eq!(r.rows.len(), 14);
     let share = r.rows.iter().find(|row| row.knob == "share").unwrap();
     assert_eq!(share.value, "0R");

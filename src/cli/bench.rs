@@ -24,10 +24,10 @@ use crate::gpu::photons::trace_photons;
 use crate::gpu::present::PresentPipeline;
 use crate::gpu::scene::GpuScene;
 
+use crate::gpu::renderer::FrameRenderer;
 use crate::gpu::{BackendChoice, Gpu};
 use crate::photons::{PhotonConfig, PhotonMap, PhotonStats, photons_within};
 use crate::plan::{BakeLimits, BakePlan};
-use crate::renderer::FrameRenderer;
 use crate::scene::Scene;
 use crate::sequence::Executor;
 use crate::timing::ms_since;
@@ -694,7 +694,7 @@ pub fn frame(
     let (adapter, backend, fitted) = match gpu {
         Some(gpu) => {
             let mut renderer = FrameRenderer::new(gpu, scene)?;
-            let lobes = renderer.bake(gpu, scene, &progress)?.lobes;
+            let lobes = crate::bake::bake_frames(gpu, &mut renderer, scene, &progress)?.lobes;
             if cfg.needs_direct_bake() {
                 direct_bake_ms = Some(renderer.bake_direct(gpu, scene)?);
             }

@@ -11,12 +11,10 @@ use std::path::{Path, PathBuf};
 
 use serde::Serialize;
 
-use crate::bake::{BakeDevice, Progress, bake};
-use crate::cpu;
+use crate::bake::Progress;
 use crate::direct::DIRECT_SAMPLES;
 use crate::error::{Error, Result};
-use crate::gpu::Gpu;
-use crate::gpu::scene::GpuScene;
+use crate::renderer::{Engine, Renderer};
 use crate::scene::{self, Scene};
 
 /// The dense cloud's default splat count.
@@ -54,10 +52,10 @@ pub struct ClusterRow {
     pub em_ms: f64,
 }
 
-/// Writes both scenes to `dir` and bakes each on `gpu` (the CPU mirror without one); `settings`
-/// applies the command line's bake settings.
+/// Writes both scenes to `dir` and bakes each on `engine`; `settings` applies the command
+/// line's bake settings.
 pub fn cluster(
-    gpu: Option<&Gpu>,
+    engine: &Engine,
     splats: u64,
     dir: &Path,
     settings: &dyn Fn(&mut Scene) -> Result<()>,
@@ -76,17 +74,15 @@ pub fn cluster(
         .map(|path| {
             let mut scene = scene::load(path)?;
             settings(&mut scene)?;
-            measure(gpu, &scene)
+            measure(engine, scene)
         })
         .collect::<Result<Vec<_>>>()?;
     let slowdown = |f: fn(&ClusterRow) -> f64| f(&rows[0]) / f(&rows[1]).max(1e-9);
-    let (adapter, backend) = match gpu {
-        Some(g) => (g.info.name.clone(), g.backend_name().to_string()),
-        None => (
-            format!("CPU mirror ({} threads)", rayon::current_num_threads()),
-            "cpu".to_string(),
-        ),
+    let adapter = match engine {
+        Engine::Device(_) => engine.adapter(),
+        Engine::Mirror => format!("CPU mirror ({} threads)", rayon::current_num_threads()),
     };
+    let backend = engine.backend().to_string();
     Ok(ClusterBench {
         adapter,
         backend,
@@ -96,26 +92,13 @@ pub fn cluster(
     })
 }
 
-fn measure(gpu: Option<&Gpu>, scene: &Scene) -> Result<ClusterRow> {
+fn measure(engine: &Engine, scene: Scene) -> Result<ClusterRow> {
     let quiet = Progress::new(false);
-    let (baked, max_cell_len) = match gpu {
-        Some(gpu) => {
-            let on_gpu = GpuScene::upload(gpu, scene)?;
-            let grid = cpu::scene_grid(scene)?;
-            (
-                bake(scene, BakeDevice::Gpu(gpu, &on_gpu), &quiet)?,
-                max_cell(&grid),
-            )
-        }
-        None => {
-            let grid = cpu::scene_grid(scene)?;
-            (
-                bake(scene, BakeDevice::Cpu(&grid), &quiet)?,
-                max_cell(&grid),
-            )
-        }
-    };
-    let s = &baked.lobes.stats;
+    let mut renderer = Renderer::new(std::sync::Arc::new(scene), engine)?;
+    let max_cell_len = max_cell(&*renderer.read_grid()?);
+    let baked = renderer.bake(&quiet)?;
+    let scene = renderer.scene();
+    let s = &renderer.lobes().stats;
     let direct_rays = scene.splats.len() as u64 * scene.lights.len() as u64 * DIRECT_SAMPLES as u64;
     let photons_ms = baked.photons.ms.unwrap_or(0.0);
     let emitted = scene.bake.photons as f64;

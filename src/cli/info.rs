@@ -1,14 +1,13 @@
 //! `lobelight info`: what a scene holds and what it will cost, with the grid built on the
 //! device (or the CPU mirror) so its figures are real.
 
-use std::time::Instant;
+use std::sync::Arc;
 
 use serde::Serialize;
 
-use crate::cpu;
 use crate::error::Result;
-use crate::gpu::{Gpu, grid::build_grid};
-use crate::grid::{SplatGrid, grid_params};
+use crate::grid::grid_params;
+use crate::renderer::{Engine, Renderer};
 use crate::scene::{ObjectSummary, Scene};
 use crate::types::{Lobe, Photon, Splat};
 
@@ -58,18 +57,12 @@ pub struct Memory {
     pub total: u64,
 }
 
-/// Builds the grid on `gpu`, or on the CPU mirror when `gpu` is `None`.
-pub fn info(scene: &Scene, gpu: Option<&Gpu>) -> Result<Info> {
+/// Builds the grid on `engine`.
+pub fn info(scene: &Arc<Scene>, engine: &Engine) -> Result<Info> {
     let params = grid_params(&scene.splats, &scene.grid)?;
-    let start = Instant::now();
-    let grid: SplatGrid = match gpu {
-        Some(gpu) => {
-            let splats = gpu.storage("splats", &scene.splats)?;
-            build_grid(gpu, &params, &splats)?.download(gpu)?
-        }
-        None => cpu::build_grid(&params, &scene.splats)?,
-    };
-    let build_ms = start.elapsed().as_secs_f64() * 1e3;
+    let renderer = Renderer::new(scene.clone(), engine)?;
+    let grid = renderer.read_grid()?;
+    let build_ms = renderer.grid_ms();
     // In the file's coordinates (a far scene was moved to the origin on load).
     let (lo, hi) = scene.bounds();
     let (lo, hi) = (lo + scene.origin, hi + scene.origin);
@@ -97,8 +90,11 @@ pub fn info(scene: &Scene, gpu: Option<&Gpu>) -> Result<Info> {
     };
     Ok(Info {
         scene: scene.path.display().to_string(),
-        adapter: gpu.map_or_else(|| "cpu mirror".into(), |g| g.info.name.clone()),
-        backend: gpu.map_or_else(|| "cpu".into(), |g| g.backend_name().into()),
+        adapter: match engine {
+            Engine::Mirror => "cpu mirror".into(),
+            Engine::Device(_) => engine.adapter(),
+        },
+        backend: engine.backend().into(),
         splats: scene.splats.len(),
         lights: scene.lights.len(),
         materials: scene.material_names.clone(),

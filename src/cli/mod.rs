@@ -22,6 +22,7 @@ use crate::em::{EmConfig, Estimate, LobeFamily};
 use crate::frame::{Direct, FrameConfig, Show, Splatter};
 use crate::gpu::{BackendChoice, Gpu};
 use crate::photons::PhotonConfig;
+use crate::renderer::{Engine, EngineChoice, Fallback};
 use crate::scene::file::StoreRange;
 use crate::tone::{ToneConfig, ToneMode};
 use crate::{Error, Result, scene};
@@ -65,6 +66,28 @@ fn parse_shard(s: &str) -> std::result::Result<(u32, u32), String> {
 }
 
 impl DeviceArgs {
+    /// The engine these flags choose where the work would take `auto` (`EngineChoice`):
+    /// `--cpu` the mirror, `--gpu` or a named backend the device, a software rasterizer too.
+    /// One line on stderr says where the engine is not the device asked for.
+    fn engine(&self, auto: EngineChoice) -> Result<Engine> {
+        let choice = if self.cpu {
+            EngineChoice::Mirror
+        } else if self.gpu || self.backend != BackendChoice::Auto {
+            EngineChoice::Device
+        } else {
+            auto
+        };
+        let (engine, fallback) = Engine::open(choice, self.backend)?;
+        match fallback {
+            Some(why @ Fallback::Software(_)) => {
+                eprintln!("lobelight: {why} (--gpu runs them on it)")
+            }
+            Some(why) => eprintln!("lobelight: {why}"),
+            None => {}
+        }
+        Ok(engine)
+    }
+
     /// The device, or none for the CPU mirror: with `--cpu`, or when no adapter is found and
     /// no backend was named (one line on stderr says so, and how to install lavapipe). A
     /// backend named with `--backend` that has no adapter stays an error.
@@ -79,25 +102,6 @@ impl DeviceArgs {
                 Ok(None)
             }
             Err(e) => Err(e),
-        }
-    }
-
-    /// The engine of a bake and of still images: the device, but where it is a software
-    /// rasterizer and neither `--gpu` nor `--backend` asks for it. There the CPU mirror renders
-    /// the same image in about half the time (docs/measurements.md, "Which engine renders"),
-    /// and one line on stderr says what runs where.
-    fn still_engine(&self) -> Result<Option<Gpu>> {
-        match self.gpu()? {
-            Some(g) if self.prefers_mirror(&g) => {
-                eprintln!(
-                    "lobelight: {} is a software rasterizer: the bake and the image run on the \
-                     CPU mirror ({} threads), faster here (--gpu runs them on it)",
-                    g.info.name,
-                    rayon::current_num_threads()
-                );
-                Ok(None)
-            }
-            other => Ok(other),
         }
     }
 
@@ -526,9 +530,9 @@ fn run(cli: Cli) -> Result<()> {
             json,
             device,
         } => {
-            let scene = scene::load(&scene)?;
-            let gpu = device.gpu()?;
-            let info = info::info(&scene, gpu.as_ref())?;
+            let scene = std::sync::Arc::new(scene::load(&scene)?);
+            let engine = device.engine(EngineChoice::Device)?;
+            let info = info::info(&scene, &engine)?;
             print_report(json, &info)?;
         }
         Command::Render {
@@ -557,7 +561,8 @@ fn run(cli: Cli) -> Result<()> {
                 Some(path) => scene::views::load(path, &scene.camera)?,
                 None => Vec::new(),
             };
-            let gpu = device.still_engine()?;
+            let scene = std::sync::Arc::new(scene);
+            let engine = device.engine(EngineChoice::Auto)?;
             let opts = render::Options {
                 views,
                 shard,
@@ -570,7 +575,7 @@ fn run(cli: Cli) -> Result<()> {
                 cache,
                 spp,
             };
-            let report = render::render(&scene, gpu.as_ref(), &opts, &output)?;
+            let report = render::render(&scene, &engine, &opts, &output)?;
             if let Some(path) = object_ids {
                 render::write_object_ids(&scene, &opts, &path)?;
             }
@@ -764,10 +769,8 @@ fn run(cli: Cli) -> Result<()> {
             cluster_splats,
             ..
         } => {
-            let gpu = device.still_engine()?;
-            let r = cluster::cluster(gpu.as_ref(), cluster_splats, &output, &|scene| {
-                bake.apply(scene)
-            })?;
+            let engine = device.engine(EngineChoice::Auto)?;
+            let r = cluster::cluster(&engine, cluster_splats, &output, &|scene| bake.apply(scene))?;
             print_report(json, &r)?;
         }
         Command::Bench {
@@ -795,12 +798,12 @@ fn run(cli: Cli) -> Result<()> {
                     .map_or("scene".into(), |s| s.to_string_lossy().into_owned());
                 loaded.push((name, scene));
             }
-            let gpu = device.gpu()?;
+            let engine = device.engine(EngineChoice::Device)?;
             let mut plan = crate::cli::sweep::SweepPlan::default();
             if !knobs.is_empty() {
                 plan = plan.only(&knobs)?;
             }
-            let r = crate::cli::sweep::sweep(&loaded, gpu.as_ref(), &plan, &output)?;
+            let r = crate::cli::sweep::sweep(&loaded, &engine, &plan, &output)?;
             print_report(json, &r)?;
         }
         Command::Bench {
@@ -831,18 +834,20 @@ fn run(cli: Cli) -> Result<()> {
             }
             // Moving frames run on the device, a software rasterizer included (faster there
             // than the mirror); photons, the fit and re-bakes where still images run.
-            let gpu = match what {
-                BenchKind::Frame => device.gpu()?,
-                _ => device.still_engine()?,
-            };
+            let engine = device.engine(match what {
+                BenchKind::Frame => EngineChoice::Device,
+                _ => EngineChoice::Auto,
+            })?;
+            let gpu = engine.gpu();
             let mut reports = Vec::new();
             for path in &scenes {
                 let mut scene = scene::load(path)?;
                 bake.apply(&mut scene)?;
+                let scene = std::sync::Arc::new(scene);
                 let photons = PhotonConfig::from_scene(&scene);
                 let (text, value) = match what {
                     BenchKind::Photons => {
-                        let r = bench::photons(&scene, gpu.as_ref(), &photons)?;
+                        let r = bench::photons(&scene, gpu, &photons)?;
                         (r.to_string(), to_json(&r)?)
                     }
                     BenchKind::Frame => {
@@ -858,18 +863,17 @@ fn run(cli: Cli) -> Result<()> {
                                 None => still = Some(report),
                             }
                         }
-                        let gpu = gpu.as_ref();
                         let mut r = bench::frame(&scene, gpu, &frame, &tone, orbit, moving)?;
                         r.window = still;
                         (r.to_string(), to_json(&r)?)
                     }
                     BenchKind::Rebake => {
-                        let r = crate::cli::rebake::rebake(&scene, gpu.as_ref())?;
+                        let r = crate::cli::rebake::rebake(&scene, &engine)?;
                         (r.to_string(), to_json(&r)?)
                     }
                     BenchKind::Em => {
                         let em = EmConfig::from_scene(&scene);
-                        let r = bench::em(&scene, gpu.as_ref(), &photons, &em)?;
+                        let r = bench::em(&scene, gpu, &photons, &em)?;
                         (r.to_string(), to_json(&r)?)
                     }
                     BenchKind::Convolution

@@ -3,24 +3,20 @@
 //! of the photons and a third of the EM iterations, then the full bake. This times both over a few moves and measures the
 //! preview's error against the full bake's frame, so the preview's speed comes with its price.
 
+use std::sync::Arc;
 use std::time::Instant;
 
 use serde::Serialize;
 
-use crate::bake::{BakeDevice, Progress, bake};
+use crate::bake::Progress;
 use crate::camera::View;
 use crate::cli::compare::difference;
 use crate::cli::measure::median;
 use crate::cli::view::{move_first_light, passes};
-use crate::cpu;
-use crate::cpu::frames::{cpu_direct, cpu_frame_into};
-use crate::direct::DirectMap;
 use crate::em::LobeMap;
 use crate::error::{Error, Result};
-use crate::frame::{FrameConfig, camera_uniform, shade_params};
-use crate::gpu::Gpu;
-use crate::grid::SplatGrid;
-use crate::renderer::FrameRenderer;
+use crate::frame::FrameConfig;
+use crate::renderer::{Engine, Renderer};
 use crate::scene::Scene;
 use crate::timing::ms_since;
 
@@ -54,59 +50,24 @@ pub struct RebakeBench {
     pub moves: u32,
 }
 
-/// Where it runs: the device with the scene on it, or the CPU mirror with its grid.
-enum Place<'a> {
-    Gpu(&'a Gpu, Box<FrameRenderer>),
-    /// The grid, and the direct bake of the lights as they last moved.
-    Cpu(SplatGrid, DirectMap),
+/// Bakes the renderer's scene as `scene` says (its lights and bake settings); returns the
+/// lobes and the bake's milliseconds.
+fn bake_as(renderer: &mut Renderer, scene: Scene) -> Result<(LobeMap, f64)> {
+    renderer.relight(Arc::new(scene))?;
+    let t = Instant::now();
+    renderer.bake(&Progress::new(false))?;
+    Ok((renderer.lobes().clone(), ms_since(t)))
 }
 
-impl Place<'_> {
-    fn bake(&self, scene: &Scene) -> Result<(LobeMap, f64)> {
-        let quiet = Progress::new(false);
-        let t = Instant::now();
-        let device = match self {
-            Place::Gpu(gpu, renderer) => BakeDevice::Gpu(gpu, &renderer.on_gpu),
-            Place::Cpu(grid, _) => BakeDevice::Cpu(grid),
-        };
-        let lobes = bake(scene, device, &quiet)?.lobes;
-        Ok((lobes, ms_since(t)))
-    }
-
-    /// The direct bake of the scene's lights, in milliseconds.
-    fn bake_direct(&mut self, scene: &Scene) -> Result<f64> {
-        let t = Instant::now();
-        match self {
-            Place::Gpu(gpu, renderer) => {
-                renderer.bake_direct(gpu, scene)?;
-            }
-            Place::Cpu(grid, direct) => *direct = cpu_direct(scene, grid)?,
-        }
-        Ok(ms_since(t))
-    }
-
-    /// The frame of the scene's camera with `lobes`, linear HDR.
-    fn image(&mut self, scene: &Scene, lobes: &LobeMap) -> Result<Vec<[f32; 4]>> {
-        let cfg = FrameConfig::default();
-        let view = View::new(&scene.camera, IMAGE.0, IMAGE.1);
-        match self {
-            Place::Gpu(gpu, renderer) => {
-                renderer.set_lobes(gpu, scene, lobes)?;
-                renderer.draw(gpu, scene, &view, &cfg)?;
-                renderer.read_hdr(gpu)
-            }
-            Place::Cpu(grid, direct) => {
-                let cam = camera_uniform(&view, scene.bounds(), &cfg);
-                let params = shade_params(scene, lobes, &cfg);
-                let mut hdr = vec![[0.0; 4]; (IMAGE.0 * IMAGE.1) as usize];
-                cpu_frame_into(scene, grid, lobes, direct, &cam, &params, &mut hdr);
-                Ok(hdr)
-            }
-        }
-    }
+/// The frame of the scene's camera with `lobes`, linear HDR.
+fn image(renderer: &mut Renderer, lobes: &LobeMap) -> Result<Vec<[f32; 4]>> {
+    let view = View::new(&renderer.scene().camera, IMAGE.0, IMAGE.1);
+    renderer.set_lobes(lobes.clone());
+    renderer.draw(&view, &FrameConfig::default(), 0, |_| {})?;
+    renderer.read_hdr()
 }
 
-pub fn rebake(scene: &Scene, gpu: Option<&Gpu>) -> Result<RebakeBench> {
+pub fn rebake(scene: &Arc<Scene>, engine: &Engine) -> Result<RebakeBench> {
     let [quick, full] = &passes(&scene.bake, true)[..] else {
         return Err(Error::Invalid(format!(
             "bench rebake needs a scene with enough photons for a preview bake (it has {}; \
@@ -114,45 +75,36 @@ pub fn rebake(scene: &Scene, gpu: Option<&Gpu>) -> Result<RebakeBench> {
             scene.bake.photons
         )));
     };
-    let t = Instant::now();
-    let (mut place, adapter, backend) = match gpu {
-        Some(gpu) => {
-            let renderer = FrameRenderer::new(gpu, scene)?;
-            let name = (gpu.info.name.clone(), gpu.backend_name().to_string());
-            (Place::Gpu(gpu, Box::new(renderer)), name.0, name.1)
-        }
-        None => {
-            let grid = cpu::scene_grid(scene)?;
-            let threads = rayon::current_num_threads();
-            let adapter = format!("CPU mirror ({threads} threads)");
-            let direct = cpu_direct(scene, &grid)?;
-            (Place::Cpu(grid, direct), adapter, "cpu".to_string())
-        }
-    };
-    let grid_ms = ms_since(t);
-    let (_, bake_ms) = place.bake(scene)?;
+    let mut renderer = Renderer::new(scene.clone(), engine)?;
+    let grid_ms = renderer.grid_ms();
+    let (_, bake_ms) = bake_as(&mut renderer, (**scene).clone())?;
     let (mut full_ms, mut preview_ms, mut errors) = (Vec::new(), Vec::new(), Vec::new());
     let mut direct_ms = Vec::new();
     for k in 1..=MOVES {
         let moved = move_first_light(scene, k as f32, 0.0)
             .ok_or_else(|| Error::Invalid("bench rebake needs a scene with a light".into()))?;
-        direct_ms.push(place.bake_direct(&moved)?);
+        renderer.relight(Arc::new(moved.clone()))?;
+        direct_ms.push(renderer.bake_direct()?);
         let mut preview = moved.clone();
         preview.bake = quick.clone();
-        let (quick, ms) = place.bake(&preview)?;
+        let (quick, ms) = bake_as(&mut renderer, preview)?;
         preview_ms.push(ms);
-        let (full, ms) = place.bake(&moved)?;
+        let (full, ms) = bake_as(&mut renderer, moved)?;
         full_ms.push(ms);
-        let preview_image = place.image(&moved, &quick)?;
-        let d = difference(&preview_image, &place.image(&moved, &full)?)?;
+        let preview_image = image(&mut renderer, &quick)?;
+        let d = difference(&preview_image, &image(&mut renderer, &full)?)?;
         errors.push(d.rel_mse);
     }
     let rebake_ms = median(full_ms);
     let photons = full.photons;
+    let adapter = match engine {
+        Engine::Device(_) => engine.adapter(),
+        Engine::Mirror => format!("CPU mirror ({} threads)", rayon::current_num_threads()),
+    };
     Ok(RebakeBench {
         scene: scene.path.display().to_string(),
         adapter,
-        backend,
+        backend: engine.backend().to_string(),
         splats: scene.splats.len(),
         photons,
         preview_photons: quick.photons,

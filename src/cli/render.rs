@@ -2,25 +2,18 @@
 //! figures. Methods: `lobes`, the renderer; `photons`, the stored photons seen from the camera.
 
 use std::path::{Path, PathBuf};
+use std::sync::Arc;
 use std::time::Instant;
 
 use serde::Serialize;
 
-use crate::bake::{BakeDevice, Baked, Progress, StageReport, bake, bins_cpu};
+use crate::bake::{Progress, StageReport};
 use crate::cache::{self, Miss};
 use crate::camera::View;
-use crate::cpu;
-use crate::cpu::frames::{cpu_frame, cpu_path, cpu_reference, cpu_refined};
-use crate::cpu::photon_view::scene_scale;
 use crate::error::{Error, Result};
-use crate::frame::{FrameConfig, camera_uniform, shade_params};
-use crate::gpu::photon_view::photon_image;
-use crate::gpu::photons::trace_photons;
-use crate::gpu::scene::GpuScene;
-use crate::gpu::tone::tone_map;
-use crate::gpu::{Compiled, Gpu};
-use crate::photons::PhotonConfig;
-use crate::renderer::FrameRenderer;
+use crate::frame::FrameConfig;
+use crate::renderer::Compiled;
+use crate::renderer::{BakeReport, Engine, Renderer};
 use crate::scene::Scene;
 use crate::scene::file::CameraDesc;
 use crate::shared::tone::srgb_byte;
@@ -86,12 +79,11 @@ fn image_size(scene: &Scene, opts: &Options) -> (u32, u32) {
 
 /// Writes the object-ID image of the render `opts` describes (`crate::objects`) to `path`,
 /// with the surfaces' names beside it.
-pub fn write_object_ids(scene: &Scene, opts: &Options, path: &Path) -> Result<()> {
+pub fn write_object_ids(scene: &Arc<Scene>, opts: &Options, path: &Path) -> Result<()> {
     let (width, height) = image_size(scene, opts);
     let view = View::new(&scene.camera, width, height);
-    let grid = cpu::scene_grid(scene)?;
-    let cam = camera_uniform(&view, scene.bounds(), &opts.frame);
-    let ids = crate::objects::object_ids(scene, &grid, &cam, crate::objects::SAMPLES)?;
+    let renderer = Renderer::new(scene.clone(), &Engine::Mirror)?;
+    let ids = renderer.object_ids(&view, &opts.frame)?;
     crate::cli::compare::write_object_ids(path, &ids, view.width, view.height, &scene.surfaces)
 }
 
@@ -205,24 +197,15 @@ impl ImageFormat {
     }
 }
 
-fn adapter_names(gpu: Option<&Gpu>) -> (String, String) {
-    (
-        gpu.map_or_else(|| "CPU mirror".to_string(), |g| g.info.name.clone()),
-        gpu.map_or("cpu", |g| g.backend_name()).to_string(),
-    )
-}
-
 pub fn render(
-    scene: &Scene,
-    gpu: Option<&Gpu>,
+    scene: &Arc<Scene>,
+    engine: &Engine,
     opts: &Options,
     output: &Path,
 ) -> Result<RenderReport> {
     let (width, height) = image_size(scene, opts);
     crate::scene::check_resolution(width, height).map_err(Error::Invalid)?;
-    if let Some(gpu) = gpu {
-        gpu.check_image(width, height)?;
-    }
+    engine.check_image(width, height)?;
     let format = ImageFormat::of(output)?;
     opts.frame.validate()?;
     opts.tone.validate()?;
@@ -233,13 +216,13 @@ pub fn render(
             opts.method.name()
         )));
     }
-    let (adapter, backend) = adapter_names(gpu);
+    let mut renderer = Renderer::new(scene.clone(), engine)?;
     let mut views = Vec::new();
     let (stages, cache_hit, log_average) = match opts.method {
         Method::Lobes => {
             let numbered = shots(opts, &view, width, height, output)?;
             let shots: Vec<Shot> = numbered.iter().map(|(_, s)| s.clone()).collect();
-            let (stages, hit, done) = render_lobes(scene, gpu, opts, &shots, format)?;
+            let (stages, hit, done) = render_lobes(&mut renderer, opts, &shots, format)?;
             if !opts.views.is_empty() {
                 views = numbered
                     .iter()
@@ -260,22 +243,23 @@ pub fn render(
             )));
         }
         Method::Photons => (
-            render_photons(scene, gpu, opts, &view, format, output)?,
+            render_photons(&mut renderer, opts, &view, format, output)?,
             false,
             0.0,
         ),
         Method::Reference => {
-            let (stages, log_average) = render_reference(scene, gpu, opts, &view, format, output)?;
+            let (stages, log_average) =
+                render_reference(&mut renderer, opts, &view, format, output)?;
             (stages, false, log_average)
         }
         Method::Path => {
-            let (stages, log_average) = render_path(scene, gpu, opts, &view, format, output)?;
+            let (stages, log_average) = render_path(&mut renderer, opts, &view, format, output)?;
             (stages, false, log_average)
         }
     };
     Ok(RenderReport {
-        adapter,
-        backend,
+        adapter: engine.adapter(),
+        backend: engine.backend().to_string(),
         splats: scene.splats.len(),
         method: opts.method,
         output: output.display().to_string(),
@@ -285,7 +269,7 @@ pub fn render(
         log_average,
         stages,
         views,
-        pipelines: gpu.map(Gpu::compiled),
+        pipelines: engine.compiled(),
     })
 }
 
@@ -334,11 +318,11 @@ fn shots(
 
 /// The bake from the cache file when it matches, else baked (and saved when asked).
 fn bake_or_load(
-    scene: &Scene,
-    device: BakeDevice,
+    renderer: &mut Renderer,
     opts: &Options,
     progress: &Progress,
-) -> Result<(Baked, bool)> {
+) -> Result<(BakeReport, bool)> {
+    let scene = renderer.scene();
     let key = cache::bake_key(scene);
     if let Some(path) = &opts.cache {
         match cache::load(path, key, scene.splats.len())? {
@@ -348,14 +332,13 @@ fn bake_or_load(
                     eprintln!("{why}");
                 }
                 let skipped = StageReport::skipped(&why);
-                let baked = Baked {
-                    lobes,
-                    direct: None,
+                renderer.set_lobes(lobes);
+                let report = BakeReport {
                     photons: skipped.clone(),
                     binning: skipped.clone(),
                     em: skipped,
                 };
-                return Ok((baked, true));
+                return Ok((report, true));
             }
             Err(Miss::Stale) if opts.progress => eprintln!(
                 "{}: the scene or a bake setting changed since it was written; baking again",
@@ -364,11 +347,11 @@ fn bake_or_load(
             Err(_) => {}
         }
     }
-    let baked = bake(scene, device, progress)?;
+    let report = renderer.bake(progress)?;
     if let Some(path) = &opts.cache {
-        cache::save(path, key, &baked.lobes)?;
+        cache::save(path, key, renderer.lobes())?;
     }
-    Ok((baked, false))
+    Ok((report, false))
 }
 
 /// The pixels a frame ends in: tone-mapped for PNG, linear for EXR.
@@ -390,11 +373,9 @@ fn tone_skipped() -> StageReport {
     StageReport::skipped("EXR output keeps linear radiance")
 }
 
-/// A frame's HDR image on the device, tone-mapped for PNG or read back linear for EXR.
-fn drawn_on_gpu(
-    gpu: &Gpu,
-    hdr: &wgpu::Buffer,
-    pixels: u32,
+/// The renderer's last image, tone-mapped for PNG or read back linear for EXR.
+fn drawn(
+    renderer: &Renderer,
     format: ImageFormat,
     tone: &ToneConfig,
     shade: StageReport,
@@ -402,47 +383,16 @@ fn drawn_on_gpu(
     Ok(match format {
         ImageFormat::Png => {
             let t = Instant::now();
-            let mut encoder = gpu.encoder("tone map");
-            let toned = tone_map(gpu, &mut encoder, hdr, pixels, tone)?;
-            gpu.submit_and_wait(encoder)?;
-            let tonemap = StageReport::ran(ms_since(t));
-            let sum = gpu.read::<[f32; 2]>(&toned.log_sum, 1)?;
+            let toned = renderer.tone_map(tone)?;
             Drawn {
-                pixels: Pixels::Rgba8(gpu.read::<u32>(&toned.rgba, pixels as usize)?),
-                shade,
-                tonemap,
-                log_sum: sum.first().copied(),
-            }
-        }
-        ImageFormat::Exr => Drawn {
-            pixels: Pixels::Hdr(gpu.read::<[f32; 4]>(hdr, pixels as usize)?),
-            shade,
-            tonemap: tone_skipped(),
-            log_sum: None,
-        },
-    })
-}
-
-/// A frame's HDR image from the CPU mirror, tone-mapped for PNG or kept linear for EXR.
-fn drawn_on_cpu(
-    hdr: Vec<[f32; 4]>,
-    format: ImageFormat,
-    tone: &ToneConfig,
-    shade: StageReport,
-) -> Result<Drawn> {
-    Ok(match format {
-        ImageFormat::Png => {
-            let t = Instant::now();
-            let (rgba, sum) = cpu::tone_map(tone, &hdr)?;
-            Drawn {
-                pixels: Pixels::Rgba8(rgba),
+                pixels: Pixels::Rgba8(toned.rgba),
                 shade,
                 tonemap: StageReport::ran(ms_since(t)),
-                log_sum: Some(sum),
+                log_sum: Some(toned.log_sum),
             }
         }
         ImageFormat::Exr => Drawn {
-            pixels: Pixels::Hdr(hdr),
+            pixels: Pixels::Hdr(renderer.read_hdr()?),
             shade,
             tonemap: tone_skipped(),
             log_sum: None,
@@ -485,8 +435,7 @@ struct Shots {
 
 /// The renderer: bake (or load) once, then for each shot the splat passes, tone map, write.
 fn render_lobes(
-    scene: &Scene,
-    gpu: Option<&Gpu>,
+    renderer: &mut Renderer,
     opts: &Options,
     shots: &[Shot],
     format: ImageFormat,
@@ -498,75 +447,23 @@ fn render_lobes(
         log_average: 0.0,
         each: Vec::with_capacity(shots.len()),
     };
-    let mut record = |drawn: Drawn, shot: &Shot, t: Instant| -> Result<()> {
+    let (baked, hit) = bake_or_load(renderer, opts, &progress)?;
+    for shot in shots {
+        let (t, view) = (Instant::now(), &shot.view);
+        let bar = (opts.spp > 0).then(|| progress.bar(opts.spp as u64));
+        let each = |k: u32| bar.iter().for_each(|b| b.set_position(k as u64 + 1));
+        let drawn_now = renderer.draw(view, &opts.frame, opts.spp, each);
+        bar.iter().for_each(|b| b.finish_and_clear());
+        drawn_now?;
+        let shade = refined(ms_since(t), opts.spp);
+        let drawn = drawn(renderer, format, &opts.tone, shade)?;
         write_drawn(&drawn, &progress, &shot.view, &shot.output)?;
         done.each.push(ms_since(t));
         done.log_average = drawn.log_sum.map_or(0.0, crate::tone::log_average);
         (done.shade, done.tonemap) = (drawn.shade, drawn.tonemap);
-        Ok(())
-    };
-    let (baked, hit, grid) = match gpu {
-        Some(gpu) => {
-            let mut renderer = FrameRenderer::new(gpu, scene)?;
-            let on_gpu = BakeDevice::Gpu(gpu, &renderer.on_gpu);
-            let (baked, hit) = bake_or_load(scene, on_gpu, opts, &progress)?;
-            renderer.set_baked(gpu, scene, &baked)?;
-            for shot in shots {
-                let (t, view) = (Instant::now(), &shot.view);
-                let targets = if opts.spp == 0 {
-                    renderer.draw(gpu, scene, view, &opts.frame)?
-                } else {
-                    let bar = progress.bar(opts.spp as u64);
-                    let each = |k: u32| bar.set_position(k as u64 + 1);
-                    let drawn =
-                        renderer.draw_refined(gpu, scene, view, &opts.frame, opts.spp, each);
-                    bar.finish_and_clear();
-                    drawn?
-                };
-                let shade = refined(ms_since(t), opts.spp);
-                let pixels = view.width * view.height;
-                record(
-                    drawn_on_gpu(gpu, &targets.hdr, pixels, format, &opts.tone, shade)?,
-                    shot,
-                    t,
-                )?;
-            }
-            (baked, hit, StageReport::ran(renderer.on_gpu.grid_ms))
-        }
-        None => {
-            let t = Instant::now();
-            let host_grid = cpu::scene_grid(scene)?;
-            let grid = StageReport::ran(ms_since(t));
-            let (baked, hit) = bake_or_load(scene, BakeDevice::Cpu(&host_grid), opts, &progress)?;
-            let params = shade_params(scene, &baked.lobes, &opts.frame);
-            for shot in shots {
-                let t = Instant::now();
-                let cam = camera_uniform(&shot.view, scene.bounds(), &opts.frame);
-                let hdr = match opts.spp {
-                    0 => cpu_frame(
-                        scene,
-                        &host_grid,
-                        (&baked.lobes, baked.direct.as_ref()),
-                        &cam,
-                        &params,
-                    )?,
-                    spp => cpu_refined(
-                        scene,
-                        &host_grid,
-                        (&baked.lobes, baked.direct.as_ref()),
-                        &cam,
-                        &params,
-                        spp,
-                    )?,
-                };
-                let shade = refined(ms_since(t), opts.spp);
-                record(drawn_on_cpu(hdr, format, &opts.tone, shade)?, shot, t)?;
-            }
-            (baked, hit, grid)
-        }
-    };
+    }
     let stages = Stages {
-        grid,
+        grid: StageReport::ran(renderer.grid_ms()),
         photons: baked.photons,
         binning: baked.binning,
         em: baked.em,
@@ -579,53 +476,21 @@ fn render_lobes(
 /// `--method reference`: photons traced and binned (no fit), gathered per pixel at the
 /// visible point with the exact BRDF, direct light by the frame's own shade pass.
 fn render_reference(
-    scene: &Scene,
-    gpu: Option<&Gpu>,
+    renderer: &mut Renderer,
     opts: &Options,
     view: &View,
     format: ImageFormat,
     output: &Path,
 ) -> Result<(Stages, f32)> {
     let progress = Progress::new(opts.progress);
-    let cam = camera_uniform(view, scene.bounds(), &opts.frame);
-    let pixels = view.width * view.height;
-    let (grid, photons, binning, drawn) = match gpu {
-        Some(gpu) => {
-            let mut renderer = FrameRenderer::new(gpu, scene)?;
-            let binned = renderer.bins(gpu, scene, &progress)?;
-            let t = Instant::now();
-            let targets = renderer.draw_reference(gpu, scene, &binned, view, &opts.frame)?;
-            let shade = StageReport::ran(ms_since(t));
-            let drawn = drawn_on_gpu(gpu, &targets.hdr, pixels, format, &opts.tone, shade)?;
-            (
-                StageReport::ran(renderer.on_gpu.grid_ms),
-                binned.photons,
-                binned.binning,
-                drawn,
-            )
-        }
-        None => {
-            let t = Instant::now();
-            let host_grid = cpu::scene_grid(scene)?;
-            let grid = StageReport::ran(ms_since(t));
-            let binned = bins_cpu(scene, &host_grid, &progress)?;
-            let t = Instant::now();
-            let hdr = cpu_reference(
-                scene,
-                &host_grid,
-                &binned.bins,
-                &binned.em,
-                &cam,
-                &opts.frame,
-            );
-            let shade = StageReport::ran(ms_since(t));
-            let drawn = drawn_on_cpu(hdr, format, &opts.tone, shade)?;
-            (grid, binned.photons, binned.binning, drawn)
-        }
-    };
+    let [photons, binning] = renderer.bin_photons(&progress)?;
+    let t = Instant::now();
+    renderer.draw_reference(view, &opts.frame)?;
+    let shade = StageReport::ran(ms_since(t));
+    let drawn = drawn(renderer, format, &opts.tone, shade)?;
     write_drawn(&drawn, &progress, view, output)?;
     let stages = Stages {
-        grid,
+        grid: StageReport::ran(renderer.grid_ms()),
         photons,
         binning,
         em: StageReport::skipped("the reference gathers photons; it fits no lobes"),
@@ -637,44 +502,25 @@ fn render_reference(
 
 /// `--method path`: `--spp` path-traced samples per pixel, on the device or the CPU mirror.
 fn render_path(
-    scene: &Scene,
-    gpu: Option<&Gpu>,
+    renderer: &mut Renderer,
     opts: &Options,
     view: &View,
     format: ImageFormat,
     output: &Path,
 ) -> Result<(Stages, f32)> {
     let progress = Progress::new(opts.progress);
-    let pixels = view.width * view.height;
     let spp = opts.spp.max(1);
     let bar = progress.bar(spp as u64);
     let each = |k: u32| bar.set_position(k as u64 + 1);
-    let (grid, drawn) = match gpu {
-        Some(gpu) => {
-            let mut renderer = FrameRenderer::new(gpu, scene)?;
-            let t = Instant::now();
-            let targets = renderer.draw_path(gpu, scene, view, opts.frame.show, spp, each);
-            bar.finish_and_clear();
-            let shade = refined(ms_since(t), spp);
-            let drawn = drawn_on_gpu(gpu, &targets?.hdr, pixels, format, &opts.tone, shade)?;
-            (StageReport::ran(renderer.on_gpu.grid_ms), drawn)
-        }
-        None => {
-            let t = Instant::now();
-            let host_grid = cpu::scene_grid(scene)?;
-            let grid = StageReport::ran(ms_since(t));
-            let cam = camera_uniform(view, scene.bounds(), &opts.frame);
-            let t = Instant::now();
-            let hdr = cpu_path(scene, &host_grid, &cam, opts.frame.show, spp);
-            bar.finish_and_clear();
-            let drawn = drawn_on_cpu(hdr?, format, &opts.tone, refined(ms_since(t), spp))?;
-            (grid, drawn)
-        }
-    };
+    let t = Instant::now();
+    let traced = renderer.draw_path(view, &opts.frame, spp, each);
+    bar.finish_and_clear();
+    traced?;
+    let drawn = drawn(renderer, format, &opts.tone, refined(ms_since(t), spp))?;
     write_drawn(&drawn, &progress, view, output)?;
     let why = "the path tracer needs no bake";
     let stages = Stages {
-        grid,
+        grid: StageReport::ran(renderer.grid_ms()),
         photons: StageReport::skipped(why),
         binning: StageReport::skipped(why),
         em: StageReport::skipped(why),
@@ -687,8 +533,7 @@ fn render_path(
 /// `--method photons`: the stored photons seen from the camera (thesis Fig. 3.1), drawn by
 /// the `photon_view` stage on the device or its CPU mirror.
 fn render_photons(
-    scene: &Scene,
-    gpu: Option<&Gpu>,
+    renderer: &mut Renderer,
     opts: &Options,
     view: &View,
     format: ImageFormat,
@@ -699,37 +544,18 @@ fn render_photons(
             "--method photons writes PNG only (it shows where photons landed, not radiance)".into(),
         ));
     }
-    let cfg = PhotonConfig::from_scene(scene);
-    let bar = Progress::new(opts.progress).bar(cfg.photons);
+    let total = crate::photons::PhotonConfig::from_scene(renderer.scene()).photons;
+    let bar = Progress::new(opts.progress).bar(total);
     let mut on_batch = |done: u64, _total: u64| bar.set_position(done);
-    let cam = camera_uniform(view, scene.bounds(), &opts.frame);
-    let scale = scene_scale(&scene.lights, cfg.photons)?;
-    let (hdr, stats, grid_ms, draw_ms) = match gpu {
-        Some(gpu) => {
-            let on_gpu = GpuScene::upload(gpu, scene)?;
-            let traced = trace_photons(gpu, scene, &on_gpu, &cfg, &mut on_batch)?;
-            bar.finish_and_clear();
-            let t = Instant::now();
-            let mut encoder = gpu.encoder("photon view");
-            let hdr = photon_image(gpu, &mut encoder, &on_gpu, &traced, &cam, scale)?;
-            gpu.submit_and_wait(encoder)?;
-            let hdr = gpu.read::<[f32; 4]>(&hdr, (view.width * view.height) as usize)?;
-            (hdr, traced.stats, on_gpu.grid_ms, ms_since(t))
-        }
-        None => {
-            let (map, grid, grid_ms) = cpu::trace_scene(scene, &cfg, &mut on_batch)?;
-            bar.finish_and_clear();
-            let t = Instant::now();
-            let geo = scene.geometry(&grid);
-            let hdr = cpu::photon_image(&cam, &scene.materials, &map.photons, &geo, scale)?;
-            (hdr, map.stats, grid_ms, ms_since(t))
-        }
-    };
-    let image: Vec<[f32; 3]> = hdr.iter().map(|c| [c[0], c[1], c[2]]).collect();
+    let seen = renderer.photon_view(view, &opts.frame, &mut on_batch);
+    bar.finish_and_clear();
+    let seen = seen?;
+    let image: Vec<[f32; 3]> = seen.hdr.iter().map(|c| [c[0], c[1], c[2]]).collect();
     write_png(output, &image, view.width, view.height)?;
     let not_built = "not part of --method photons";
+    let stats = seen.stats;
     Ok(Stages {
-        grid: StageReport::ran(grid_ms),
+        grid: StageReport::ran(renderer.grid_ms()),
         photons: StageReport {
             emitted: Some(stats.emitted),
             stored: Some(stats.stored),
@@ -738,7 +564,7 @@ fn render_photons(
         binning: StageReport::skipped(not_built),
         em: StageReport::skipped(not_built),
         // Drawing the photons.
-        shade: StageReport::ran(draw_ms),
+        shade: StageReport::ran(seen.draw_ms),
         tonemap: StageReport::skipped("photon view is scaled by its 99.5th percentile"),
     })
 }

@@ -19,7 +19,7 @@ use crate::cpu::frames::cpu_direct;
 use crate::error::{Error, Result};
 use crate::frame::FrameConfig;
 use crate::gpu::Gpu;
-use crate::renderer::FrameRenderer;
+use crate::gpu::renderer::FrameRenderer;
 use crate::scene;
 use crate::scene::file::CameraDesc;
 use crate::timing::ms_since;
@@ -330,7 +330,7 @@ fn bake_cloud(
     // a direct bake of its own here would count it twice.
     let (baked, direct_ms, mirror_grid_ms) = match engine {
         BakeEngine::Device => {
-            let baked = renderer.bake(gpu, &scene, &progress)?;
+            let baked = crate::bake::bake_frames(gpu, &mut renderer, &scene, &progress)?;
             let direct_ms = match baked.direct {
                 Some(_) => 0.0,
                 None => renderer.bake_direct(gpu, &scene)?,
@@ -342,7 +342,7 @@ fn bake_cloud(
             let grid = cpu::scene_grid(&scene)?;
             let grid_ms = ms_since(t);
             let baked = bake(&scene, BakeDevice::Cpu(&grid), &progress)?;
-            renderer.set_baked(gpu, &scene, &baked)?;
+            renderer.set_baked(gpu, &scene, (&baked.lobes, baked.direct.as_ref()))?;
             let direct_ms = match &baked.direct {
                 Some(_) => 0.0,
                 None => {

@@ -17,21 +17,19 @@ use std::fmt::Write as _;
 use std::path::Path;
 use std::time::Instant;
 
+use std::sync::Arc;
+
 use serde::Serialize;
 
-use crate::bake::{BakeDevice, Progress, bake};
+use crate::bake::Progress;
 use crate::camera::View;
 use crate::cli::compare::{Difference, ObjectDifference, Values, difference_of, per_object};
 use crate::cli::measure::median;
 use crate::cli::plot::{Chart, Series};
-use crate::cpu;
-use crate::cpu::frames::{cpu_path, cpu_refined};
 use crate::em::LobeFamily;
 use crate::error::{Error, Result};
-use crate::frame::{Direct, FrameConfig, Terms, camera_uniform, shade_params};
-use crate::gpu::Gpu;
-use crate::objects::{SAMPLES, object_ids};
-use crate::renderer::FrameRenderer;
+use crate::frame::{Direct, FrameConfig};
+use crate::renderer::{Engine, Renderer};
 use crate::scene::Scene;
 use crate::shared::rng::{pcg_hash, unit_float};
 use crate::timing::ms_since;
@@ -311,30 +309,26 @@ struct LobeRun {
     frame_ms: f64,
 }
 
-/// Where the sweep runs: a device with its pipelines built once, or the CPU mirror.
-enum Runner<'a> {
-    /// The device, and its frame renderer once the first scene is on it.
-    Gpu(&'a Gpu, Option<Box<FrameRenderer>>),
-    Cpu,
-}
-
-/// The renderer of `slot` drawing `scene`: the passes compiled once, the scene uploaded anew.
-fn renderer_on<'r>(
-    gpu: &Gpu,
-    slot: &'r mut Option<Box<FrameRenderer>>,
-    scene: &Scene,
-) -> Result<&'r mut FrameRenderer> {
-    let renderer = match slot.take() {
-        Some(mut r) => {
-            r.set_scene(gpu, scene)?;
-            r
-        }
-        None => Box::new(FrameRenderer::new(gpu, scene)?),
-    };
-    Ok(slot.insert(renderer))
+/// Where the sweep runs: one renderer, its device's passes compiled once, made for the first
+/// scene it draws.
+struct Runner<'a> {
+    engine: &'a Engine,
+    renderer: Option<Renderer>,
 }
 
 impl Runner<'_> {
+    /// The renderer drawing `scene`, uploaded or gridded anew.
+    fn on(&mut self, scene: &Scene) -> Result<&mut Renderer> {
+        let scene = Arc::new(scene.clone());
+        Ok(match &mut self.renderer {
+            Some(renderer) => {
+                renderer.set_scene(scene)?;
+                renderer
+            }
+            none => none.insert(Renderer::new(scene, self.engine)?),
+        })
+    }
+
     fn lobes(&mut self, scene: &Scene, view: &View, frames: u32) -> Result<LobeRun> {
         let quiet = Progress::new(false);
         // The still image `render` writes (its default refinement frames, with shadow rays and
@@ -345,84 +339,56 @@ impl Runner<'_> {
         };
         let spp = super::render::DEFAULT_SPP;
         let mut times = Vec::new();
-        let (hdr, baked) = match self {
-            Runner::Gpu(gpu, slot) => {
-                let renderer = renderer_on(gpu, slot, scene)?;
-                let baked = renderer.bake(gpu, scene, &quiet)?;
-                for i in 0..=frames {
-                    let t = Instant::now();
-                    renderer.draw_refined(gpu, scene, view, &cfg, spp, |_| {})?;
-                    if i > 0 {
-                        times.push(ms_since(t));
-                    }
-                }
-                (renderer.read_hdr(gpu)?, baked)
+        let renderer = self.on(scene)?;
+        let baked = renderer.bake(&quiet)?;
+        // The first frame compiles a device's passes: not timed.
+        for i in 0..=frames {
+            let t = Instant::now();
+            renderer.draw(view, &cfg, spp, |_| {})?;
+            if i > 0 {
+                times.push(ms_since(t));
             }
-            Runner::Cpu => {
-                let cam = camera_uniform(view, scene.bounds(), &cfg);
-                let grid = cpu::scene_grid(scene)?;
-                let baked = bake(scene, BakeDevice::Cpu(&grid), &quiet)?;
-                let params = shade_params(scene, &baked.lobes, &cfg);
-                let mut hdr = Vec::new();
-                for _ in 0..frames.max(1) {
-                    let t = Instant::now();
-                    hdr = cpu_refined(
-                        scene,
-                        &grid,
-                        (&baked.lobes, baked.direct.as_ref()),
-                        &cam,
-                        &params,
-                        spp,
-                    )?;
-                    times.push(ms_since(t));
-                }
-                (hdr, baked)
-            }
-        };
+        }
         Ok(LobeRun {
-            hdr,
+            hdr: renderer.read_hdr()?,
             photons_ms: baked.photons.ms.unwrap_or(0.0),
             binning_ms: baked.binning.ms.unwrap_or(0.0),
             em_ms: baked.em.ms.unwrap_or(0.0),
-            lobes_kept: baked.lobes.lobes.len() as u64,
+            lobes_kept: renderer.lobes().lobes.len() as u64,
             frame_ms: median(times),
         })
     }
 
+    /// Which surface each pixel of `view` shows, of the scene drawn last.
+    fn object_ids(&self, view: &View) -> Result<Vec<u16>> {
+        let renderer = self.renderer.as_ref().ok_or_else(|| {
+            Error::internal("the sweep asked for object IDs before drawing a scene")
+        })?;
+        renderer.object_ids(view, &FrameConfig::default())
+    }
+
     /// The path tracer's image of `view` at `spp` samples per pixel.
     fn path(&mut self, scene: &Scene, view: &View, spp: u32) -> Result<Vec<[f32; 4]>> {
-        match self {
-            Runner::Gpu(gpu, slot) => {
-                let renderer = renderer_on(gpu, slot, scene)?;
-                renderer.draw_path(gpu, scene, view, Terms::ALL, spp, |_| {})?;
-                renderer.read_hdr(gpu)
-            }
-            Runner::Cpu => {
-                let cam = camera_uniform(view, scene.bounds(), &FrameConfig::default());
-                let grid = cpu::scene_grid(scene)?;
-                cpu_path(scene, &grid, &cam, Terms::ALL, spp)
-            }
-        }
+        let renderer = self.on(scene)?;
+        renderer.draw_path(view, &FrameConfig::default(), spp, |_| {})?;
+        renderer.read_hdr()
     }
 }
 
 /// Runs the plan on each `(name, scene)`, writing tables, charts and references to `out_dir`.
 pub fn sweep(
     scenes: &[(String, Scene)],
-    gpu: Option<&Gpu>,
+    engine: &Engine,
     plan: &SweepPlan,
     out_dir: &Path,
 ) -> Result<SweepReport> {
     let start = Instant::now();
     std::fs::create_dir_all(out_dir).map_err(|e| Error::io(out_dir, e))?;
-    let mut runner = match gpu {
-        Some(gpu) => Runner::Gpu(gpu, None),
-        None => Runner::Cpu,
+    let mut runner = Runner {
+        engine,
+        renderer: None,
     };
-    let (adapter, backend) = match gpu {
-        Some(g) => (g.info.name.clone(), g.backend_name().to_string()),
-        None => ("CPU mirror".to_string(), "cpu".to_string()),
-    };
+    let (adapter, backend) = (engine.adapter(), engine.backend().to_string());
     let mut references = Vec::new();
     let mut rows = Vec::new();
     let mut skipped = Vec::new();
@@ -450,8 +416,7 @@ pub fn sweep(
             image: image.display().to_string(),
         });
         // Which surface each pixel shows, for the per-object figures.
-        let cam = camera_uniform(&view, scene.bounds(), &FrameConfig::default());
-        let ids = object_ids(scene, &cpu::scene_grid(scene)?, &cam, SAMPLES)?;
+        let ids = runner.object_ids(&view)?;
         let against = |hdr: &[[f32; 4]]| -> Result<(Difference, Vec<ObjectDifference>)> {
             let d = difference_of(hdr, &reference, plan.size, plan.size, Values::Radiance)?;
             Ok((d, per_object(hdr, &reference, &ids, &scene.surfaces)?))

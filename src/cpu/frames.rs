@@ -99,7 +99,7 @@ pub fn cpu_frame_into(
     let baked = Direct::of_code(params.direct) == Direct::Baked;
     let selection = match baked {
         true => {
-            let tree = crate::lod::LodTree::of_scene(scene, cam.lod > 0.0);
+            let tree = scene.lod_tree(cam.lod > 0.0);
             Some(cpu::splat_select::selection(cam, &scene.splats, &tree))
         }
         false => None,

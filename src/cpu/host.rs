@@ -4,6 +4,7 @@
 
 use std::time::Instant;
 
+pub use crate::bins::DepositBins;
 use crate::bins::PhotonBins;
 use crate::em::{EmConfig, FitShape, GatherSetup, LobeMap};
 use crate::error::{Error, Result};
@@ -143,15 +144,6 @@ pub fn fit_lobes_gathering(
     gathering: Option<(Geometry, &GatherSetup)>,
 ) -> Result<LobeMap> {
     fit_binned(cfg, (bins, None), (splats, materials), shape, gathering)
-}
-
-/// Photon deposits on the host (`sequence::deposit_photons`): the records binned, each
-/// splat's spread and count, and the passes' settings.
-#[derive(Clone, Debug, Default, PartialEq)]
-pub struct DepositBins {
-    pub params: DepositParams,
-    pub bins: PhotonBins,
-    pub spread: Vec<[f32; 2]>,
 }
 
 /// The deposits of `photons`, which landed on `splats`, binned over `grid`'s box.

@@ -4,8 +4,8 @@
 use super::Gpu;
 use super::exec::GpuExecutor;
 use super::photons::GpuPhotons;
+use crate::bins::DepositBins;
 use crate::bins::{PhotonBins, check_binned};
-use crate::cpu::DepositBins;
 use crate::error::Result;
 use crate::sequence::{self, Executor};
 use crate::types::{BinParams, DepositParams, GridParams};
@@ -56,7 +56,7 @@ pub fn bin_photons(
     Ok(bins)
 }
 
-/// Photon deposits on the device (see `cpu::DepositBins`).
+/// Photon deposits on the device (see `bins::DepositBins`).
 pub type GpuDeposits = sequence::Deposits<wgpu::Buffer>;
 
 impl GpuDeposits {

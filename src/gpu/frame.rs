@@ -260,7 +260,7 @@ impl FrameScene {
         let slot = if merged { &self.tree } else { &self.flat };
         if slot.get().is_none() {
             let start = std::time::Instant::now();
-            let tree = crate::lod::LodTree::of_scene(scene, merged);
+            let tree = scene.lod_tree(merged);
             let ms = crate::timing::ms_since(start);
             log::info!(
                 "level of detail: {} of {} splats in {ms:.0} ms",
@@ -939,13 +939,13 @@ impl SplatPipelines {
         // The walk down the chunks' nodes, from the top: one invocation a node.
         for (k, level) in tree.nodes.iter().enumerate().rev() {
             let up = tree.nodes.get(k + 1).map_or(&tree.visit_all, |l| &l.visits);
-            let groups = level.count.div_ceil(crate::cpu::splat_nodes::WG);
+            let groups = crate::sequence::groups(Stage::SplatNodes, level.count)?;
             let walk = [&uniforms.cam, &level.nodes, up, &level.visits];
             gpu.dispatch(encoder, Stage::SplatNodes, &walk, groups)?;
         }
         // One invocation a chunk, in both passes.
         let chunks = scene.splat_count.div_ceil(crate::lod::CHUNK as u32);
-        let groups = chunks.div_ceil(crate::cpu::splat_select::WG);
+        let groups = crate::sequence::groups(Stage::SplatSelect, chunks)?;
         gpu.dispatch(encoder, Stage::SplatSelect, &select, groups)?;
         super::scan::exclusive_scan(gpu, encoder, scene.group_counts, chunks)?;
         let list = [

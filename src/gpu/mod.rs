@@ -10,6 +10,7 @@ pub mod photon_view;
 pub mod photons;
 pub mod present;
 pub mod reference;
+pub mod renderer;
 pub mod scan;
 pub mod scene;
 

@@ -107,6 +107,15 @@ impl Scene {
         self.materials.iter().any(Material::is_glossy)
     }
 
+    /// What frames of the scene select by: with the level of detail on (`merged`), its merge
+    /// tree, with the merged normals where a material is glossy; else its chunks alone.
+    pub fn lod_tree(&self, merged: bool) -> crate::lod::LodTree {
+        match merged {
+            true => crate::lod::LodTree::build(&self.splats, self.has_glossy()),
+            false => crate::lod::LodTree::flat(&self.splats),
+        }
+    }
+
     /// Photon search radius: the scene's, or 1/40 of the largest extent of the bounds.
     pub fn search_radius(&self) -> f32 {
         self.bake.radius.unwrap_or_else(|| {
