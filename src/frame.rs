@@ -268,6 +268,74 @@ pub fn frame_camera(cam: &Camera, params: &ShadeParams, splatting: Splatting) ->
     }
 }
 
+/// What one frame derives from the scene and its camera, once, as `plan::BakePlan` is the
+/// bake's: the camera uniform of its view, the camera its passes read (`frame_camera`: the
+/// level of detail only where it draws merged disks), its shading uniform and how splats
+/// become pixels. The device's passes and the mirrors take it whole.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct FramePlan {
+    /// The view's camera uniform (`camera_uniform`), jittered where the frame is.
+    pub view: Camera,
+    /// The camera the splat passes read.
+    pub cam: Camera,
+    pub params: ShadeParams,
+    pub splatting: Splatting,
+}
+
+impl FramePlan {
+    /// The plan of a frame of `view` (a camera uniform) shaded with `params`.
+    pub fn new(view: &Camera, params: ShadeParams, splatting: Splatting) -> FramePlan {
+        FramePlan {
+            view: *view,
+            cam: frame_camera(view, &params, splatting),
+            params,
+            splatting,
+        }
+    }
+
+    /// The plan of a frame of `view` with `lobes_per_splat` lobes a splat, in a scene of
+    /// `extent` (its shadow bias): `shade_params_for`'s uniform.
+    pub fn of(
+        scene: &Scene,
+        extent: &SceneExtent,
+        lobes_per_splat: u32,
+        (view, cfg): (&Camera, &FrameConfig),
+        splatting: Splatting,
+    ) -> FramePlan {
+        let params = shade_params_for(scene, lobes_per_splat, extent.shadow_bias, cfg);
+        FramePlan::new(view, params, splatting)
+    }
+
+    /// Refinement frame `k` of `spp` of this frame's still image (`refinement`): jittered,
+    /// with its share of shadow rays, every splat drawn as it is.
+    pub fn refinement(&self, k: u32, spp: u32) -> FramePlan {
+        let view = Camera {
+            jitter: jitter(k, spp),
+            ..self.view
+        };
+        FramePlan::new(&view, refinement(&self.params, k, spp), self.splatting)
+    }
+
+    /// This frame, its view jittered by `offset` pixels (a moving frame's `temporal_jitter`).
+    pub fn jittered(&self, offset: [f32; 2]) -> FramePlan {
+        let view = Camera {
+            jitter: offset,
+            ..self.view
+        };
+        FramePlan::new(&view, self.params, self.splatting)
+    }
+
+    /// Whether its passes draw the level of detail's merged disks.
+    pub fn merged(&self) -> bool {
+        self.cam.lod > 0.0
+    }
+
+    /// Whether it reads the direct bake (baked direct light; refinement frames cast rays).
+    pub fn reads_direct_bake(&self) -> bool {
+        Direct::of_code(self.params.direct) == Direct::Baked
+    }
+}
+
 /// What frames take of a scene's splats, walked once (`FrameRenderer` keeps it): its bounds
 /// (the camera's depth range) and its shadow bias.
 #[derive(Clone, Copy, Debug, PartialEq)]

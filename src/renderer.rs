@@ -16,7 +16,7 @@ use crate::cpu;
 use crate::direct::DirectMap;
 use crate::em::LobeMap;
 use crate::error::{Error, Result};
-use crate::frame::{FrameConfig, camera_uniform, shade_params};
+use crate::frame::{FrameConfig, FramePlan, SceneExtent, Splatting, camera_uniform};
 use crate::gpu::Gpu;
 use crate::gpu::bins::GpuBins;
 use crate::gpu::photon_view::photon_image;
@@ -218,6 +218,8 @@ impl Device {
 struct Mirror {
     grid: SplatGrid,
     grid_ms: f64,
+    /// The scene's bounds and shadow bias, walked once.
+    extent: SceneExtent,
     bins: Option<Binned<PhotonBins>>,
     /// Every splat's direct light of the scene's lights: final gathering's, or baked the
     /// first time a frame reads it.
@@ -273,6 +275,7 @@ impl Renderer {
                 On::Mirror(Mirror {
                     grid,
                     grid_ms: ms_since(t),
+                    extent: SceneExtent::of(&scene),
                     bins: None,
                     direct: None,
                     hdr: Vec::new(),
@@ -334,6 +337,7 @@ impl Renderer {
                 let t = std::time::Instant::now();
                 m.grid = cpu::scene_grid(&scene)?;
                 m.grid_ms = ms_since(t);
+                m.extent = SceneExtent::of(&scene);
                 (m.bins, m.direct) = (None, None);
             }
         }
@@ -472,18 +476,14 @@ impl Renderer {
                     _ => cfg.glossy_rays > 0,
                 };
                 m.direct(scene, needed)?;
-                let light = (&self.lobes, m.direct.as_ref());
-                let params = shade_params(scene, &self.lobes, cfg);
-                let cam = camera_uniform(view, scene.bounds(), cfg);
-                m.hdr = match spp {
-                    0 => cpu::frames::cpu_frame(scene, &m.grid, light, &cam, &params)?,
-                    spp => {
-                        let grid = &m.grid;
-                        let hdr = cpu::frames::cpu_refined(scene, grid, light, &cam, &params, spp)?;
-                        (0..spp).for_each(&mut each);
-                        hdr
-                    }
-                };
+                let no_direct = DirectMap::default();
+                let direct = m.direct.as_ref().filter(|_| needed).unwrap_or(&no_direct);
+                let cam = camera_uniform(view, m.extent.bounds, cfg);
+                let lobes = self.lobes.lobes_per_splat;
+                let plan = FramePlan::of(scene, &m.extent, lobes, (&cam, cfg), Splatting::Raster);
+                let light = (&self.lobes, direct);
+                m.hdr = cpu::frames::cpu_draw(scene, &m.grid, light, &plan, spp);
+                (0..spp).for_each(&mut each);
             }
         }
         Ok(())
@@ -520,7 +520,7 @@ impl Renderer {
             }
             On::Mirror(m) => {
                 let binned = m.bins.as_ref().ok_or_else(unbinned)?;
-                let cam = camera_uniform(view, scene.bounds(), cfg);
+                let cam = camera_uniform(view, m.extent.bounds, cfg);
                 let (bins, em) = (&binned.bins, &binned.em);
                 m.hdr = cpu::frames::cpu_reference(scene, &m.grid, bins, em, &cam, cfg);
             }
@@ -544,7 +544,7 @@ impl Renderer {
                 frames.draw_path(gpu, scene, view, cfg.show, spp, each)?;
             }
             On::Mirror(m) => {
-                let cam = camera_uniform(view, scene.bounds(), cfg);
+                let cam = camera_uniform(view, m.extent.bounds, cfg);
                 m.hdr = cpu::frames::cpu_path(scene, &m.grid, &cam, cfg.show, spp)?;
                 (0..spp.max(1)).for_each(&mut each);
             }

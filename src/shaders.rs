@@ -26,7 +26,12 @@ macro_rules! stage {
     ($name:literal) => {
         WgslFile {
             name: $name,
-            text: include_str!(concat!("../wgsl/", $name, ".wgsl")),
+            text: include_str!(concat!(
+                env!("CARGO_MANIFEST_DIR"),
+                "/wgsl/",
+                $name,
+                ".wgsl"
+            )),
         }
     };
 }
@@ -35,8 +40,21 @@ macro_rules! shared {
     ($name:literal) => {
         WgslFile {
             name: $name,
-            text: include_str!(concat!("../wgsl/shared/", $name, ".wgsl")),
+            text: include_str!(concat!(
+                env!("CARGO_MANIFEST_DIR"),
+                "/wgsl/shared/",
+                $name,
+                ".wgsl"
+            )),
         }
+    };
+}
+
+/// Declares `SHARED`, the modules a stage imports with `// #import name`.
+macro_rules! shared_modules {
+    ($($name:literal,)*) => {
+        /// The shared modules of `wgsl/shared/`, by name.
+        pub const SHARED: &[WgslFile] = &[$(shared!($name),)*];
     };
 }
 
@@ -69,49 +87,9 @@ macro_rules! stages {
     };
 }
 
-stages! {
-    GridCount => "grid_count",
-    GridScatter => "grid_scatter",
-    GridRank => "grid_rank",
-    GridDistance => "grid_distance",
-    GridCone => "grid_cone",
-    TraceRays => "trace_rays",
-    PhotonTrace => "photon_trace",
-    BinCount => "bin_count",
-    BinScatter => "bin_scatter",
-    BinRank => "bin_rank",
-    BinPlace => "bin_place",
-    EmSelect => "em_select",
-    EmGather => "em_gather",
-    EmDeposit => "em_deposit",
-    EmDepositList => "em_deposit_list",
-    EmShare => "em_share",
-    EmFit => "em_fit",
-    EmCoverage => "em_coverage",
-    EmSmooth => "em_smooth",
-    ScanReduce => "scan_reduce",
-    ScanApply => "scan_apply",
-    TonemapReduce => "tonemap_reduce",
-    TonemapApply => "tonemap_apply",
-    SplatVisibility => "splat_visibility",
-    SplatNodes => "splat_nodes",
-    SplatSelect => "splat_select",
-    SplatList => "splat_list",
-    SplatShade => "splat_shade",
-    SplatAttributes => "splat_attributes",
-    SplatTileCount => "splat_tile_count",
-    SplatTileScatter => "splat_tile_scatter",
-    SplatCompute => "splat_compute",
-    DirectBake => "direct_bake",
-    FinalGather => "final_gather",
-    Shade => "shade",
-    ReferenceGather => "reference_gather",
-    PathTrace => "path_trace",
-    Present => "present",
-    PhotonView => "photon_view",
-    PhotonResolve => "photon_resolve",
-    Temporal => "temporal",
-}
+// One row a `wgsl/<stage>.wgsl` and one a `wgsl/shared/<module>.wgsl`, in file-name order,
+// written by `build.rs`.
+include!(concat!(env!("OUT_DIR"), "/stages.rs"));
 
 impl Stage {
     /// The stage whose file stem is `name`.
@@ -132,26 +110,6 @@ impl std::fmt::Display for Stage {
 }
 
 /// Every shared module (`wgsl/shared/<name>.wgsl`), importable by name.
-pub const SHARED: &[WgslFile] = &[
-    shared!("types"),
-    shared!("dispatch"),
-    shared!("grid"),
-    shared!("rng"),
-    shared!("sampling"),
-    shared!("ward"),
-    shared!("trace"),
-    shared!("bins"),
-    shared!("deposits"),
-    shared!("octahedral"),
-    shared!("lobes"),
-    shared!("tone"),
-    shared!("splat"),
-    shared!("lights"),
-    shared!("splat_shading"),
-    shared!("lobe_brdf"),
-    shared!("fullscreen"),
-    shared!("drawn_clip"),
-];
 
 /// What the host reads from a stage's WGSL instead of writing it a second time: the shape of
 /// its workgroups. The CPU mirrors keep their own constants (their loops need them), and a

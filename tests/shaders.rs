@@ -141,97 +141,51 @@ fn unbalanced_ifdef_names_file_and_line() {
 }
 
 /// The device host takes every stage's workgroup size (and items per invocation) from the
-/// WGSL, read with naga; the CPU mirrors write theirs for their loops. The two must agree, and
-/// every compute stage with a fixed workgroup size must have a mirror listed here.
+/// WGSL, read with naga; the CPU mirrors write theirs for their loops, in their rows of the
+/// mirrors' table (`cpu::MIRRORS`). The two must agree, and every stage has one row.
 #[test]
 fn mirror_workgroup_shapes_match_the_wgsl() {
-    use lobelight::cpu::*;
+    use lobelight::cpu::{mirror_rows, tonemap_reduce};
     use lobelight::shaders::stage_shape;
-    let mirrors: &[(Stage, u32, u32)] = &[
-        (Stage::GridCount, grid_count::WG, 1),
-        (Stage::GridScatter, grid_scatter::WG, 1),
-        (Stage::GridRank, grid_rank::WG, 1),
-        (Stage::GridDistance, grid_distance::WG, 1),
-        (Stage::GridCone, grid_cone::WG, 1),
-        (Stage::TraceRays, trace_rays::WG, 1),
-        (Stage::PhotonTrace, photon_trace::WG, 1),
-        (Stage::DirectBake, direct_bake::WG, 1),
-        (Stage::FinalGather, final_gather::WG, 1),
-        (Stage::PathTrace, path_trace::WG, 1),
-        (Stage::SplatTileCount, splat_tiles::WG, 1),
-        (Stage::SplatTileScatter, splat_tiles::WG, 1),
-        (Stage::SplatCompute, splat_tiles::WG, 1),
-        (Stage::SplatNodes, splat_nodes::WG, 1),
-        (Stage::SplatSelect, splat_select::WG, 1),
-        (Stage::SplatList, splat_list::WG, 1),
-        (Stage::SplatShade, splat_shade::WG, 1),
-        (Stage::BinCount, bin_count::WG, 1),
-        (Stage::BinScatter, bin_scatter::WG, 1),
-        (Stage::BinRank, bin_rank::WG, 1),
-        (Stage::BinPlace, bin_place::WG, 1),
-        (Stage::EmSelect, em_select::WG, 1),
-        (Stage::EmGather, em_gather::WG, 1),
-        (Stage::EmDeposit, em_deposit::WG, 1),
-        (Stage::EmDepositList, em_deposit_list::WG, 1),
-        (Stage::EmShare, em_share::WG, 1),
-        (Stage::EmSmooth, em_smooth::WG, 1),
-        (Stage::EmCoverage, em_coverage::WG, 1),
-        (Stage::ScanReduce, scan_reduce::WG, scan_reduce::ITEMS),
-        (Stage::ScanApply, scan_apply::WG, scan_apply::ITEMS),
-        (
-            Stage::TonemapReduce,
-            tonemap_reduce::WG,
-            tonemap_reduce::ITEMS,
-        ),
-        (Stage::TonemapApply, tonemap_apply::WG, 1),
-        (Stage::Shade, shade::WG, 1),
-        (Stage::PhotonView, photon_view::WG, 1),
-        (Stage::PhotonResolve, photon_resolve::WG, 1),
-        (Stage::Temporal, temporal::WG, 1),
-    ];
-    for &(name, wg, items) in mirrors {
-        let shape = stage_shape(name).unwrap();
-        assert_eq!(shape.workgroup_size, Some(wg), "{name}: workgroup size");
-        assert_eq!(shape.items, items, "{name}: items per invocation");
-        assert_eq!(shape.per_group(name).unwrap(), wg * items, "{name}");
+    // Every stage has one row, in its mirror's file, whose shape is the WGSL's: `em_fit`'s
+    // workgroup size is a pipeline constant (`em::workgroup_size`), and the splat raster
+    // passes, the reference gather and present draw triangles, so none of them has one.
+    for &stage in Stage::ALL {
+        let rows: Vec<_> = mirror_rows().filter(|r| r.stage == stage).collect();
+        assert_eq!(
+            rows.len(),
+            1,
+            "{}: rows in the mirrors' table",
+            stage.name()
+        );
+        let (row, shape) = (rows[0], stage_shape(stage).unwrap());
+        assert_eq!(
+            row.workgroup_size, shape.workgroup_size,
+            "{stage}: workgroup size"
+        );
+        if let Some(wg) = row.workgroup_size {
+            assert_eq!(shape.items, row.items, "{stage}: items per invocation");
+            assert_eq!(shape.per_group(stage).unwrap(), wg * row.items, "{stage}");
+        }
     }
+    assert_eq!(mirror_rows().count(), Stage::ALL.len());
     assert_eq!(
         tonemap_reduce::BLOCK,
         tonemap_reduce::WG * tonemap_reduce::ITEMS
     );
-    // em_fit's workgroup size is a pipeline constant (`em::workgroup_size`), and the splat
-    // passes, the reference gather and present draw triangles: none has a fixed size.
-    for &stage in Stage::ALL {
-        let fixed = stage_shape(stage).unwrap().workgroup_size.is_some();
-        let listed = mirrors.iter().any(|m| m.0 == stage);
-        assert_eq!(
-            fixed,
-            listed,
-            "{}: fixed workgroup size without a mirror listed",
-            stage.name()
-        );
-    }
     assert_eq!(stage_shape(Stage::EmFit).unwrap().workgroup_size, None);
+    assert!(mirror_rows().filter(|r| r.workgroup_size.is_some()).count() > 30);
 }
 
 /// What the host and the mirrors bind is read from the WGSL too: each compute stage's
 /// bindings are numbered from 0 without gaps in each group (so "binding order" is the order a
 /// dispatch lists its buffers, as the CPU executor checks), and only the tracing stages use
-/// group 1, the scene's geometry buffers (`GEOMETRY_BINDINGS`).
+/// group 1, the scene's geometry buffers (`GEOMETRY_BINDINGS`), as their mirrors say.
 #[test]
 fn stage_bindings_are_read_from_the_wgsl() {
+    use lobelight::cpu::Mirror;
     use lobelight::shaders::{resolve_stage, stage_shape};
-    let traced = [
-        Stage::TraceRays,
-        Stage::PhotonTrace,
-        Stage::PhotonView,
-        Stage::DirectBake,
-        Stage::EmCoverage,
-        Stage::FinalGather,
-        Stage::PathTrace,
-        Stage::Shade,
-        Stage::ReferenceGather,
-    ];
+    let mut traced = 0;
     for &stage in Stage::ALL {
         let shape = stage_shape(stage).unwrap();
         let module = naga::front::wgsl::parse_str(&resolve_stage(stage).unwrap()).unwrap();
@@ -247,18 +201,28 @@ fn stage_bindings_are_read_from_the_wgsl() {
             let expected: Vec<u32> = (0..shape.bindings[group as usize]).collect();
             assert_eq!(numbers, expected, "{} group {group}", stage.name());
         }
-        if traced.contains(&stage) {
+        // A stage traces rays where its WGSL binds the geometry group, whole; its mirror, where
+        // the executor runs one, takes the geometry then and only then.
+        let traces = shape.bindings[1] > 0;
+        if traces {
             assert_eq!(
                 shape.bindings[1] as usize,
                 lobelight::gpu::exec::GEOMETRY_BINDINGS,
                 "{}: the geometry group",
                 stage.name()
             );
-        } else {
-            assert_eq!(shape.bindings[1], 0, "{}: no geometry group", stage.name());
+            traced += 1;
+        }
+        match lobelight::cpu::mirror(stage) {
+            Some(Mirror::Traced(_)) => assert!(traces, "{stage}: a traced mirror"),
+            Some(Mirror::Plain(_)) => assert!(!traces, "{stage}: a mirror without geometry"),
+            None => {}
         }
         assert!(shape.bindings[0] > 0, "{}", stage.name());
     }
+    // The photon pass, the direct bake, coverage, final gathering, the path tracer, the
+    // photon view, shading, the reference gather and the ray-trace test stage.
+    assert_eq!(traced, 9);
 }
 
 /// Every stage validates with each of its paged arrays split into three pages, and declares

@@ -18,7 +18,7 @@ use crate::cpu::frames::{cpu_direct, cpu_frame_into};
 use crate::direct::DirectMap;
 use crate::em::{EmConfig, EmStats, LobeFamily, LobeMap};
 use crate::error::Result;
-use crate::frame::{FrameConfig, Splatting, camera_uniform, shade_params};
+use crate::frame::{FrameConfig, FramePlan, Splatting, camera_uniform, shade_params};
 
 use crate::gpu::photons::trace_photons;
 use crate::gpu::present::PresentPipeline;
@@ -777,11 +777,12 @@ pub fn frame(
             for (w, h) in FRAME_SIZES {
                 let view = View::new(&scene.camera, w, h);
                 let cam = camera_uniform(&view, scene.bounds(), cfg);
+                let plan = FramePlan::new(&cam, params, Splatting::Raster);
                 let mut times = Vec::new();
                 for _ in 0..=TIMED_FRAMES {
                     let t = Instant::now();
                     let mut hdr = vec![[0.0; 4]; (w * h) as usize];
-                    cpu_frame_into(scene, &grid, &lobes, &direct, &cam, &params, &mut hdr);
+                    cpu_frame_into(scene, &grid, &lobes, &direct, &plan, &mut hdr);
                     let shade = ms_since(t);
                     let t = Instant::now();
                     cpu::tone_map(tone, &hdr)?;

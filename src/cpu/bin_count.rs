@@ -1,5 +1,7 @@
 //! Mirror of `wgsl/bin_count.wgsl`.
 
+use super::{Mirror, MirrorRow};
+use crate::shaders::Stage;
 use super::bindings::{Bindings, view};
 use crate::error::Result;
 use crate::shared::bins::{RANK_CHUNK, bin_of};
@@ -41,3 +43,13 @@ pub fn dispatch(b: &Bindings, groups: u32) -> Result<()> {
     bin_count(&p, photons, &mut cell_start, &mut chunks[0], groups);
     Ok(())
 }
+
+/// This file's row of the mirrors' table (`cpu::MIRRORS`).
+pub const ROWS: &[MirrorRow] = &[
+    MirrorRow {
+        stage: Stage::BinCount,
+        workgroup_size: Some(WG),
+        items: 1,
+        run: Some(Mirror::Plain(dispatch)),
+    },
+];

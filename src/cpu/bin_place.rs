@@ -1,5 +1,7 @@
 //! Mirror of `wgsl/bin_place.wgsl`.
 
+use super::{Mirror, MirrorRow};
+use crate::shaders::Stage;
 use super::bindings::{Bindings, view, view_mut};
 use crate::error::Result;
 use crate::types::{BinParams, BinnedPhoton};
@@ -55,3 +57,13 @@ pub fn dispatch(b: &Bindings, groups: u32) -> Result<()> {
     );
     Ok(())
 }
+
+/// This file's row of the mirrors' table (`cpu::MIRRORS`).
+pub const ROWS: &[MirrorRow] = &[
+    MirrorRow {
+        stage: Stage::BinPlace,
+        workgroup_size: Some(WG),
+        items: 1,
+        run: Some(Mirror::Plain(dispatch)),
+    },
+];

@@ -1,6 +1,8 @@
 //! Mirror of `wgsl/bin_rank.wgsl`; workgroups run in parallel (each entry writes only its own
 //! slot).
 
+use super::{Mirror, MirrorRow};
+use crate::shaders::Stage;
 use super::bindings::{Bindings, view};
 use crate::error::Result;
 use rayon::prelude::*;
@@ -59,3 +61,13 @@ pub fn dispatch(b: &Bindings, groups: u32) -> Result<()> {
     bin_rank(&p, &cell_start, view(&keys), &cells, &mut slots, groups);
     Ok(())
 }
+
+/// This file's row of the mirrors' table (`cpu::MIRRORS`).
+pub const ROWS: &[MirrorRow] = &[
+    MirrorRow {
+        stage: Stage::BinRank,
+        workgroup_size: Some(WG),
+        items: 1,
+        run: Some(Mirror::Plain(dispatch)),
+    },
+];

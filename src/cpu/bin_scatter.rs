@@ -1,6 +1,8 @@
 //! Mirror of `wgsl/bin_scatter.wgsl`. Sequential, so each cell's scratch list is in input
 //! order; the GPU's depends on scheduling until `bin_rank` and `bin_place`.
 
+use super::{Mirror, MirrorRow};
+use crate::shaders::Stage;
 use super::bindings::{Bindings, view, view_mut};
 use crate::error::Result;
 use crate::shared::bins::bin_of;
@@ -72,3 +74,13 @@ pub fn dispatch(b: &Bindings, groups: u32) -> Result<()> {
     );
     Ok(())
 }
+
+/// This file's row of the mirrors' table (`cpu::MIRRORS`).
+pub const ROWS: &[MirrorRow] = &[
+    MirrorRow {
+        stage: Stage::BinScatter,
+        workgroup_size: Some(WG),
+        items: 1,
+        run: Some(Mirror::Plain(dispatch)),
+    },
+];

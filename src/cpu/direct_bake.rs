@@ -3,6 +3,8 @@
 // `!(x < y)` is meant: NaN must fail these tests, as it does in the WGSL twin.
 #![allow(clippy::neg_cmp_op_on_partial_ord)]
 
+use super::{Mirror, MirrorRow};
+use crate::shaders::Stage;
 use super::bindings::{Bindings, view, view_mut};
 use crate::error::Result;
 use glam::Vec3;
@@ -100,3 +102,13 @@ pub fn dispatch(b: &Bindings, geo: &Geometry, _groups: u32) -> Result<()> {
     direct_bake(&p, view(&lights), view(&order), direct, visibility, geo);
     Ok(())
 }
+
+/// This file's row of the mirrors' table (`cpu::MIRRORS`).
+pub const ROWS: &[MirrorRow] = &[
+    MirrorRow {
+        stage: Stage::DirectBake,
+        workgroup_size: Some(WG),
+        items: 1,
+        run: Some(Mirror::Traced(dispatch)),
+    },
+];

@@ -4,6 +4,8 @@
 // `!(x < y)` is meant: NaN must fail these tests, as it does in the WGSL twin.
 #![allow(clippy::neg_cmp_op_on_partial_ord)]
 
+use super::{Mirror, MirrorRow};
+use crate::shaders::Stage;
 use super::bindings::{Bindings, view, view_mut};
 use crate::error::Result;
 use glam::{IVec3, UVec3, Vec2, Vec3};
@@ -278,3 +280,13 @@ pub fn dispatch(b: &Bindings, geo: &Geometry, groups: u32) -> Result<()> {
     );
     Ok(())
 }
+
+/// This file's row of the mirrors' table (`cpu::MIRRORS`).
+pub const ROWS: &[MirrorRow] = &[
+    MirrorRow {
+        stage: Stage::EmCoverage,
+        workgroup_size: Some(WG),
+        items: 1,
+        run: Some(Mirror::Traced(dispatch)),
+    },
+];

@@ -1,6 +1,8 @@
 //! Mirror of `wgsl/em_deposit.wgsl`: each photon adds itself to its splat's deposit, in 64-bit
 //! integer sums (added here as u64, which is what the device's carried words hold).
 
+use super::{Mirror, MirrorRow};
+use crate::shaders::Stage;
 use super::bindings::{Bindings, view};
 use crate::error::Result;
 use glam::Vec3;
@@ -58,3 +60,13 @@ pub fn dispatch(b: &Bindings, groups: u32) -> Result<()> {
     em_deposit(&p, view(&photons), view(&splats), &mut deposits, groups);
     Ok(())
 }
+
+/// This file's row of the mirrors' table (`cpu::MIRRORS`).
+pub const ROWS: &[MirrorRow] = &[
+    MirrorRow {
+        stage: Stage::EmDeposit,
+        workgroup_size: Some(WG),
+        items: 1,
+        run: Some(Mirror::Plain(dispatch)),
+    },
+];

@@ -3,6 +3,8 @@
 //! Sequential, so the list is in splat order (the device's is in any order; binning sorts both
 //! alike).
 
+use super::{Mirror, MirrorRow};
+use crate::shaders::Stage;
 use super::bindings::{Bindings, view, view_mut};
 use crate::error::Result;
 use glam::Vec3;
@@ -80,3 +82,13 @@ pub fn dispatch(b: &Bindings, groups: u32) -> Result<()> {
     );
     Ok(())
 }
+
+/// This file's row of the mirrors' table (`cpu::MIRRORS`).
+pub const ROWS: &[MirrorRow] = &[
+    MirrorRow {
+        stage: Stage::EmDepositList,
+        workgroup_size: Some(WG),
+        items: 1,
+        run: Some(Mirror::Plain(dispatch)),
+    },
+];

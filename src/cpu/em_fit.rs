@@ -3,6 +3,8 @@
 //! in `Cache`; workgroups run in parallel (each writes only its own splat).
 //! `EM_SUBGROUP_REDUCE` in the flags selects the sum order of the `subgroups` variant.
 
+use super::{Mirror, MirrorRow};
+use crate::shaders::Stage;
 use super::bindings::{Bindings, view, view_mut};
 use crate::error::Result;
 use glam::Vec3;
@@ -763,3 +765,13 @@ pub fn dispatch(b: &Bindings, groups: u32) -> Result<()> {
     );
     Ok(())
 }
+
+/// This file's row of the mirrors' table (`cpu::MIRRORS`).
+pub const ROWS: &[MirrorRow] = &[
+    MirrorRow {
+        stage: Stage::EmFit,
+        workgroup_size: None,
+        items: 1,
+        run: Some(Mirror::Plain(dispatch)),
+    },
+];

@@ -1,6 +1,8 @@
 //! Mirror of `wgsl/em_select.wgsl`. Sequential, so the list and the lobe slots are in splat
 //! order.
 
+use super::{Mirror, MirrorRow};
+use crate::shaders::Stage;
 use super::bindings::{Bindings, view, view_mut};
 use crate::error::Result;
 use glam::Vec3;
@@ -98,3 +100,13 @@ pub fn dispatch(b: &Bindings, groups: u32) -> Result<()> {
     );
     Ok(())
 }
+
+/// This file's row of the mirrors' table (`cpu::MIRRORS`).
+pub const ROWS: &[MirrorRow] = &[
+    MirrorRow {
+        stage: Stage::EmSelect,
+        workgroup_size: Some(WG),
+        items: 1,
+        run: Some(Mirror::Plain(dispatch)),
+    },
+];

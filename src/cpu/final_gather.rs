@@ -2,6 +2,8 @@
 //! hemisphere (with shared fits, over its group's members' in turn), and the radiance of the
 //! surface each meets, as the bake knows it (`hit_albedo`).
 
+use super::{Mirror, MirrorRow};
+use crate::shaders::Stage;
 use super::bindings::{Bindings, view, view_mut};
 use crate::error::Result;
 use glam::{Vec3, Vec4};
@@ -114,3 +116,13 @@ pub fn dispatch(b: &Bindings, geo: &Geometry, _groups: u32) -> Result<()> {
     );
     Ok(())
 }
+
+/// This file's row of the mirrors' table (`cpu::MIRRORS`).
+pub const ROWS: &[MirrorRow] = &[
+    MirrorRow {
+        stage: Stage::FinalGather,
+        workgroup_size: Some(WG),
+        items: 1,
+        run: Some(Mirror::Traced(dispatch)),
+    },
+];

@@ -9,10 +9,7 @@ use crate::cpu;
 use crate::direct::{DirectMap, direct_params, shadow_bias};
 use crate::em::LobeMap;
 use crate::error::Result;
-use crate::frame::{
-    Direct, FrameConfig, Splatting, Terms, frame_camera, jitter, path_params, refinement,
-    shade_params,
-};
+use crate::frame::{Direct, FrameConfig, FramePlan, Splatting, Terms, path_params, shade_params};
 use crate::grid::SplatGrid;
 use crate::scene::Scene;
 use crate::sequence::Executor;
@@ -78,26 +75,50 @@ pub fn cpu_frame(
     cam: &Camera,
     params: &ShadeParams,
 ) -> Result<Vec<[f32; 4]>> {
-    let needed = Direct::of_code(params.direct) == Direct::Baked || params.glossy_rays > 0;
+    let plan = FramePlan::new(cam, *params, Splatting::Raster);
+    let needed = plan.reads_direct_bake() || params.glossy_rays > 0;
     let direct = direct_for(scene, grid, needed, direct)?;
-    let mut hdr = vec![[0.0; 4]; (cam.size[0] * cam.size[1]) as usize];
-    cpu_frame_into(scene, grid, lobes, &direct, cam, params, &mut hdr);
-    Ok(hdr)
+    Ok(cpu_draw(scene, grid, (lobes, &direct), &plan, 0))
 }
 
-/// `cpu_frame` with the direct bake made, into `hdr` (a refinement frame adds to it).
+/// The frame of `plan` (`spp` 0: the frame a moving camera gets), or the still image of its
+/// `spp` refinement frames (`FramePlan::refinement`), with the direct bake made.
+pub fn cpu_draw(
+    scene: &Scene,
+    grid: &SplatGrid,
+    (lobes, direct): (&LobeMap, &DirectMap),
+    plan: &FramePlan,
+    spp: u32,
+) -> Vec<[f32; 4]> {
+    let [w, h] = plan.view.size;
+    let mut hdr = vec![[0.0; 4]; (w * h) as usize];
+    match spp {
+        0 => cpu_frame_into(scene, grid, lobes, direct, plan, &mut hdr),
+        spp => (0..spp).for_each(|k| {
+            cpu_frame_into(
+                scene,
+                grid,
+                lobes,
+                direct,
+                &plan.refinement(k, spp),
+                &mut hdr,
+            )
+        }),
+    }
+    hdr
+}
+
+/// The frame of `plan` with the direct bake made, into `hdr` (a refinement frame adds to it).
 pub fn cpu_frame_into(
     scene: &Scene,
     grid: &SplatGrid,
     lobes: &LobeMap,
     direct: &DirectMap,
-    cam: &Camera,
-    params: &ShadeParams,
+    plan: &FramePlan,
     hdr: &mut [[f32; 4]],
 ) {
-    let cam = &frame_camera(cam, params, Splatting::Raster);
-    let baked = Direct::of_code(params.direct) == Direct::Baked;
-    let selection = match baked {
+    let (cam, params) = (&plan.cam, &plan.params);
+    let selection = match plan.reads_direct_bake() {
         true => {
             let tree = scene.lod_tree(cam.lod > 0.0);
             Some(cpu::splat_select::selection(cam, &scene.splats, &tree))
@@ -175,16 +196,8 @@ pub fn cpu_refined(
     spp: u32,
 ) -> Result<Vec<[f32; 4]>> {
     let direct = direct_for(scene, grid, params.glossy_rays > 0, direct)?;
-    let mut hdr = vec![[0.0; 4]; (cam.size[0] * cam.size[1]) as usize];
-    for k in 0..spp.max(1) {
-        let cam = Camera {
-            jitter: jitter(k, spp),
-            ..*cam
-        };
-        let params = refinement(params, k, spp);
-        cpu_frame_into(scene, grid, lobes, &direct, &cam, &params, &mut hdr);
-    }
-    Ok(hdr)
+    let plan = FramePlan::new(cam, *params, Splatting::Raster);
+    Ok(cpu_draw(scene, grid, (lobes, &direct), &plan, spp.max(1)))
 }
 
 /// The reference on the CPU: the gather pass in place of visibility and attributes, then the

@@ -1,5 +1,7 @@
 //! Mirror of `wgsl/grid_count.wgsl`.
 
+use super::{Mirror, MirrorRow};
+use crate::shaders::Stage;
 use super::bindings::{Bindings, view};
 use crate::error::Result;
 use crate::grid::{cell_index, disk_cell_range};
@@ -45,3 +47,13 @@ pub fn dispatch(b: &Bindings, groups: u32) -> Result<()> {
     grid_count(&p, view(&splats), &mut counts, &mut max_len[0], groups);
     Ok(())
 }
+
+/// This file's row of the mirrors' table (`cpu::MIRRORS`).
+pub const ROWS: &[MirrorRow] = &[
+    MirrorRow {
+        stage: Stage::GridCount,
+        workgroup_size: Some(WG),
+        items: 1,
+        run: Some(Mirror::Plain(dispatch)),
+    },
+];

@@ -1,5 +1,7 @@
 //! Mirror of `wgsl/grid_distance.wgsl`: one axis pass of the capped Chebyshev distance field.
 
+use super::{Mirror, MirrorRow};
+use crate::shaders::Stage;
 use super::bindings::Bindings;
 use crate::error::Result;
 use crate::grid::DIST_CAP;
@@ -68,3 +70,13 @@ pub fn dispatch(b: &Bindings, groups: u32) -> Result<()> {
     grid_distance(&pass, &grid, &cell_start, &src, &mut dst, groups);
     Ok(())
 }
+
+/// This file's row of the mirrors' table (`cpu::MIRRORS`).
+pub const ROWS: &[MirrorRow] = &[
+    MirrorRow {
+        stage: Stage::GridDistance,
+        workgroup_size: Some(WG),
+        items: 1,
+        run: Some(Mirror::Plain(dispatch)),
+    },
+];

@@ -1,5 +1,7 @@
 //! Mirror of `wgsl/grid_rank.wgsl`: each entry's rank within its cell.
 
+use super::{Mirror, MirrorRow};
+use crate::shaders::Stage;
 use super::bindings::Bindings;
 use crate::error::Result;
 use crate::types::GridParams;
@@ -49,3 +51,13 @@ pub fn dispatch(b: &Bindings, groups: u32) -> Result<()> {
     );
     Ok(())
 }
+
+/// This file's row of the mirrors' table (`cpu::MIRRORS`).
+pub const ROWS: &[MirrorRow] = &[
+    MirrorRow {
+        stage: Stage::GridRank,
+        workgroup_size: Some(WG),
+        items: 1,
+        run: Some(Mirror::Plain(dispatch)),
+    },
+];

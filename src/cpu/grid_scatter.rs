@@ -1,6 +1,8 @@
 //! Mirror of `wgsl/grid_scatter.wgsl`. Sequential, so the scratch order is splat order; the
 //! GPU's depends on scheduling until `grid_rank`.
 
+use super::{Mirror, MirrorRow};
+use crate::shaders::Stage;
 use super::bindings::{Bindings, view};
 use crate::error::Result;
 use crate::grid::{cell_index, disk_cell_range};
@@ -59,3 +61,13 @@ pub fn dispatch(b: &Bindings, groups: u32) -> Result<()> {
     );
     Ok(())
 }
+
+/// This file's row of the mirrors' table (`cpu::MIRRORS`).
+pub const ROWS: &[MirrorRow] = &[
+    MirrorRow {
+        stage: Stage::GridScatter,
+        workgroup_size: Some(WG),
+        items: 1,
+        run: Some(Mirror::Plain(dispatch)),
+    },
+];

@@ -3,6 +3,8 @@
 // `!(x < y)` is meant: NaN must fail these tests, as it does in the WGSL twin.
 #![allow(clippy::neg_cmp_op_on_partial_ord)]
 
+use super::{Mirror, MirrorRow};
+use crate::shaders::Stage;
 use super::bindings::{Bindings, view, view_mut};
 use crate::error::Result;
 use glam::{IVec3, Vec2, Vec3, Vec4};
@@ -279,3 +281,13 @@ pub fn dispatch(b: &Bindings, geo: &Geometry, _groups: u32) -> Result<()> {
     path_trace(&p, &cam, materials, lights, view_mut(&mut hdr), geo);
     Ok(())
 }
+
+/// This file's row of the mirrors' table (`cpu::MIRRORS`).
+pub const ROWS: &[MirrorRow] = &[
+    MirrorRow {
+        stage: Stage::PathTrace,
+        workgroup_size: Some(WG),
+        items: 1,
+        run: Some(Mirror::Traced(dispatch)),
+    },
+];

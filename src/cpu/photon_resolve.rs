@@ -1,5 +1,7 @@
 //! Mirror of `wgsl/photon_resolve.wgsl`: fixed-point sums to HDR pixels.
 
+use super::{Mirror, MirrorRow};
+use crate::shaders::Stage;
 use super::bindings::{Bindings, view_mut};
 use crate::error::Result;
 use crate::types::PhotonViewParams;
@@ -26,3 +28,13 @@ pub fn dispatch(b: &Bindings, _groups: u32) -> Result<()> {
     photon_resolve(&p, &sums, view_mut(&mut hdr));
     Ok(())
 }
+
+/// This file's row of the mirrors' table (`cpu::MIRRORS`).
+pub const ROWS: &[MirrorRow] = &[
+    MirrorRow {
+        stage: Stage::PhotonResolve,
+        workgroup_size: Some(WG),
+        items: 1,
+        run: Some(Mirror::Plain(dispatch)),
+    },
+];

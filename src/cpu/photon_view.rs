@@ -1,6 +1,8 @@
 //! Mirror of `wgsl/photon_view.wgsl`: the photons the camera sees, summed in fixed point into
 //! their pixels (wrapping like the device's `atomicAdd`; the sum does not depend on order).
 
+use super::{Mirror, MirrorRow};
+use crate::shaders::Stage;
 use super::bindings::{Bindings, view};
 use glam::Vec3;
 use rayon::prelude::*;
@@ -100,3 +102,13 @@ pub fn dispatch(b: &Bindings, geo: &Geometry, _groups: u32) -> Result<()> {
     photon_view(&p, &cam, materials, photons, &mut sums, geo);
     Ok(())
 }
+
+/// This file's row of the mirrors' table (`cpu::MIRRORS`).
+pub const ROWS: &[MirrorRow] = &[
+    MirrorRow {
+        stage: Stage::PhotonView,
+        workgroup_size: Some(WG),
+        items: 1,
+        run: Some(Mirror::Traced(dispatch)),
+    },
+];

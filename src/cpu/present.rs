@@ -2,6 +2,8 @@
 //! the tone-mapped image's packed sRGB bytes (filtered bilinearly where the image is smaller
 //! than the target), decoded to linear for an sRGB surface.
 
+use super::MirrorRow;
+use crate::shaders::Stage;
 use glam::{Vec2, Vec3, Vec4};
 
 use crate::types::PresentParams;
@@ -85,3 +87,13 @@ pub fn upsample(params: &PresentParams, hdr: &[[f32; 4]]) -> Vec<[f32; 4]> {
         .map(|i| bilinear(params, centre(params, i), texel).to_array())
         .collect()
 }
+
+/// This file's row of the mirrors' table (`cpu::MIRRORS`).
+pub const ROWS: &[MirrorRow] = &[
+    MirrorRow {
+        stage: Stage::Present,
+        workgroup_size: None,
+        items: 1,
+        run: None,
+    },
+];

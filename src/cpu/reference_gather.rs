@@ -4,6 +4,8 @@
 // `!(x < y)` is meant: NaN must fail these tests, as it does in the WGSL twin.
 #![allow(clippy::neg_cmp_op_on_partial_ord)]
 
+use super::MirrorRow;
+use crate::shaders::Stage;
 use glam::{Vec2, Vec3};
 use rayon::prelude::*;
 
@@ -107,3 +109,13 @@ pub fn reference_gather(
         specular: target(3),
     }
 }
+
+/// This file's row of the mirrors' table (`cpu::MIRRORS`).
+pub const ROWS: &[MirrorRow] = &[
+    MirrorRow {
+        stage: Stage::ReferenceGather,
+        workgroup_size: None,
+        items: 1,
+        run: None,
+    },
+];

@@ -1,5 +1,7 @@
 //! Mirror of `wgsl/scan_apply.wgsl`: in-block exclusive scan plus the block's offset.
 
+use super::{Mirror, MirrorRow};
+use crate::shaders::Stage;
 use super::bindings::Bindings;
 use crate::error::Result;
 use crate::types::ScanParams;
@@ -57,3 +59,13 @@ pub fn dispatch(b: &Bindings, groups: u32) -> Result<()> {
     scan_apply(&p, &mut values, &offsets, groups);
     Ok(())
 }
+
+/// This file's row of the mirrors' table (`cpu::MIRRORS`).
+pub const ROWS: &[MirrorRow] = &[
+    MirrorRow {
+        stage: Stage::ScanApply,
+        workgroup_size: Some(WG),
+        items: ITEMS,
+        run: Some(Mirror::Plain(dispatch)),
+    },
+];

@@ -1,5 +1,7 @@
 //! Mirror of `wgsl/scan_reduce.wgsl`: per-block sums with the same tree order.
 
+use super::{Mirror, MirrorRow};
+use crate::shaders::Stage;
 use super::bindings::Bindings;
 use crate::error::Result;
 use crate::types::ScanParams;
@@ -43,3 +45,13 @@ pub fn dispatch(b: &Bindings, groups: u32) -> Result<()> {
     scan_reduce(&p, &values, &mut sums, groups);
     Ok(())
 }
+
+/// This file's row of the mirrors' table (`cpu::MIRRORS`).
+pub const ROWS: &[MirrorRow] = &[
+    MirrorRow {
+        stage: Stage::ScanReduce,
+        workgroup_size: Some(WG),
+        items: ITEMS,
+        run: Some(Mirror::Plain(dispatch)),
+    },
+];

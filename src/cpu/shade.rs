@@ -4,6 +4,8 @@
 // `!(x < y)` is meant: NaN must fail these tests, as it does in the WGSL twin.
 #![allow(clippy::neg_cmp_op_on_partial_ord)]
 
+use super::MirrorRow;
+use crate::shaders::Stage;
 use glam::{Vec2, Vec3, Vec4};
 use rayon::prelude::*;
 
@@ -346,3 +348,13 @@ pub fn shade(
         .to_array();
     });
 }
+
+/// This file's row of the mirrors' table (`cpu::MIRRORS`).
+pub const ROWS: &[MirrorRow] = &[
+    MirrorRow {
+        stage: Stage::Shade,
+        workgroup_size: Some(WG),
+        items: 1,
+        run: None,
+    },
+];

@@ -3,6 +3,8 @@
 // `!(x < y)` is meant: NaN must fail these tests, as it does in the WGSL twin.
 #![allow(clippy::neg_cmp_op_on_partial_ord)]
 
+use super::MirrorRow;
+use crate::shaders::Stage;
 use glam::{Vec3, Vec4};
 
 use super::splat_shading::Shading;
@@ -97,3 +99,13 @@ pub fn splat_attributes(
         specular: target(3),
     }
 }
+
+/// This file's row of the mirrors' table (`cpu::MIRRORS`).
+pub const ROWS: &[MirrorRow] = &[
+    MirrorRow {
+        stage: Stage::SplatAttributes,
+        workgroup_size: None,
+        items: 1,
+        run: None,
+    },
+];

@@ -1,6 +1,8 @@
 //! Mirror of `wgsl/splat_list.wgsl`: the drawn splats (drawn radius above 0) chunk by chunk,
 //! each chunk's from its offset in the scanned counts, in the order of its visited entries.
 
+use super::MirrorRow;
+use crate::shaders::Stage;
 use crate::lod::{LodTree, visited};
 
 pub const WG: u32 = 64;
@@ -16,3 +18,13 @@ pub fn splat_list(offsets: &[u32], drawn: &[f32], tree: &LodTree, visits: &[u32]
     }
     selected
 }
+
+/// This file's row of the mirrors' table (`cpu::MIRRORS`).
+pub const ROWS: &[MirrorRow] = &[
+    MirrorRow {
+        stage: Stage::SplatList,
+        workgroup_size: Some(WG),
+        items: 1,
+        run: None,
+    },
+];

@@ -2,6 +2,8 @@
 //! the level of detail's chunks, each node's levels its subtree may visit (none where its
 //! parent's visits none). `walk` runs every level from the top, as the device does.
 
+use super::MirrorRow;
+use crate::shaders::Stage;
 use rayon::prelude::*;
 
 use crate::lod::{LodTree, NODE_FANOUT};
@@ -38,3 +40,13 @@ pub fn walk(cam: &Camera, tree: &LodTree) -> Vec<Vec<u32>> {
     }
     visits
 }
+
+/// This file's row of the mirrors' table (`cpu::MIRRORS`).
+pub const ROWS: &[MirrorRow] = &[
+    MirrorRow {
+        stage: Stage::SplatNodes,
+        workgroup_size: Some(WG),
+        items: 1,
+        run: None,
+    },
+];

@@ -4,6 +4,8 @@
 //! (`drawn_radius`; 0: not drawn) and the word of its merged normals there, each chunk's count
 //! of drawn splats and the levels it visited. `selection` adds `splat_list` for the list.
 
+use super::MirrorRow;
+use crate::shaders::Stage;
 use rayon::prelude::*;
 
 use crate::lod::{LodTree, NODE_FANOUT, visited};
@@ -118,3 +120,13 @@ pub fn drawn_splats(splats: &[Splat], drawn: &[f32]) -> Vec<Splat> {
         .map(|(s, &radius)| Splat { radius, ..*s })
         .collect()
 }
+
+/// This file's row of the mirrors' table (`cpu::MIRRORS`).
+pub const ROWS: &[MirrorRow] = &[
+    MirrorRow {
+        stage: Stage::SplatSelect,
+        workgroup_size: Some(WG),
+        items: 1,
+        run: None,
+    },
+];

@@ -4,6 +4,8 @@
 //! merged disk is shaded with the mean of the normals it stands for, its lobe widened by their
 //! spread.
 
+use super::MirrorRow;
+use crate::shaders::Stage;
 use glam::Vec3;
 use rayon::prelude::*;
 
@@ -45,3 +47,13 @@ pub fn splat_shade(
     }
     out
 }
+
+/// This file's row of the mirrors' table (`cpu::MIRRORS`).
+pub const ROWS: &[MirrorRow] = &[
+    MirrorRow {
+        stage: Stage::SplatShade,
+        workgroup_size: Some(WG),
+        items: 1,
+        run: None,
+    },
+];

@@ -3,6 +3,8 @@
 //! tile pass itself, `splat_compute`, sums the same fragments in the same order as the raster
 //! passes, so its mirror is theirs (`splat_visibility`, `splat_attributes`).
 
+use super::{Mirror, MirrorRow};
+use crate::shaders::Stage;
 use super::bindings::{Bindings, view};
 use crate::error::Result;
 use crate::shared::splat::tile_rect;
@@ -78,3 +80,25 @@ pub fn dispatch_tile_scatter(b: &Bindings, _groups: u32) -> Result<()> {
     );
     Ok(())
 }
+
+/// This file's row of the mirrors' table (`cpu::MIRRORS`).
+pub const ROWS: &[MirrorRow] = &[
+    MirrorRow {
+        stage: Stage::SplatCompute,
+        workgroup_size: Some(WG),
+        items: 1,
+        run: None,
+    },
+    MirrorRow {
+        stage: Stage::SplatTileCount,
+        workgroup_size: Some(WG),
+        items: 1,
+        run: Some(Mirror::Plain(dispatch_tile_count)),
+    },
+    MirrorRow {
+        stage: Stage::SplatTileScatter,
+        workgroup_size: Some(WG),
+        items: 1,
+        run: Some(Mirror::Plain(dispatch_tile_scatter)),
+    },
+];

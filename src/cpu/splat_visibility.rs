@@ -5,6 +5,8 @@
 // `!(x < y)` is meant: NaN must fail these tests, as it does in the WGSL twin.
 #![allow(clippy::neg_cmp_op_on_partial_ord)]
 
+use super::MirrorRow;
+use crate::shaders::Stage;
 use glam::{Vec2, Vec3};
 use rayon::prelude::*;
 
@@ -188,3 +190,13 @@ pub struct Visible {
     pub depth: f32,
     pub front: u32,
 }
+
+/// This file's row of the mirrors' table (`cpu::MIRRORS`).
+pub const ROWS: &[MirrorRow] = &[
+    MirrorRow {
+        stage: Stage::SplatVisibility,
+        workgroup_size: None,
+        items: 1,
+        run: None,
+    },
+];

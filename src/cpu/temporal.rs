@@ -3,6 +3,8 @@
 //! the pixel shows now (or an edge neighbour does, within the pixel's footprint) and clamped to
 //! the colour range of the pixel and its four edge neighbours.
 
+use super::{Mirror, MirrorRow};
+use crate::shaders::Stage;
 use glam::{IVec2, Vec3, Vec4};
 use rayon::prelude::*;
 
@@ -255,3 +257,13 @@ pub fn dispatch(b: &Bindings, _groups: u32) -> Result<()> {
     );
     Ok(())
 }
+
+/// This file's row of the mirrors' table (`cpu::MIRRORS`).
+pub const ROWS: &[MirrorRow] = &[
+    MirrorRow {
+        stage: Stage::Temporal,
+        workgroup_size: Some(WG),
+        items: 1,
+        run: Some(Mirror::Plain(dispatch)),
+    },
+];

@@ -1,5 +1,7 @@
 //! Mirror of `wgsl/tonemap_apply.wgsl`: every pixel through the operator, as sRGB bytes.
 
+use super::{Mirror, MirrorRow};
+use crate::shaders::Stage;
 use super::bindings::{Bindings, view};
 use crate::error::Result;
 use glam::{Vec2, Vec3};
@@ -30,3 +32,13 @@ pub fn dispatch(b: &Bindings, _groups: u32) -> Result<()> {
     tonemap_apply(&p, view(&hdr), view(&log_sum), &mut rgba);
     Ok(())
 }
+
+/// This file's row of the mirrors' table (`cpu::MIRRORS`).
+pub const ROWS: &[MirrorRow] = &[
+    MirrorRow {
+        stage: Stage::TonemapApply,
+        workgroup_size: Some(WG),
+        items: 1,
+        run: Some(Mirror::Plain(dispatch)),
+    },
+];

@@ -1,5 +1,7 @@
 //! Mirror of `wgsl/tonemap_reduce.wgsl`: per-block (Σ log(ε + Y), count) in the same order.
 
+use super::{Mirror, MirrorRow};
+use crate::shaders::Stage;
 use super::bindings::{Bindings, view, view_mut};
 use crate::error::Result;
 use glam::Vec2;
@@ -61,3 +63,13 @@ pub fn dispatch(b: &Bindings, groups: u32) -> Result<()> {
     tonemap_reduce(&p, view(&hdr), view(&sums_in), out, groups);
     Ok(())
 }
+
+/// This file's row of the mirrors' table (`cpu::MIRRORS`).
+pub const ROWS: &[MirrorRow] = &[
+    MirrorRow {
+        stage: Stage::TonemapReduce,
+        workgroup_size: Some(WG),
+        items: ITEMS,
+        run: Some(Mirror::Plain(dispatch)),
+    },
+];

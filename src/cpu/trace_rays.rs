@@ -1,5 +1,7 @@
 //! Mirror of `wgsl/trace_rays.wgsl`.
 
+use super::MirrorRow;
+use crate::shaders::Stage;
 use glam::Vec3;
 
 use crate::shared::trace::{Geometry, trace_ray};
@@ -33,3 +35,13 @@ pub fn trace_rays(
         }
     }
 }
+
+/// This file's row of the mirrors' table (`cpu::MIRRORS`).
+pub const ROWS: &[MirrorRow] = &[
+    MirrorRow {
+        stage: Stage::TraceRays,
+        workgroup_size: Some(WG),
+        items: 1,
+        run: None,
+    },
+];

@@ -12,7 +12,7 @@ use std::sync::{Mutex, OnceLock};
 use super::Gpu;
 use crate::em::LobeMap;
 use crate::error::{Error, Result};
-use crate::frame::{Direct as DirectMode, Splatter, Splatting};
+use crate::frame::{Direct as DirectMode, FramePlan, Splatter, Splatting};
 use crate::scene::Scene;
 use crate::sequence::{Direct, TileLists, bin_splat_tiles};
 use crate::shaders::Stage;
@@ -795,23 +795,27 @@ impl SplatPipelines {
         params: &ShadeParams,
         out: &FrameTargets,
     ) -> Result<()> {
-        let uniforms = self.uniforms(gpu, cam, params, Splatting::Raster);
-        self.record(gpu, encoder, scene, &uniforms, out, SplatPass::Shade)
+        let plan = FramePlan::new(cam, *params, Splatting::Raster);
+        self.record(
+            gpu,
+            encoder,
+            scene,
+            &self.uniforms(gpu, &plan),
+            out,
+            SplatPass::Shade,
+        )
     }
 
     /// Records one frame into `out.hdr`: visibility, attributes, shade.
-    #[allow(clippy::too_many_arguments)]
     pub fn draw(
         &self,
         gpu: &Gpu,
         encoder: &mut wgpu::CommandEncoder,
         scene: &SceneBuffers,
-        cam: &Camera,
-        params: &ShadeParams,
-        splatting: Splatting,
+        plan: &FramePlan,
         out: &FrameTargets,
     ) -> Result<()> {
-        let uniforms = self.uniforms(gpu, cam, params, splatting);
+        let uniforms = self.uniforms(gpu, plan);
         for pass in SplatPass::ALL {
             self.record(gpu, encoder, scene, &uniforms, out, pass)?;
         }
@@ -824,12 +828,10 @@ impl SplatPipelines {
         &self,
         gpu: &Gpu,
         scene: &SceneBuffers,
-        cam: &Camera,
-        params: &ShadeParams,
-        splatting: Splatting,
+        plan: &FramePlan,
         out: &FrameTargets,
     ) -> Result<[f64; 3]> {
-        let uniforms = self.uniforms(gpu, cam, params, splatting);
+        let uniforms = self.uniforms(gpu, plan);
         let mut ms = [0.0; 3];
         for (pass, slot) in SplatPass::ALL.into_iter().zip(&mut ms) {
             let t = std::time::Instant::now();
@@ -844,15 +846,8 @@ impl SplatPipelines {
     /// The selection of a frame of baked direct light alone (`record_splat_select`: the walk
     /// down the nodes, `splat_select`, the scan and `splat_list`), waited for: its
     /// milliseconds; 0 for a frame that selects nothing (direct light by rays). Benchmarks.
-    pub fn select_timed(
-        &self,
-        gpu: &Gpu,
-        scene: &SceneBuffers,
-        cam: &Camera,
-        params: &ShadeParams,
-        splatting: Splatting,
-    ) -> Result<f64> {
-        let uniforms = self.uniforms(gpu, cam, params, splatting);
+    pub fn select_timed(&self, gpu: &Gpu, scene: &SceneBuffers, plan: &FramePlan) -> Result<f64> {
+        let uniforms = self.uniforms(gpu, plan);
         if DirectMode::of_code(uniforms.direct) != DirectMode::Baked {
             return Ok(0.0);
         }
@@ -863,22 +858,15 @@ impl SplatPipelines {
         Ok(crate::timing::ms_since(t))
     }
 
-    /// The frame's uniforms; the camera as `frame::frame_camera` gives it to the passes (the
-    /// level of detail in moving frames of the raster passes only).
-    fn uniforms(
-        &self,
-        gpu: &Gpu,
-        cam: &Camera,
-        params: &ShadeParams,
-        splatting: Splatting,
-    ) -> Uniforms {
-        let cam = &crate::frame::frame_camera(cam, params, splatting);
+    /// The frame's uniforms, from its plan: the camera its passes read (the level of detail
+    /// in moving frames of the raster passes only) and its shading.
+    fn uniforms(&self, gpu: &Gpu, plan: &FramePlan) -> Uniforms {
         Uniforms {
-            camera: *cam,
-            cam: gpu.uniform("camera", cam),
-            params: gpu.uniform("shade params", params),
-            direct: params.direct,
-            splatting,
+            camera: plan.cam,
+            cam: gpu.uniform("camera", &plan.cam),
+            params: gpu.uniform("shade params", &plan.params),
+            direct: plan.params.direct,
+            splatting: plan.splatting,
             tiles: Default::default(),
         }
     }
@@ -1046,6 +1034,8 @@ impl SplatPipelines {
         Ok(())
     }
 
+    /// Records one splat pass of a frame; in frames of baked direct light the visibility pass
+    /// selects the drawn splats first and the attribute pass shades them.
     fn record(
         &self,
         gpu: &Gpu,
@@ -1055,7 +1045,6 @@ impl SplatPipelines {
         out: &FrameTargets,
         pass: SplatPass,
     ) -> Result<()> {
-        let (cam_buf, params_buf) = (&uniforms.cam, &uniforms.params);
         let baked = DirectMode::of_code(uniforms.direct) == DirectMode::Baked;
         match pass {
             SplatPass::Visibility if baked => {
@@ -1069,118 +1058,155 @@ impl SplatPipelines {
         if uniforms.splatting == Splatting::Compute && pass != SplatPass::Shade {
             return self.record_compute(gpu, encoder, scene, uniforms, out, pass);
         }
-        // A raster pass's pipeline for the paging of `list` (buffers by binding), and its bind
-        // group (the attribute passes also read the front target).
-        let bound = |which: Raster, list: &[(u32, &wgpu::Buffer)]| -> Result<_> {
-            let stage = which.stage();
-            let paging = gpu.paging_by(stage, |group, binding| {
-                let found = list.iter().find(|(b, _)| *b == binding);
-                found.filter(|_| group == 0).map(|(_, buffer)| *buffer)
-            })?;
-            let pipeline = self.raster(gpu, which, &paging, baked)?;
-            let mut entries = gpu.paged_entries_at(stage, 0, list, &paging)?;
-            if which != Raster::Visibility {
-                entries.push(wgpu::BindGroupEntry {
-                    binding: FRONT_BINDING,
-                    resource: wgpu::BindingResource::TextureView(&out.front),
-                });
-            }
-            let group = gpu.device.create_bind_group(&wgpu::BindGroupDescriptor {
-                label: Some(stage.name()),
-                layout: &pipeline.get_bind_group_layout(0),
-                entries: &entries,
+        match pass {
+            SplatPass::Visibility => self.record_visibility(gpu, encoder, scene, uniforms, out),
+            SplatPass::Attributes => self.record_attributes(gpu, encoder, scene, uniforms, out),
+            SplatPass::Shade => self.record_shade(gpu, encoder, scene, uniforms, out),
+        }
+    }
+
+    /// A raster pass's pipeline for the paging of `list` (buffers by binding), and its bind
+    /// group (the attribute passes also read the front target).
+    fn bound_raster(
+        &self,
+        gpu: &Gpu,
+        which: Raster,
+        list: &[(u32, &wgpu::Buffer)],
+        out: &FrameTargets,
+        baked: bool,
+    ) -> Result<(wgpu::RenderPipeline, wgpu::BindGroup)> {
+        let stage = which.stage();
+        let paging = gpu.paging_by(stage, |group, binding| {
+            let found = list.iter().find(|(b, _)| *b == binding);
+            found.filter(|_| group == 0).map(|(_, buffer)| *buffer)
+        })?;
+        let pipeline = self.raster(gpu, which, &paging, baked)?;
+        let mut entries = gpu.paged_entries_at(stage, 0, list, &paging)?;
+        if which != Raster::Visibility {
+            entries.push(wgpu::BindGroupEntry {
+                binding: FRONT_BINDING,
+                resource: wgpu::BindingResource::TextureView(&out.front),
             });
-            Ok((pipeline, group))
-        };
-        let depth_attachment = |load| {
-            Some(wgpu::RenderPassDepthStencilAttachment {
-                view: &out.depth,
-                depth_ops: Some(wgpu::Operations {
-                    load,
-                    store: wgpu::StoreOp::Store,
-                }),
-                stencil_ops: None,
-            })
-        };
-        if pass == SplatPass::Visibility {
-            let list = [
+        }
+        let group = gpu.device.create_bind_group(&wgpu::BindGroupDescriptor {
+            label: Some(stage.name()),
+            layout: &pipeline.get_bind_group_layout(0),
+            entries: &entries,
+        });
+        Ok((pipeline, group))
+    }
+
+    /// The visibility pass: the nearest disk's depth and id into the front target.
+    fn record_visibility(
+        &self,
+        gpu: &Gpu,
+        encoder: &mut wgpu::CommandEncoder,
+        scene: &SceneBuffers,
+        uniforms: &Uniforms,
+        out: &FrameTargets,
+    ) -> Result<()> {
+        let baked = DirectMode::of_code(uniforms.direct) == DirectMode::Baked;
+        let list = [
+            (0, &uniforms.cam),
+            (1, scene.splats),
+            (2, scene.drawn),
+            (3, scene.selected_count),
+            (4, scene.selected),
+            (VISIBILITY_CLIP_BINDING, scene.clips),
+        ];
+        let (pipeline, vis_group) =
+            self.bound_raster(gpu, Raster::Visibility, &list, out, baked)?;
+        let front = Some(wgpu::RenderPassColorAttachment {
+            view: &out.front,
+            depth_slice: None,
+            resolve_target: None,
+            ops: wgpu::Operations {
+                load: wgpu::LoadOp::Clear(wgpu::Color::TRANSPARENT),
+                store: wgpu::StoreOp::Store,
+            },
+        });
+        let mut pass = encoder.begin_render_pass(&wgpu::RenderPassDescriptor {
+            label: Some(Stage::SplatVisibility.name()),
+            color_attachments: &[front],
+            depth_stencil_attachment: depth_attachment(out, wgpu::LoadOp::Clear(0.0)),
+            timestamp_writes: None,
+            occlusion_query_set: None,
+            multiview_mask: None,
+        });
+        pass.set_pipeline(&pipeline);
+        pass.set_bind_group(0, &vis_group, &[]);
+        match baked && self.indirect {
+            true => pass.draw_indirect(scene.draw_args, 0),
+            false => pass.draw(SPLAT_VERTICES, 0..instances(scene.splat_count)),
+        }
+        Ok(())
+    }
+
+    /// The attribute pass: the disks within the depth tolerance blended into the sums.
+    fn record_attributes(
+        &self,
+        gpu: &Gpu,
+        encoder: &mut wgpu::CommandEncoder,
+        scene: &SceneBuffers,
+        uniforms: &Uniforms,
+        out: &FrameTargets,
+    ) -> Result<()> {
+        let baked = DirectMode::of_code(uniforms.direct) == DirectMode::Baked;
+        let (cam_buf, params_buf) = (&uniforms.cam, &uniforms.params);
+        // `fs_main` reads none of the direct bake's bindings (the lights, the bake's two
+        // buffers), so its derived layout has none; `fs_baked` reads the camera, the splats
+        // and what `splat_shade` wrote.
+        let mut list: Vec<(u32, &wgpu::Buffer)> = match baked {
+            true => vec![
                 (0, cam_buf),
                 (1, scene.splats),
-                (2, scene.drawn),
-                (3, scene.selected_count),
-                (4, scene.selected),
-                (VISIBILITY_CLIP_BINDING, scene.clips),
-            ];
-            let (pipeline, vis_group) = bound(Raster::Visibility, &list)?;
-            let front = Some(wgpu::RenderPassColorAttachment {
-                view: &out.front,
-                depth_slice: None,
-                resolve_target: None,
-                ops: wgpu::Operations {
-                    load: wgpu::LoadOp::Clear(wgpu::Color::TRANSPARENT),
-                    store: wgpu::StoreOp::Store,
-                },
-            });
-            let mut pass = encoder.begin_render_pass(&wgpu::RenderPassDescriptor {
-                label: Some(Stage::SplatVisibility.name()),
-                color_attachments: &[front],
-                depth_stencil_attachment: depth_attachment(wgpu::LoadOp::Clear(0.0)),
-                timestamp_writes: None,
-                occlusion_query_set: None,
-                multiview_mask: None,
-            });
-            pass.set_pipeline(&pipeline);
-            pass.set_bind_group(0, &vis_group, &[]);
-            match baked && self.indirect {
-                true => pass.draw_indirect(scene.draw_args, 0),
-                false => pass.draw(SPLAT_VERTICES, 0..instances(scene.splat_count)),
-            }
-            return Ok(());
+                (SHADED_BINDING, scene.shaded),
+                (DRAWN_BINDING, scene.drawn),
+                (DRAWN_BINDING + 1, scene.selected_count),
+                (DRAWN_BINDING + 2, scene.selected),
+            ],
+            false => (0u32..)
+                .zip(scene.shading(cam_buf, params_buf))
+                .filter(|(b, _)| !DIRECT_BAKE_BINDINGS.contains(b))
+                .collect(),
+        };
+        list.push((ATTRIBUTES_CLIP_BINDING, scene.clips));
+        let which = match baked {
+            true => Raster::AttributesBaked,
+            false => Raster::Attributes,
+        };
+        let (pipeline, attr_group) = self.bound_raster(gpu, which, &list, out, baked)?;
+        let mut color = out.cleared_sums();
+        if baked {
+            color.truncate(2);
         }
-        if pass == SplatPass::Attributes {
-            // `fs_main` reads none of the direct bake's bindings (the lights, the bake's two
-            // buffers), so its derived layout has none; `fs_baked` reads the camera, the splats
-            // and what `splat_shade` wrote.
-            let mut list: Vec<(u32, &wgpu::Buffer)> = match baked {
-                true => vec![
-                    (0, cam_buf),
-                    (1, scene.splats),
-                    (SHADED_BINDING, scene.shaded),
-                    (DRAWN_BINDING, scene.drawn),
-                    (DRAWN_BINDING + 1, scene.selected_count),
-                    (DRAWN_BINDING + 2, scene.selected),
-                ],
-                false => (0u32..)
-                    .zip(scene.shading(cam_buf, params_buf))
-                    .filter(|(b, _)| !DIRECT_BAKE_BINDINGS.contains(b))
-                    .collect(),
-            };
-            list.push((ATTRIBUTES_CLIP_BINDING, scene.clips));
-            let which = match baked {
-                true => Raster::AttributesBaked,
-                false => Raster::Attributes,
-            };
-            let (pipeline, attr_group) = bound(which, &list)?;
-            let mut color = out.cleared_sums();
-            if baked {
-                color.truncate(2);
-            }
-            let mut pass = encoder.begin_render_pass(&wgpu::RenderPassDescriptor {
-                label: Some(Stage::SplatAttributes.name()),
-                color_attachments: &color,
-                depth_stencil_attachment: depth_attachment(wgpu::LoadOp::Load),
-                timestamp_writes: None,
-                occlusion_query_set: None,
-                multiview_mask: None,
-            });
-            pass.set_pipeline(&pipeline);
-            pass.set_bind_group(0, &attr_group, &[]);
-            match baked && self.indirect {
-                true => pass.draw_indirect(scene.draw_args, 0),
-                false => pass.draw(SPLAT_VERTICES, 0..instances(scene.splat_count)),
-            }
-            return Ok(());
+        let mut pass = encoder.begin_render_pass(&wgpu::RenderPassDescriptor {
+            label: Some(Stage::SplatAttributes.name()),
+            color_attachments: &color,
+            depth_stencil_attachment: depth_attachment(out, wgpu::LoadOp::Load),
+            timestamp_writes: None,
+            occlusion_query_set: None,
+            multiview_mask: None,
+        });
+        pass.set_pipeline(&pipeline);
+        pass.set_bind_group(0, &attr_group, &[]);
+        match baked && self.indirect {
+            true => pass.draw_indirect(scene.draw_args, 0),
+            false => pass.draw(SPLAT_VERTICES, 0..instances(scene.splat_count)),
         }
+        Ok(())
+    }
+
+    /// The shade pass: each pixel's blended surface shaded into the HDR image.
+    fn record_shade(
+        &self,
+        gpu: &Gpu,
+        encoder: &mut wgpu::CommandEncoder,
+        scene: &SceneBuffers,
+        uniforms: &Uniforms,
+        out: &FrameTargets,
+    ) -> Result<()> {
+        let (cam_buf, params_buf) = (&uniforms.cam, &uniforms.params);
         let mut frame_entries = vec![
             wgpu::BindGroupEntry {
                 binding: 0,
@@ -1252,4 +1278,19 @@ impl SplatPipelines {
         pass.dispatch_workgroups(x, y, 1);
         Ok(())
     }
+}
+
+/// The depth target as a raster pass attaches it, cleared or loaded.
+fn depth_attachment(
+    out: &FrameTargets,
+    load: wgpu::LoadOp<f32>,
+) -> Option<wgpu::RenderPassDepthStencilAttachment<'_>> {
+    Some(wgpu::RenderPassDepthStencilAttachment {
+        view: &out.depth,
+        depth_ops: Some(wgpu::Operations {
+            load,
+            store: wgpu::StoreOp::Store,
+        }),
+        stencil_ops: None,
+    })
 }

@@ -15,8 +15,8 @@ use crate::direct::{DirectMap, direct_params_biased};
 use crate::em::LobeMap;
 use crate::error::{Error, Result};
 use crate::frame::{
-    Direct, FrameConfig, SceneExtent, Splatter, Splatting, Terms, camera_uniform, frame_camera,
-    jitter, path_params, refinement, shade_params_for, temporal_jitter, temporal_params,
+    Direct, FrameConfig, FramePlan, SceneExtent, Terms, camera_uniform, path_params,
+    shade_params_for, temporal_jitter, temporal_params,
 };
 use crate::gpu::Gpu;
 use crate::gpu::bins::GpuBins;
@@ -28,7 +28,7 @@ use crate::gpu::tone::{GpuToned, tone_map};
 use crate::scene::Scene;
 use crate::sequence::{TemporalHistory, path_sample};
 use crate::tone::ToneConfig;
-use crate::types::{Camera, EmParams, Light, PathParams, ShadeParams};
+use crate::types::{Camera, EmParams, Light, PathParams};
 
 pub struct FrameRenderer {
     /// The splats, materials and grid (shared with a bake on another thread).
@@ -64,10 +64,8 @@ struct Moving {
 /// What the last moving frame was drawn with, which the next one's history must share.
 #[derive(Clone, Copy)]
 struct History {
-    /// Its camera, jitter included.
-    cam: Camera,
-    params: ShadeParams,
-    splatting: Splatting,
+    /// Its plan, jitter included.
+    plan: FramePlan,
     /// Moving frames since the last reset: picks the jitter and which history buffer is the
     /// last frame's.
     frames: u32,
@@ -240,6 +238,19 @@ impl FrameRenderer {
             .ok_or_else(|| Error::internal("the frame renderer has no targets yet"))
     }
 
+    /// The plan of a frame of `cam` (a view's camera uniform) with the lobes uploaded.
+    fn plan(&self, scene: &Scene, cam: &Camera, cfg: &FrameConfig) -> Result<FramePlan> {
+        let splatting = self.pipelines.splatting(cfg.splatter)?;
+        let lobes = self.lobes_per_splat;
+        Ok(FramePlan::of(
+            scene,
+            &self.extent,
+            lobes,
+            (cam, cfg),
+            splatting,
+        ))
+    }
+
     /// Records the lobes' frame of `cam` into the current targets; returns their HDR image.
     pub fn record(
         &self,
@@ -249,8 +260,8 @@ impl FrameRenderer {
         cam: &Camera,
         cfg: &FrameConfig,
     ) -> Result<&wgpu::Buffer> {
-        let params = shade_params_for(scene, self.lobes_per_splat, self.extent.shadow_bias, cfg);
-        self.record_params(gpu, encoder, scene, cam, &params, cfg.splatter)
+        let plan = self.plan(scene, cam, cfg)?;
+        self.record_plan(gpu, encoder, scene, &plan)
     }
 
     /// Records the moving frame of `cam`: with `cfg.temporal`, jittered and blended with the
@@ -269,34 +280,25 @@ impl FrameRenderer {
             self.history = None;
             return self.record(gpu, encoder, scene, cam, cfg);
         }
-        let moving = self.next_moving(scene, cam, cfg)?;
-        let next = &moving.next;
-        self.record_params(gpu, encoder, scene, &next.cam, &next.params, cfg.splatter)?;
+        let moving = self.next_moving(&self.plan(scene, cam, cfg)?);
+        self.record_plan(gpu, encoder, scene, &moving.next.plan)?;
         self.record_temporal(gpu, encoder, &moving)?;
         self.history = Some(moving.next);
         Ok(&self.targets()?.hdr)
     }
 
-    /// The next moving frame of `cam`: its jitter, and the history it continues where the
+    /// The next moving frame of `plan`: its jitter, and the history it continues where the
     /// last moving frame was shaded alike.
-    fn next_moving(&self, scene: &Scene, cam: &Camera, cfg: &FrameConfig) -> Result<Moving> {
-        let params = shade_params_for(scene, self.lobes_per_splat, self.extent.shadow_bias, cfg);
-        let splatting = self.pipelines.splatting(cfg.splatter)?;
-        let last = self
-            .history
-            .filter(|h| h.params == params && h.splatting == splatting);
+    fn next_moving(&self, plan: &FramePlan) -> Moving {
+        let alike =
+            |h: &History| h.plan.params == plan.params && h.plan.splatting == plan.splatting;
+        let last = self.history.filter(alike);
         let frames = last.map_or(0, |h| h.frames);
-        let cam = Camera {
-            jitter: temporal_jitter(frames),
-            ..*cam
-        };
         let next = History {
-            cam,
-            params,
-            splatting,
+            plan: plan.jittered(temporal_jitter(frames)),
             frames: frames + 1,
         };
-        Ok(Moving { last, next })
+        Moving { last, next }
     }
 
     /// Records the temporal pass of a moving frame, its splat passes recorded.
@@ -307,9 +309,9 @@ impl FrameRenderer {
         moving: &Moving,
     ) -> Result<()> {
         let t = self.targets()?;
-        let (cam, last) = (&moving.next.cam, moving.last);
+        let (cam, last) = (&moving.next.plan.view, moving.last);
         let params = temporal_params(t.width, t.height, last.is_none());
-        let prev = last.map_or(*cam, |h| h.cam);
+        let prev = last.map_or(*cam, |h| h.plan.view);
         // Frame k since the reset reads history buffer k % 2 and writes the other.
         let k = moving.next.frames - 1;
         let history = t.history(gpu)?;
@@ -321,9 +323,9 @@ impl FrameRenderer {
         crate::sequence::temporal(&mut ex, cam, &prev, &params, &t.hdr, &t.surface, from, to)
     }
 
-    /// Records refinement frame `k` of `spp` of `cam` (`frame::refinement`): jittered, with
-    /// its share of shadow rays, added to the running mean in the HDR image, which holds the
-    /// still image once `k + 1 == spp`. Returns the HDR image.
+    /// Records refinement frame `k` of `spp` of `cam` (`FramePlan::refinement`): jittered,
+    /// with its share of shadow rays, added to the running mean in the HDR image, which holds
+    /// the still image once `k + 1 == spp`. Returns the HDR image.
     #[allow(clippy::too_many_arguments)]
     pub fn record_sample(
         &self,
@@ -335,52 +337,41 @@ impl FrameRenderer {
         k: u32,
         spp: u32,
     ) -> Result<&wgpu::Buffer> {
-        let base = shade_params_for(scene, self.lobes_per_splat, self.extent.shadow_bias, cfg);
-        let cam = Camera {
-            jitter: jitter(k, spp),
-            ..*cam
-        };
-        let params = refinement(&base, k, spp);
-        self.record_params(gpu, encoder, scene, &cam, &params, cfg.splatter)
+        let plan = self.plan(scene, cam, cfg)?.refinement(k, spp);
+        self.record_plan(gpu, encoder, scene, &plan)
     }
 
-    fn record_params(
+    /// Records the splat passes of `plan` into the current targets.
+    fn record_plan(
         &self,
         gpu: &Gpu,
         encoder: &mut wgpu::CommandEncoder,
         scene: &Scene,
-        cam: &Camera,
-        params: &ShadeParams,
-        splatter: Splatter,
+        plan: &FramePlan,
     ) -> Result<&wgpu::Buffer> {
-        if Direct::of_code(params.direct) == Direct::Baked && self.direct_ms.is_none() {
+        if plan.reads_direct_bake() && self.direct_ms.is_none() {
             return Err(Error::Internal(
                 "baked direct light was asked for before the lights' direct bake".into(),
             ));
         }
         let targets = self.targets()?;
-        let splatting = self.pipelines.splatting(splatter)?;
-        let buffers = self.frame_buffers(gpu, scene, cam, params, splatting)?;
-        self.pipelines
-            .draw(gpu, encoder, &buffers, cam, params, splatting, targets)?;
+        let buffers = self.frame_buffers(gpu, scene, plan)?;
+        self.pipelines.draw(gpu, encoder, &buffers, plan, targets)?;
         Ok(&targets.hdr)
     }
 
-    /// What the splat passes bind for a frame of `cam`, the level of detail's merge tree built
-    /// first where the frame draws with it (`frame_camera`).
+    /// What the splat passes bind for a frame of `plan`, the level of detail's merge tree
+    /// built first where the frame draws with it.
     fn frame_buffers(
         &self,
         gpu: &Gpu,
         scene: &Scene,
-        cam: &Camera,
-        params: &ShadeParams,
-        splatting: Splatting,
+        plan: &FramePlan,
     ) -> Result<SceneBuffers<'_>> {
-        let merged = frame_camera(cam, params, splatting).lod > 0.0;
-        if Direct::of_code(params.direct) == Direct::Baked {
-            self.frame_scene.ensure_tree(gpu, scene, merged)?;
+        if plan.reads_direct_bake() {
+            self.frame_scene.ensure_tree(gpu, scene, plan.merged())?;
         }
-        Ok(self.frame_scene.buffers(&self.on_gpu, merged))
+        Ok(self.frame_scene.buffers(&self.on_gpu, plan.merged()))
     }
 
     /// Records the reference image of `cam` from binned photons (`bins`, with the binning's
@@ -557,17 +548,13 @@ impl FrameRenderer {
         cfg: &FrameConfig,
     ) -> Result<[f64; 4]> {
         let cam = self.prepare(gpu, scene, view, cfg)?;
-        let moving = match cfg.temporal {
-            true => Some(self.next_moving(scene, &cam, cfg)?),
-            false => None,
-        };
-        let cam = moving.as_ref().map_or(cam, |m| m.next.cam);
-        let params = shade_params_for(scene, self.lobes_per_splat, self.extent.shadow_bias, cfg);
-        let splatting = self.pipelines.splatting(cfg.splatter)?;
-        let buffers = self.frame_buffers(gpu, scene, &cam, &params, splatting)?;
+        let plan = self.plan(scene, &cam, cfg)?;
+        let moving = cfg.temporal.then(|| self.next_moving(&plan));
+        let plan = moving.as_ref().map_or(plan, |m| m.next.plan);
+        let buffers = self.frame_buffers(gpu, scene, &plan)?;
         let [visibility, attributes, shade] =
             self.pipelines
-                .draw_timed(gpu, &buffers, &cam, &params, splatting, self.targets()?)?;
+                .draw_timed(gpu, &buffers, &plan, self.targets()?)?;
         let mut temporal = 0.0;
         self.history = None;
         if let Some(moving) = moving {
@@ -591,11 +578,9 @@ impl FrameRenderer {
         cfg: &FrameConfig,
     ) -> Result<f64> {
         let cam = self.prepare(gpu, scene, view, cfg)?;
-        let params = shade_params_for(scene, self.lobes_per_splat, self.extent.shadow_bias, cfg);
-        let splatting = self.pipelines.splatting(cfg.splatter)?;
-        let buffers = self.frame_buffers(gpu, scene, &cam, &params, splatting)?;
-        self.pipelines
-            .select_timed(gpu, &buffers, &cam, &params, splatting)
+        let plan = self.plan(scene, &cam, cfg)?;
+        let buffers = self.frame_buffers(gpu, scene, &plan)?;
+        self.pipelines.select_timed(gpu, &buffers, &plan)
     }
 
     /// Records the tone mapping of the current targets' HDR image.
