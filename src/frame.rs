@@ -1,5 +1,5 @@
 //! One frame of the baked scene (docs/design.md §7–8): what to show, the camera uniform, the
-//! shading settings and the path tracer's uniform (the direct bake's are `direct`'s). `gpu::frame`
+//! shading settings and the path tracer's uniform (the direct bake's are `direct`'s). `gpu::passes`
 //! records the splat passes on a device, `cpu::frames` runs them on the mirrors.
 
 use glam::{Vec2, Vec3};

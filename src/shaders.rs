@@ -109,11 +109,9 @@ impl std::fmt::Display for Stage {
     }
 }
 
-/// Every shared module (`wgsl/shared/<name>.wgsl`), importable by name.
-
 /// What the host reads from a stage's WGSL instead of writing it a second time: the shape of
-/// its workgroups. The CPU mirrors keep their own constants (their loops need them), and a
-/// test checks those against this.
+/// its workgroups. The CPU mirrors state their own in their rows (their loops need them), and
+/// a test checks those against this.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub struct StageShape {
     /// `@workgroup_size` of the compute entry point `main` (its x; y and z are 1), or `None`

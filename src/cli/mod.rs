@@ -284,178 +284,198 @@ impl LookArgs {
 #[derive(Subcommand)]
 enum Command {
     /// Splats, lights, materials, bounds, grid and memory of a scene, and the device in use.
-    Info {
-        scene: PathBuf,
-        /// Print one JSON object on stdout.
-        #[arg(long)]
-        json: bool,
-        #[command(flatten)]
-        device: DeviceArgs,
-    },
+    Info(InfoArgs),
     /// Render a scene to an image: PNG (tone-mapped) or EXR (linear HDR).
-    Render {
-        scene: PathBuf,
-        /// Output image, .png or .exr.
-        #[arg(short, long)]
-        output: PathBuf,
-        /// What to draw: `lobes` renders; `photons` shows the stored photons as points.
-        #[arg(long, value_enum, default_value_t = render::Method::Lobes)]
-        method: render::Method,
-        #[arg(long)]
-        width: Option<u32>,
-        #[arg(long)]
-        height: Option<u32>,
-        /// Load the bake from FILE when it was made for this scene and these bake settings;
-        /// else bake and save it there.
-        #[arg(long, value_name = "FILE")]
-        cache: Option<PathBuf>,
-        /// Samples per pixel of the still image: refinement frames, each jittered within the
-        /// pixel and with its share of the shadow rays, averaged (1: one exact frame at the
-        /// pixel centres, no anti-aliasing; 0: the frame a moving camera gets, with --direct).
-        #[arg(long, default_value_t = render::DEFAULT_SPP, value_parser = clap::value_parser!(u32).range(0..=65536))]
-        spp: u32,
-        #[command(flatten)]
-        bake: BakeArgs,
-        #[command(flatten)]
-        look: LookArgs,
-        #[command(flatten)]
-        device: DeviceArgs,
-        /// Print per-stage figures on stderr.
-        #[arg(long)]
-        stats: bool,
-        /// Print the figures as one JSON object on stdout.
-        #[arg(long)]
-        json: bool,
-        /// Also write which surface each pixel shows (16-bit grey PNG; names in FILE.json
-        /// beside it), for `compare --objects`.
-        #[arg(long, value_name = "FILE.png")]
-        object_ids: Option<PathBuf>,
-        /// An image sequence from one bake: the cameras FILE lists ([[view]] tables and/or an
-        /// [orbit]), each written to OUT numbered (a run of # in its name, else _NNNN).
-        #[arg(long, value_name = "FILE")]
-        views: Option<PathBuf>,
-        /// With --views: draw only the views whose index is K modulo N (K in 0..N), so N
-        /// machines that share the bake cache split the sequence.
-        #[arg(long, value_name = "K/N", value_parser = parse_shard, requires = "views")]
-        shard: Option<(u32, u32)>,
-    },
+    Render(RenderArgs),
     /// Difference of image A against the reference B: relMSE, PSNR, SMAPE, FLIP, mean
     /// relative difference, pixels within 5 %, RMSE, energy (EXR for radiance, FLIP on the
     /// tone-mapped pair; PNG compares display values).
-    Compare {
-        a: PathBuf,
-        b: PathBuf,
-        /// Write the per-pixel relative difference as a heat map (red 5 %, yellow ≥ 25 %).
-        #[arg(long, value_name = "OUT.png")]
-        heatmap: Option<PathBuf>,
-        /// Print one JSON object on stdout.
-        #[arg(long)]
-        json: bool,
-        /// Also report the figures per object, over the pixels this object-ID image gives
-        /// each (render --object-ids; edge pixels left out).
-        #[arg(long, value_name = "IDS.png")]
-        objects: Option<PathBuf>,
-    },
+    Compare(CompareArgs),
     /// A window that draws the scene in real time: direct light at once, global illumination
     /// when the bake (on a second thread) is in. Keys: see docs/viewer.md (H in the window).
-    View {
-        scene: PathBuf,
-        #[arg(long)]
-        width: Option<u32>,
-        #[arg(long)]
-        height: Option<u32>,
-        /// Scripted run: draw N frames once the bake is in, then exit.
-        #[arg(long, value_name = "N")]
-        frames: Option<u32>,
-        /// Refinement frames a resting camera adds to its still image, each jittered and with
-        /// its share of shadow rays (render --spp's frames; 0: never refine, every frame a
-        /// moving frame).
-        #[arg(long, default_value_t = render::DEFAULT_SPP, value_parser = clap::value_parser!(u32).range(0..=65536))]
-        spp: u32,
-        /// With --frames: save the last frame here (PNG).
-        #[arg(long, value_name = "OUT.png", requires = "frames")]
-        screenshot: Option<PathBuf>,
-        /// Moving frames' target time: where they would take longer they are drawn at a lower
-        /// internal resolution (the title shows it) and upsampled to the window; a resting
-        /// camera refines at the window's size. 0: always the window's size. Default 33, but
-        /// a scripted run (--frames) draws at the window's size unless given.
-        #[arg(long, value_name = "MS")]
-        target_ms: Option<f64>,
-        /// With --frames: degrees the camera turns about its up axis before each frame after
-        /// the first (a scripted orbit: every frame a moving frame).
-        #[arg(
-            long,
-            value_name = "DEGREES",
-            requires = "frames",
-            default_value_t = 0.0
-        )]
-        turn: f32,
-        /// Load the bake from FILE when it was made for this scene and these bake settings
-        /// (an instant start); else bake and save it there.
-        #[arg(long, value_name = "FILE")]
-        cache: Option<PathBuf>,
-        /// What the window shows first (keys R and M switch).
-        #[arg(long, value_enum, default_value_t = render::Method::Lobes)]
-        method: render::Method,
-        #[command(flatten)]
-        bake: BakeArgs,
-        #[command(flatten)]
-        look: LookArgs,
-        /// Graphics API (default: WGPU_BACKEND, else Vulkan, else GL).
-        #[arg(long, value_enum, default_value_t = BackendChoice::Auto)]
-        backend: BackendChoice,
-        /// Bake on the window's adapter even where it is a software rasterizer (lavapipe,
-        /// llvmpipe), whose bakes the CPU mirror runs faster; frames are drawn on it either way.
-        #[arg(long)]
-        gpu: bool,
-    },
+    View(ViewArgs),
     /// Measure a stage: throughput and the figures that show it did the right work.
-    Bench {
-        #[arg(value_enum)]
-        what: BenchKind,
-        /// Scenes to measure (all kinds but `convolution`, which needs none).
-        scenes: Vec<PathBuf>,
-        /// Where files the benchmark writes go (`convolution` heat maps; `sweep` tables,
-        /// charts and reference images).
-        #[arg(short, long, value_name = "DIR", default_value = ".")]
-        output: PathBuf,
-        #[command(flatten)]
-        bake: BakeArgs,
-        #[command(flatten)]
-        look: LookArgs,
-        #[command(flatten)]
-        device: DeviceArgs,
-        /// Print one JSON object per scene on stdout (an array for several scenes).
-        #[arg(long)]
-        json: bool,
-        /// `frame` only: also draw 10 moving frames of the scene's camera in a 1280×720 window
-        /// (needs a display; one scene), the figures under the key `window`.
-        #[arg(long)]
-        window: bool,
-        /// `frame --window` only: the window draws a 30-frame orbit instead, with this target
-        /// frame time (the viewer's `--target-ms`; 33 is its default), under the key
-        /// `window_orbit`, each checked frame against its view's still image.
-        #[arg(long, value_name = "MS", requires = "window")]
-        target_ms: Option<f64>,
-        /// `sweep` only: turn only these knobs (path, photons, iterations, radius, lobes,
-        /// splats, family, prune, share, smooth), comma-separated; default all.
-        #[arg(long, value_delimiter = ',')]
-        knobs: Vec<String>,
-        /// `scale` only: the splat counts of the generated clouds, comma-separated.
-        #[arg(long, value_delimiter = ',', default_values_t = scale::DEFAULT_SIZES)]
-        sizes: Vec<u64>,
-        /// `scale` only: the generated clouds' material.
-        #[arg(long, value_enum, default_value_t = scale::Material::Diffuse)]
-        material: scale::Material,
-        /// `cluster` only: the dense cloud's splat count.
-        #[arg(long, value_name = "N", default_value_t = cluster::DEFAULT_CLUSTER)]
-        cluster_splats: u64,
-        /// `frame` only: moving frames of a scripted orbit (the scene's camera turned by
-        /// half a degree a frame) each compared with its view's still image, under the key
-        /// `orbit` (0: none).
-        #[arg(long, value_name = "FRAMES", default_value_t = bench::ORBIT_FRAMES)]
-        orbit: u32,
-    },
+    Bench(BenchArgs),
+}
+
+/// The arguments of `lobelight info`.
+#[derive(Args)]
+struct InfoArgs {
+    scene: PathBuf,
+    /// Print one JSON object on stdout.
+    #[arg(long)]
+    json: bool,
+    #[command(flatten)]
+    device: DeviceArgs,
+}
+
+/// The arguments of `lobelight render`.
+#[derive(Args)]
+struct RenderArgs {
+    scene: PathBuf,
+    /// Output image, .png or .exr.
+    #[arg(short, long)]
+    output: PathBuf,
+    /// What to draw: `lobes` renders; `photons` shows the stored photons as points.
+    #[arg(long, value_enum, default_value_t = render::Method::Lobes)]
+    method: render::Method,
+    #[arg(long)]
+    width: Option<u32>,
+    #[arg(long)]
+    height: Option<u32>,
+    /// Load the bake from FILE when it was made for this scene and these bake settings;
+    /// else bake and save it there.
+    #[arg(long, value_name = "FILE")]
+    cache: Option<PathBuf>,
+    /// Samples per pixel of the still image: refinement frames, each jittered within the
+    /// pixel and with its share of the shadow rays, averaged (1: one exact frame at the
+    /// pixel centres, no anti-aliasing; 0: the frame a moving camera gets, with --direct).
+    #[arg(long, default_value_t = render::DEFAULT_SPP, value_parser = clap::value_parser!(u32).range(0..=65536))]
+    spp: u32,
+    #[command(flatten)]
+    bake: BakeArgs,
+    #[command(flatten)]
+    look: LookArgs,
+    #[command(flatten)]
+    device: DeviceArgs,
+    /// Print per-stage figures on stderr.
+    #[arg(long)]
+    stats: bool,
+    /// Print the figures as one JSON object on stdout.
+    #[arg(long)]
+    json: bool,
+    /// Also write which surface each pixel shows (16-bit grey PNG; names in FILE.json
+    /// beside it), for `compare --objects`.
+    #[arg(long, value_name = "FILE.png")]
+    object_ids: Option<PathBuf>,
+    /// An image sequence from one bake: the cameras FILE lists ([[view]] tables and/or an
+    /// [orbit]), each written to OUT numbered (a run of # in its name, else _NNNN).
+    #[arg(long, value_name = "FILE")]
+    views: Option<PathBuf>,
+    /// With --views: draw only the views whose index is K modulo N (K in 0..N), so N
+    /// machines that share the bake cache split the sequence.
+    #[arg(long, value_name = "K/N", value_parser = parse_shard, requires = "views")]
+    shard: Option<(u32, u32)>,
+}
+
+/// The arguments of `lobelight compare`.
+#[derive(Args)]
+struct CompareArgs {
+    a: PathBuf,
+    b: PathBuf,
+    /// Write the per-pixel relative difference as a heat map (red 5 %, yellow ≥ 25 %).
+    #[arg(long, value_name = "OUT.png")]
+    heatmap: Option<PathBuf>,
+    /// Print one JSON object on stdout.
+    #[arg(long)]
+    json: bool,
+    /// Also report the figures per object, over the pixels this object-ID image gives
+    /// each (render --object-ids; edge pixels left out).
+    #[arg(long, value_name = "IDS.png")]
+    objects: Option<PathBuf>,
+}
+
+/// The arguments of `lobelight view`.
+#[derive(Args)]
+struct ViewArgs {
+    scene: PathBuf,
+    #[arg(long)]
+    width: Option<u32>,
+    #[arg(long)]
+    height: Option<u32>,
+    /// Scripted run: draw N frames once the bake is in, then exit.
+    #[arg(long, value_name = "N")]
+    frames: Option<u32>,
+    /// Refinement frames a resting camera adds to its still image, each jittered and with
+    /// its share of shadow rays (render --spp's frames; 0: never refine, every frame a
+    /// moving frame).
+    #[arg(long, default_value_t = render::DEFAULT_SPP, value_parser = clap::value_parser!(u32).range(0..=65536))]
+    spp: u32,
+    /// With --frames: save the last frame here (PNG).
+    #[arg(long, value_name = "OUT.png", requires = "frames")]
+    screenshot: Option<PathBuf>,
+    /// Moving frames' target time: where they would take longer they are drawn at a lower
+    /// internal resolution (the title shows it) and upsampled to the window; a resting
+    /// camera refines at the window's size. 0: always the window's size. Default 33, but
+    /// a scripted run (--frames) draws at the window's size unless given.
+    #[arg(long, value_name = "MS")]
+    target_ms: Option<f64>,
+    /// With --frames: degrees the camera turns about its up axis before each frame after
+    /// the first (a scripted orbit: every frame a moving frame).
+    #[arg(
+        long,
+        value_name = "DEGREES",
+        requires = "frames",
+        default_value_t = 0.0
+    )]
+    turn: f32,
+    /// Load the bake from FILE when it was made for this scene and these bake settings
+    /// (an instant start); else bake and save it there.
+    #[arg(long, value_name = "FILE")]
+    cache: Option<PathBuf>,
+    /// What the window shows first (keys R and M switch).
+    #[arg(long, value_enum, default_value_t = render::Method::Lobes)]
+    method: render::Method,
+    #[command(flatten)]
+    bake: BakeArgs,
+    #[command(flatten)]
+    look: LookArgs,
+    /// Graphics API (default: WGPU_BACKEND, else Vulkan, else GL).
+    #[arg(long, value_enum, default_value_t = BackendChoice::Auto)]
+    backend: BackendChoice,
+    /// Bake on the window's adapter even where it is a software rasterizer (lavapipe,
+    /// llvmpipe), whose bakes the CPU mirror runs faster; frames are drawn on it either way.
+    #[arg(long)]
+    gpu: bool,
+}
+
+/// The arguments of `lobelight bench`.
+#[derive(Args)]
+struct BenchArgs {
+    #[arg(value_enum)]
+    what: BenchKind,
+    /// Scenes to measure (all kinds but `convolution`, which needs none).
+    scenes: Vec<PathBuf>,
+    /// Where files the benchmark writes go (`convolution` heat maps; `sweep` tables,
+    /// charts and reference images).
+    #[arg(short, long, value_name = "DIR", default_value = ".")]
+    output: PathBuf,
+    #[command(flatten)]
+    bake: BakeArgs,
+    #[command(flatten)]
+    look: LookArgs,
+    #[command(flatten)]
+    device: DeviceArgs,
+    /// Print one JSON object per scene on stdout (an array for several scenes).
+    #[arg(long)]
+    json: bool,
+    /// `frame` only: also draw 10 moving frames of the scene's camera in a 1280×720 window
+    /// (needs a display; one scene), the figures under the key `window`.
+    #[arg(long)]
+    window: bool,
+    /// `frame --window` only: the window draws a 30-frame orbit instead, with this target
+    /// frame time (the viewer's `--target-ms`; 33 is its default), under the key
+    /// `window_orbit`, each checked frame against its view's still image.
+    #[arg(long, value_name = "MS", requires = "window")]
+    target_ms: Option<f64>,
+    /// `sweep` only: turn only these knobs (path, photons, iterations, radius, lobes,
+    /// splats, family, prune, share, smooth), comma-separated; default all.
+    #[arg(long, value_delimiter = ',')]
+    knobs: Vec<String>,
+    /// `scale` only: the splat counts of the generated clouds, comma-separated.
+    #[arg(long, value_delimiter = ',', default_values_t = scale::DEFAULT_SIZES)]
+    sizes: Vec<u64>,
+    /// `scale` only: the generated clouds' material.
+    #[arg(long, value_enum, default_value_t = scale::Material::Diffuse)]
+    material: scale::Material,
+    /// `cluster` only: the dense cloud's splat count.
+    #[arg(long, value_name = "N", default_value_t = cluster::DEFAULT_CLUSTER)]
+    cluster_splats: u64,
+    /// `frame` only: moving frames of a scripted orbit (the scene's camera turned by
+    /// half a degree a frame) each compared with its view's still image, under the key
+    /// `orbit` (0: none).
+    #[arg(long, value_name = "FRAMES", default_value_t = bench::ORBIT_FRAMES)]
+    orbit: u32,
 }
 
 #[derive(Clone, Copy, ValueEnum)]
@@ -525,375 +545,416 @@ fn checked_target_ms(ms: f64) -> Result<f64> {
 
 fn run(cli: Cli) -> Result<()> {
     match cli.command {
-        Command::Info {
-            scene,
-            json,
-            device,
-        } => {
-            let scene = std::sync::Arc::new(scene::load(&scene)?);
-            let engine = device.engine(EngineChoice::Device)?;
-            let info = info::info(&scene, &engine)?;
-            print_report(json, &info)?;
+        Command::Info(args) => info_command(args),
+        Command::Render(args) => render_command(args),
+        Command::View(args) => view_command(args),
+        Command::Compare(args) => compare_command(args),
+        Command::Bench(args) => bench_command(args),
+    }
+}
+
+/// `lobelight bench`: the kinds with inputs of their own one function each, the kinds run over
+/// scenes (photons, em, frame, rebake) one.
+fn bench_command(args: BenchArgs) -> Result<()> {
+    match args.what {
+        BenchKind::Convolution => bench_convolution(args),
+        BenchKind::Scale => bench_scale(args),
+        BenchKind::Cluster => bench_cluster(args),
+        BenchKind::Sweep => bench_sweep(args),
+        _ => bench_scenes(args),
+    }
+}
+
+/// `lobelight info`.
+fn info_command(args: InfoArgs) -> Result<()> {
+    let InfoArgs {
+        scene,
+        json,
+        device,
+    } = args;
+    let scene = std::sync::Arc::new(scene::load(&scene)?);
+    let engine = device.engine(EngineChoice::Device)?;
+    let info = info::info(&scene, &engine)?;
+    print_report(json, &info)?;
+    Ok(())
+}
+
+/// `lobelight render`.
+fn render_command(args: RenderArgs) -> Result<()> {
+    let RenderArgs {
+        scene,
+        output,
+        method,
+        width,
+        height,
+        cache,
+        spp,
+        bake,
+        look,
+        device,
+        stats,
+        json,
+        object_ids,
+        views,
+        shard,
+    } = args;
+    if let Some(path) = &object_ids {
+        compare::check_ids_path(path)?;
+    }
+    let mut scene = scene::load(&scene)?;
+    bake.apply(&mut scene)?;
+    let views = match &views {
+        Some(path) => scene::views::load(path, &scene.camera)?,
+        None => Vec::new(),
+    };
+    let scene = std::sync::Arc::new(scene);
+    let engine = device.engine(EngineChoice::Auto)?;
+    let opts = render::Options {
+        views,
+        shard,
+        method,
+        width,
+        height,
+        progress: !json,
+        frame: look.frame(),
+        tone: look.tone(),
+        cache,
+        spp,
+    };
+    let report = render::render(&scene, &engine, &opts, &output)?;
+    if let Some(path) = object_ids {
+        render::write_object_ids(&scene, &opts, &path)?;
+    }
+    if json {
+        print_json(&report)?;
+    } else if stats {
+        eprintln!("{report}");
+    } else if let (Some(first), Some(last)) = (report.views.first(), report.views.last()) {
+        eprintln!(
+            "wrote {} views ({} … {}, {}×{})",
+            report.views.len(),
+            first.output,
+            last.output,
+            report.width,
+            report.height
+        );
+    } else {
+        eprintln!(
+            "wrote {} ({}×{})",
+            report.output, report.width, report.height
+        );
+    }
+    Ok(())
+}
+
+/// `lobelight view`.
+fn view_command(args: ViewArgs) -> Result<()> {
+    let ViewArgs {
+        scene,
+        width,
+        height,
+        frames,
+        spp,
+        screenshot,
+        target_ms,
+        turn,
+        cache,
+        method,
+        bake,
+        look,
+        backend,
+        gpu,
+    } = args;
+    let default_ms = match frames {
+        Some(_) => 0.0,
+        None => crate::cli::view::DEFAULT_TARGET_MS,
+    };
+    let target_ms = checked_target_ms(target_ms.unwrap_or(default_ms))?;
+    if !turn.is_finite() {
+        return Err(Error::Invalid(format!("--turn must be finite, not {turn}")));
+    }
+    let mut scene = scene::load(&scene)?;
+    bake.apply(&mut scene)?;
+    let [w0, h0] = scene.camera.resolution;
+    let (width, height) = (width.unwrap_or(w0), height.unwrap_or(h0));
+    scene::check_resolution(width, height).map_err(Error::Invalid)?;
+    let opts = crate::cli::view::ViewOptions {
+        width,
+        height,
+        backend,
+        frame: look.frame(),
+        tone: look.tone(),
+        method,
+        frames,
+        screenshot,
+        cache,
+        spp,
+        gpu_bake: gpu,
+        target_ms,
+        turn,
+    };
+    opts.frame.validate()?;
+    if method == render::Method::Path {
+        return Err(Error::Invalid(
+            "the viewer draws the lobes, the reference or the photons; the path tracer \
+             renders still images: lobelight render --method path"
+                .into(),
+        ));
+    }
+    opts.tone.validate()?;
+    crate::cli::view::view(scene, opts)?;
+    Ok(())
+}
+
+/// `lobelight compare`.
+fn compare_command(args: CompareArgs) -> Result<()> {
+    let CompareArgs {
+        a,
+        b,
+        heatmap,
+        json,
+        objects,
+    } = args;
+    let (pa, wa, ha) = compare::read_image(&a)?;
+    let (pb, wb, hb) = compare::read_image(&b)?;
+    if (wa, ha) != (wb, hb) {
+        return Err(Error::Invalid(format!(
+            "{} is {wa}×{ha} but {} is {wb}×{hb}",
+            a.display(),
+            b.display()
+        )));
+    }
+    let values = compare::values_of(&b);
+    if compare::values_of(&a) != values {
+        return Err(Error::Invalid(format!(
+            "{} and {} hold different kinds of values (radiance in EXR, display values \
+             otherwise): compare two EXR or two PNG images",
+            a.display(),
+            b.display()
+        )));
+    }
+    let mut d = compare::difference_of(&pa, &pb, wa, ha, values)?;
+    if let Some(path) = objects {
+        let (ids, wi, hi, names) = compare::read_object_ids(&path)?;
+        if (wi, hi) != (wa, ha) {
+            return Err(Error::Invalid(format!(
+                "{} is {wi}×{hi} but the images are {wa}×{ha}",
+                path.display()
+            )));
         }
-        Command::Render {
-            scene,
-            output,
-            method,
-            width,
-            height,
-            cache,
-            spp,
-            bake,
-            look,
-            device,
-            stats,
-            json,
-            object_ids,
-            views,
-            shard,
-        } => {
-            if let Some(path) = &object_ids {
-                compare::check_ids_path(path)?;
-            }
-            let mut scene = scene::load(&scene)?;
-            bake.apply(&mut scene)?;
-            let views = match &views {
-                Some(path) => scene::views::load(path, &scene.camera)?,
-                None => Vec::new(),
-            };
-            let scene = std::sync::Arc::new(scene);
-            let engine = device.engine(EngineChoice::Auto)?;
-            let opts = render::Options {
-                views,
-                shard,
-                method,
-                width,
-                height,
-                progress: !json,
-                frame: look.frame(),
-                tone: look.tone(),
-                cache,
-                spp,
-            };
-            let report = render::render(&scene, &engine, &opts, &output)?;
-            if let Some(path) = object_ids {
-                render::write_object_ids(&scene, &opts, &path)?;
-            }
-            if json {
-                print_json(&report)?;
-            } else if stats {
-                eprintln!("{report}");
-            } else if let (Some(first), Some(last)) = (report.views.first(), report.views.last()) {
-                eprintln!(
-                    "wrote {} views ({} … {}, {}×{})",
-                    report.views.len(),
-                    first.output,
-                    last.output,
-                    report.width,
-                    report.height
-                );
-            } else {
-                eprintln!(
-                    "wrote {} ({}×{})",
-                    report.output, report.width, report.height
-                );
-            }
+        d.objects = compare::per_object(&pa, &pb, &ids, &names)?;
+    }
+    if let Some(path) = heatmap {
+        compare::heatmap(&compare::relative(&pa, &pb), wa, ha, &path)?;
+    }
+    if json {
+        print_json(&d)?;
+    } else {
+        let flip = d.flip.map_or("—".to_string(), |f| format!("{f:.4}"));
+        say(format_args!(
+            "relMSE {:.4e}, PSNR {:.2} dB, SMAPE {:.4}, FLIP {flip}\n\
+             mean relative {:.4} %, within 5 %: {:.2} % of {} pixels, max {:.3}, rmse {:.4e}, energy {:+.4} %",
+            d.rel_mse,
+            d.psnr,
+            d.smape,
+            100.0 * d.mean_relative,
+            100.0 * d.within_5_percent,
+            d.pixels,
+            d.max_relative,
+            d.rmse,
+            100.0 * d.energy
+        ));
+        for o in &d.objects {
+            say(format_args!(
+                "{:<28} {:>7} px  mean {:.5} vs {:.5}  bias {:+7.2} %  relMSE {:.4e}  SMAPE {:.4}",
+                o.name,
+                o.pixels,
+                o.mean,
+                o.reference_mean,
+                100.0 * o.bias,
+                o.rel_mse,
+                o.smape
+            ));
         }
-        Command::View {
-            scene,
-            width,
-            height,
-            frames,
-            spp,
-            screenshot,
-            target_ms,
-            turn,
-            cache,
-            method,
-            bake,
-            look,
-            backend,
-            gpu,
-        } => {
-            let default_ms = match frames {
-                Some(_) => 0.0,
-                None => crate::cli::view::DEFAULT_TARGET_MS,
-            };
-            let target_ms = checked_target_ms(target_ms.unwrap_or(default_ms))?;
-            if !turn.is_finite() {
-                return Err(Error::Invalid(format!("--turn must be finite, not {turn}")));
+    }
+    Ok(())
+}
+
+/// `lobelight bench convolution`.
+fn bench_convolution(args: BenchArgs) -> Result<()> {
+    let BenchArgs { output, json, .. } = args;
+    let r = crate::cli::convolution::convolution_bench(&output, Default::default())?;
+    print_report(json, &r)?;
+    Ok(())
+}
+
+/// `lobelight bench scale`.
+fn bench_scale(args: BenchArgs) -> Result<()> {
+    let BenchArgs {
+        output,
+        bake,
+        device,
+        json,
+        sizes,
+        material,
+        ..
+    } = args;
+    let Some(gpu) = device.gpu()? else {
+        return Err(Error::Invalid(
+            "bench scale draws its frames on a device and needs a GPU adapter (lavapipe \
+             will do; where it is one, the bake runs on the CPU mirror)"
+                .into(),
+        ));
+    };
+    // The bake where still images bake: on the mirror beside a software rasterizer.
+    let engine = match device.prefers_mirror(&gpu) {
+        true => scale::BakeEngine::Mirror,
+        false => scale::BakeEngine::Device,
+    };
+    let r = scale::scale(&gpu, engine, (&sizes, material), &output, &|scene| {
+        bake.apply(scene)
+    })?;
+    print_report(json, &r)?;
+    Ok(())
+}
+
+/// `lobelight bench cluster`.
+fn bench_cluster(args: BenchArgs) -> Result<()> {
+    let BenchArgs {
+        output,
+        bake,
+        device,
+        json,
+        cluster_splats,
+        ..
+    } = args;
+    let engine = device.engine(EngineChoice::Auto)?;
+    let r = cluster::cluster(&engine, cluster_splats, &output, &|scene| bake.apply(scene))?;
+    print_report(json, &r)?;
+    Ok(())
+}
+
+/// `lobelight bench sweep`.
+fn bench_sweep(args: BenchArgs) -> Result<()> {
+    let BenchArgs {
+        scenes,
+        output,
+        bake,
+        device,
+        json,
+        knobs,
+        ..
+    } = args;
+    if scenes.is_empty() {
+        return Err(Error::Invalid(
+            "bench sweep needs at least one scene (e.g. scenes/bunny.toml scenes/dragon.toml)"
+                .into(),
+        ));
+    }
+    let mut loaded = Vec::new();
+    for path in &scenes {
+        let mut scene = scene::load(path)?;
+        bake.apply(&mut scene)?;
+        let name = path
+            .file_stem()
+            .map_or("scene".into(), |s| s.to_string_lossy().into_owned());
+        loaded.push((name, scene));
+    }
+    let engine = device.engine(EngineChoice::Device)?;
+    let mut plan = crate::cli::sweep::SweepPlan::default();
+    if !knobs.is_empty() {
+        plan = plan.only(&knobs)?;
+    }
+    let r = crate::cli::sweep::sweep(&loaded, &engine, &plan, &output)?;
+    print_report(json, &r)?;
+    Ok(())
+}
+
+/// `lobelight bench`.
+fn bench_scenes(args: BenchArgs) -> Result<()> {
+    let BenchArgs {
+        what,
+        scenes,
+        bake,
+        look,
+        device,
+        json,
+        window,
+        target_ms,
+        orbit,
+        ..
+    } = args;
+    if scenes.is_empty() {
+        return Err(Error::Invalid(
+            "bench needs at least one scene (e.g. scenes/bunny.toml)".into(),
+        ));
+    }
+    if window && (scenes.len() > 1 || !matches!(what, BenchKind::Frame) || device.cpu) {
+        return Err(Error::Invalid(
+            "--window is for `bench frame` of one scene on a GPU (a process opens one window)"
+                .into(),
+        ));
+    }
+    if let Some(ms) = target_ms {
+        checked_target_ms(ms)?;
+    }
+    // Moving frames run on the device, a software rasterizer included (faster there
+    // than the mirror); photons, the fit and re-bakes where still images run.
+    let engine = device.engine(match what {
+        BenchKind::Frame => EngineChoice::Device,
+        _ => EngineChoice::Auto,
+    })?;
+    let gpu = engine.gpu();
+    let mut reports = Vec::new();
+    for path in &scenes {
+        let mut scene = scene::load(path)?;
+        bake.apply(&mut scene)?;
+        let scene = std::sync::Arc::new(scene);
+        let photons = PhotonConfig::from_scene(&scene);
+        let (text, value) = match what {
+            BenchKind::Photons => {
+                let r = bench::photons(&scene, gpu, &photons)?;
+                (r.to_string(), to_json(&r)?)
             }
-            let mut scene = scene::load(&scene)?;
-            bake.apply(&mut scene)?;
-            let [w0, h0] = scene.camera.resolution;
-            let (width, height) = (width.unwrap_or(w0), height.unwrap_or(h0));
-            scene::check_resolution(width, height).map_err(Error::Invalid)?;
-            let opts = crate::cli::view::ViewOptions {
-                width,
-                height,
-                backend,
-                frame: look.frame(),
-                tone: look.tone(),
-                method,
-                frames,
-                screenshot,
-                cache,
-                spp,
-                gpu_bake: gpu,
-                target_ms,
-                turn,
-            };
-            opts.frame.validate()?;
-            if method == render::Method::Path {
-                return Err(Error::Invalid(
-                    "the viewer draws the lobes, the reference or the photons; the path tracer \
-                     renders still images: lobelight render --method path"
-                        .into(),
-                ));
-            }
-            opts.tone.validate()?;
-            crate::cli::view::view(scene, opts)?;
-        }
-        Command::Compare {
-            a,
-            b,
-            heatmap,
-            json,
-            objects,
-        } => {
-            let (pa, wa, ha) = compare::read_image(&a)?;
-            let (pb, wb, hb) = compare::read_image(&b)?;
-            if (wa, ha) != (wb, hb) {
-                return Err(Error::Invalid(format!(
-                    "{} is {wa}×{ha} but {} is {wb}×{hb}",
-                    a.display(),
-                    b.display()
-                )));
-            }
-            let values = compare::values_of(&b);
-            if compare::values_of(&a) != values {
-                return Err(Error::Invalid(format!(
-                    "{} and {} hold different kinds of values (radiance in EXR, display values \
-                     otherwise): compare two EXR or two PNG images",
-                    a.display(),
-                    b.display()
-                )));
-            }
-            let mut d = compare::difference_of(&pa, &pb, wa, ha, values)?;
-            if let Some(path) = objects {
-                let (ids, wi, hi, names) = compare::read_object_ids(&path)?;
-                if (wi, hi) != (wa, ha) {
-                    return Err(Error::Invalid(format!(
-                        "{} is {wi}×{hi} but the images are {wa}×{ha}",
-                        path.display()
-                    )));
+            BenchKind::Frame => {
+                let (frame, tone) = (look.frame(), look.tone());
+                // The window first (a process opens one): the orbit's frames are then
+                // drawn again offscreen, at the sizes the window drew them.
+                let (mut still, mut moving) = (None, None);
+                if window {
+                    let (f, t, backend) = (frame.clone(), tone, device.backend);
+                    let report = bench::window_frames(&scene, f, t, backend, target_ms)?;
+                    match target_ms {
+                        Some(_) => moving = Some(report),
+                        None => still = Some(report),
+                    }
                 }
-                d.objects = compare::per_object(&pa, &pb, &ids, &names)?;
+                let mut r = bench::frame(&scene, gpu, &frame, &tone, orbit, moving)?;
+                r.window = still;
+                (r.to_string(), to_json(&r)?)
             }
-            if let Some(path) = heatmap {
-                compare::heatmap(&compare::relative(&pa, &pb), wa, ha, &path)?;
+            BenchKind::Rebake => {
+                let r = crate::cli::rebake::rebake(&scene, &engine)?;
+                (r.to_string(), to_json(&r)?)
             }
-            if json {
-                print_json(&d)?;
-            } else {
-                let flip = d.flip.map_or("—".to_string(), |f| format!("{f:.4}"));
-                say(format_args!(
-                    "relMSE {:.4e}, PSNR {:.2} dB, SMAPE {:.4}, FLIP {flip}\n\
-                     mean relative {:.4} %, within 5 %: {:.2} % of {} pixels, max {:.3}, rmse {:.4e}, energy {:+.4} %",
-                    d.rel_mse,
-                    d.psnr,
-                    d.smape,
-                    100.0 * d.mean_relative,
-                    100.0 * d.within_5_percent,
-                    d.pixels,
-                    d.max_relative,
-                    d.rmse,
-                    100.0 * d.energy
-                ));
-                for o in &d.objects {
-                    say(format_args!(
-                        "{:<28} {:>7} px  mean {:.5} vs {:.5}  bias {:+7.2} %  relMSE {:.4e}  SMAPE {:.4}",
-                        o.name,
-                        o.pixels,
-                        o.mean,
-                        o.reference_mean,
-                        100.0 * o.bias,
-                        o.rel_mse,
-                        o.smape
-                    ));
-                }
+            BenchKind::Em => {
+                let em = EmConfig::from_scene(&scene);
+                let r = bench::em(&scene, gpu, &photons, &em)?;
+                (r.to_string(), to_json(&r)?)
             }
+            BenchKind::Convolution | BenchKind::Sweep | BenchKind::Scale | BenchKind::Cluster => {
+                unreachable!("handled above")
+            }
+        };
+        if !json {
+            say(format_args!("{text}\n"));
         }
-        Command::Bench {
-            what: BenchKind::Convolution,
-            output,
-            json,
-            ..
-        } => {
-            let r = crate::cli::convolution::convolution_bench(&output, Default::default())?;
-            print_report(json, &r)?;
-        }
-        Command::Bench {
-            what: BenchKind::Scale,
-            output,
-            bake,
-            device,
-            json,
-            sizes,
-            material,
-            ..
-        } => {
-            let Some(gpu) = device.gpu()? else {
-                return Err(Error::Invalid(
-                    "bench scale draws its frames on a device and needs a GPU adapter (lavapipe \
-                     will do; where it is one, the bake runs on the CPU mirror)"
-                        .into(),
-                ));
-            };
-            // The bake where still images bake: on the mirror beside a software rasterizer.
-            let engine = match device.prefers_mirror(&gpu) {
-                true => scale::BakeEngine::Mirror,
-                false => scale::BakeEngine::Device,
-            };
-            let r = scale::scale(&gpu, engine, (&sizes, material), &output, &|scene| {
-                bake.apply(scene)
-            })?;
-            print_report(json, &r)?;
-        }
-        Command::Bench {
-            what: BenchKind::Cluster,
-            output,
-            bake,
-            device,
-            json,
-            cluster_splats,
-            ..
-        } => {
-            let engine = device.engine(EngineChoice::Auto)?;
-            let r = cluster::cluster(&engine, cluster_splats, &output, &|scene| bake.apply(scene))?;
-            print_report(json, &r)?;
-        }
-        Command::Bench {
-            what: BenchKind::Sweep,
-            scenes,
-            output,
-            bake,
-            device,
-            json,
-            knobs,
-            ..
-        } => {
-            if scenes.is_empty() {
-                return Err(Error::Invalid(
-                    "bench sweep needs at least one scene (e.g. scenes/bunny.toml scenes/dragon.toml)"
-                        .into(),
-                ));
-            }
-            let mut loaded = Vec::new();
-            for path in &scenes {
-                let mut scene = scene::load(path)?;
-                bake.apply(&mut scene)?;
-                let name = path
-                    .file_stem()
-                    .map_or("scene".into(), |s| s.to_string_lossy().into_owned());
-                loaded.push((name, scene));
-            }
-            let engine = device.engine(EngineChoice::Device)?;
-            let mut plan = crate::cli::sweep::SweepPlan::default();
-            if !knobs.is_empty() {
-                plan = plan.only(&knobs)?;
-            }
-            let r = crate::cli::sweep::sweep(&loaded, &engine, &plan, &output)?;
-            print_report(json, &r)?;
-        }
-        Command::Bench {
-            what,
-            scenes,
-            bake,
-            look,
-            device,
-            json,
-            window,
-            target_ms,
-            orbit,
-            ..
-        } => {
-            if scenes.is_empty() {
-                return Err(Error::Invalid(
-                    "bench needs at least one scene (e.g. scenes/bunny.toml)".into(),
-                ));
-            }
-            if window && (scenes.len() > 1 || !matches!(what, BenchKind::Frame) || device.cpu) {
-                return Err(Error::Invalid(
-                    "--window is for `bench frame` of one scene on a GPU (a process opens one window)"
-                        .into(),
-                ));
-            }
-            if let Some(ms) = target_ms {
-                checked_target_ms(ms)?;
-            }
-            // Moving frames run on the device, a software rasterizer included (faster there
-            // than the mirror); photons, the fit and re-bakes where still images run.
-            let engine = device.engine(match what {
-                BenchKind::Frame => EngineChoice::Device,
-                _ => EngineChoice::Auto,
-            })?;
-            let gpu = engine.gpu();
-            let mut reports = Vec::new();
-            for path in &scenes {
-                let mut scene = scene::load(path)?;
-                bake.apply(&mut scene)?;
-                let scene = std::sync::Arc::new(scene);
-                let photons = PhotonConfig::from_scene(&scene);
-                let (text, value) = match what {
-                    BenchKind::Photons => {
-                        let r = bench::photons(&scene, gpu, &photons)?;
-                        (r.to_string(), to_json(&r)?)
-                    }
-                    BenchKind::Frame => {
-                        let (frame, tone) = (look.frame(), look.tone());
-                        // The window first (a process opens one): the orbit's frames are then
-                        // drawn again offscreen, at the sizes the window drew them.
-                        let (mut still, mut moving) = (None, None);
-                        if window {
-                            let (f, t, backend) = (frame.clone(), tone, device.backend);
-                            let report = bench::window_frames(&scene, f, t, backend, target_ms)?;
-                            match target_ms {
-                                Some(_) => moving = Some(report),
-                                None => still = Some(report),
-                            }
-                        }
-                        let mut r = bench::frame(&scene, gpu, &frame, &tone, orbit, moving)?;
-                        r.window = still;
-                        (r.to_string(), to_json(&r)?)
-                    }
-                    BenchKind::Rebake => {
-                        let r = crate::cli::rebake::rebake(&scene, &engine)?;
-                        (r.to_string(), to_json(&r)?)
-                    }
-                    BenchKind::Em => {
-                        let em = EmConfig::from_scene(&scene);
-                        let r = bench::em(&scene, gpu, &photons, &em)?;
-                        (r.to_string(), to_json(&r)?)
-                    }
-                    BenchKind::Convolution
-                    | BenchKind::Sweep
-                    | BenchKind::Scale
-                    | BenchKind::Cluster => {
-                        unreachable!("handled above")
-                    }
-                };
-                if !json {
-                    say(format_args!("{text}\n"));
-                }
-                reports.push(value);
-            }
-            if json {
-                match reports.len() {
-                    1 => print_json(&reports[0])?,
-                    _ => print_json(&reports)?,
-                }
-            }
+        reports.push(value);
+    }
+    if json {
+        match reports.len() {
+            1 => print_json(&reports[0])?,
+            _ => print_json(&reports)?,
         }
     }
     Ok(())

@@ -4,8 +4,8 @@
 pub mod bins;
 pub mod em;
 pub mod exec;
-pub mod frame;
 pub mod grid;
+pub mod passes;
 pub mod photon_view;
 pub mod photons;
 pub mod present;
@@ -761,7 +761,7 @@ fn required_limits(adapter: &wgpu::Limits) -> wgpu::Limits {
     wgpu::Limits {
         max_buffer_size: adapter.max_buffer_size,
         max_storage_buffer_binding_size: adapter.max_storage_buffer_binding_size,
-        // The compute splatter binds 11 (`gpu::frame::SPLAT_COMPUTE_BUFFERS`); where the adapter
+        // The compute splatter binds 11 (`gpu::passes::SPLAT_COMPUTE_BUFFERS`); where the adapter
         // offers fewer, it is not used. A paged array takes one a page (`Gpu::paging`).
         max_storage_buffers_per_shader_stage: adapter.max_storage_buffers_per_shader_stage.min(32),
         max_storage_textures_per_shader_stage: adapter.max_storage_textures_per_shader_stage.min(4),

@@ -2,7 +2,7 @@
 //! texture (or any colour target of the same format, which is how its test reads it back),
 //! upsampled where the image is smaller than the target.
 
-use super::frame::raster_pipeline_at;
+use super::passes::raster_pipeline_at;
 use super::{Gpu, buffer_entries};
 use crate::error::Result;
 use crate::shaders::{Paging, Stage};

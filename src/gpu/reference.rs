@@ -4,7 +4,7 @@
 //! for a reference never compile it.
 
 use super::bins::GpuBins;
-use super::frame::{FrameTargets, SceneBuffers, SplatPipelines, raster_pipeline};
+use super::passes::{FrameTargets, PassBuffers, SplatPipelines, raster_pipeline};
 use super::{Gpu, buffer_entries};
 use crate::error::Result;
 use crate::shaders::Stage;
@@ -35,7 +35,7 @@ impl ReferencePipeline {
         gpu: &Gpu,
         encoder: &mut wgpu::CommandEncoder,
         splat: &SplatPipelines,
-        scene: &SceneBuffers,
+        scene: &PassBuffers,
         bins: &GpuBins,
         em: &EmParams,
         cam: &Camera,

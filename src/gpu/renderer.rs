@@ -21,7 +21,7 @@ use crate::frame::{
 use crate::gpu::Gpu;
 use crate::gpu::bins::GpuBins;
 use crate::gpu::exec::GpuExecutor;
-use crate::gpu::frame::{FrameScene, FrameTargets, SceneBuffers, SplatPipelines};
+use crate::gpu::passes::{FrameScene, FrameTargets, PassBuffers, SplatPipelines};
 use crate::gpu::reference::ReferencePipeline;
 use crate::gpu::scene::GpuScene;
 use crate::gpu::tone::{GpuToned, tone_map};
@@ -180,7 +180,7 @@ impl FrameRenderer {
         ms: f64,
     ) -> Result<()> {
         self.set_lights(gpu, scene)?;
-        self.frame_scene.direct = crate::sequence::Direct {
+        self.frame_scene.direct = crate::sequence::DirectBake {
             direct: gpu.storage("direct light", &baked.direct)?,
             visibility: gpu.storage("light visibility", &baked.visibility)?,
         };
@@ -362,12 +362,7 @@ impl FrameRenderer {
 
     /// What the splat passes bind for a frame of `plan`, the level of detail's merge tree
     /// built first where the frame draws with it.
-    fn frame_buffers(
-        &self,
-        gpu: &Gpu,
-        scene: &Scene,
-        plan: &FramePlan,
-    ) -> Result<SceneBuffers<'_>> {
+    fn frame_buffers(&self, gpu: &Gpu, scene: &Scene, plan: &FramePlan) -> Result<PassBuffers<'_>> {
         if plan.reads_direct_bake() {
             self.frame_scene.ensure_tree(gpu, scene, plan.merged())?;
         }

@@ -12,9 +12,9 @@ use std::sync::{Mutex, OnceLock};
 use super::Gpu;
 use crate::em::LobeMap;
 use crate::error::{Error, Result};
-use crate::frame::{Direct as DirectMode, FramePlan, Splatter, Splatting};
+use crate::frame::{Direct, FramePlan, Splatter, Splatting};
 use crate::scene::Scene;
-use crate::sequence::{Direct, TileLists, bin_splat_tiles};
+use crate::sequence::{DirectBake, TileLists, bin_splat_tiles};
 use crate::shaders::Stage;
 use crate::shaders::{PAGE_BINDING_STEP, Paging};
 use crate::shared::splat::{SPLAT_CORNERS, SPLATS_PER_INSTANCE, instances};
@@ -57,7 +57,7 @@ const TARGETS: usize = 4;
 const SPLAT_VERTICES: std::ops::Range<u32> = 0..SPLAT_CORNERS * SPLATS_PER_INSTANCE;
 
 /// What the splat passes read of a baked scene, all on the device.
-pub struct SceneBuffers<'a> {
+pub struct PassBuffers<'a> {
     pub splats: &'a wgpu::Buffer,
     pub splat_count: u32,
     pub materials: &'a wgpu::Buffer,
@@ -66,7 +66,7 @@ pub struct SceneBuffers<'a> {
     /// `lobe_norms::lobe_norms()`, the table the shading divides each lobe by.
     pub lobe_norms: &'a wgpu::Buffer,
     pub lights: &'a wgpu::Buffer,
-    /// The direct bake (`sequence::Direct`): per-splat irradiance and light visibility.
+    /// The direct bake (`sequence::DirectBake`): per-splat irradiance and light visibility.
     pub direct: &'a wgpu::Buffer,
     pub visibility: &'a wgpu::Buffer,
     /// Bind group 1 of tracing stages (`GpuScene::geometry`).
@@ -137,7 +137,7 @@ impl TreeBuffers {
     }
 }
 
-impl<'a> SceneBuffers<'a> {
+impl<'a> PassBuffers<'a> {
     /// Bindings 0–9 of the passes that shade fragments (`splat_attributes`, `splat_compute`):
     /// the camera and the splats, then the eight `wgsl/shared/splat_shading.wgsl` declares.
     fn shading(&self, cam: &'a wgpu::Buffer, params: &'a wgpu::Buffer) -> [&'a wgpu::Buffer; 10] {
@@ -192,7 +192,7 @@ pub struct FrameScene {
     pub lobe_norms: wgpu::Buffer,
     pub lights: wgpu::Buffer,
     /// The direct bake of `lights` (zeroed until `FrameRenderer::bake_direct`).
-    pub direct: Direct<wgpu::Buffer>,
+    pub direct: DirectBake<wgpu::Buffer>,
     /// The order the device's direct bake takes the splats in (`grid::splat_order`), made
     /// for its first bake.
     pub direct_order: Option<wgpu::Buffer>,
@@ -227,7 +227,7 @@ impl FrameScene {
             lobes: gpu.storage("lobes", &lobes.lobes)?,
             lobe_norms: gpu.storage("lobe norms", crate::lobe_norms::lobe_norms())?,
             lights: gpu.storage("lights", &scene.lights)?,
-            direct: Direct {
+            direct: DirectBake {
                 direct: gpu.storage_zeroed("direct light", splats * 16)?,
                 visibility: gpu.storage_zeroed("light visibility", visibility)?,
             },
@@ -279,8 +279,8 @@ impl FrameScene {
 
     /// What the passes bind, with the scene's splats, materials and grid; `merged`: the
     /// level of detail's tree for `splat_select` (else the chunks alone), where built.
-    pub fn buffers<'a>(&'a self, on_gpu: &'a GpuScene, merged: bool) -> SceneBuffers<'a> {
-        SceneBuffers {
+    pub fn buffers<'a>(&'a self, on_gpu: &'a GpuScene, merged: bool) -> PassBuffers<'a> {
+        PassBuffers {
             splats: &on_gpu.splats,
             splat_count: on_gpu.grid.params.splat_count,
             materials: &on_gpu.materials,
@@ -324,7 +324,7 @@ pub struct SplatPipelines {
     /// unpaged ones, built with the rest, serve every scene whose arrays fit one binding each.
     raster: Mutex<HashMap<(Raster, Paging, bool), wgpu::RenderPipeline>>,
     /// The shade pass by the paging of the scene's geometry and whether it casts shadow rays.
-    shade: Mutex<HashMap<(Paging, DirectMode), ShadePipeline>>,
+    shade: Mutex<HashMap<(Paging, Direct), ShadePipeline>>,
     /// The device can run the compute splatter's tile pass (`compute_splatter_fits`).
     splat_compute: bool,
     /// The device draws from a buffer's arguments (`draw_indirect`). Without, the raster
@@ -525,12 +525,12 @@ struct ShadePipeline {
 }
 
 impl ShadePipeline {
-    /// `direct`: with `DirectMode::Rays` the pipeline can cast shadow rays (`SHADOW_RAYS` in the
+    /// `direct`: with `Direct::Rays` the pipeline can cast shadow rays (`SHADOW_RAYS` in the
     /// WGSL). Frames of baked direct light take the one without: llvmpipe paid for the shadow-ray code even where the
     /// frame's uniform skipped it (the shade pass of the bunny at 512² took 15.6 ms with it,
     /// 4.9 ms without; docs/measurements.md).
-    fn new(gpu: &Gpu, paging: &Paging, direct: DirectMode) -> Result<ShadePipeline> {
-        let rays = direct == DirectMode::Rays;
+    fn new(gpu: &Gpu, paging: &Paging, direct: Direct) -> Result<ShadePipeline> {
+        let rays = direct == Direct::Rays;
         let layouts = shade_layouts(gpu, paging)?;
         let layout = gpu
             .device
@@ -688,7 +688,7 @@ impl SplatPipelines {
         ] {
             pipelines.raster(gpu, which, &unpaged, false)?;
         }
-        for direct in [DirectMode::Baked, DirectMode::Rays] {
+        for direct in [Direct::Baked, Direct::Rays] {
             pipelines.shade_pipeline(gpu, &unpaged, direct)?;
         }
         gpu.pipeline(Stage::SplatSelect)?;
@@ -724,12 +724,7 @@ impl SplatPipelines {
 
     /// The shade pass for geometry paged as `paging`, casting shadow rays or not, built on
     /// first use.
-    fn shade_pipeline(
-        &self,
-        gpu: &Gpu,
-        paging: &Paging,
-        direct: DirectMode,
-    ) -> Result<ShadePipeline> {
+    fn shade_pipeline(&self, gpu: &Gpu, paging: &Paging, direct: Direct) -> Result<ShadePipeline> {
         let key = (paging.clone(), direct);
         if let Some(p) = self.shade.lock().ok().and_then(|m| m.get(&key).cloned()) {
             return Ok(p);
@@ -790,7 +785,7 @@ impl SplatPipelines {
         &self,
         gpu: &Gpu,
         encoder: &mut wgpu::CommandEncoder,
-        scene: &SceneBuffers,
+        scene: &PassBuffers,
         cam: &Camera,
         params: &ShadeParams,
         out: &FrameTargets,
@@ -811,7 +806,7 @@ impl SplatPipelines {
         &self,
         gpu: &Gpu,
         encoder: &mut wgpu::CommandEncoder,
-        scene: &SceneBuffers,
+        scene: &PassBuffers,
         plan: &FramePlan,
         out: &FrameTargets,
     ) -> Result<()> {
@@ -827,7 +822,7 @@ impl SplatPipelines {
     pub fn draw_timed(
         &self,
         gpu: &Gpu,
-        scene: &SceneBuffers,
+        scene: &PassBuffers,
         plan: &FramePlan,
         out: &FrameTargets,
     ) -> Result<[f64; 3]> {
@@ -846,9 +841,9 @@ impl SplatPipelines {
     /// The selection of a frame of baked direct light alone (`record_splat_select`: the walk
     /// down the nodes, `splat_select`, the scan and `splat_list`), waited for: its
     /// milliseconds; 0 for a frame that selects nothing (direct light by rays). Benchmarks.
-    pub fn select_timed(&self, gpu: &Gpu, scene: &SceneBuffers, plan: &FramePlan) -> Result<f64> {
+    pub fn select_timed(&self, gpu: &Gpu, scene: &PassBuffers, plan: &FramePlan) -> Result<f64> {
         let uniforms = self.uniforms(gpu, plan);
-        if DirectMode::of_code(uniforms.direct) != DirectMode::Baked {
+        if Direct::of_code(uniforms.direct) != Direct::Baked {
             return Ok(0.0);
         }
         let t = std::time::Instant::now();
@@ -896,7 +891,7 @@ impl SplatPipelines {
         &self,
         gpu: &Gpu,
         encoder: &mut wgpu::CommandEncoder,
-        scene: &SceneBuffers,
+        scene: &PassBuffers,
         uniforms: &Uniforms,
     ) -> Result<()> {
         // The merge tree with the level of detail on, the chunks alone with it off.
@@ -955,7 +950,7 @@ impl SplatPipelines {
         &self,
         gpu: &Gpu,
         encoder: &mut wgpu::CommandEncoder,
-        scene: &SceneBuffers,
+        scene: &PassBuffers,
         uniforms: &Uniforms,
     ) -> Result<()> {
         let stage = Stage::SplatShade;
@@ -980,7 +975,7 @@ impl SplatPipelines {
         &self,
         gpu: &Gpu,
         encoder: &mut wgpu::CommandEncoder,
-        scene: &SceneBuffers,
+        scene: &PassBuffers,
         uniforms: &Uniforms,
         out: &FrameTargets,
         pass: SplatPass,
@@ -1040,12 +1035,12 @@ impl SplatPipelines {
         &self,
         gpu: &Gpu,
         encoder: &mut wgpu::CommandEncoder,
-        scene: &SceneBuffers,
+        scene: &PassBuffers,
         uniforms: &Uniforms,
         out: &FrameTargets,
         pass: SplatPass,
     ) -> Result<()> {
-        let baked = DirectMode::of_code(uniforms.direct) == DirectMode::Baked;
+        let baked = Direct::of_code(uniforms.direct) == Direct::Baked;
         match pass {
             SplatPass::Visibility if baked => {
                 self.record_splat_select(gpu, encoder, scene, uniforms)?
@@ -1101,11 +1096,11 @@ impl SplatPipelines {
         &self,
         gpu: &Gpu,
         encoder: &mut wgpu::CommandEncoder,
-        scene: &SceneBuffers,
+        scene: &PassBuffers,
         uniforms: &Uniforms,
         out: &FrameTargets,
     ) -> Result<()> {
-        let baked = DirectMode::of_code(uniforms.direct) == DirectMode::Baked;
+        let baked = Direct::of_code(uniforms.direct) == Direct::Baked;
         let list = [
             (0, &uniforms.cam),
             (1, scene.splats),
@@ -1147,11 +1142,11 @@ impl SplatPipelines {
         &self,
         gpu: &Gpu,
         encoder: &mut wgpu::CommandEncoder,
-        scene: &SceneBuffers,
+        scene: &PassBuffers,
         uniforms: &Uniforms,
         out: &FrameTargets,
     ) -> Result<()> {
-        let baked = DirectMode::of_code(uniforms.direct) == DirectMode::Baked;
+        let baked = Direct::of_code(uniforms.direct) == Direct::Baked;
         let (cam_buf, params_buf) = (&uniforms.cam, &uniforms.params);
         // `fs_main` reads none of the direct bake's bindings (the lights, the bake's two
         // buffers), so its derived layout has none; `fs_baked` reads the camera, the splats
@@ -1202,7 +1197,7 @@ impl SplatPipelines {
         &self,
         gpu: &Gpu,
         encoder: &mut wgpu::CommandEncoder,
-        scene: &SceneBuffers,
+        scene: &PassBuffers,
         uniforms: &Uniforms,
         out: &FrameTargets,
     ) -> Result<()> {
@@ -1250,7 +1245,7 @@ impl SplatPipelines {
             _ => scene.geometry.get(binding as usize).copied(),
         })?;
         frame_entries.extend(gpu.paged_entries_at(Stage::Shade, 0, &hits, &paging)?);
-        let shade = self.shade_pipeline(gpu, &paging, DirectMode::of_code(uniforms.direct))?;
+        let shade = self.shade_pipeline(gpu, &paging, Direct::of_code(uniforms.direct))?;
         let geometry_entries = gpu.paged_entries(Stage::Shade, 1, &scene.geometry, &paging)?;
         let groups = [frame_entries, geometry_entries]
             .iter()
