@@ -2,8 +2,9 @@
 //! where there is none or where it is a software rasterizer the mirror outruns — and a
 //! `Renderer` made from it and a scene owns what every image needs on that engine: the
 //! scene's splats and grid, the bake's lobes and direct light, the reference's binned
-//! photons, the frame passes and the last image. It bakes, draws stills, references and
-//! path-traced images, tone-maps and reads back, with the same calls on either engine; the
+//! photons, the frame passes and the last image. It bakes, draws stills, moving frames,
+//! references and path-traced images, tone-maps and reads back, with the same calls on either
+//! engine; the
 //! branch between the device (`gpu::renderer::FrameRenderer`) and the mirrors
 //! (`cpu::frames`) is taken here and nowhere above.
 
@@ -226,15 +227,51 @@ struct Mirror {
     direct: Option<DirectMap>,
     /// The last image drawn.
     hdr: Vec<[f32; 4]>,
+    /// The moving frames' history (`draw_moving` with `temporal`); none after a reset.
+    history: Option<MirrorHistory>,
+}
+
+/// The last moving frame on the mirror: its plan (jitter included), the moving frames since
+/// the last reset, and its resolved image and kept surfaces.
+struct MirrorHistory {
+    plan: FramePlan,
+    frames: u32,
+    image: Vec<[f32; 4]>,
+    surface: Vec<[f32; 4]>,
 }
 
 impl Mirror {
-    /// The direct bake where a frame `needs` it, baked now where the bake made none.
-    fn direct(&mut self, scene: &Scene, needed: bool) -> Result<Option<&DirectMap>> {
+    /// The plan of a frame of `view` drawn with `lobes`, its direct bake made first where it
+    /// is `needed` and the bake made none.
+    fn plan(
+        &mut self,
+        scene: &Scene,
+        lobes: &LobeMap,
+        (view, cfg): (&View, &FrameConfig),
+        needed: bool,
+    ) -> Result<FramePlan> {
         if needed && self.direct.is_none() {
             self.direct = Some(cpu::frames::cpu_direct(scene, &self.grid)?);
         }
-        Ok(self.direct.as_ref())
+        let cam = camera_uniform(view, self.extent.bounds, cfg);
+        let per_splat = lobes.lobes_per_splat;
+        let plan = FramePlan::of(
+            scene,
+            &self.extent,
+            per_splat,
+            (&cam, cfg),
+            Splatting::Raster,
+        );
+        Ok(plan)
+    }
+
+    /// The direct bake a frame reads: none where it reads none (`plan` made it where it does).
+    fn read_direct(&self, needed: bool) -> &DirectMap {
+        static NONE: DirectMap = DirectMap {
+            direct: Vec::new(),
+            visibility: Vec::new(),
+        };
+        self.direct.as_ref().filter(|_| needed).unwrap_or(&NONE)
     }
 }
 
@@ -279,6 +316,7 @@ impl Renderer {
                     bins: None,
                     direct: None,
                     hdr: Vec::new(),
+                    history: None,
                 })
             }
         };
@@ -338,7 +376,7 @@ impl Renderer {
                 m.grid = cpu::scene_grid(&scene)?;
                 m.grid_ms = ms_since(t);
                 m.extent = SceneExtent::of(&scene);
-                (m.bins, m.direct) = (None, None);
+                (m.bins, m.direct, m.history) = (None, None, None);
             }
         }
         self.scene = scene;
@@ -377,7 +415,7 @@ impl Renderer {
             }
             On::Mirror(m) => {
                 if moved {
-                    (m.direct, m.bins) = (None, None);
+                    (m.direct, m.bins, m.history) = (None, None, None);
                 }
             }
         }
@@ -417,6 +455,7 @@ impl Renderer {
                 if baked.direct.is_some() {
                     m.direct = baked.direct;
                 }
+                m.history = None;
             }
         }
         self.lobes = baked.lobes;
@@ -475,17 +514,52 @@ impl Renderer {
                     0 => cfg.needs_direct_bake(),
                     _ => cfg.glossy_rays > 0,
                 };
-                m.direct(scene, needed)?;
-                let no_direct = DirectMap::default();
-                let direct = m.direct.as_ref().filter(|_| needed).unwrap_or(&no_direct);
-                let cam = camera_uniform(view, m.extent.bounds, cfg);
-                let lobes = self.lobes.lobes_per_splat;
-                let plan = FramePlan::of(scene, &m.extent, lobes, (&cam, cfg), Splatting::Raster);
-                let light = (&self.lobes, direct);
+                let plan = m.plan(scene, &self.lobes, (view, cfg), needed)?;
+                let light = (&self.lobes, m.read_direct(needed));
                 m.hdr = cpu::frames::cpu_draw(scene, &m.grid, light, &plan, spp);
                 (0..spp).for_each(&mut each);
             }
         }
+        Ok(())
+    }
+
+    /// Draws the moving frame of `view`: with `cfg.temporal`, jittered and blended with the
+    /// moving frames before it (`sequence::temporal`; none before it after a reset: new lobes,
+    /// lights, size or shading), else the frame a moving camera gets alone (`draw` with no
+    /// refinement frames). Keeps the HDR image, the resolved one.
+    pub fn draw_moving(&mut self, view: &View, cfg: &FrameConfig) -> Result<()> {
+        let scene = &self.scene;
+        let m = match &mut self.on {
+            On::Device(d) => {
+                let (gpu, frames, _) = d.parts(scene, &self.lobes)?;
+                frames.draw_moving(gpu, scene, view, cfg)?;
+                return Ok(());
+            }
+            On::Mirror(m) => m,
+        };
+        let needed = cfg.needs_direct_bake();
+        let plan = m.plan(scene, &self.lobes, (view, cfg), needed)?;
+        // A frame drawn alone, or shaded otherwise, ends the history.
+        let alike =
+            |h: &MirrorHistory| h.plan.params == plan.params && h.plan.view.size == plan.view.size;
+        let last = m.history.take().filter(|h| cfg.temporal && alike(h));
+        if !cfg.temporal {
+            let light = (&self.lobes, m.read_direct(needed));
+            m.hdr = cpu::frames::cpu_draw(scene, &m.grid, light, &plan, 0);
+            return Ok(());
+        }
+        let frames = last.as_ref().map_or(0, |h| h.frames);
+        let next = plan.jittered(crate::frame::temporal_jitter(frames));
+        let light = (&self.lobes, m.read_direct(needed));
+        let (hdr, surface) = cpu::frames::cpu_draw_surface(scene, &m.grid, light, &next, 0);
+        let (image, kept) = temporal_on_mirror(&next, last.as_ref(), (&hdr, &surface))?;
+        m.hdr = image.clone();
+        m.history = Some(MirrorHistory {
+            plan: next,
+            frames: frames + 1,
+            image,
+            surface: kept,
+        });
         Ok(())
     }
 
@@ -639,4 +713,52 @@ impl Renderer {
             }
         }
     }
+}
+
+/// The temporal pass on the mirror (`sequence::temporal`) of the moving frame `next` drawn as
+/// `now` (its image and surfaces), blended with `last`'s history: the resolved image and the
+/// surfaces it kept, the next frame's history.
+fn temporal_on_mirror(
+    next: &FramePlan,
+    last: Option<&MirrorHistory>,
+    (hdr, surface): (&[[f32; 4]], &[[f32; 4]]),
+) -> Result<(Vec<[f32; 4]>, Vec<[f32; 4]>)> {
+    use crate::sequence::{Executor, TemporalHistory, temporal};
+    let [w, h] = next.view.size.map(|x| x as u32);
+    let pixels = (w * h) as usize;
+    let params = crate::frame::temporal_params(w, h, last.is_none());
+    let prev = last.map_or(next.view, |l| l.plan.view);
+    let mut ex = cpu::CpuExecutor::default();
+    let blank = vec![[0.0f32; 4]; pixels];
+    let (last_image, last_surface) = last.map_or((&blank, &blank), |l| (&l.image, &l.surface));
+    let hdr = ex.upload("hdr", hdr)?;
+    let surface = ex.upload("surface", surface)?;
+    let from = (
+        ex.upload("history", last_image)?,
+        ex.upload("history surface", last_surface)?,
+    );
+    let bytes = pixels as u64 * 16;
+    let to = (
+        ex.zeroed("resolved", bytes)?,
+        ex.zeroed("kept surface", bytes)?,
+    );
+    let last = TemporalHistory {
+        image: &from.0,
+        surface: &from.1,
+    };
+    let next_history = TemporalHistory {
+        image: &to.0,
+        surface: &to.1,
+    };
+    temporal(
+        &mut ex,
+        &next.view,
+        &prev,
+        &params,
+        &hdr,
+        &surface,
+        last,
+        next_history,
+    )?;
+    Ok((ex.read(&hdr, pixels)?, ex.read(&to.1, pixels)?))
 }

@@ -782,7 +782,9 @@ pub fn frame(
                 for _ in 0..=TIMED_FRAMES {
                     let t = Instant::now();
                     let mut hdr = vec![[0.0; 4]; (w * h) as usize];
-                    cpu_frame_into(scene, &grid, &lobes, &direct, &plan, &mut hdr);
+                    let mut surface = vec![[0.0; 4]; hdr.len()];
+                    let out = (&mut hdr[..], &mut surface[..]);
+                    cpu_frame_into(scene, &grid, &lobes, &direct, &plan, out);
                     let shade = ms_since(t);
                     let t = Instant::now();
                     cpu::tone_map(tone, &hdr)?;

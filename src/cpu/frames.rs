@@ -90,32 +90,41 @@ pub fn cpu_draw(
     plan: &FramePlan,
     spp: u32,
 ) -> Vec<[f32; 4]> {
-    let [w, h] = plan.view.size;
-    let mut hdr = vec![[0.0; 4]; (w * h) as usize];
-    match spp {
-        0 => cpu_frame_into(scene, grid, lobes, direct, plan, &mut hdr),
-        spp => (0..spp).for_each(|k| {
-            cpu_frame_into(
-                scene,
-                grid,
-                lobes,
-                direct,
-                &plan.refinement(k, spp),
-                &mut hdr,
-            )
-        }),
-    }
-    hdr
+    cpu_draw_surface(scene, grid, (lobes, direct), plan, spp).0
 }
 
-/// The frame of `plan` with the direct bake made, into `hdr` (a refinement frame adds to it).
+/// `cpu_draw`, and the surface each pixel of its last frame shows.
+pub fn cpu_draw_surface(
+    scene: &Scene,
+    grid: &SplatGrid,
+    (lobes, direct): (&LobeMap, &DirectMap),
+    plan: &FramePlan,
+    spp: u32,
+) -> (Vec<[f32; 4]>, Vec<[f32; 4]>) {
+    let [w, h] = plan.view.size;
+    let mut hdr = vec![[0.0; 4]; (w * h) as usize];
+    let mut surface = vec![[0.0; 4]; hdr.len()];
+    match spp {
+        0 => cpu_frame_into(scene, grid, lobes, direct, plan, (&mut hdr, &mut surface)),
+        spp => {
+            for k in 0..spp {
+                let plan = plan.refinement(k, spp);
+                cpu_frame_into(scene, grid, lobes, direct, &plan, (&mut hdr, &mut surface));
+            }
+        }
+    }
+    (hdr, surface)
+}
+
+/// The frame of `plan` with the direct bake made, into `hdr` (a refinement frame adds to it),
+/// and the surface each pixel shows into `surface` (the temporal pass reprojects by it).
 pub fn cpu_frame_into(
     scene: &Scene,
     grid: &SplatGrid,
     lobes: &LobeMap,
     direct: &DirectMap,
     plan: &FramePlan,
-    hdr: &mut [[f32; 4]],
+    (hdr, surface): (&mut [[f32; 4]], &mut [[f32; 4]]),
 ) {
     let (cam, params) = (&plan.cam, &plan.params);
     let selection = match plan.reads_direct_bake() {
@@ -170,18 +179,8 @@ pub fn cpu_frame_into(
         direct_light: &direct.direct,
         materials: &scene.materials,
     };
-    let mut surface = vec![[0.0; 4]; hdr.len()];
     let lights = &scene.lights;
-    cpu::shade::shade(
-        cam,
-        params,
-        &sums,
-        lights,
-        &hit_light,
-        &geo,
-        hdr,
-        &mut surface,
-    );
+    cpu::shade::shade(cam, params, &sums, lights, &hit_light, &geo, hdr, surface);
 }
 
 /// The still image of `cam` on the CPU: `spp` refinement frames, each jittered and with its

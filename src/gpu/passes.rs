@@ -1120,21 +1120,42 @@ impl SplatPipelines {
                 store: wgpu::StoreOp::Store,
             },
         });
+        let (stage, depth) = (Stage::SplatVisibility, wgpu::LoadOp::Clear(0.0));
+        let bound = (&pipeline, &vis_group);
+        self.draw_splats(encoder, (stage, &[front], depth), out, scene, bound, baked);
+        Ok(())
+    }
+
+    /// A splat raster pass into `color` (its depth target cleared or loaded, `depth`): the
+    /// listed splats, drawn indirectly, in frames of baked direct light; else every splat.
+    #[allow(clippy::too_many_arguments)]
+    fn draw_splats(
+        &self,
+        encoder: &mut wgpu::CommandEncoder,
+        (stage, color, depth): (
+            Stage,
+            &[Option<wgpu::RenderPassColorAttachment>],
+            wgpu::LoadOp<f32>,
+        ),
+        out: &FrameTargets,
+        scene: &PassBuffers,
+        (pipeline, group): (&wgpu::RenderPipeline, &wgpu::BindGroup),
+        baked: bool,
+    ) {
         let mut pass = encoder.begin_render_pass(&wgpu::RenderPassDescriptor {
-            label: Some(Stage::SplatVisibility.name()),
-            color_attachments: &[front],
-            depth_stencil_attachment: depth_attachment(out, wgpu::LoadOp::Clear(0.0)),
+            label: Some(stage.name()),
+            color_attachments: color,
+            depth_stencil_attachment: depth_attachment(out, depth),
             timestamp_writes: None,
             occlusion_query_set: None,
             multiview_mask: None,
         });
-        pass.set_pipeline(&pipeline);
-        pass.set_bind_group(0, &vis_group, &[]);
+        pass.set_pipeline(pipeline);
+        pass.set_bind_group(0, group, &[]);
         match baked && self.indirect {
             true => pass.draw_indirect(scene.draw_args, 0),
             false => pass.draw(SPLAT_VERTICES, 0..instances(scene.splat_count)),
         }
-        Ok(())
     }
 
     /// The attribute pass: the disks within the depth tolerance blended into the sums.
@@ -1175,20 +1196,9 @@ impl SplatPipelines {
         if baked {
             color.truncate(2);
         }
-        let mut pass = encoder.begin_render_pass(&wgpu::RenderPassDescriptor {
-            label: Some(Stage::SplatAttributes.name()),
-            color_attachments: &color,
-            depth_stencil_attachment: depth_attachment(out, wgpu::LoadOp::Load),
-            timestamp_writes: None,
-            occlusion_query_set: None,
-            multiview_mask: None,
-        });
-        pass.set_pipeline(&pipeline);
-        pass.set_bind_group(0, &attr_group, &[]);
-        match baked && self.indirect {
-            true => pass.draw_indirect(scene.draw_args, 0),
-            false => pass.draw(SPLAT_VERTICES, 0..instances(scene.splat_count)),
-        }
+        let (stage, depth) = (Stage::SplatAttributes, wgpu::LoadOp::Load);
+        let bound = (&pipeline, &attr_group);
+        self.draw_splats(encoder, (stage, &color, depth), out, scene, bound, baked);
         Ok(())
     }
 
