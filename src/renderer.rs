@@ -276,8 +276,8 @@ impl Mirror {
 }
 
 enum On {
-    Device(Device),
-    Mirror(Mirror),
+    Device(Box<Device>),
+    Mirror(Box<Mirror>),
 }
 
 /// A scene prepared on one engine, and everything drawn from it.
@@ -298,18 +298,18 @@ impl Renderer {
     /// built on the host.
     pub fn new(scene: Arc<Scene>, engine: &Engine) -> Result<Renderer> {
         let on = match engine {
-            Engine::Device(gpu) => On::Device(Device {
+            Engine::Device(gpu) => On::Device(Box::new(Device {
                 scene: Arc::new(GpuScene::upload(gpu, &scene)?),
                 gpu: gpu.clone(),
                 frames: None,
                 bins: None,
                 stale: false,
                 direct: None,
-            }),
+            })),
             Engine::Mirror => {
                 let t = std::time::Instant::now();
                 let grid = cpu::scene_grid(&scene)?;
-                On::Mirror(Mirror {
+                On::Mirror(Box::new(Mirror {
                     grid,
                     grid_ms: ms_since(t),
                     extent: SceneExtent::of(&scene),
@@ -317,7 +317,7 @@ impl Renderer {
                     direct: None,
                     hdr: Vec::new(),
                     history: None,
-                })
+                }))
             }
         };
         Ok(Renderer {
@@ -715,6 +715,9 @@ impl Renderer {
     }
 }
 
+/// An image and the surface each of its pixels shows, in host memory.
+type ImageAndSurface = (Vec<[f32; 4]>, Vec<[f32; 4]>);
+
 /// The temporal pass on the mirror (`sequence::temporal`) of the moving frame `next` drawn as
 /// `now` (its image and surfaces), blended with `last`'s history: the resolved image and the
 /// surfaces it kept, the next frame's history.
@@ -722,7 +725,7 @@ fn temporal_on_mirror(
     next: &FramePlan,
     last: Option<&MirrorHistory>,
     (hdr, surface): (&[[f32; 4]], &[[f32; 4]]),
-) -> Result<(Vec<[f32; 4]>, Vec<[f32; 4]>)> {
+) -> Result<ImageAndSurface> {
     use crate::sequence::{Executor, TemporalHistory, temporal};
     let [w, h] = next.view.size.map(|x| x as u32);
     let pixels = (w * h) as usize;

@@ -100,3 +100,11 @@ fn the_mirror_is_chosen_by_name_and_a_relight_keeps_the_splats() {
             .is_err()
     );
 }
+
+/// A renderer moves to another thread (a worker, or a Python object that releases the GIL).
+#[test]
+fn a_renderer_and_its_engine_are_send() {
+    fn send<T: Send>() {}
+    send::<Renderer>();
+    send::<Engine>();
+}

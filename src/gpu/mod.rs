@@ -430,6 +430,19 @@ impl Gpu {
             .create_command_encoder(&wgpu::CommandEncoderDescriptor { label: Some(label) })
     }
 
+    /// Records `what` into a fresh encoder labelled `label`, submits it and waits: one
+    /// submission of the host's `draw`s (their `record`s record into a caller's encoder).
+    pub fn record_and_wait<T>(
+        &self,
+        label: &str,
+        what: impl FnOnce(&mut wgpu::CommandEncoder) -> Result<T>,
+    ) -> Result<T> {
+        let mut encoder = self.encoder(label);
+        let recorded = what(&mut encoder)?;
+        self.submit_and_wait(encoder)?;
+        Ok(recorded)
+    }
+
     /// Submits and waits until the device is idle, then reports any device error.
     pub fn submit_and_wait(&self, encoder: wgpu::CommandEncoder) -> Result<()> {
         self.queue.submit(Some(encoder.finish()));

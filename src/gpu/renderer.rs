@@ -440,9 +440,7 @@ impl FrameRenderer {
         cfg: &FrameConfig,
     ) -> Result<&FrameTargets> {
         let cam = self.prepare(gpu, scene, view, cfg)?;
-        let mut encoder = gpu.encoder("frame");
-        self.record(gpu, &mut encoder, scene, &cam, cfg)?;
-        gpu.submit_and_wait(encoder)?;
+        gpu.record_and_wait("frame", |e| self.record(gpu, e, scene, &cam, cfg).map(drop))?;
         self.targets()
     }
 
@@ -455,9 +453,9 @@ impl FrameRenderer {
         cfg: &FrameConfig,
     ) -> Result<&FrameTargets> {
         let cam = self.prepare(gpu, scene, view, cfg)?;
-        let mut encoder = gpu.encoder("moving frame");
-        self.record_moving(gpu, &mut encoder, scene, &cam, cfg)?;
-        gpu.submit_and_wait(encoder)?;
+        gpu.record_and_wait("moving frame", |e| {
+            self.record_moving(gpu, e, scene, &cam, cfg).map(drop)
+        })?;
         self.targets()
     }
 
@@ -474,9 +472,10 @@ impl FrameRenderer {
     ) -> Result<&FrameTargets> {
         let cam = self.prepare(gpu, scene, view, cfg)?;
         for k in 0..spp.max(1) {
-            let mut encoder = gpu.encoder("refinement frame");
-            self.record_sample(gpu, &mut encoder, scene, &cam, cfg, k, spp)?;
-            gpu.submit_and_wait(encoder)?;
+            gpu.record_and_wait("refinement frame", |e| {
+                self.record_sample(gpu, e, scene, &cam, cfg, k, spp)
+                    .map(drop)
+            })?;
             each(k);
         }
         self.targets()
@@ -493,9 +492,10 @@ impl FrameRenderer {
     ) -> Result<&FrameTargets> {
         self.resize(gpu, view.width, view.height)?;
         let cam = camera_uniform(view, self.extent.bounds, cfg);
-        let mut encoder = gpu.encoder("reference");
-        self.record_reference(gpu, &mut encoder, scene, bins, em, &cam, cfg)?;
-        gpu.submit_and_wait(encoder)?;
+        gpu.record_and_wait("reference", |e| {
+            self.record_reference(gpu, e, scene, bins, em, &cam, cfg)
+                .map(drop)
+        })?;
         self.targets()
     }
 
@@ -554,9 +554,7 @@ impl FrameRenderer {
         self.history = None;
         if let Some(moving) = moving {
             let t = std::time::Instant::now();
-            let mut encoder = gpu.encoder("temporal");
-            self.record_temporal(gpu, &mut encoder, &moving)?;
-            gpu.submit_and_wait(encoder)?;
+            gpu.record_and_wait("temporal", |e| self.record_temporal(gpu, e, &moving))?;
             temporal = crate::timing::ms_since(t);
             self.history = Some(moving.next);
         }
@@ -592,10 +590,7 @@ impl FrameRenderer {
 
     /// Tone-maps the last frame drawn and waits.
     pub fn tone_map(&self, gpu: &Gpu, tone: &ToneConfig) -> Result<GpuToned> {
-        let mut encoder = gpu.encoder("tone map");
-        let toned = self.record_tone_map(gpu, &mut encoder, tone)?;
-        gpu.submit_and_wait(encoder)?;
-        Ok(toned)
+        gpu.record_and_wait("tone map", |e| self.record_tone_map(gpu, e, tone))
     }
 
     /// The last frame's linear HDR pixels, rows from the top.
