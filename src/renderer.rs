@@ -116,6 +116,14 @@ impl Engine {
             .map_or_else(|| "CPU mirror".to_string(), |g| g.info.name.clone())
     }
 
+    /// The adapter's name, or the CPU mirror with its threads (the benchmarks' `adapter`).
+    pub fn adapter_and_threads(&self) -> String {
+        match self {
+            Engine::Device(_) => self.adapter(),
+            Engine::Mirror => format!("CPU mirror ({} threads)", rayon::current_num_threads()),
+        }
+    }
+
     /// The graphics API's name, or "cpu".
     pub fn backend(&self) -> &'static str {
         self.gpu().map_or("cpu", Gpu::backend_name)
@@ -148,6 +156,13 @@ pub struct BakeReport {
 pub struct Toned {
     pub rgba: Vec<u32>,
     pub log_sum: [f32; 2],
+}
+
+/// The scene's photons traced and read back to the host (`Renderer::trace_photons`).
+pub struct TracedPhotons {
+    pub map: crate::photons::PhotonMap,
+    /// Reading them back from the device (0 on the mirror, where they are host memory).
+    pub download_ms: f64,
 }
 
 /// The stored photons seen from a camera (`Renderer::photon_view`).
@@ -624,6 +639,34 @@ impl Renderer {
             }
         }
         Ok(())
+    }
+
+    /// Traces `cfg`'s photons from the scene's lights (`sequence::trace_photons`) and reads
+    /// them back; `on_batch` hears (paths done, total).
+    pub fn trace_photons(
+        &self,
+        cfg: &PhotonConfig,
+        on_batch: &mut dyn FnMut(u64, u64),
+    ) -> Result<TracedPhotons> {
+        let scene = &self.scene;
+        match &self.on {
+            On::Device(d) => {
+                let traced = gpu_photons::trace_photons(&d.gpu, scene, &d.scene, cfg, on_batch)?;
+                let t = std::time::Instant::now();
+                let map = traced.download(&d.gpu)?;
+                let download_ms = ms_since(t);
+                Ok(TracedPhotons { map, download_ms })
+            }
+            On::Mirror(m) => {
+                let geo = scene.geometry(&m.grid);
+                let (lights, materials) = (&scene.lights, &scene.materials);
+                let map = cpu::trace_photons(lights, materials, &geo, cfg, on_batch)?;
+                Ok(TracedPhotons {
+                    map,
+                    download_ms: 0.0,
+                })
+            }
+        }
     }
 
     /// Traces the scene's photons and draws the stored ones seen from `view` (thesis Fig.

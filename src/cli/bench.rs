@@ -1,5 +1,6 @@
 //! `lobelight bench …`: throughput with the figures that say whether the work was right.
 
+use std::sync::Arc;
 use std::time::Instant;
 
 use serde::Serialize;
@@ -20,7 +21,6 @@ use crate::em::{EmConfig, EmStats, LobeFamily, LobeMap};
 use crate::error::Result;
 use crate::frame::{FrameConfig, FramePlan, Splatting, camera_uniform, shade_params};
 
-use crate::gpu::photons::trace_photons;
 use crate::gpu::present::PresentPipeline;
 use crate::gpu::scene::GpuScene;
 
@@ -28,6 +28,7 @@ use crate::gpu::renderer::FrameRenderer;
 use crate::gpu::{BackendChoice, Gpu};
 use crate::photons::{PhotonConfig, PhotonMap, PhotonStats, photons_within};
 use crate::plan::{BakeLimits, BakePlan};
+use crate::renderer::{Engine, Renderer};
 use crate::scene::Scene;
 use crate::sequence::Executor;
 use crate::timing::ms_since;
@@ -59,47 +60,23 @@ pub struct PhotonStages {
     pub download_ms: f64,
 }
 
-/// Traces the scene's photons once, on the GPU or (without one) the CPU mirror. The GPU's
-/// pipelines are compiled by a small warm-up trace first, which is not timed.
-pub fn photons(scene: &Scene, gpu: Option<&Gpu>, cfg: &PhotonConfig) -> Result<PhotonBench> {
-    let (map, grid_ms, download_ms, adapter, backend) = match gpu {
-        Some(gpu) => {
-            let on_gpu = GpuScene::upload(gpu, scene)?;
-            let warm = PhotonConfig {
-                photons: cfg.photons.min(4096),
-                ..cfg.clone()
-            };
-            trace_photons(gpu, scene, &on_gpu, &warm, &mut |_, _| {})?;
-            let traced = trace_photons(gpu, scene, &on_gpu, cfg, &mut |_, _| {})?;
-            let t = Instant::now();
-            let map = traced.download(gpu)?;
-            (
-                map,
-                on_gpu.grid_ms,
-                ms_since(t),
-                gpu.info.name.clone(),
-                gpu.backend_name().to_string(),
-            )
-        }
-        None => {
-            let (map, _, grid_ms) = cpu::trace_scene(scene, cfg, &mut |_, _| {})?;
-            let threads = rayon::current_num_threads();
-            (
-                map,
-                grid_ms,
-                0.0,
-                format!("CPU mirror ({threads} threads)"),
-                "cpu".into(),
-            )
-        }
+/// Traces the scene's photons once on `engine`. A small warm-up trace first compiles a
+/// device's pipelines, and is not timed.
+pub fn photons(scene: &Arc<Scene>, engine: &Engine, cfg: &PhotonConfig) -> Result<PhotonBench> {
+    let renderer = Renderer::new(scene.clone(), engine)?;
+    let warm = PhotonConfig {
+        photons: cfg.photons.min(4096),
+        ..cfg.clone()
     };
+    renderer.trace_photons(&warm, &mut |_, _| {})?;
+    let traced = renderer.trace_photons(cfg, &mut |_, _| {})?;
     Ok(summarise(
         scene,
-        map,
-        grid_ms,
-        download_ms,
-        adapter,
-        backend,
+        traced.map,
+        renderer.grid_ms(),
+        traced.download_ms,
+        engine.adapter_and_threads(),
+        engine.backend().to_string(),
     ))
 }
 

@@ -78,10 +78,7 @@ pub fn cluster(
         })
         .collect::<Result<Vec<_>>>()?;
     let slowdown = |f: fn(&ClusterRow) -> f64| f(&rows[0]) / f(&rows[1]).max(1e-9);
-    let adapter = match engine {
-        Engine::Device(_) => engine.adapter(),
-        Engine::Mirror => format!("CPU mirror ({} threads)", rayon::current_num_threads()),
-    };
+    let adapter = engine.adapter_and_threads();
     let backend = engine.backend().to_string();
     Ok(ClusterBench {
         adapter,

@@ -913,7 +913,7 @@ fn bench_scenes(args: BenchArgs) -> Result<()> {
         let photons = PhotonConfig::from_scene(&scene);
         let (text, value) = match what {
             BenchKind::Photons => {
-                let r = bench::photons(&scene, gpu, &photons)?;
+                let r = bench::photons(&scene, &engine, &photons)?;
                 (r.to_string(), to_json(&r)?)
             }
             BenchKind::Frame => {

@@ -97,10 +97,7 @@ pub fn rebake(scene: &Arc<Scene>, engine: &Engine) -> Result<RebakeBench> {
     }
     let rebake_ms = median(full_ms);
     let photons = full.photons;
-    let adapter = match engine {
-        Engine::Device(_) => engine.adapter(),
-        Engine::Mirror => format!("CPU mirror ({} threads)", rayon::current_num_threads()),
-    };
+    let adapter = engine.adapter_and_threads();
     Ok(RebakeBench {
         scene: scene.path.display().to_string(),
         adapter,

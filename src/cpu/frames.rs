@@ -1,6 +1,6 @@
 //! The frames on the CPU mirrors: the direct bake, the splat passes of a frame and of a still
 //! image's refinement frames, the reference and the path tracer, each the sequence the device
-//! runs (`renderer::FrameRenderer`), on `CpuExecutor`s or the mirrors' functions.
+//! runs (`gpu::renderer::FrameRenderer`), on `CpuExecutor`s or the mirrors' functions.
 
 use std::borrow::Cow;
 
