@@ -405,12 +405,13 @@ impl Renderer {
     /// where the lights changed. Other geometry needs a new renderer.
     pub fn relight(&mut self, scene: Arc<Scene>) -> Result<()> {
         let old = &self.scene;
-        let same = bytemuck::cast_slice::<_, u8>(&scene.splats)
-            == bytemuck::cast_slice::<_, u8>(&old.splats)
-            && bytemuck::cast_slice::<_, u8>(&scene.materials)
-                == bytemuck::cast_slice::<_, u8>(&old.materials)
-            && bytemuck::cast_slice::<_, u8>(&scene.clips)
-                == bytemuck::cast_slice::<_, u8>(&old.clips);
+        let same = Arc::ptr_eq(&scene, old)
+            || bytemuck::cast_slice::<_, u8>(&scene.splats)
+                == bytemuck::cast_slice::<_, u8>(&old.splats)
+                && bytemuck::cast_slice::<_, u8>(&scene.materials)
+                    == bytemuck::cast_slice::<_, u8>(&old.materials)
+                && bytemuck::cast_slice::<_, u8>(&scene.clips)
+                    == bytemuck::cast_slice::<_, u8>(&old.clips);
         if !same {
             return Err(Error::Invalid(
                 "relight keeps the scene's splats, materials and clips; another scene needs \
@@ -699,9 +700,8 @@ impl Renderer {
                 })
             }
             On::Mirror(m) => {
-                let geo = scene.geometry(&m.grid);
-                let (lights, materials) = (&scene.lights, &scene.materials);
-                let map = cpu::trace_photons(lights, materials, &geo, &photons, on_batch)?;
+                let map = self.trace_photons(&photons, on_batch)?.map;
+                let (geo, materials) = (scene.geometry(&m.grid), &scene.materials);
                 let t = std::time::Instant::now();
                 let hdr = cpu::photon_image(&cam, materials, &map.photons, &geo, scale)?;
                 let draw_ms = ms_since(t);
@@ -714,18 +714,13 @@ impl Renderer {
         }
     }
 
-    /// Which scene surface each pixel of `view` shows (`objects::object_ids`, on the host).
+    /// Which scene surface each pixel of `view` shows (`objects::object_ids`, on the host,
+    /// over the engine's grid).
     pub fn object_ids(&self, view: &View, cfg: &FrameConfig) -> Result<Vec<u16>> {
         let scene = &self.scene;
         let cam = camera_uniform(view, scene.bounds(), cfg);
-        let samples = crate::objects::SAMPLES;
-        match &self.on {
-            On::Mirror(m) => crate::objects::object_ids(scene, &m.grid, &cam, samples),
-            On::Device(_) => {
-                let grid = cpu::scene_grid(scene)?;
-                crate::objects::object_ids(scene, &grid, &cam, samples)
-            }
-        }
+        let grid = self.read_grid()?;
+        crate::objects::object_ids(scene, &grid, &cam, crate::objects::SAMPLES)
     }
 
     /// The last image's linear HDR pixels, rows from the top.

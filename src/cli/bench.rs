@@ -15,7 +15,7 @@ use crate::cli::measure::median;
 use crate::cli::render::Method;
 use crate::cli::view::{ViewOptions, ViewReport};
 use crate::cpu;
-use crate::cpu::frames::{cpu_direct, cpu_frame_into};
+use crate::cpu::frames::{cpu_direct, cpu_draw};
 use crate::direct::DirectMap;
 use crate::em::{EmConfig, EmStats, LobeFamily, LobeMap};
 use crate::error::Result;
@@ -758,10 +758,7 @@ pub fn frame(
                 let mut times = Vec::new();
                 for _ in 0..=TIMED_FRAMES {
                     let t = Instant::now();
-                    let mut hdr = vec![[0.0; 4]; (w * h) as usize];
-                    let mut surface = vec![[0.0; 4]; hdr.len()];
-                    let out = (&mut hdr[..], &mut surface[..]);
-                    cpu_frame_into(scene, &grid, &lobes, &direct, &plan, out);
+                    let hdr = cpu_draw(scene, &grid, (&lobes, &direct), &plan, 0);
                     let shade = ms_since(t);
                     let t = Instant::now();
                     cpu::tone_map(tone, &hdr)?;

@@ -6,7 +6,6 @@ use std::sync::Arc;
 use serde::Serialize;
 
 use crate::error::Result;
-use crate::grid::grid_params;
 use crate::renderer::{Engine, Renderer};
 use crate::scene::{ObjectSummary, Scene};
 use crate::types::{Lobe, Photon, Splat};
@@ -59,7 +58,6 @@ pub struct Memory {
 
 /// Builds the grid on `engine`.
 pub fn info(scene: &Arc<Scene>, engine: &Engine) -> Result<Info> {
-    let params = grid_params(&scene.splats, &scene.grid)?;
     let renderer = Renderer::new(scene.clone(), engine)?;
     let grid = renderer.read_grid()?;
     let build_ms = renderer.grid_ms();
@@ -71,7 +69,7 @@ pub fn info(scene: &Arc<Scene>, engine: &Engine) -> Result<Info> {
     let memory = {
         let splats = n * std::mem::size_of::<Splat>() as u64;
         // Offsets, plus the build's scratch (two u32 per entry) and final lists.
-        let grid = (params.cell_count as u64 + 1) * 4 * 2 + entries * 4 * 3;
+        let grid = (grid.params.cell_count as u64 + 1) * 4 * 2 + entries * 4 * 3;
         let photons = scene.bake.photons * std::mem::size_of::<Photon>() as u64;
         // Lobes for glossy splats alone (the fit keeps none for the others).
         let glossy = scene

@@ -52,8 +52,8 @@ pub struct RebakeBench {
 
 /// Bakes the renderer's scene as `scene` says (its lights and bake settings); returns the
 /// lobes and the bake's milliseconds.
-fn bake_as(renderer: &mut Renderer, scene: Scene) -> Result<(LobeMap, f64)> {
-    renderer.relight(Arc::new(scene))?;
+fn bake_as(renderer: &mut Renderer, scene: Arc<Scene>) -> Result<(LobeMap, f64)> {
+    renderer.relight(scene)?;
     let t = Instant::now();
     renderer.bake(&Progress::new(false))?;
     Ok((renderer.lobes().clone(), ms_since(t)))
@@ -77,17 +77,18 @@ pub fn rebake(scene: &Arc<Scene>, engine: &Engine) -> Result<RebakeBench> {
     };
     let mut renderer = Renderer::new(scene.clone(), engine)?;
     let grid_ms = renderer.grid_ms();
-    let (_, bake_ms) = bake_as(&mut renderer, (**scene).clone())?;
+    let (_, bake_ms) = bake_as(&mut renderer, scene.clone())?;
     let (mut full_ms, mut preview_ms, mut errors) = (Vec::new(), Vec::new(), Vec::new());
     let mut direct_ms = Vec::new();
     for k in 1..=MOVES {
         let moved = move_first_light(scene, k as f32, 0.0)
             .ok_or_else(|| Error::Invalid("bench rebake needs a scene with a light".into()))?;
-        renderer.relight(Arc::new(moved.clone()))?;
+        let moved = Arc::new(moved);
+        renderer.relight(moved.clone())?;
         direct_ms.push(renderer.bake_direct()?);
-        let mut preview = moved.clone();
+        let mut preview = (*moved).clone();
         preview.bake = quick.clone();
-        let (quick, ms) = bake_as(&mut renderer, preview)?;
+        let (quick, ms) = bake_as(&mut renderer, Arc::new(preview))?;
         preview_ms.push(ms);
         let (full, ms) = bake_as(&mut renderer, moved)?;
         full_ms.push(ms);

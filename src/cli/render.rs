@@ -216,11 +216,26 @@ pub fn render(
             opts.method.name()
         )));
     }
+    if opts.method != Method::Lobes && !opts.views.is_empty() {
+        return Err(Error::Invalid(format!(
+            "--views draws a sequence from one bake: it is for --method lobes, not {}",
+            opts.method.name()
+        )));
+    }
+    if opts.method == Method::Photons && format != ImageFormat::Png {
+        return Err(Error::Invalid(
+            "--method photons writes PNG only (it shows where photons landed, not radiance)".into(),
+        ));
+    }
+    // Every check before the scene goes onto its engine: a bad option costs no grid.
+    let numbered = match opts.method {
+        Method::Lobes => shots(opts, &view, width, height, output)?,
+        _ => Vec::new(),
+    };
     let mut renderer = Renderer::new(scene.clone(), engine)?;
     let mut views = Vec::new();
     let (stages, cache_hit, log_average) = match opts.method {
         Method::Lobes => {
-            let numbered = shots(opts, &view, width, height, output)?;
             let shots: Vec<Shot> = numbered.iter().map(|(_, s)| s.clone()).collect();
             let (stages, hit, done) = render_lobes(&mut renderer, opts, &shots, format)?;
             if !opts.views.is_empty() {
@@ -236,14 +251,8 @@ pub fn render(
             }
             (stages, hit, done.log_average)
         }
-        _ if !opts.views.is_empty() => {
-            return Err(Error::Invalid(format!(
-                "--views draws a sequence from one bake: it is for --method lobes, not {}",
-                opts.method.name()
-            )));
-        }
         Method::Photons => (
-            render_photons(&mut renderer, opts, &view, format, output)?,
+            render_photons(&mut renderer, opts, &view, output)?,
             false,
             0.0,
         ),
@@ -531,19 +540,13 @@ fn render_path(
 }
 
 /// `--method photons`: the stored photons seen from the camera (thesis Fig. 3.1), drawn by
-/// the `photon_view` stage on the device or its CPU mirror.
+/// the `photon_view` stage on the device or its CPU mirror, to a PNG (`render` checked).
 fn render_photons(
     renderer: &mut Renderer,
     opts: &Options,
     view: &View,
-    format: ImageFormat,
     output: &Path,
 ) -> Result<Stages> {
-    if format != ImageFormat::Png {
-        return Err(Error::Invalid(
-            "--method photons writes PNG only (it shows where photons landed, not radiance)".into(),
-        ));
-    }
     let total = crate::photons::PhotonConfig::from_scene(renderer.scene()).photons;
     let bar = Progress::new(opts.progress).bar(total);
     let mut on_batch = |done: u64, _total: u64| bar.set_position(done);

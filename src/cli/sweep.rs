@@ -318,8 +318,8 @@ struct Runner<'a> {
 
 impl Runner<'_> {
     /// The renderer drawing `scene`, uploaded or gridded anew.
-    fn on(&mut self, scene: &Scene) -> Result<&mut Renderer> {
-        let scene = Arc::new(scene.clone());
+    fn on(&mut self, scene: &Arc<Scene>) -> Result<&mut Renderer> {
+        let scene = scene.clone();
         Ok(match &mut self.renderer {
             Some(renderer) => {
                 renderer.set_scene(scene)?;
@@ -329,7 +329,7 @@ impl Runner<'_> {
         })
     }
 
-    fn lobes(&mut self, scene: &Scene, view: &View, frames: u32) -> Result<LobeRun> {
+    fn lobes(&mut self, scene: &Arc<Scene>, view: &View, frames: u32) -> Result<LobeRun> {
         let quiet = Progress::new(false);
         // The still image `render` writes (its default refinement frames, with shadow rays and
         // glossy rays), as the user gets it from the bake's knobs.
@@ -368,7 +368,7 @@ impl Runner<'_> {
     }
 
     /// The path tracer's image of `view` at `spp` samples per pixel.
-    fn path(&mut self, scene: &Scene, view: &View, spp: u32) -> Result<Vec<[f32; 4]>> {
+    fn path(&mut self, scene: &Arc<Scene>, view: &View, spp: u32) -> Result<Vec<[f32; 4]>> {
         let renderer = self.on(scene)?;
         renderer.draw_path(view, &FrameConfig::default(), spp, |_| {})?;
         renderer.read_hdr()
@@ -403,8 +403,10 @@ pub fn sweep(
             "sweep {name}: reference, the path tracer at {} samples a pixel",
             plan.reference_spp
         );
+        // One copy of the scene for the renderer, whichever image draws it.
+        let shared = Arc::new(scene.clone());
         let t = Instant::now();
-        let reference = runner.path(scene, &view, plan.reference_spp)?;
+        let reference = runner.path(&shared, &view, plan.reference_spp)?;
         let image = out_dir.join(format!("reference_{name}.exr"));
         crate::cli::render::write_exr(&image, &reference, plan.size, plan.size)?;
         references.push(SweepReference {
@@ -424,7 +426,7 @@ pub fn sweep(
         // The path tracer's own rows: each image costs its whole time, every view again.
         for &spp in &plan.path_spp {
             let t = Instant::now();
-            let hdr = runner.path(scene, &view, spp)?;
+            let hdr = runner.path(&shared, &view, spp)?;
             let ms = ms_since(t);
             let (d, objects) = against(&hdr)?;
             let row = SweepRow {
@@ -456,7 +458,7 @@ pub fn sweep(
             rows.push(row);
         }
         for setting in plan.settings() {
-            let s = apply(&base, setting, radius);
+            let s = Arc::new(apply(&base, setting, radius));
             let run = match runner.lobes(&s, &view, plan.frames) {
                 Ok(run) => run,
                 Err(e) => {
