@@ -1,7 +1,7 @@
 //! Photon binning (docs/design.md §5): stored photons sorted into a uniform grid whose cells are a
 //! little over half the search radius, each cell's list in photon-key order `(path, bounce)`.
-//! Count → exclusive scan → scatter → rank → place, on the GPU (`gpu::bins`) and in the CPU
-//! mirror (`cpu::bin_photons`), which give identical lists.
+//! Count → exclusive scan → scatter → rank → place (`sequence::bin_photons`), on the device
+//! and on the CPU mirror, which give identical lists.
 //!
 //! Half-radius cells keep lists short (the rank pass costs the square of a list's length)
 //! and bound the gather tighter than radius-sized cells: the 2R box around a splat covers at

@@ -1,6 +1,6 @@
 //! The lobe fit (docs/design.md §6): settings, the plan of `em_fit` dispatches, and the result.
 //! The passes are `em_select` (list the splats with photons near them) and `em_fit` (one
-//! workgroup per listed splat); `gpu::em::fit_lobes` and `cpu::fit_lobes` run them alike.
+//! workgroup per listed splat); `sequence::fit_lobes` runs them alike on either engine.
 
 use serde::{Deserialize, Serialize};
 

@@ -12,8 +12,9 @@
 //!   stage's settings, limits and host-side data;
 //! - `scene` (the scene file, procedural shapes and model files) and `camera`;
 //! - `sequence` (each multi-dispatch stage's dispatches, written once), `direct`, `frame` (what a
-//!   frame draws), `objects` (which surface each pixel shows), `plan` (the bake's plan), then the
-//!   two engines: `cpu` (the mirrors) and `gpu` (the device host);
+//!   frame draws), `objects` (which surface each pixel shows), `plan` (the bake's plan), `host` (the
+//!   bake's passes from host data to host data, on any executor), then the two engines: `cpu`
+//!   (the mirrors) and `gpu` (the device host);
 //! - `bake` (photons → bins → lobes on either engine), `cache` (a bake on disk) and `renderer`
 //!   (one renderer over either engine, chosen once);
 //! - `cli` (feature `app`): the `lobelight` commands.
@@ -49,6 +50,7 @@ pub mod fit_groups;
 pub mod frame;
 pub mod gpu;
 pub mod grid;
+pub mod host;
 pub mod large_pages;
 pub mod lobe_norms;
 pub mod lod;

@@ -8,13 +8,11 @@ use std::path::Path;
 
 use glam::Vec3;
 use lobelight::bins::{PhotonBins, bin_params};
-use lobelight::cpu;
 use lobelight::em::{EmConfig, FitShape};
-use lobelight::gpu::bins::bin_photons;
-use lobelight::gpu::photons::{GpuPhotons, trace_photons};
-use lobelight::gpu::scene::GpuScene;
 use lobelight::grid::grid_params;
+use lobelight::host::FitFrom;
 use lobelight::photons::{PhotonConfig, PhotonMap};
+use lobelight::renderer::{Engine, Renderer};
 use lobelight::scene::{self, file::StoreRange};
 use lobelight::shared::bins::{RANK_CHUNK, bin_of, list_count, lists_per_cell};
 use lobelight::shared::octahedral::oct_decode;
@@ -68,26 +66,25 @@ fn assert_well_formed(bins: &PhotonBins, map: &PhotonMap) {
 
 #[test]
 fn gpu_bins_equal_cpu_bins_across_pages() {
-    let gpu = common::gpu();
-    let scene = scene::load(Path::new("scenes/cornell.toml")).unwrap();
+    let device = common::device();
+    let scene = std::sync::Arc::new(scene::load(Path::new("scenes/cornell.toml")).unwrap());
     let cfg = PhotonConfig {
         photons: 60_000,
         store: StoreRange::All,
         batch: 8192,
-        page_limit: 20_000,
         ..PhotonConfig::from_scene(&scene)
     };
-    let uploaded = GpuScene::upload(&gpu, &scene).unwrap();
-    let traced = trace_photons(&gpu, &scene, &uploaded, &cfg, &mut |_, _| {}).unwrap();
-    assert!(traced.pages.len() >= 3, "{} pages", traced.pages.len());
-    let map = traced.download(&gpu).unwrap();
+    let renderer = Renderer::new(scene.clone(), &device).unwrap();
+    let map = renderer.trace_photons(&cfg, &mut |_, _| {}).unwrap().map;
+    let pages: Vec<&[Photon]> = map.photons.chunks(20_000).collect();
+    assert!(pages.len() >= 3, "{} pages", pages.len());
     let stored = map.photons.len() as u64;
-    let params = bin_params(&uploaded.grid.params, scene.search_radius(), stored).unwrap();
-    let on_gpu = bin_photons(&gpu, &traced, &uploaded.splats, &params)
-        .unwrap()
-        .download(&gpu)
+    let grid = renderer.read_grid().unwrap();
+    let params = bin_params(&grid.params, scene.search_radius(), stored).unwrap();
+    let on_gpu = device.bin_photons(&params, &pages, &scene.splats).unwrap();
+    let on_cpu = Engine::Mirror
+        .bin_photons(&params, &[&map.photons], &scene.splats)
         .unwrap();
-    let on_cpu = cpu::bin_photons(&params, &map.photons, &scene.splats).unwrap();
     // Each photon carries the surface it landed on.
     let by_key: std::collections::HashMap<_, _> =
         map.photons.iter().map(|m| (m.key(), m)).collect();
@@ -108,7 +105,7 @@ fn gpu_bins_equal_cpu_bins_across_pages() {
 /// long, and comes out sorted on both sides.
 #[test]
 fn long_cell_lists_sort_across_rank_chunks() {
-    let gpu = common::gpu();
+    let device = common::device();
     let mut rng = common::Rng(7);
     let n = 20_000u32;
     assert!(n > 2 * RANK_CHUNK);
@@ -135,12 +132,18 @@ fn long_cell_lists_sort_across_rank_chunks() {
         photons,
         stats: Default::default(),
     };
-    let on_cpu = cpu::bin_photons(&params, &map.photons, &splats).unwrap();
-    let uploaded = GpuPhotons::upload(&gpu, &map).unwrap();
-    let splat_buffer = gpu.storage("splats", &splats).unwrap();
-    let binned = bin_photons(&gpu, &uploaded, &splat_buffer, &params).unwrap();
-    assert_eq!(binned.rank_chunks, 3);
-    let on_gpu = binned.download(&gpu).unwrap();
+    let on_cpu = Engine::Mirror
+        .bin_photons(&params, &[&map.photons], &splats)
+        .unwrap();
+    let on_gpu = device
+        .bin_photons(&params, &[&map.photons], &splats)
+        .unwrap();
+    let longest = on_gpu.cell_start.windows(2).map(|w| w[1] - w[0]).max();
+    assert_eq!(
+        longest.map(|n| n.div_ceil(RANK_CHUNK)),
+        Some(3),
+        "rank chunks"
+    );
     assert_well_formed(&on_cpu, &map);
     assert_same_bins(&on_gpu, &on_cpu);
 }
@@ -151,40 +154,40 @@ fn long_cell_lists_sort_across_rank_chunks() {
 /// equal, irradiance equal but for the order of the sums).
 #[test]
 fn sub_cell_lists_hold_each_cells_photons() {
-    let gpu = common::gpu();
-    let scene = scene::load(Path::new("scenes/cornell.toml")).unwrap();
+    let device = common::device();
+    let scene = std::sync::Arc::new(scene::load(Path::new("scenes/cornell.toml")).unwrap());
     let cfg = PhotonConfig {
         photons: 60_000,
         ..PhotonConfig::from_scene(&scene)
     };
-    let uploaded = GpuScene::upload(&gpu, &scene).unwrap();
-    let traced = trace_photons(&gpu, &scene, &uploaded, &cfg, &mut |_, _| {}).unwrap();
-    let map = traced.download(&gpu).unwrap();
+    let renderer = Renderer::new(scene.clone(), &device).unwrap();
+    let map = renderer.trace_photons(&cfg, &mut |_, _| {}).unwrap().map;
+    let grid = renderer.read_grid().unwrap();
     // Twice the scene's radius: 4³ sub-cells of its 64 k cells stay within a storage binding.
     let radius = 2.0 * scene.search_radius();
-    let whole = bin_params(&uploaded.grid.params, radius, 0).unwrap();
+    let whole = bin_params(&grid.params, radius, 0).unwrap();
     assert_eq!(whole.sub, 1);
-    let one = cpu::bin_photons(&whole, &map.photons, &scene.splats).unwrap();
+    let mirror = Engine::Mirror;
+    let one = mirror
+        .bin_photons(&whole, &[&map.photons], &scene.splats)
+        .unwrap();
     let em = EmConfig {
         radius,
         // The photon fit itself.
         gather: 0,
         ..EmConfig::from_scene(&scene)
     };
-    let fit_one = cpu::fit_lobes(
-        &em,
-        &one,
-        &scene.splats,
-        &scene.materials,
-        FitShape::default(),
-    )
-    .unwrap();
+    let of = (&scene.splats[..], &scene.materials[..]);
+    let fit_one = mirror
+        .fit_lobes(&em, FitFrom::photons(&one), of, FitShape::default())
+        .unwrap();
     for sub in [2, 3, 4] {
         let params = BinParams { sub, ..whole };
-        let on_cpu = cpu::bin_photons(&params, &map.photons, &scene.splats).unwrap();
-        let on_gpu = bin_photons(&gpu, &traced, &uploaded.splats, &params)
-            .unwrap()
-            .download(&gpu)
+        let on_cpu = mirror
+            .bin_photons(&params, &[&map.photons], &scene.splats)
+            .unwrap();
+        let on_gpu = device
+            .bin_photons(&params, &[&map.photons], &scene.splats)
             .unwrap();
         assert_well_formed(&on_cpu, &map);
         assert_same_bins(&on_gpu, &on_cpu);
@@ -197,14 +200,9 @@ fn sub_cell_lists_hold_each_cells_photons() {
             let listed = &one.keys[one.cell_start[c] as usize..one.cell_start[c + 1] as usize];
             assert_eq!(split, listed, "sub {sub}: cell {c}");
         }
-        let fit = cpu::fit_lobes(
-            &em,
-            &on_cpu,
-            &scene.splats,
-            &scene.materials,
-            FitShape::default(),
-        )
-        .unwrap();
+        let fit = mirror
+            .fit_lobes(&em, FitFrom::photons(&on_cpu), of, FitShape::default())
+            .unwrap();
         for (i, (a, b)) in fit_one.light.iter().zip(&fit.light).enumerate() {
             assert_eq!(a.photons, b.photons, "sub {sub}: splat {i}");
             for k in 0..3 {

@@ -8,17 +8,19 @@ use std::path::Path;
 
 use glam::Vec3;
 use lobelight::bake::{self, Progress, on_device};
+use lobelight::bins::DepositBins;
 use lobelight::bins::bin_params;
-use lobelight::cpu::{self, CpuExecutor, DepositBins};
+use lobelight::cpu::{self, CpuExecutor};
 use lobelight::em::{EmConfig, FitShape, deposit_params};
 use lobelight::fit_groups::CoverGroups;
-use lobelight::gpu::bins::deposit_photons;
+use lobelight::gpu::bins::GpuDeposits;
 use lobelight::gpu::exec::GpuExecutor;
-use lobelight::gpu::photons::GpuPhotons;
 use lobelight::gpu::scene::GpuScene;
 use lobelight::grid::{GridConfig, grid_params};
+use lobelight::host::FitFrom;
 use lobelight::photons::PhotonMap;
 use lobelight::plan::BakePlan;
+use lobelight::renderer::{Engine, Renderer};
 use lobelight::sequence::{CoverInput, Executor, SharedDeposits, share_light};
 use lobelight::shared::deposits::{DEPOSIT_POSITION_UNITS, disk_share};
 use lobelight::types::{EmParams, Photon, Splat, SplatLight};
@@ -40,7 +42,7 @@ fn cornell(
     // smoothing after them to its own parity).
     scene.bake.smooth = 0.0;
     let cfg = lobelight::photons::PhotonConfig::from_scene(&scene);
-    let (map, grid, _) = cpu::trace_scene(&scene, &cfg, &mut |_, _| {}).unwrap();
+    let (map, grid) = common::mirror_photons(&scene, &cfg);
     (scene, grid, map)
 }
 
@@ -56,7 +58,8 @@ fn cornell(
 /// point, lying on the rim of a gather disk counts on one side and not on the other.
 #[test]
 fn deposits_and_shared_light_on_the_device_equal_the_mirror() {
-    let gpu = common::gpu();
+    let device = common::device();
+    let gpu = device.gpu().unwrap();
     let (scene, grid, map) = cornell(400_000);
     let params = deposit_params(
         &scene.lights,
@@ -65,35 +68,19 @@ fn deposits_and_shared_light_on_the_device_equal_the_mirror() {
         scene.search_radius(),
     )
     .unwrap();
-    let on_cpu = cpu::deposit_photons(&params, &map.photons, &scene.splats, &grid.params).unwrap();
-    let on_gpu_scene = GpuScene::upload(&gpu, &scene).unwrap();
-    let photons = GpuPhotons::upload(&gpu, &map).unwrap();
-    let deposits = deposit_photons(
-        &gpu,
-        &photons,
-        &on_gpu_scene.splats,
-        &params,
-        &on_gpu_scene.grid.params,
-    )
-    .unwrap();
-    let on_gpu = deposits.download(&gpu).unwrap();
+    let on = (&scene.splats[..], &grid.params);
+    let on_cpu = Engine::Mirror
+        .deposit_photons(&params, &[&map.photons], on)
+        .unwrap();
+    let on_gpu = device
+        .deposit_photons(&params, &[&map.photons], on)
+        .unwrap();
     // Deposits split over buffers of 8,738 splats each (512 KiB pages), 5 ranges.
-    let paged = common::gpu().with_page_bytes(512 << 10);
-    let split = {
-        let scene_there = GpuScene::upload(&paged, &scene).unwrap();
-        let photons_there = GpuPhotons::upload(&paged, &map).unwrap();
-        let grid_there = &scene_there.grid.params;
-        deposit_photons(
-            &paged,
-            &photons_there,
-            &scene_there.splats,
-            &params,
-            grid_there,
-        )
-        .unwrap()
-        .download(&paged)
-        .unwrap()
-    };
+    let paged = Engine::Device(std::sync::Arc::new(
+        common::gpu().with_page_bytes(512 << 10),
+    ));
+    assert_eq!(paged.bake_limits().deposit_range, 8_738);
+    let split = paged.deposit_photons(&params, &[&map.photons], on).unwrap();
     assert_eq!(
         split.params, on_gpu.params,
         "deposits split by splat ranges"
@@ -176,16 +163,18 @@ fn deposits_and_shared_light_on_the_device_equal_the_mirror() {
     let (cfg, setup) = (plan.em.clone(), plan.gather_setup(&scene));
     assert!(cfg.uses_deposits());
     let quiet = Progress::new(false);
-    let lit_gpu = on_device(&scene, &gpu, &on_gpu_scene, |ex, on| {
+    let on_gpu_scene = GpuScene::upload(gpu, &scene).unwrap();
+    let deposits = GpuDeposits::upload(gpu, &on_gpu).unwrap();
+    let lit_gpu = on_device(&scene, gpu, &on_gpu_scene, |ex, on| {
         let input = (&deposits.bins, Some(&deposits));
         bake::fit(ex, &scene, &plan, on, input, &quiet).map(|(lobes, _)| lobes)
     })
     .unwrap();
     let shape = plan.limits.fit_shape;
-    let gathering = Some((scene.geometry(&grid), &setup));
-    let (splats, materials) = (&scene.splats, &scene.materials);
-    let lit_cpu =
-        cpu::fit_lobes_to_deposits(&cfg, &on_cpu, splats, materials, shape, gathering).unwrap();
+    let mirror = Renderer::new(std::sync::Arc::new(scene.clone()), &Engine::Mirror).unwrap();
+    let lit_cpu = mirror
+        .fit_lobes(&cfg, FitFrom::deposits(&on_cpu), shape, Some(&setup))
+        .unwrap();
     let (mut lit, mut apart, mut sums) = (0, 0, [0.0f64; 2]);
     for i in 0..scene.splats.len() {
         let m = scene.materials[scene.splats[i].material as usize];
@@ -221,7 +210,10 @@ fn shared_light_once_a_group_on_the_device_equals_the_mirror() {
     let (scene, grid, map) = cornell(400_000);
     let r = scene.search_radius();
     let params = deposit_params(&scene.lights, scene.bake.photons, &scene.splats, r).unwrap();
-    let d = cpu::deposit_photons(&params, &map.photons, &scene.splats, &grid.params).unwrap();
+    let on = (&scene.splats[..], &grid.params);
+    let d = Engine::Mirror
+        .deposit_photons(&params, &[&map.photons], on)
+        .unwrap();
     let n = scene.splats.len() as u32;
     let em = EmConfig::from_scene(&scene).params(n, n, FitShape::default());
     let coarse = CoverGroups::new(&scene.splats, 32.0 * r, None).unwrap();
@@ -305,7 +297,10 @@ fn deposits_keep_every_photon() {
     let (scene, grid, map) = cornell(40_000);
     let params =
         deposit_params(&scene.lights, 40_000, &scene.splats, scene.search_radius()).unwrap();
-    let d = cpu::deposit_photons(&params, &map.photons, &scene.splats, &grid.params).unwrap();
+    let on = (&scene.splats[..], &grid.params);
+    let d = Engine::Mirror
+        .deposit_photons(&params, &[&map.photons], on)
+        .unwrap();
     let count: f64 = d.spread.iter().map(|s| s[1] as f64).sum();
     assert_eq!(count as usize, map.photons.len());
     let sum = |p: &mut dyn Iterator<Item = [f32; 3]>| {
@@ -420,7 +415,9 @@ fn shared_light_of_a_flat_field_is_the_photons_estimate() {
         spread_max: lobelight::em::DEPOSIT_REACH * radius,
         ..Default::default()
     };
-    let d: DepositBins = cpu::deposit_photons(&deposit, &photons, &splats, &grid).unwrap();
+    let d: DepositBins = Engine::Mirror
+        .deposit_photons(&deposit, &[&photons], (&splats, &grid))
+        .unwrap();
     let mut shared = vec![SplatLight::default(); splats.len()];
     let binned = cpu::em_share::BinnedDeposits {
         cell_start: &d.bins.cell_start,
@@ -453,12 +450,13 @@ fn shared_light_of_a_flat_field_is_the_photons_estimate() {
     }
     assert_eq!(counters[3], n, "every splat of the field is lit");
 
-    let bins = cpu::bin_photons(
-        &bin_params(&grid, r, photons.len() as u64).unwrap(),
-        &photons,
-        &splats,
-    )
-    .unwrap();
+    let bins = Engine::Mirror
+        .bin_photons(
+            &bin_params(&grid, r, photons.len() as u64).unwrap(),
+            &[&photons],
+            &splats,
+        )
+        .unwrap();
     let margin = r + 2.0 * spacing;
     let interior: Vec<u32> = (0..n)
         .filter(|&i| {

@@ -8,14 +8,12 @@ use std::path::Path;
 
 use glam::Vec3;
 use lobelight::bins::{PhotonBins, bin_params};
-use lobelight::cpu;
 use lobelight::em::FitShape;
 use lobelight::em::{EmConfig, LobeFamily, LobeMap};
-use lobelight::gpu::Gpu;
-use lobelight::gpu::bins::GpuBins;
-use lobelight::gpu::em::{fit_lobes_shaped, fit_shape};
 use lobelight::grid::grid_params;
+use lobelight::host::FitFrom;
 use lobelight::photons::PhotonConfig;
+use lobelight::renderer::Engine;
 use lobelight::scene::{self, Scene, file::StoreRange};
 use lobelight::shared::sampling::{frame_of, polar, to_world};
 use lobelight::shared::ward::ward_half_vector;
@@ -80,7 +78,9 @@ impl Fixture {
         // One list a cell (no photon count): these tests are of the fit; splitting cells into
         // sub-cell lists is tested with the binning (tests/bins.rs).
         let params = bin_params(&grid, R, 0).unwrap();
-        cpu::bin_photons(&params, &self.photons, &self.splats).unwrap()
+        Engine::Mirror
+            .bin_photons(&params, &[&self.photons], &self.splats)
+            .unwrap()
     }
 }
 
@@ -104,40 +104,58 @@ fn config(family: LobeFamily, lobes: u32, iterations: u32) -> EmConfig {
 }
 
 fn on_cpu(cfg: &EmConfig, bins: &PhotonBins, splats: &[Splat], materials: &[Material]) -> LobeMap {
-    cpu::fit_lobes(cfg, bins, splats, materials, FitShape::default()).unwrap()
+    on_cpu_shaped(cfg, bins, splats, materials, FitShape::default())
 }
 
-fn on_gpu(
-    gpu: &Gpu,
-    cfg: &EmConfig,
-    bins: &PhotonBins,
-    splats: &[Splat],
-    materials: &[Material],
-) -> LobeMap {
-    on_gpu_shaped(gpu, cfg, bins, splats, materials, fit_shape(gpu))
-}
-
-fn on_gpu_shaped(
-    gpu: &Gpu,
+/// `on_cpu` in `shape` (the device's sum order).
+fn on_cpu_shaped(
     cfg: &EmConfig,
     bins: &PhotonBins,
     splats: &[Splat],
     materials: &[Material],
     shape: FitShape,
 ) -> LobeMap {
-    let uploaded = GpuBins::upload(gpu, bins).unwrap();
-    let s = gpu.storage("splats", splats).unwrap();
-    let m = gpu.storage("materials", materials).unwrap();
-    fit_lobes_shaped(gpu, &s, &m, splats.len() as u32, &uploaded, cfg, shape)
+    let from = FitFrom::photons(bins);
+    Engine::Mirror
+        .fit_lobes(cfg, from, (splats, materials), shape)
         .unwrap()
-        .download(gpu)
+}
+
+fn on_gpu(
+    device: &Engine,
+    cfg: &EmConfig,
+    bins: &PhotonBins,
+    splats: &[Splat],
+    materials: &[Material],
+) -> LobeMap {
+    on_gpu_shaped(
+        device,
+        cfg,
+        bins,
+        splats,
+        materials,
+        device.bake_limits().fit_shape,
+    )
+}
+
+fn on_gpu_shaped(
+    device: &Engine,
+    cfg: &EmConfig,
+    bins: &PhotonBins,
+    splats: &[Splat],
+    materials: &[Material],
+    shape: FitShape,
+) -> LobeMap {
+    let from = FitFrom::photons(bins);
+    device
+        .fit_lobes(cfg, from, (splats, materials), shape)
         .unwrap()
 }
 
 /// The device's fit shape, and the portable reduction too where it uses subgroups: parity
 /// tests run both.
-fn shapes(gpu: &Gpu) -> Vec<FitShape> {
-    let own = fit_shape(gpu);
+fn shapes(device: &Engine) -> Vec<FitShape> {
+    let own = device.bake_limits().fit_shape;
     let mut all = vec![own];
     if own.subgroup_reduce {
         all.push(FitShape {
@@ -257,7 +275,7 @@ fn check_recovery_of(
 
 #[test]
 fn known_mixtures_are_recovered() {
-    let gpu = common::gpu();
+    let device = common::device();
     let cases = [
         (
             LobeFamily::Vmf,
@@ -284,7 +302,7 @@ fn known_mixtures_are_recovered() {
         let cpu_map = on_cpu(&cfg, &bins, &fixture.splats, &fixture.materials);
         assert_eq!(cpu_map.light[0].photons, 1500);
         check_recovery(family, &truth, "CPU", &cpu_map);
-        let gpu_map = on_gpu(&gpu, &cfg, &bins, &fixture.splats, &fixture.materials);
+        let gpu_map = on_gpu(&device, &cfg, &bins, &fixture.splats, &fixture.materials);
         check_recovery(family, &truth, "GPU", &gpu_map);
     }
 }
@@ -295,7 +313,7 @@ fn known_mixtures_are_recovered() {
 /// fit with fewer lobes than the truth drops nothing.
 #[test]
 fn pruning_keeps_the_lobes_the_photons_need() {
-    let gpu = common::gpu();
+    let device = common::device();
     let cases = [
         (
             LobeFamily::Vmf,
@@ -339,7 +357,7 @@ fn pruning_keeps_the_lobes_the_photons_need() {
         let fixed = on_cpu(&config(family, 5, 40), &bins, splats, materials);
         let maps = [
             ("CPU", on_cpu(&pruned, &bins, splats, materials)),
-            ("GPU", on_gpu(&gpu, &pruned, &bins, splats, materials)),
+            ("GPU", on_gpu(&device, &pruned, &bins, splats, materials)),
         ];
         for (on, map) in &maps {
             // One true lobe: one kept, and it is the truth.
@@ -416,24 +434,18 @@ fn cornell_bins(store: Option<StoreRange>) -> (Scene, PhotonBins) {
         store: store.unwrap_or(base.store),
         ..base
     };
-    let (map, grid, _) = cpu::trace_scene(&scene, &cfg, &mut |_, _| {}).unwrap();
-    let bins = cpu::bin_photons(
-        &bin_params(
-            &grid.params,
-            scene.search_radius(),
-            map.photons.len() as u64,
-        )
-        .unwrap(),
-        &map.photons,
-        &scene.splats,
-    )
-    .unwrap();
+    let (map, grid) = common::mirror_photons(&scene, &cfg);
+    let stored = map.photons.len() as u64;
+    let params = bin_params(&grid.params, scene.search_radius(), stored).unwrap();
+    let bins = Engine::Mirror
+        .bin_photons(&params, &[&map.photons], &scene.splats)
+        .unwrap();
     (scene, bins)
 }
 
 #[test]
 fn gpu_fit_equals_cpu_fit_on_the_same_photons() {
-    let gpu = common::gpu();
+    let device = common::device();
     let (scene, bins) = cornell_bins(Some(StoreRange::All));
     // (family, sparse EM, lobes): five lobes, whose rounding growth was measured (below), and
     // the scenes' default of eight.
@@ -463,9 +475,9 @@ fn gpu_fit_equals_cpu_fit_on_the_same_photons() {
         // rounding outruns five iterations on a few splats (measured: 15 lobes of 187,264
         // part, one in 12,000): they may part as sparse EM's may, one lobe in 1,000.
         let may_part = sparse || lobes > 5;
-        for shape in shapes(&gpu) {
-            let c = cpu::fit_lobes(&em, &bins, &scene.splats, &scene.materials, shape).unwrap();
-            let g = on_gpu_shaped(&gpu, &em, &bins, &scene.splats, &scene.materials, shape);
+        for shape in shapes(&device) {
+            let c = on_cpu_shaped(&em, &bins, &scene.splats, &scene.materials, shape);
+            let g = on_gpu_shaped(&device, &em, &bins, &scene.splats, &scene.materials, shape);
             assert!(c.stats.fitted > 1000, "{} splats fitted", c.stats.fitted);
             assert_eq!(c.stats.fitted, g.stats.fitted);
             assert!(c.fitted().any(|l| l.lobes < em.lobes), "nothing pruned");
@@ -483,7 +495,7 @@ fn gpu_fit_equals_cpu_fit_on_the_same_photons() {
 /// list on every pass: the same sums in the same order as the CPU mirror.
 #[test]
 fn streamed_photons_fit_as_cached_ones() {
-    let gpu = common::gpu();
+    let device = common::device();
     let mut rng = Rng(17);
     let truth = [(dir(20.0, 40.0), 0.08, 0.6), (dir(50.0, 250.0), 0.05, 0.4)];
     let sets: Vec<_> = [40, 600, 1500, 3000]
@@ -494,10 +506,10 @@ fn streamed_photons_fit_as_cached_ones() {
     let bins = fixture.bins();
     for family in [LobeFamily::Ward, LobeFamily::Vmf] {
         let cfg = config(family, 2, 5);
-        for shape in shapes(&gpu) {
+        for shape in shapes(&device) {
             let (splats, materials) = (&fixture.splats, &fixture.materials);
-            let c = cpu::fit_lobes(&cfg, &bins, splats, materials, shape).unwrap();
-            let g = on_gpu_shaped(&gpu, &cfg, &bins, splats, materials, shape);
+            let c = on_cpu_shaped(&cfg, &bins, splats, materials, shape);
+            let g = on_gpu_shaped(&device, &cfg, &bins, splats, materials, shape);
             for (i, set) in sets.iter().enumerate() {
                 assert_eq!(g.light[i].photons as usize, set.len(), "GPU, splat {i}");
                 assert_eq!(c.light[i].photons as usize, set.len(), "CPU, splat {i}");
@@ -515,7 +527,7 @@ fn streamed_photons_fit_as_cached_ones() {
 /// fits do. Splats under the bound fit exactly as before.
 #[test]
 fn a_bounded_fit_keeps_the_irradiance_and_the_lobes() {
-    let gpu = common::gpu();
+    let device = common::device();
     let mut rng = Rng(23);
     let truth = [
         (dir(10.0, 30.0), 0.09, 0.5),
@@ -559,9 +571,9 @@ fn a_bounded_fit_keeps_the_irradiance_and_the_lobes() {
         }
     }
     check_recovery_of(3, LobeFamily::Ward, &truth, "CPU, bounded", &part);
-    for shape in shapes(&gpu) {
-        let c = cpu::fit_lobes(&bounded, &bins, splats, materials, shape).unwrap();
-        let g = on_gpu_shaped(&gpu, &bounded, &bins, splats, materials, shape);
+    for shape in shapes(&device) {
+        let c = on_cpu_shaped(&bounded, &bins, splats, materials, shape);
+        let g = on_gpu_shaped(&device, &bounded, &bins, splats, materials, shape);
         check_recovery_of(3, LobeFamily::Ward, &truth, "GPU, bounded", &g);
         assert_parity(&format!("bounded {shape:?}"), false, &c, &g);
     }
@@ -716,7 +728,7 @@ fn plain_em_log_likelihood_never_decreases() {
 /// photons only from behind (none accepted), and a splat with no photons at all.
 #[test]
 fn degenerate_inputs_give_finite_lobes() {
-    let gpu = common::gpu();
+    let device = common::device();
     let up = Vec3::new(0.3, 0.2, 0.93).normalize();
     let grazing = Vec3::new(1.0, 0.0, 1e-4).normalize();
     let sets = vec![
@@ -751,7 +763,7 @@ fn degenerate_inputs_give_finite_lobes() {
                 ),
                 (
                     "GPU",
-                    on_gpu(&gpu, &cfg, &bins, &fixture.splats, &fixture.materials),
+                    on_gpu(&device, &cfg, &bins, &fixture.splats, &fixture.materials),
                 ),
             ];
             for (side, map) in &maps {
@@ -806,7 +818,7 @@ fn degenerate_inputs_give_finite_lobes() {
 /// irradiance are its own 200 photons' alone, on the mirror and on the device.
 #[test]
 fn photons_of_a_perpendicular_surface_do_not_count() {
-    let gpu = common::gpu();
+    let device = common::device();
     let mut rng = Rng(31);
     let truth = [(dir(20.0, 40.0), 0.08, 1.0)];
     let own = mixture(&mut rng, LobeFamily::Ward, &truth, 200);
@@ -830,7 +842,7 @@ fn photons_of_a_perpendicular_surface_do_not_count() {
     let (splats, materials) = (&fixture.splats, &fixture.materials);
     for (on, map) in [
         ("CPU", on_cpu(&cfg, &bins, splats, materials)),
-        ("GPU", on_gpu(&gpu, &cfg, &bins, splats, materials)),
+        ("GPU", on_gpu(&device, &cfg, &bins, splats, materials)),
     ] {
         let l = &map.light[0];
         assert_eq!(l.photons, 200, "{on}");
@@ -848,7 +860,7 @@ fn photons_of_a_perpendicular_surface_do_not_count() {
 /// `em_fit`'s final pass over the same photons.
 #[test]
 fn gathered_irradiance_equals_the_fit_pass() {
-    let gpu = common::gpu();
+    let device = common::device();
     let (scene, bins) = cornell_bins(None);
     let em = EmConfig {
         iterations: 3,
@@ -861,10 +873,10 @@ fn gathered_irradiance_equals_the_fit_pass() {
         fit_all: true,
         ..em.clone()
     };
-    let shape = shapes(&gpu)[0];
-    let c = cpu::fit_lobes(&em, &bins, &scene.splats, &scene.materials, shape).unwrap();
-    let g = on_gpu_shaped(&gpu, &em, &bins, &scene.splats, &scene.materials, shape);
-    let fit = on_gpu_shaped(&gpu, &all, &bins, &scene.splats, &scene.materials, shape);
+    let shape = shapes(&device)[0];
+    let c = on_cpu_shaped(&em, &bins, &scene.splats, &scene.materials, shape);
+    let g = on_gpu_shaped(&device, &em, &bins, &scene.splats, &scene.materials, shape);
+    let fit = on_gpu_shaped(&device, &all, &bins, &scene.splats, &scene.materials, shape);
     let diffuse = |i: usize| {
         let m = scene.materials[scene.splats[i].material as usize];
         m.specular.iter().all(|&s| s == 0.0)

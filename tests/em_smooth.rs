@@ -9,7 +9,8 @@ mod common;
 use std::path::Path;
 
 use glam::Vec3;
-use lobelight::cpu::{self, CpuExecutor, DepositBins};
+use lobelight::bins::DepositBins;
+use lobelight::cpu::CpuExecutor;
 use lobelight::em::deposit_params;
 use lobelight::fit_groups::CoverGroups;
 use lobelight::gpu::exec::GpuExecutor;
@@ -29,11 +30,13 @@ fn cornell() -> (Scene, DepositBins, EmParams) {
     let mut scene = lobelight::scene::load(Path::new("scenes/cornell.toml")).unwrap();
     scene.bake.photons = 200_000;
     let cfg = lobelight::photons::PhotonConfig::from_scene(&scene);
-    let (map, grid, _) = cpu::trace_scene(&scene, &cfg, &mut |_, _| {}).unwrap();
+    let (map, grid) = common::mirror_photons(&scene, &cfg);
     let r = scene.search_radius();
     let params = deposit_params(&scene.lights, scene.bake.photons, &scene.splats, r).unwrap();
-    let deposits =
-        cpu::deposit_photons(&params, &map.photons, &scene.splats, &grid.params).unwrap();
+    let on = (&scene.splats[..], &grid.params);
+    let deposits = lobelight::renderer::Engine::Mirror
+        .deposit_photons(&params, &[&map.photons], on)
+        .unwrap();
     let em = lobelight::em::EmConfig::from_scene(&scene);
     let n = scene.splats.len() as u32;
     let shape = lobelight::em::FitShape::default();

@@ -8,7 +8,6 @@ use std::path::Path;
 use glam::Vec3;
 
 use lobelight::bake::{self, BakeDevice, Progress, bake, bins_cpu, on_device};
-use lobelight::cpu;
 use lobelight::cpu::CpuExecutor;
 use lobelight::cpu::em_select::FIT_BIT;
 use lobelight::cpu::frames::cpu_direct;
@@ -17,7 +16,9 @@ use lobelight::em::{EmConfig, LobeMap};
 use lobelight::gpu::bins::GpuBins;
 use lobelight::gpu::exec::GpuExecutor;
 use lobelight::gpu::scene::GpuScene;
+use lobelight::host::FitFrom;
 use lobelight::plan::BakePlan;
+use lobelight::renderer::{Engine, Renderer};
 use lobelight::sequence::{Executor, cover_light, final_gather};
 use lobelight::shared::lights::area_light_hit;
 use lobelight::shared::octahedral::oct_decode;
@@ -260,12 +261,12 @@ fn lobes_fitted_to_gathered_samples_match_the_mirror() {
         })
         .unwrap()
     };
-    let (splats, materials) = (&scene.splats, &scene.materials);
-    let gathering = Some((scene.geometry(&grid), &setup));
-    let on_cpu =
-        cpu::fit_lobes_gathering(&cfg, &bins, splats, materials, shape, gathering).unwrap();
+    let splats = &scene.splats;
+    let mirror = Renderer::new(std::sync::Arc::new(scene.clone()), &Engine::Mirror).unwrap();
+    let from = FitFrom::photons(&bins);
+    let on_cpu = mirror.fit_lobes(&cfg, from, shape, Some(&setup)).unwrap();
     let by_photons = EmConfig { gather: 0, ..cfg };
-    let mut photons = cpu::fit_lobes(&by_photons, &bins, splats, materials, shape).unwrap();
+    let mut photons = mirror.fit_lobes(&by_photons, from, shape, None).unwrap();
     // The photons' estimate as the gathering fit's photon pass makes it: the irradiance
     // alone (no lobes, which em_coverage leaves as the photon fit wrote them), with
     // em_coverage's share at the faces' edges.

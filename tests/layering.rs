@@ -262,6 +262,7 @@ const ORDER: &[&str] = &[
     "frame",
     "objects",
     "plan",
+    "host",
     "cpu",
     "gpu",
     // The bake over either engine, its cache, and the renderer that picks the engine once.

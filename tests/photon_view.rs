@@ -30,7 +30,7 @@ fn setup() -> (Scene, PhotonMap, lobelight::grid::SplatGrid, Camera, f32) {
     let mut scene = scene::load(Path::new("scenes/cornell.toml")).unwrap();
     scene.bake.photons = 40_000;
     let cfg = PhotonConfig::from_scene(&scene);
-    let (map, grid, _) = cpu::trace_scene(&scene, &cfg, &mut |_, _| {}).unwrap();
+    let (map, grid) = common::mirror_photons(&scene, &cfg);
     let view = View::new(&scene.camera, 96, 96);
     let cam = camera_uniform(&view, scene.bounds(), &FrameConfig::default());
     let scale = scene_scale(&scene.lights, cfg.photons).unwrap();

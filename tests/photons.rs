@@ -8,11 +8,8 @@ use std::collections::HashMap;
 use std::path::Path;
 
 use glam::Vec3;
-use lobelight::cpu;
-use lobelight::gpu::Gpu;
-use lobelight::gpu::photons::trace_photons;
-use lobelight::gpu::scene::GpuScene;
 use lobelight::photons::{PhotonConfig, PhotonMap};
+use lobelight::renderer::{Engine, Renderer};
 use lobelight::scene::{self, Scene, file::StoreRange};
 use lobelight::types::Photon;
 
@@ -29,15 +26,13 @@ fn config(scene: &Scene, photons: u64, store: StoreRange) -> PhotonConfig {
 }
 
 fn on_cpu(scene: &Scene, cfg: &PhotonConfig) -> PhotonMap {
-    cpu::trace_scene(scene, cfg, &mut |_, _| {}).unwrap().0
+    traced_on(&Engine::Mirror, scene, cfg)
 }
 
-fn on_gpu(gpu: &Gpu, scene: &Scene, cfg: &PhotonConfig) -> PhotonMap {
-    let uploaded = GpuScene::upload(gpu, scene).unwrap();
-    trace_photons(gpu, scene, &uploaded, cfg, &mut |_, _| {})
-        .unwrap()
-        .download(gpu)
-        .unwrap()
+/// The photons `engine` traces, read back.
+fn traced_on(engine: &Engine, scene: &Scene, cfg: &PhotonConfig) -> PhotonMap {
+    let renderer = Renderer::new(std::sync::Arc::new(scene.clone()), engine).unwrap();
+    renderer.trace_photons(cfg, &mut |_, _| {}).unwrap().map
 }
 
 /// Σ power of the photons of one bounce, per channel, in f64.
@@ -85,10 +80,10 @@ fn cornell() -> Scene {
 /// picks the other of two disks at the same place.
 #[test]
 fn first_bounces_match_the_cpu_mirror_photon_by_photon() {
-    let gpu = common::gpu();
+    let device = common::device();
     let scene = cornell();
     let cfg = config(&scene, 50_000, StoreRange::All);
-    let a = on_gpu(&gpu, &scene, &cfg);
+    let a = traced_on(&device, &scene, &cfg);
     let b = on_cpu(&scene, &cfg);
     assert_finite(&a, "GPU");
     assert_finite(&b, "CPU");
@@ -152,11 +147,11 @@ fn first_bounces_match_the_cpu_mirror_photon_by_photon() {
 /// agrees within its statistical error (compound-Poisson variance Σ power²).
 #[test]
 fn stored_power_per_region_agrees_statistically() {
-    let gpu = common::gpu();
+    let device = common::device();
     let scene = cornell();
     let cfg = config(&scene, 100_000, StoreRange::Indirect);
-    let a = on_gpu(
-        &gpu,
+    let a = traced_on(
+        &device,
         &scene,
         &PhotonConfig {
             seed: 1,
@@ -245,12 +240,12 @@ fn check_closed(map: &PhotonMap, what: &str) {
 
 #[test]
 fn white_box_loses_exactly_the_albedo_per_bounce() {
-    let gpu = common::gpu();
+    let device = common::device();
     let albedo = [0.9, 0.6, 0.3];
     let scene = parse(&closed_box("diffuse = [0.9, 0.6, 0.3]", POINT));
     let cfg = config(&scene, 40_000, StoreRange::All);
     for (what, map) in [
-        ("GPU", on_gpu(&gpu, &scene, &cfg)),
+        ("GPU", traced_on(&device, &scene, &cfg)),
         ("CPU", on_cpu(&scene, &cfg)),
     ] {
         check_closed(&map, what);
@@ -285,14 +280,14 @@ fn white_box_loses_exactly_the_albedo_per_bounce() {
 
 #[test]
 fn glossy_box_never_gains_energy() {
-    let gpu = common::gpu();
+    let device = common::device();
     let scene = parse(&closed_box(
         "diffuse = 0.0\nspecular = 0.8\nroughness = 0.2",
         POINT,
     ));
     let cfg = config(&scene, 40_000, StoreRange::All);
     for (what, map) in [
-        ("GPU", on_gpu(&gpu, &scene, &cfg)),
+        ("GPU", traced_on(&device, &scene, &cfg)),
         ("CPU", on_cpu(&scene, &cfg)),
     ] {
         check_closed(&map, what);
@@ -321,7 +316,7 @@ fn glossy_box_never_gains_energy() {
 /// their power arrives at the first hit.
 #[test]
 fn every_light_delivers_its_power() {
-    let gpu = common::gpu();
+    let device = common::device();
     let lights = [
         ("point", POINT.to_string(), false),
         (
@@ -350,7 +345,7 @@ fn every_light_delivers_its_power() {
             [0, 1, 2].map(|c| scene.lights.iter().map(|l| l.power[c] as f64).sum());
         let cfg = config(&scene, 30_000, StoreRange::All);
         for (what, map) in [
-            ("GPU", on_gpu(&gpu, &scene, &cfg)),
+            ("GPU", traced_on(&device, &scene, &cfg)),
             ("CPU", on_cpu(&scene, &cfg)),
         ] {
             check_closed(&map, &format!("{name} {what}"));
@@ -381,13 +376,13 @@ fn every_light_delivers_its_power() {
 /// device and the mirror.
 #[test]
 fn photons_end_at_the_light_they_meet() {
-    let gpu = common::gpu();
+    let device = common::device();
     let light = "[[light]]\ntype = \"area\"\ncenter = [0.0, 0.999, 0.0]\nsize = [0.6, 0.6]\n\
                  normal = [0.0, -1.0, 0.0]\npower = 10.0";
     let scene = parse(&closed_box("diffuse = 0.8", light));
     let cfg = config(&scene, 40_000, StoreRange::All);
     for (what, map) in [
-        ("GPU", on_gpu(&gpu, &scene, &cfg)),
+        ("GPU", traced_on(&device, &scene, &cfg)),
         ("CPU", on_cpu(&scene, &cfg)),
     ] {
         check_closed(&map, what);
@@ -412,7 +407,7 @@ fn photons_end_at_the_light_they_meet() {
 /// ("light 1").
 #[test]
 fn photons_land_on_a_light_that_reflects() {
-    let gpu = common::gpu();
+    let device = common::device();
     let light = "[[light]]\ntype = \"area\"\ncenter = [0.0, 0.999, 0.0]\nsize = [0.6, 0.6]\n\
                  normal = [0.0, -1.0, 0.0]\npower = 10.0\nmaterial = \"wall\"\nspacing = 0.05";
     let scene = parse(&closed_box("diffuse = 0.8", light));
@@ -427,7 +422,7 @@ fn photons_land_on_a_light_that_reflects() {
     }));
     let cfg = config(&scene, 40_000, StoreRange::All);
     for (what, map) in [
-        ("GPU", on_gpu(&gpu, &scene, &cfg)),
+        ("GPU", traced_on(&device, &scene, &cfg)),
         ("CPU", on_cpu(&scene, &cfg)),
     ] {
         check_closed(&map, what);
@@ -455,7 +450,7 @@ fn photons_land_on_a_light_that_reflects() {
 /// area is exact (a quad of splats overhangs its edges by about a splat radius).
 #[test]
 fn directional_light_delivers_irradiance_times_area() {
-    let gpu = common::gpu();
+    let device = common::device();
     let mut scene = parse(
         r#"
 [[light]]
@@ -484,7 +479,7 @@ spacing = 0.5
     let target = std::f64::consts::PI * (radius as f64).powi(2);
     let hit_fraction = target / disk_area;
     for (what, map) in [
-        ("GPU", on_gpu(&gpu, &scene, &cfg)),
+        ("GPU", traced_on(&device, &scene, &cfg)),
         ("CPU", on_cpu(&scene, &cfg)),
     ] {
         assert_finite(&map, what);
@@ -510,7 +505,7 @@ spacing = 0.5
 /// those of a run with room to spare.
 #[test]
 fn overflow_grows_the_store_and_loses_nothing() {
-    let gpu = common::gpu();
+    let device = common::device();
     let scene = cornell();
     let roomy = config(&scene, 20_000, StoreRange::All);
     let tight = PhotonConfig {
@@ -519,8 +514,8 @@ fn overflow_grows_the_store_and_loses_nothing() {
         page_limit: 5000,
         ..roomy.clone()
     };
-    let reference = on_gpu(&gpu, &scene, &roomy);
-    let squeezed = on_gpu(&gpu, &scene, &tight);
+    let reference = traced_on(&device, &scene, &roomy);
+    let squeezed = traced_on(&device, &scene, &tight);
     let s = &squeezed.stats;
     eprintln!(
         "tight store: {} batches, {} reruns, {} pages",
@@ -553,11 +548,11 @@ fn overflow_grows_the_store_and_loses_nothing() {
 
 #[test]
 fn same_seed_same_photons() {
-    let gpu = common::gpu();
+    let device = common::device();
     let scene = cornell();
     let cfg = config(&scene, 30_000, StoreRange::Indirect);
-    let a = on_gpu(&gpu, &scene, &cfg);
-    let b = on_gpu(&gpu, &scene, &cfg);
+    let a = traced_on(&device, &scene, &cfg);
+    let b = traced_on(&device, &scene, &cfg);
     assert_eq!(a.photons, b.photons, "two GPU runs differ");
     let c = on_cpu(&scene, &cfg);
     let d = on_cpu(&scene, &cfg);

@@ -9,7 +9,6 @@ use lobelight::bake::{Binned, Progress, bins_cpu};
 use lobelight::bins::PhotonBins;
 use lobelight::camera::View;
 use lobelight::cli::compare::difference;
-use lobelight::cpu;
 use lobelight::cpu::frames::{cpu_frame, cpu_reference};
 use lobelight::frame::{Direct, FrameConfig, camera_uniform, shade_params};
 use lobelight::gpu::Gpu;
@@ -89,14 +88,11 @@ fn reference_and_lobes_agree_where_nothing_is_glossy() {
         gather: 0,
         ..lobelight::em::EmConfig::from_scene(&scene)
     };
-    let lobes = cpu::fit_lobes(
-        &em,
-        &binned.bins,
-        &scene.splats,
-        &scene.materials,
-        Default::default(),
-    )
-    .unwrap();
+    let of = (&scene.splats[..], &scene.materials[..]);
+    let from = lobelight::host::FitFrom::photons(&binned.bins);
+    let lobes = lobelight::renderer::Engine::Mirror
+        .fit_lobes(&em, from, of, Default::default())
+        .unwrap();
     assert_eq!(lobes.stats.fitted, 0, "nothing glossy, no lobes");
     // The same direct light in both (shadow rays): the comparison is of the indirect light.
     let cfg = FrameConfig {

@@ -7,15 +7,12 @@ use std::process::Command;
 
 use lobelight::camera::View;
 use lobelight::cli::compare::{Values, difference_of, read_image};
-use lobelight::cpu::photon_view::scene_scale;
 use lobelight::cpu::present::present;
-use lobelight::frame::{FrameConfig, camera_uniform};
-use lobelight::gpu::photon_view::photon_image;
-use lobelight::gpu::photons::trace_photons;
+use lobelight::frame::FrameConfig;
 use lobelight::gpu::present::PresentPipeline;
 use lobelight::gpu::scene::GpuScene;
 use lobelight::gpu::tone::tone_map;
-use lobelight::photons::PhotonConfig;
+use lobelight::renderer::Renderer;
 use lobelight::scene;
 use lobelight::tone::ToneConfig;
 
@@ -168,18 +165,18 @@ fn a_scripted_view_matches_the_offscreen_render() {
 fn the_photon_view_shows_the_bakes_photons() {
     let shot = path("shot-photons.png");
     let (a, w, h) = scripted_view(&["--method", "photons"], &shot);
-    let gpu = common::gpu();
+    let device = common::device();
+    let gpu = device.gpu().unwrap();
     let mut scene = scene::load(std::path::Path::new(COMMON[0])).unwrap();
     scene.bake.photons = 100_000;
-    let on_gpu = GpuScene::upload(&gpu, &scene).unwrap();
-    let cfg = PhotonConfig::from_scene(&scene);
-    let traced = trace_photons(&gpu, &scene, &on_gpu, &cfg, &mut |_, _| {}).unwrap();
     let view = View::new(&scene.camera, w, h);
-    let cam = camera_uniform(&view, scene.bounds(), &FrameConfig::default());
-    let scale = scene_scale(&scene.lights, cfg.photons).unwrap();
-    let mut encoder = gpu.encoder("photon view");
-    let hdr = photon_image(&gpu, &mut encoder, &on_gpu, &traced, &cam, scale).unwrap();
-    let toned = tone_map(&gpu, &mut encoder, &hdr, w * h, &ToneConfig::default()).unwrap();
+    let renderer = Renderer::new(std::sync::Arc::new(scene), &device).unwrap();
+    let seen = renderer
+        .photon_view(&view, &FrameConfig::default(), &mut |_, _| {})
+        .unwrap();
+    let hdr = gpu.storage("photon view", &seen.hdr).unwrap();
+    let mut encoder = gpu.encoder("photon view tone map");
+    let toned = tone_map(gpu, &mut encoder, &hdr, w * h, &ToneConfig::default()).unwrap();
     gpu.submit_and_wait(encoder).unwrap();
     let rgba: Vec<u32> = gpu.read(&toned.rgba, (w * h) as usize).unwrap();
     // What the PNG holds: the bytes over 255.

@@ -1,13 +1,10 @@
-//! The photon pass on the device: `sequence::trace_photons` (batches of `photon_trace`
-//! appending to a store of pages, the counters read back after each), with pages no larger
-//! than the device's largest binding.
+//! Stored photons on the device (`sequence::Traced`): read back, or uploaded from the host
+//! (the photon pass itself: `host::trace`, `bake::trace`).
 
 use super::Gpu;
 use super::exec::GpuExecutor;
-use super::scene::GpuScene;
 use crate::error::Result;
-use crate::photons::{PhotonConfig, PhotonMap, emitters, page_photons};
-use crate::scene::Scene;
+use crate::photons::PhotonMap;
 use crate::sequence;
 
 /// One store buffer on the device and how many photons it holds.
@@ -39,30 +36,4 @@ impl GpuPhotons {
             stats: map.stats.clone(),
         })
     }
-}
-
-/// Traces `cfg.photons` photons from the scene's lights (`sequence::trace_photons`), in pages
-/// no larger than the device's largest binding. `progress` hears (paths done, total).
-pub fn trace_photons(
-    gpu: &Gpu,
-    scene: &Scene,
-    on_gpu: &GpuScene,
-    cfg: &PhotonConfig,
-    progress: &mut dyn FnMut(u64, u64),
-) -> Result<GpuPhotons> {
-    cfg.validate()?;
-    let emitters = emitters(&scene.lights, cfg.photons)?;
-    let max_page = page_photons(cfg, gpu.bake_limits().photon_page);
-    let mut encoder = gpu.encoder("photon trace");
-    let mut ex = GpuExecutor::new(gpu, &mut encoder).tracing(on_gpu.geometry());
-    let traced = sequence::trace_photons(
-        &mut ex,
-        &emitters,
-        &on_gpu.materials,
-        cfg,
-        max_page,
-        progress,
-    )?;
-    gpu.submit_and_wait(encoder)?;
-    Ok(traced)
 }

@@ -284,3 +284,20 @@ pub fn apart(a: &[f32], b: &[f32]) -> String {
         share(1e-3)
     )
 }
+
+/// The test device as an engine (`common::gpu`).
+pub fn device() -> lobelight::renderer::Engine {
+    lobelight::renderer::Engine::Device(std::sync::Arc::new(gpu()))
+}
+
+/// `scene`'s photons traced by the mirror (sorted by key) and the grid they were traced
+/// through.
+pub fn mirror_photons(
+    scene: &lobelight::scene::Scene,
+    cfg: &lobelight::photons::PhotonConfig,
+) -> (lobelight::photons::PhotonMap, lobelight::grid::SplatGrid) {
+    use lobelight::renderer::{Engine, Renderer};
+    let renderer = Renderer::new(std::sync::Arc::new(scene.clone()), &Engine::Mirror).unwrap();
+    let map = renderer.trace_photons(cfg, &mut |_, _| {}).unwrap().map;
+    (map, renderer.read_grid().unwrap().into_owned())
+}

@@ -9,139 +9,34 @@
 //! (`cpu::frames`) is taken here and nowhere above.
 
 use std::sync::Arc;
+use std::time::Instant;
+
+mod engine;
+pub use engine::{Engine, EngineChoice, Fallback};
 
 use crate::bake::{BakeDevice, Baked, Binned, Progress, StageReport, bake, bins_cpu, bins_gpu};
 use crate::bins::PhotonBins;
 use crate::camera::View;
 use crate::cpu;
+use crate::cpu::CpuExecutor;
 use crate::direct::DirectMap;
-use crate::em::LobeMap;
+use crate::em::{EmConfig, FitShape, GatherSetup, LobeMap};
 use crate::error::{Error, Result};
 use crate::frame::{FrameConfig, FramePlan, SceneExtent, Splatting, camera_uniform};
 use crate::gpu::Gpu;
 use crate::gpu::bins::GpuBins;
-use crate::gpu::photon_view::photon_image;
-use crate::gpu::photons as gpu_photons;
+use crate::gpu::exec::GpuExecutor;
 use crate::gpu::renderer::FrameRenderer;
 use crate::gpu::scene::GpuScene;
 pub use crate::gpu::{BackendChoice, Compiled};
 use crate::grid::SplatGrid;
+use crate::host::{self, FitFrom};
 use crate::photons::{PhotonConfig, PhotonStats};
+use crate::plan::BakeLimits;
 use crate::scene::Scene;
+use crate::sequence::{self, Executor};
 use crate::timing::ms_since;
 use crate::tone::ToneConfig;
-
-/// Which engine to run on.
-#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, serde::Serialize)]
-#[cfg_attr(feature = "cli", derive(clap::ValueEnum))]
-#[serde(rename_all = "lowercase")]
-pub enum EngineChoice {
-    /// The device, but the CPU mirror where none is found, or where the device is a software
-    /// rasterizer (lavapipe, llvmpipe) and no backend was named: there the mirror bakes and
-    /// draws still images in about half the time (docs/measurements.md).
-    #[default]
-    Auto,
-    /// The CPU mirrors.
-    Mirror,
-    /// The device, a software rasterizer too; the CPU mirror where none is found and no
-    /// backend was named.
-    Device,
-}
-
-/// Why `Engine::open` gave the mirror where a device was asked for or preferred.
-#[derive(Clone, Debug, PartialEq, Eq)]
-pub enum Fallback {
-    /// No adapter was found (why).
-    NoDevice(String),
-    /// The adapter (named) is a software rasterizer, which the mirror outruns.
-    Software(String),
-}
-
-impl std::fmt::Display for Fallback {
-    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
-        match self {
-            Fallback::NoDevice(why) => write!(f, "running on the CPU mirror (slower): {why}"),
-            Fallback::Software(name) => write!(
-                f,
-                "{name} is a software rasterizer: the bake and the image run on the CPU mirror \
-                 ({} threads), faster here",
-                rayon::current_num_threads()
-            ),
-        }
-    }
-}
-
-/// The engine stages run on: a device, or the CPU mirrors.
-#[derive(Clone)]
-pub enum Engine {
-    Mirror,
-    Device(Arc<Gpu>),
-}
-
-impl Engine {
-    /// Opens the engine `choice` names on `backend`, and why it is the mirror where the
-    /// device was asked for or preferred. A backend named that has no adapter stays an error.
-    pub fn open(
-        choice: EngineChoice,
-        backend: BackendChoice,
-    ) -> Result<(Engine, Option<Fallback>)> {
-        if choice == EngineChoice::Mirror {
-            return Ok((Engine::Mirror, None));
-        }
-        let gpu = match Gpu::new(backend) {
-            Ok(gpu) => gpu,
-            Err(Error::NoAdapter(why)) if backend == BackendChoice::Auto => {
-                return Ok((Engine::Mirror, Some(Fallback::NoDevice(why))));
-            }
-            Err(e) => return Err(e),
-        };
-        if choice == EngineChoice::Auto && backend == BackendChoice::Auto && gpu.is_software() {
-            let software = Fallback::Software(gpu.info.name.clone());
-            return Ok((Engine::Mirror, Some(software)));
-        }
-        Ok((Engine::Device(Arc::new(gpu)), None))
-    }
-
-    /// The device, where this engine is one.
-    pub fn gpu(&self) -> Option<&Gpu> {
-        match self {
-            Engine::Device(gpu) => Some(gpu),
-            Engine::Mirror => None,
-        }
-    }
-
-    /// The adapter's name, or "CPU mirror".
-    pub fn adapter(&self) -> String {
-        self.gpu()
-            .map_or_else(|| "CPU mirror".to_string(), |g| g.info.name.clone())
-    }
-
-    /// The adapter's name, or the CPU mirror with its threads (the benchmarks' `adapter`).
-    pub fn adapter_and_threads(&self) -> String {
-        match self {
-            Engine::Device(_) => self.adapter(),
-            Engine::Mirror => format!("CPU mirror ({} threads)", rayon::current_num_threads()),
-        }
-    }
-
-    /// The graphics API's name, or "cpu".
-    pub fn backend(&self) -> &'static str {
-        self.gpu().map_or("cpu", Gpu::backend_name)
-    }
-
-    /// Refuses an image the engine cannot hold (a device's texture and buffer limits).
-    pub fn check_image(&self, width: u32, height: u32) -> Result<()> {
-        match self.gpu() {
-            Some(gpu) => gpu.check_image(width, height),
-            None => Ok(()),
-        }
-    }
-
-    /// The compute pipelines the device compiled so far, and their time (none on the mirror).
-    pub fn compiled(&self) -> Option<Compiled> {
-        self.gpu().map(Gpu::compiled)
-    }
-}
 
 /// What a bake reports of its stages (its lobes stay in the renderer).
 #[derive(Clone, Debug)]
@@ -302,6 +197,26 @@ pub struct Renderer {
     on: On,
     /// The bake's lobes (an empty map until a bake or `set_lobes`).
     lobes: LobeMap,
+}
+
+/// Runs `$body` with `$ex` an executor of `$renderer`'s engine that traces its scene (the
+/// device's buffers or the mirror's grid) and `$limits` the engine's `BakeLimits`.
+macro_rules! tracing_scene {
+    ($renderer:expr, $label:literal, |$ex:ident, $limits:ident| $body:expr) => {
+        match &$renderer.on {
+            On::Device(d) => {
+                let $limits = &d.gpu.bake_limits();
+                let mut encoder = d.gpu.encoder($label);
+                let $ex = &mut GpuExecutor::new(&d.gpu, &mut encoder).tracing(d.scene.geometry());
+                $body
+            }
+            On::Mirror(m) => {
+                let $limits = &BakeLimits::host();
+                let $ex = &mut CpuExecutor::tracing($renderer.scene.geometry(&m.grid));
+                $body
+            }
+        }
+    };
 }
 
 fn unbinned() -> Error {
@@ -642,38 +557,30 @@ impl Renderer {
         Ok(())
     }
 
-    /// Traces `cfg`'s photons from the scene's lights (`sequence::trace_photons`) and reads
-    /// them back; `on_batch` hears (paths done, total).
+    /// Traces `cfg`'s photons from the scene's lights (`host::trace`) and reads them back;
+    /// `on_batch` hears (paths done, total).
     pub fn trace_photons(
         &self,
         cfg: &PhotonConfig,
         on_batch: &mut dyn FnMut(u64, u64),
     ) -> Result<TracedPhotons> {
         let scene = &self.scene;
-        match &self.on {
-            On::Device(d) => {
-                let traced = gpu_photons::trace_photons(&d.gpu, scene, &d.scene, cfg, on_batch)?;
-                let t = std::time::Instant::now();
-                let map = traced.download(&d.gpu)?;
-                let download_ms = ms_since(t);
-                Ok(TracedPhotons { map, download_ms })
-            }
-            On::Mirror(m) => {
-                let geo = scene.geometry(&m.grid);
-                let (lights, materials) = (&scene.lights, &scene.materials);
-                let map = cpu::trace_photons(lights, materials, &geo, cfg, on_batch)?;
-                Ok(TracedPhotons {
-                    map,
-                    download_ms: 0.0,
-                })
-            }
-        }
+        tracing_scene!(self, "photon trace", |ex, limits| {
+            let materials = ex.upload("materials", &scene.materials)?;
+            let traced = host::trace(ex, limits, (&scene.lights, &materials), cfg, on_batch)?;
+            let t = Instant::now();
+            let map = traced.read_back(ex)?;
+            Ok(TracedPhotons {
+                map,
+                download_ms: ms_since(t),
+            })
+        })
     }
 
     /// Traces the scene's photons and draws the stored ones seen from `view` (thesis Fig.
-    /// 3.1); `on_batch` hears (paths done, total).
+    /// 3.1, `sequence::photon_image`); `on_batch` hears (paths done, total).
     pub fn photon_view(
-        &mut self,
+        &self,
         view: &View,
         cfg: &FrameConfig,
         on_batch: &mut dyn FnMut(u64, u64),
@@ -682,36 +589,46 @@ impl Renderer {
         let photons = PhotonConfig::from_scene(scene);
         let cam = camera_uniform(view, scene.bounds(), cfg);
         let scale = cpu::photon_view::scene_scale(&scene.lights, photons.photons)?;
-        match &self.on {
-            On::Device(d) => {
-                let traced =
-                    gpu_photons::trace_photons(&d.gpu, scene, &d.scene, &photons, on_batch)?;
-                let t = std::time::Instant::now();
-                let gpu = &d.gpu;
-                let mut encoder = gpu.encoder("photon view");
-                let hdr = photon_image(gpu, &mut encoder, &d.scene, &traced, &cam, scale)?;
-                gpu.submit_and_wait(encoder)?;
-                let hdr = gpu.read::<[f32; 4]>(&hdr, (view.width * view.height) as usize)?;
-                let draw_ms = ms_since(t);
-                Ok(PhotonView {
-                    hdr,
-                    stats: traced.stats,
-                    draw_ms,
-                })
-            }
-            On::Mirror(m) => {
-                let map = self.trace_photons(&photons, on_batch)?.map;
-                let (geo, materials) = (scene.geometry(&m.grid), &scene.materials);
-                let t = std::time::Instant::now();
-                let hdr = cpu::photon_image(&cam, materials, &map.photons, &geo, scale)?;
-                let draw_ms = ms_since(t);
-                Ok(PhotonView {
-                    hdr,
-                    stats: map.stats,
-                    draw_ms,
-                })
-            }
-        }
+        let pixels = (view.width * view.height) as usize;
+        tracing_scene!(self, "photon view", |ex, limits| {
+            let materials = ex.upload("materials", &scene.materials)?;
+            let lit = (&scene.lights[..], &materials);
+            let traced = host::trace(ex, limits, lit, &photons, on_batch)?;
+            let t = Instant::now();
+            let pages: Vec<_> = traced
+                .pages
+                .iter()
+                .map(|p| (&p.buffer, p.count as u32))
+                .collect();
+            let hdr = sequence::photon_image(ex, &materials, &pages, &cam, scale)?;
+            let hdr = ex.read(&hdr, pixels)?;
+            Ok(PhotonView {
+                hdr,
+                stats: traced.stats,
+                draw_ms: ms_since(t),
+            })
+        })
+    }
+
+    /// The lobe fit of the scene's splats to `from` in `shape` (`host::fit_lobes`), with final
+    /// gathering of `gathering`'s lights through the scene where it is given.
+    pub fn fit_lobes(
+        &self,
+        cfg: &EmConfig,
+        from: FitFrom,
+        shape: FitShape,
+        gathering: Option<&GatherSetup>,
+    ) -> Result<LobeMap> {
+        self.engine.check_shape(shape)?;
+        let scene = &self.scene;
+        tracing_scene!(self, "lobe fit", |ex, limits| {
+            let limits = &BakeLimits {
+                fit_shape: shape,
+                ..*limits
+            };
+            let of = (&scene.splats[..], &scene.materials[..]);
+            host::fit_lobes(ex, limits, cfg, from, of, gathering)
+        })
     }
 
     /// Which scene surface each pixel of `view` shows (`objects::object_ids`, on the host,
