@@ -134,7 +134,7 @@ echo "gpu-check: adapter $adapter ($backend)" >&2
 
 # The tests that open a device (each integration test that calls common::gpu(), but the
 # viewer's, which needs a window system).
-device_tests=(trace photons bins deposits em em_coverage final_gather grid_parity direct path
+device_tests=(trace photons bins deposits em estimate_coverage final_gather grid_parity direct path
   tone paging skip stress photon_view reference render sweep fit_groups)
 if [ $tests = 1 ]; then
   if [ -n "${LOBELIGHT_TESTS:-}" ]; then

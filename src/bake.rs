@@ -59,7 +59,7 @@ pub struct StageReport {
     /// splats of a cell of R/16 that face alike).
     #[serde(skip_serializing_if = "Option::is_none")]
     pub coverages: Option<u32>,
-    /// EM: splats whose photon estimate was widened (`em_smooth`), and of those the ones to
+    /// EM: splats whose photon estimate was widened (`estimate_smooth`), and of those the ones to
     /// the widest kernel.
     #[serde(skip_serializing_if = "Option::is_none")]
     pub splats_smoothed: Option<u32>,
@@ -656,7 +656,7 @@ pub fn fit<E: Executor>(
 }
 
 /// Splats with photons near them: those the fit listed, and with deposits the glossy splats
-/// served by shared fits, which `em_share` lit and no list holds (the photons' estimate lists
+/// served by shared fits, which `deposit_share` lit and no list holds (the photons' estimate lists
 /// them for their irradiance).
 fn lit(s: &EmStats, cfg: &EmConfig) -> u32 {
     s.listed + if cfg.uses_deposits() { s.served } else { 0 }
@@ -714,7 +714,7 @@ fn em_skipped(map: &LobeMap, cfg: &EmConfig, splats: usize) -> String {
     }
 }
 
-/// What `em_smooth` did, for the stage's detail: how many lit splats took a wider estimate
+/// What `estimate_smooth` did, for the stage's detail: how many lit splats took a wider estimate
 /// than their own, and how many fitted a subset of their crowded boxes.
 fn smoothed(counts: &[u32; 4]) -> String {
     let [own, half, widest, crowded] = *counts;

@@ -1,5 +1,5 @@
 //! The lobe fit (docs/design.md §6): settings, the plan of `em_fit` dispatches, and the result.
-//! The passes are `em_select` (list the splats with photons near them) and `em_fit` (one
+//! The passes are `fit_select` (list the splats with photons near them) and `em_fit` (one
 //! workgroup per listed splat); `sequence::fit_lobes` runs them alike on either engine.
 
 use serde::{Deserialize, Serialize};
@@ -40,12 +40,12 @@ impl LobeFamily {
 #[serde(rename_all = "lowercase")]
 pub enum Estimate {
     /// Each splat's photons summed into its deposit, and a splat's irradiance the share of
-    /// its neighbours' deposits that its gather disk holds (`em_share`): time bounded by
+    /// its neighbours' deposits that its gather disk holds (`deposit_share`): time bounded by
     /// splats, not photons. Fitted splats need final gathering for their lobes; with
     /// `gather` 0 the photons' estimate is used.
     #[default]
     Deposits,
-    /// Every photon within R of the splat (`em_gather`, `em_fit`): time grows with photons.
+    /// Every photon within R of the splat (`estimate_gather`, `em_fit`): time grows with photons.
     Photons,
 }
 
@@ -80,7 +80,7 @@ pub struct EmConfig {
     /// Shared fits (`fit_groups`): fitted splats within one cell of this many search radii,
     /// facing alike, share one fit (0: each fits its own).
     pub share: f32,
-    /// The photons' estimate widened where the light is smooth (`em_smooth`): the widest
+    /// The photons' estimate widened where the light is smooth (`estimate_smooth`): the widest
     /// kernel, in search radii (0: each splat keeps its own estimate). Deposits only.
     pub smooth: f32,
 }
@@ -213,7 +213,7 @@ pub const DEFAULT_SHARE: f32 = 1.0;
 /// "Smoothing").
 pub const DEFAULT_SMOOTH: f32 = 2.0;
 
-/// Widest smoothing kernel, in search radii: `em_smooth`'s box reaches the widest kernel plus
+/// Widest smoothing kernel, in search radii: `estimate_smooth`'s box reaches the widest kernel plus
 /// a deposit's reach past R, at most 2 reach (the `SMOOTH_SPAN` + 1 cells its box may span),
 /// which holds for 2 R since the reach is at least R.
 pub const MAX_SMOOTH: f32 = 2.0;
@@ -302,7 +302,7 @@ pub fn dispatch_ranges(iterations: u32, chunk: u32) -> Vec<(u32, u32)> {
 /// Counts of a lobe fit.
 #[derive(Clone, Debug, Default, Serialize)]
 pub struct EmStats {
-    /// Splats with candidate photons (listed by `em_select`).
+    /// Splats with candidate photons (listed by `fit_select`).
     pub listed: u32,
     /// Listed splats whose lobes were fitted (glossy, or all with `fit_all`).
     pub fitted: u32,
@@ -324,10 +324,10 @@ pub struct EmStats {
     pub rays: u64,
     /// Splats served by another's fit (shared fits), besides the `fitted`.
     pub served: u32,
-    /// Measures of the covered share of a gather disk (`em_coverage`): one a coverage group.
+    /// Measures of the covered share of a gather disk (`estimate_coverage`): one a coverage group.
     pub coverages: u32,
-    /// `em_smooth`: the lit splats by the estimate they took (their own, the plane within half
-    /// the widest kernel, within all of it), and those whose box was too crowded to fit.
+    /// `estimate_smooth`: the lit splats by the estimate they took (their own, the plane within
+    /// half the widest kernel, within all of it), and those whose box was too crowded to fit.
     pub smoothed: [u32; 4],
 }
 
@@ -448,7 +448,7 @@ pub const DEPOSIT_REACH: f32 = std::f32::consts::SQRT_2;
 
 /// The share of splats whose radius bounds the deposits' reach. A mesh's few large triangles
 /// (the bunny's base: 113 of its 34,835 vertices cover radii 3–10× the median) would otherwise
-/// size every splat's search: sized by the largest radius, the bunny scene's `em_share`
+/// size every splat's search: sized by the largest radius, the bunny scene's `deposit_share`
 /// visited 48 M records, the box's 2.2 M. The deposits of the larger splats keep their photons
 /// within the reach (`spread_max`), a narrower disk about the same mean.
 pub const SPREAD_QUANTILE: f64 = 0.99;

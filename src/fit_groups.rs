@@ -8,12 +8,12 @@
 //!
 //! The groups are made once per bake on the host, from the splats alone, so
 //! that both executors read the same groups and the result does not depend on scheduling.
-//! They travel as one array of words (`FitGroups::words`), which `em_select` and
+//! They travel as one array of words (`FitGroups::words`), which `fit_select` and
 //! `final_gather` read: one word a splat (`FOLLOWER_BIT | leader` for a splat that uses
 //! another's fit, its group's index for a leader, all ones for a splat not fitted), then where
 //! each group's members start, then the members, each group's leader first.
 //!
-//! The covered share of a splat's gather disk (`em_coverage`) is shared the same way, in
+//! The covered share of a splat's gather disk (`estimate_coverage`) is shared the same way, in
 //! smaller cells (`CoverGroups`): a dense scan's every search radius holds thousands of splats,
 //! whose shares differ by little. A follower joins its fit leader's coverage group: only the
 //! rays that meet it read its own estimate before `serve` replaces it.
@@ -28,7 +28,7 @@ use crate::types::{Material, Splat};
 /// A splat's word when another splat's fit serves it (`wgsl/shared/lobes.wgsl`).
 pub use crate::shared::lobes::FOLLOWER_BIT;
 
-/// The word of a splat that is not fitted: with `FOLLOWER_BIT` set, `em_select` lists it as
+/// The word of a splat that is not fitted: with `FOLLOWER_BIT` set, `fit_select` lists it as
 /// the diffuse splat it is.
 const UNGROUPED: u32 = u32::MAX;
 
@@ -137,7 +137,7 @@ impl FitGroups {
     }
 }
 
-/// Splats share the covered share of their gather disk (`em_coverage`) within cells of this
+/// Splats share the covered share of their gather disk (`estimate_coverage`) within cells of this
 /// many search radii: the share moves by at most about 0.64 per radius the centre moves (the
 /// disk's widest chord over its area), so by a few hundredths within a cell, where a dense
 /// scan's cell of R/16 holds tens of splats.
@@ -148,7 +148,7 @@ pub const COVER_CELL: f32 = 1.0 / 16.0;
 pub const COVER_COS_MIN: f32 = 0.98;
 
 /// Every splat in a group that shares one measure of its gather disk's coverage
-/// (`wgsl/em_coverage.wgsl`).
+/// (`wgsl/estimate_coverage.wgsl`).
 #[derive(Clone, Debug, Default, PartialEq)]
 pub struct CoverGroups {
     /// `splats` words, each splat's group, then `groups` words, each group's leader.

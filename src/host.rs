@@ -22,7 +22,7 @@ use crate::types::{BinParams, DepositParams, GridParams, Light, Material, Photon
 pub type PhotonPages<'a> = &'a [&'a [Photon]];
 
 /// What a fit reads: binned photons, or binned deposits (`bins` then the deposits' bins,
-/// every splat's irradiance from `em_share`).
+/// every splat's irradiance from `deposit_share`).
 #[derive(Clone, Copy)]
 pub struct FitFrom<'a> {
     pub bins: &'a PhotonBins,
@@ -119,7 +119,7 @@ pub fn deposit_photons<E: Executor>(
 }
 
 /// The lobe fit of `splats` (with their `materials`) to `from`, in `limits.fit_shape`
-/// (`em_select`, then `em_fit` over the same dispatch ranges and sum order on every
+/// (`fit_select`, then `em_fit` over the same dispatch ranges and sum order on every
 /// executor); with final gathering of `gathering`'s lights through the scene the executor
 /// traces where it is given.
 pub fn fit_lobes<E: Executor>(

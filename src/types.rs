@@ -425,7 +425,7 @@ pub struct BinParams {
     pub sub: u32,
 }
 
-/// Uniform of the lobe fit (`em_select`, `em_fit`).
+/// Uniform of the lobe fit (`fit_select`, `em_fit`).
 #[repr(C)]
 #[derive(Clone, Copy, Debug, Default, PartialEq, Pod, Zeroable)]
 pub struct EmParams {
@@ -464,29 +464,29 @@ pub struct EmParams {
     /// The fit-list entry of this dispatch's first workgroup (batches of gathered samples:
     /// the samples of entry `list_first + k` begin at k · gathered).
     pub list_first: u32,
-    /// `em_smooth`'s widest kernel, in search radii (its other is half as wide).
+    /// `estimate_smooth`'s widest kernel, in search radii (its other is half as wide).
     pub smooth_radii: f32,
     pub _pad1: u32,
     pub _pad2: u32,
 }
 
-/// The uniform of the deposit passes (`em_deposit`, `em_deposit_list`, `em_share`; design
+/// The uniform of the deposit passes (`deposit_add`, `deposit_list`, `deposit_share`; design
 /// §6, "Deposits").
 #[repr(C)]
 #[derive(Clone, Copy, Debug, Default, PartialEq, Pod, Zeroable)]
 pub struct DepositParams {
     /// Fixed-point units of one unit of photon power in a deposit's sums.
     pub power_scale: f32,
-    /// Photons of this `em_deposit` dispatch (one store page).
+    /// Photons of this `deposit_add` dispatch (one store page).
     pub photon_count: u32,
     /// The splats whose deposits this dispatch's deposit buffer holds, from `first_splat`
     /// (deposits larger than one storage binding are split by splat ranges).
     pub splat_count: u32,
     /// How far from a splat's centre a deposit's mean may lie and still reach its gather
-    /// disk: R plus the most a deposit's disk reaches past its mean (`em_share`'s box).
+    /// disk: R plus the most a deposit's disk reaches past its mean (`deposit_share`'s box).
     pub reach: f32,
     pub first_splat: u32,
-    /// The widest a deposit's disk is taken to be (`em_deposit_list` clamps its spread to it):
+    /// The widest a deposit's disk is taken to be (`deposit_list` clamps its spread to it):
     /// the reach past R, sized by nearly every splat's radius, not by the largest one's.
     pub spread_max: f32,
     pub _pad1: u32,

@@ -5,7 +5,7 @@
 //! The tolerance is per object: |mean / path tracer's − 1| ≤ `OBJECT_TOLERANCE`. The path
 //! tracer's own noise on an object's indirect light is kept near a quarter of it by its sample
 //! count (at 512 samples two seeds differ by up to 1.4 % on the diffuse box's objects, so 2,048
-//! are taken). A bake path that skips a correction fails: without `em_coverage` on the
+//! are taken). A bake path that skips a correction fails: without `estimate_coverage` on the
 //! all-diffuse box its blocks' indirect light reads 4.5 % and 2.3 % dark.
 
 mod common;

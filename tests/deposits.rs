@@ -1,4 +1,4 @@
-//! Photon deposits (design §6, "Deposits"): `em_deposit`, `em_deposit_list` and `em_share` on
+//! Photon deposits (design §6, "Deposits"): `deposit_add`, `deposit_list` and `deposit_share` on
 //! the device against their mirrors, the deposits' sums against the photons', and the shared
 //! irradiance against the photons' own estimate and the exact irradiance of a flat field.
 
@@ -38,24 +38,24 @@ fn cornell(
     let mut scene = lobelight::scene::load(Path::new("scenes/cornell.toml")).unwrap();
     scene.bake.photons = photons;
     scene.bake.gather = 8;
-    // The shared estimate as em_share and em_coverage give it (tests/em_smooth.rs holds the
-    // smoothing after them to its own parity).
+    // The shared estimate as deposit_share and estimate_coverage give it (tests/estimate_smooth.rs
+    // holds the smoothing after them to its own parity).
     scene.bake.smooth = 0.0;
     let cfg = lobelight::photons::PhotonConfig::from_scene(&scene);
     let (map, grid) = common::mirror_photons(&scene, &cfg);
     (scene, grid, map)
 }
 
-/// The device's deposits of the same photons are the mirror's: the same records in the same
-/// lists (integer sums, so the order the photons arrive in changes nothing), the same power (to
-/// a division's rounding) and spread (a photon's fixed-point offset a step apart where the
-/// device's division rounds it across one); split over buffers by splat ranges (as on a device whose
-/// storage bindings do not hold them all), they are the same records again, and the same
-/// spreads within 1e-5. The irradiance `em_share` gives every splat (with `em_coverage`'s share)
-/// agrees within 1e-5 on all but 1 % of the lit splats (measured: 125 of 34 k at 400 k
-/// photons; 643 at 100 k), and summed over them within 1e-5: a deposit's mean differs in its
-/// last bits (the device may fuse a multiply and an add), and a deposit of one photon, a
-/// point, lying on the rim of a gather disk counts on one side and not on the other.
+/// The device's deposits of the same photons are the mirror's: the same records in the same lists
+/// (integer sums, so the order the photons arrive in changes nothing), the same power (to a
+/// division's rounding) and spread (a photon's fixed-point offset a step apart where the device's
+/// division rounds it across one); split over buffers by splat ranges (as on a device whose storage
+/// bindings do not hold them all), they are the same records again, and the same spreads within
+/// 1e-5. The irradiance `deposit_share` gives every splat (with `estimate_coverage`'s share) agrees
+/// within 1e-5 on all but 1 % of the lit splats (measured: 125 of 34 k at 400 k photons; 643 at 100
+/// k), and summed over them within 1e-5: a deposit's mean differs in its last bits (the device may
+/// fuse a multiply and an add), and a deposit of one photon, a point, lying on the rim of a gather
+/// disk counts on one side and not on the other.
 #[test]
 fn deposits_and_shared_light_on_the_device_equal_the_mirror() {
     let device = common::device();
@@ -199,7 +199,7 @@ fn deposits_and_shared_light_on_the_device_equal_the_mirror() {
 }
 
 /// Each splat's light from the deposits, summed once a coverage group at its leader and copied
-/// to the members (`em_share`'s two passes), in groups of 2 R (many splats each on the default
+/// to the members (`deposit_share`'s two passes), in groups of 2 R (many splats each on the default
 /// box, whose splats lie farther apart than the bake's R/16): on the mirror every member's
 /// light is its leader's own sum, bit for bit, and the splats lit and not fitted are counted
 /// member by member; the device's agrees within 1e-5 on all but 1 % of the lit splats, as the
@@ -355,11 +355,11 @@ fn disk_share_is_the_share_of_a_uniform_disk() {
 }
 
 /// A flat field: photons of equal power fall uniformly on a plane of splats (each on the first
-/// splat whose disk holds it, as a ray's tie between coplanar disks goes). Away from the edges,
-/// the irradiance `em_share` gives the splats is the photons' own estimate (`em_gather`) within
-/// 0.5 % on the mean (measured +0.21 %: a splat's photons cover what its disk captures, which is
-/// no disk where disks overlap) and the field's exact irradiance within 1 % (+0.32 %), and no
-/// splat is further than 10 % from the photons' estimate. Counting a deposit whole where its
+/// splat whose disk holds it, as a ray's tie between coplanar disks goes). Away from the edges, the
+/// irradiance `deposit_share` gives the splats is the photons' own estimate (`estimate_gather`)
+/// within 0.5 % on the mean (measured +0.21 %: a splat's photons cover what its disk captures,
+/// which is no disk where disks overlap) and the field's exact irradiance within 1 % (+0.32 %), and
+/// no splat is further than 10 % from the photons' estimate. Counting a deposit whole where its
 /// mean lies within R instead puts splats 14 % off (the lattice points within a circle).
 #[test]
 fn shared_light_of_a_flat_field_is_the_photons_estimate() {
@@ -419,14 +419,14 @@ fn shared_light_of_a_flat_field_is_the_photons_estimate() {
         .deposit_photons(&deposit, &[&photons], (&splats, &grid))
         .unwrap();
     let mut shared = vec![SplatLight::default(); splats.len()];
-    let binned = cpu::em_share::BinnedDeposits {
+    let binned = cpu::deposit_share::BinnedDeposits {
         cell_start: &d.bins.cell_start,
         keys: &d.bins.keys,
         geom: &d.bins.geom,
         power: &d.bins.power,
         spread: &d.spread,
     };
-    let groups = n.div_ceil(cpu::em_share::WG);
+    let groups = n.div_ceil(cpu::deposit_share::WG);
     let mut counters = [0; 4];
     let matte = [lobelight::types::Material::default()];
     // Each splat its own group and leader: the sum, then the copy that counts.
@@ -436,7 +436,7 @@ fn shared_light_of_a_flat_field_is_the_photons_estimate() {
         ..params
     };
     for p in [params, copy] {
-        cpu::em_share::em_share(
+        cpu::deposit_share::deposit_share(
             &p,
             &d.params,
             &d.bins.params,
@@ -468,7 +468,7 @@ fn shared_light_of_a_flat_field_is_the_photons_estimate() {
         .collect();
     let mut gathered = vec![SplatLight::default(); splats.len()];
     let gather_params = em.params(n, interior.len() as u32, FitShape::default());
-    cpu::em_gather::em_gather(
+    cpu::estimate_gather::estimate_gather(
         &gather_params,
         &bins.params,
         &splats,
@@ -477,7 +477,7 @@ fn shared_light_of_a_flat_field_is_the_photons_estimate() {
         &bins.geom,
         &bins.power,
         &mut gathered,
-        (interior.len() as u32).div_ceil(cpu::em_gather::WG),
+        (interior.len() as u32).div_ceil(cpu::estimate_gather::WG),
     );
     let (mut a, mut b) = (0.0f64, 0.0f64);
     for &i in &interior {

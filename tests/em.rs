@@ -855,7 +855,7 @@ fn photons_of_a_perpendicular_surface_do_not_count() {
 }
 
 /// Splats that are not fitted and have few candidates gather their irradiance in one
-/// invocation each (`em_gather`): the device gives the CPU mirror's sums, and the same photon
+/// invocation each (`estimate_gather`): the device gives the CPU mirror's sums, and the same photon
 /// count and (but for the order of the sums) irradiance and weight as a workgroup of
 /// `em_fit`'s final pass over the same photons.
 #[test]

@@ -9,7 +9,7 @@ use glam::Vec3;
 
 use lobelight::bake::{self, BakeDevice, Progress, bake, bins_cpu, on_device};
 use lobelight::cpu::CpuExecutor;
-use lobelight::cpu::em_select::FIT_BIT;
+use lobelight::cpu::fit_select::FIT_BIT;
 use lobelight::cpu::frames::cpu_direct;
 use lobelight::direct::shadow_bias;
 use lobelight::em::{EmConfig, LobeMap};
@@ -231,13 +231,13 @@ fn final_gather_matches_the_mirror_and_the_photons() {
 }
 
 /// Lobes fitted to final gathering's samples (`gather`): device against mirror from the same
-/// photons, and the energy the fit hands its lobes. The default scene at 100 k photons, 8 × 8
-/// rays a glossy splat. Every fitted splat's lobes carry its irradiance (their sum within
-/// 1e-4 of it), which is the samples' estimate, π / N Σ L. Over the fitted splats its mean
-/// is the photons' (with em_coverage's share at the faces' edges, as the gathering fit's photon
-/// pass makes it) within 1 % (measured −0.04 %; against the photon fit alone, which leaves the
-/// share out, it read +5 %). Device and mirror agree within 1e-3 on the share of splats
-/// `agreeing_share` names, every splat within `WORST_SPLAT`, and within 1e-3 on the mean.
+/// photons, and the energy the fit hands its lobes. The default scene at 100 k photons, 8 × 8 rays
+/// a glossy splat. Every fitted splat's lobes carry its irradiance (their sum within 1e-4 of it),
+/// which is the samples' estimate, π / N Σ L. Over the fitted splats its mean is the photons' (with
+/// estimate_coverage's share at the faces' edges, as the gathering fit's photon pass makes it)
+/// within 1 % (measured −0.04 %; against the photon fit alone, which leaves the share out, it read
+/// +5 %). Device and mirror agree within 1e-3 on the share of splats `agreeing_share` names, every
+/// splat within `WORST_SPLAT`, and within 1e-3 on the mean.
 #[test]
 fn lobes_fitted_to_gathered_samples_match_the_mirror() {
     let gpu = common::gpu();
@@ -268,8 +268,8 @@ fn lobes_fitted_to_gathered_samples_match_the_mirror() {
     let by_photons = EmConfig { gather: 0, ..cfg };
     let mut photons = mirror.fit_lobes(&by_photons, from, shape, None).unwrap();
     // The photons' estimate as the gathering fit's photon pass makes it: the irradiance
-    // alone (no lobes, which em_coverage leaves as the photon fit wrote them), with
-    // em_coverage's share at the faces' edges.
+    // alone (no lobes, which estimate_coverage leaves as the photon fit wrote them), with
+    // estimate_coverage's share at the faces' edges.
     photons.light = {
         let geometry = scene.geometry(&grid);
         let mut ex = CpuExecutor::tracing(geometry);

@@ -82,10 +82,10 @@ fn groups_hold_near_splats_that_face_alike() {
     assert!((0..n).all(|i| seen[i] == glossy(&scene, i)));
 }
 
-/// With shared fits, the coverage groups (`em_share`, `em_coverage` and `em_smooth` sum,
-/// measure and choose once one) are made of the splats no fit serves, and each follower joins
-/// its fit leader's: no group is led by a follower, so the measures follow the fits and the
-/// diffuse splats, not every glossy splat.
+/// With shared fits, the coverage groups (`deposit_share`, `estimate_coverage` and
+/// `estimate_smooth` sum, measure and choose once one) are made of the splats no fit serves, and
+/// each follower joins its fit leader's: no group is led by a follower, so the measures follow the
+/// fits and the diffuse splats, not every glossy splat.
 #[test]
 fn followers_join_their_leaders_coverage_group() {
     let scene = cornell(1000);

@@ -365,7 +365,7 @@ fn reflecting_light_slack_matches_the_wgsl() {
 #[test]
 fn em_flags_match_the_wgsl() {
     use lobelight::shared::lobes::*;
-    let source = shaders::resolve_stage(Stage::EmCoverage).unwrap();
+    let source = shaders::resolve_stage(Stage::EstimateCoverage).unwrap();
     for (name, value) in [
         ("EM_SPARSE", EM_SPARSE),
         ("EM_PRIORS", EM_PRIORS),
@@ -383,11 +383,11 @@ fn em_flags_match_the_wgsl() {
     }
 }
 
-/// `em_smooth` and its mirror choose alike only with the same thresholds.
+/// `estimate_smooth` and its mirror choose alike only with the same thresholds.
 #[test]
 fn smoothing_constants_match_the_wgsl() {
     use lobelight::shared::lobes::*;
-    let source = shaders::resolve_stage(Stage::EmSmooth).unwrap();
+    let source = shaders::resolve_stage(Stage::EstimateSmooth).unwrap();
     for (name, value) in [
         ("SMOOTH_PHOTONS_ENOUGH", SMOOTH_PHOTONS_ENOUGH),
         ("SMOOTH_BUDGET", SMOOTH_BUDGET),
@@ -405,7 +405,7 @@ fn smoothing_constants_match_the_wgsl() {
             .lines()
             .find_map(|l| l.trim().strip_prefix(decl.as_str()))
             .and_then(|v| v.trim_end_matches(';').parse().ok())
-            .unwrap_or_else(|| panic!("no `{decl}` in em_smooth.wgsl"));
+            .unwrap_or_else(|| panic!("no `{decl}` in estimate_smooth.wgsl"));
         assert_eq!(wgsl, value, "{name}");
     }
 }

@@ -382,7 +382,7 @@ fn irradiance_pass(lid: u32, box: BinBox) {
     }
 }
 
-// The candidates of the splat's rows (em_select counts the same bin rows).
+// The candidates of the splat's rows (fit_select counts the same bin rows).
 fn candidate_count(box: BinBox) -> u32 {
     var n = 0u;
     for (var r = 0u; r < row_count(box); r++) {

@@ -1,6 +1,6 @@
 // Final gathering (docs/design.md section 6): the light arriving at a splat, sampled by rays
 // from its centre rather than estimated from the photons within the gather radius, so that it
-// is resolved at the splat's own position. Per fitted splat of the fit list (em_select's
+// is resolved at the splat's own position. Per fitted splat of the fit list (fit_select's
 // entries with FIT_BIT), samples^2 rays over its cosine-weighted hemisphere (one stratum each,
 // jittered; with shared fits, from its group's members in turn); each brings back the
 // radiance of the surface it meets, as the bake already knows it: hit_albedo / pi times its

@@ -167,7 +167,7 @@ pub struct EmBench {
     pub fits_per_s: f64,
     pub em_ms: f64,
     pub binning_ms: f64,
-    /// The photons' deposits (`em_deposit`, `em_deposit_list`, their binning), where the fit
+    /// The photons' deposits (`deposit_add`, `deposit_list`, their binning), where the fit
     /// a render runs reads them (`skipping`, `pruning`); like the binning, not in `em_ms`.
     #[serde(skip_serializing_if = "Option::is_none")]
     pub deposits_ms: Option<f64>,

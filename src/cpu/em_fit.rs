@@ -10,7 +10,7 @@ use crate::error::Result;
 use glam::Vec3;
 use rayon::prelude::*;
 
-use super::em_select::FIT_BIT;
+use super::fit_select::FIT_BIT;
 use crate::shared::bins::{
     BinBox, SURFACE_COS_MIN, bin_box, bin_row, bin_row_count, photon_weight,
 };
@@ -516,7 +516,7 @@ pub fn em_fit(
         .filter(|&index| index < em.active_count)
         .filter_map(|index| {
             let [entry, lobe_slot] = fit_list[index as usize];
-            // The lobe buffer holds the fitted splats' alone (see em_select).
+            // The lobe buffer holds the fitted splats' alone (see fit_select).
             let first = lobe_slot * em.lobes;
             let resume = match entry & FIT_BIT {
                 0 => &[][..],

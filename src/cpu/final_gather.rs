@@ -9,7 +9,7 @@ use crate::error::Result;
 use glam::{Vec3, Vec4};
 use rayon::prelude::*;
 
-use super::em_select::FIT_BIT;
+use super::fit_select::FIT_BIT;
 use crate::shared::lights::{area_point, light_first};
 use crate::shared::octahedral::oct_encode;
 use crate::shared::rng::pcg_hash;

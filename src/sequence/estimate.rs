@@ -137,7 +137,7 @@ pub fn bin_photons<E: Executor>(
 }
 
 /// Per-splat photon deposits (design §6, "Deposits"), listed as one record a splat with
-/// photons and binned as photons are, for `em_share`.
+/// photons and binned as photons are, for `deposit_share`.
 pub struct Deposits<B> {
     pub params: DepositParams,
     pub params_buf: B,
@@ -148,8 +148,8 @@ pub struct Deposits<B> {
 }
 
 /// Photon deposits of the stored photons in `pages` (a buffer and its photon count each),
-/// with at most `range` splats' deposits in one buffer: per range of splats, `em_deposit` per
-/// photon page → `em_deposit_list` → (split: the ranges' record counts) → `bin_photons` of
+/// with at most `range` splats' deposits in one buffer: per range of splats, `deposit_add` per
+/// photon page → `deposit_list` → (split: the ranges' record counts) → `bin_photons` of
 /// the records, one page a range, in cells of `params.reach` over `grid`'s box.
 pub fn deposit_photons<E: Executor>(
     ex: &mut E,
@@ -183,9 +183,9 @@ pub fn deposit_photons<E: Executor>(
             let uniform = ex.uniform("deposit page params", &page_params)?;
             let bindings = [&uniform, page, splats, &deposits];
             ex.dispatch(
-                Stage::EmDeposit,
+                Stage::DepositAdd,
                 &bindings,
-                groups(Stage::EmDeposit, photons)?,
+                groups(Stage::DepositAdd, photons)?,
             )?;
         }
         let uniform = ex.uniform("deposit range params", &in_range)?;
@@ -194,9 +194,9 @@ pub fn deposit_photons<E: Executor>(
         let listed = ex.zeroed("deposits listed", 4)?;
         let bindings = [&uniform, splats, &deposits, &list, &spread, &listed];
         ex.dispatch(
-            Stage::EmDepositList,
+            Stage::DepositList,
             &bindings,
-            groups(Stage::EmDepositList, count)?,
+            groups(Stage::DepositList, count)?,
         )?;
         lists.push((list, listed));
     }
@@ -218,7 +218,7 @@ pub fn deposit_photons<E: Executor>(
     })
 }
 
-/// Where `em_smooth` finds a splat's neighbours: the binned deposits' records (their
+/// Where `estimate_smooth` finds a splat's neighbours: the binned deposits' records (their
 /// parameters, the bins' parameters, list starts and keys) and the splats.
 pub struct Records<'a, B> {
     pub deposit_params: &'a B,
@@ -234,7 +234,7 @@ pub struct CoverInput<'a, B> {
     pub groups: u32,
 }
 
-/// What `em_share` reads: the binned deposits (their parameters, the bins' parameters, list
+/// What `deposit_share` reads: the binned deposits (their parameters, the bins' parameters, list
 /// starts, keys, geometry and power, each splat's spread) and the splats and materials.
 pub struct SharedDeposits<'a, B> {
     pub deposit_params: &'a B,
@@ -248,7 +248,7 @@ pub struct SharedDeposits<'a, B> {
     pub spread: &'a B,
 }
 
-/// `em_share`: each of `params.splat_count` splats' photon irradiance from the deposits around
+/// `deposit_share`: each of `params.splat_count` splats' photon irradiance from the deposits around
 /// it into `light`, summed once a group of `cover` (once a splat without) at its leader and
 /// copied to the members; the splats lit that are not fitted counted in `counters[3]`.
 pub fn share_light<E: Executor>(
@@ -278,17 +278,16 @@ pub fn share_light<E: Executor>(
             light,
             words,
         ];
-        let groups = groups(Stage::EmShare, invocations)?;
-        ex.dispatch(Stage::EmShare, &bindings, groups)?;
+        let groups = groups(Stage::DepositShare, invocations)?;
+        ex.dispatch(Stage::DepositShare, &bindings, groups)?;
     }
     Ok(())
 }
 
-/// `em_coverage`: each of `params.splat_count` splats' photon irradiance in `light` divided by
-/// the share of its gather disk (radius and slab from `params`) that its surface covers,
+/// `estimate_coverage`: each of `params.splat_count` splats' photon irradiance in `light` divided
+/// by the share of its gather disk (radius and slab from `params`) that its surface covers,
 /// measured once a group of `cover` (once a splat without); a splat whose lobes the photon fit
-/// wrote keeps its light (the lobes carry their own). The executor must trace the scene's
-/// geometry.
+/// wrote keeps its light (the lobes carry their own). The executor must trace the scene's geometry.
 pub fn cover_light<E: Executor>(
     ex: &mut E,
     params: &EmParams,
@@ -301,8 +300,8 @@ pub fn cover_light<E: Executor>(
     for (p, invocations) in group_passes(params, count, EM_COVER_APPLY) {
         let uniform = ex.uniform("em coverage params", &p)?;
         let bindings = [&uniform, light, words, &shares];
-        let groups = groups(Stage::EmCoverage, invocations)?;
-        ex.dispatch_traced(Stage::EmCoverage, &bindings, groups)?;
+        let groups = groups(Stage::EstimateCoverage, invocations)?;
+        ex.dispatch_traced(Stage::EstimateCoverage, &bindings, groups)?;
     }
     Ok(())
 }
@@ -341,7 +340,7 @@ fn group_words<'b, E: Executor>(
     }
 }
 
-/// `em_smooth` (design §6, "Smoothing"): each splat's photon irradiance, the least noisy of
+/// `estimate_smooth` (design §6, "Smoothing"): each splat's photon irradiance, the least noisy of
 /// its own and planes fitted to its surface's estimates within half of and all of the widest
 /// kernel that agree with it within their noise, chosen once a group of `cover` (once a splat
 /// without). Two passes: the first chooses at each group's leader from the neighbours' light
@@ -374,8 +373,8 @@ pub fn smooth_light<E: Executor>(
             &counters,
             words,
         ];
-        let groups = groups(Stage::EmSmooth, invocations)?;
-        ex.dispatch(Stage::EmSmooth, &bindings, groups)?;
+        let groups = groups(Stage::EstimateSmooth, invocations)?;
+        ex.dispatch(Stage::EstimateSmooth, &bindings, groups)?;
     }
     match ex.read::<u32>(&counters, 4)?[..] {
         [a, b, c, d] => Ok([a, b, c, d]),

@@ -15,10 +15,10 @@ use super::estimate::{
 };
 use super::{Executor, groups};
 
-/// What `em_share` reads besides the binned records (`FitInput`'s bins are then the
+/// What `deposit_share` reads besides the binned records (`FitInput`'s bins are then the
 /// deposits' bins).
 pub struct DepositInput<'a, B> {
-    /// `DepositParams::reach`: `em_select` lists the splats with deposits within it.
+    /// `DepositParams::reach`: `fit_select` lists the splats with deposits within it.
     pub reach: f32,
     pub params: &'a B,
     pub keys: &'a B,
@@ -38,12 +38,12 @@ pub struct FitInput<'a, B> {
     /// Final gathering for the fitted splats' lobes, with `EmConfig::gather` rays a side; the
     /// executor then traces the scene's splats.
     pub gathering: Option<Gathering<'a, B>>,
-    /// The bins hold deposits, not photons: every splat's irradiance comes from `em_share`
+    /// The bins hold deposits, not photons: every splat's irradiance comes from `deposit_share`
     /// (which needs final gathering: the deposits carry no photon directions to fit).
     pub deposits: Option<DepositInput<'a, B>>,
     /// Shared fits: only the groups' leaders are fitted, from their members' rays.
     pub groups: Option<GroupInput<'a, B>>,
-    /// Shared coverage: `em_coverage` measures once a group (else once a splat).
+    /// Shared coverage: `estimate_coverage` measures once a group (else once a splat).
     pub cover: Option<CoverInput<'a, B>>,
 }
 
@@ -76,12 +76,12 @@ pub struct Fit<B> {
     /// Splats on the fit list: those fitted, and those not fitted with too many candidates
     /// for one invocation.
     pub listed: u32,
-    /// Splats on the gather list (`em_gather`).
+    /// Splats on the gather list (`estimate_gather`).
     pub gathered: u32,
     pub fitted: u32,
     pub max_candidates: u32,
     pub dispatches: u32,
-    /// Wall time of the passes: `em_select` with its readback, `em_gather`, `em_fit`, and
+    /// Wall time of the passes: `fit_select` with its readback, `estimate_gather`, `em_fit`, and
     /// with final gathering the direct bake and `final_gather` (their `em_fit` in `fit_ms`).
     pub select_ms: f64,
     pub gather_ms: f64,
@@ -92,7 +92,7 @@ pub struct Fit<B> {
     /// With final gathering, the direct bake its rays read: every splat's, of the setup's
     /// lights, the same as the frames bake (`bake_direct`), so they may take it.
     pub direct: Option<DirectBake<B>>,
-    /// `em_smooth`'s counts (`smooth_light`; zeros where it did not run).
+    /// `estimate_smooth`'s counts (`smooth_light`; zeros where it did not run).
     pub smoothed: [u32; 4],
 }
 
@@ -138,18 +138,18 @@ impl<B> Fit<B> {
     }
 }
 
-/// The lobe fit: `em_select` lists the splats with photons near them, in two lists → (split:
-/// the lists' lengths and the most candidates a fit-list splat has, which sizes the
-/// dispatches on a loop-limited device) → `em_gather`, one invocation per splat of the gather
-/// list (irradiance alone) → `em_fit`, one workgroup per splat of the fit list, in one
-/// dispatch or in several that hand the mixture over through the lobe buffer. With final
-/// gathering (`cfg.gather` > 0), that `em_fit` gives the fitted splats only their irradiance,
-/// then `direct_bake` → `final_gather` from each fitted splat → `em_fit` over those samples.
-/// With deposits (`input.deposits`, final gathering only), the bins hold the deposits:
-/// `em_share` gives every splat its irradiance in place of `em_gather` and the photon
-/// `em_fit`. Wherever the scene's geometry is given (`input.gathering`), `em_coverage` divides
-/// every splat's irradiance by the share of its gather disk its surface covers before final
-/// gathering, whether or not anything is fitted.
+/// The lobe fit: `fit_select` lists the splats with photons near them, in two lists → (split: the
+/// lists' lengths and the most candidates a fit-list splat has, which sizes the dispatches on a
+/// loop-limited device) → `estimate_gather`, one invocation per splat of the gather list
+/// (irradiance alone) → `em_fit`, one workgroup per splat of the fit list, in one dispatch or in
+/// several that hand the mixture over through the lobe buffer. With final gathering (`cfg.gather` >
+/// 0), that `em_fit` gives the fitted splats only their irradiance, then `direct_bake` →
+/// `final_gather` from each fitted splat → `em_fit` over those samples. With deposits
+/// (`input.deposits`, final gathering only), the bins hold the deposits: `deposit_share` gives
+/// every splat its irradiance in place of `estimate_gather` and the photon `em_fit`. Wherever the
+/// scene's geometry is given (`input.gathering`), `estimate_coverage` divides every splat's
+/// irradiance by the share of its gather disk its surface covers before final gathering, whether or
+/// not anything is fitted.
 pub fn fit_lobes<E: Executor>(
     ex: &mut E,
     input: &FitInput<E::Buffer>,
@@ -195,9 +195,9 @@ pub fn fit_lobes<E: Executor>(
         fit_groups,
     ];
     ex.dispatch(
-        Stage::EmSelect,
+        Stage::FitSelect,
         &bindings,
-        groups(Stage::EmSelect, splat_count)?,
+        groups(Stage::FitSelect, splat_count)?,
     )?;
     let (listed, max_candidates, fitted, gathered) = match ex.read::<u32>(&counters, 4)?[..] {
         [a, b, c, d] => (a, b, c, d),
@@ -246,21 +246,21 @@ pub fn fit_lobes<E: Executor>(
                 &light,
             ];
             ex.dispatch(
-                Stage::EmGather,
+                Stage::EstimateGather,
                 &bindings,
-                groups(Stage::EmGather, gathered)?,
+                groups(Stage::EstimateGather, gathered)?,
             )?;
         }
     }
     // A split point of its own, so that the gather's time and the fit's are told apart (one
-    // more submission, well under a millisecond); em_share counts the splats it lit that are
+    // more submission, well under a millisecond); deposit_share counts the splats it lit that are
     // not fitted.
     let gathered = match (&input.deposits, &ex.read::<u32>(&counters, 4)?[..]) {
         (Some(_), &[.., lit]) => lit,
         _ => gathered,
     };
     let gather_ms = ms_since(t) - select_ms;
-    // Lobes for the fitted splats alone, at the slots em_select gave them.
+    // Lobes for the fitted splats alone, at the slots fit_select gave them.
     let lobes = ex.zeroed("lobes", (fitted as u64 * cfg.lobes as u64).max(1) * 32)?;
     let gathering = match (&input.gathering, cfg.gather) {
         (_, 0) => None,
@@ -283,7 +283,7 @@ pub fn fit_lobes<E: Executor>(
         lobes: &lobes,
         light: &light,
     };
-    // With deposits em_share gave every splat its irradiance; no pass over photons is left.
+    // With deposits deposit_share gave every splat its irradiance; no pass over photons is left.
     let mut dispatches = match input.deposits {
         Some(_) => 0,
         None => em_fit(ex, cfg, shape, &params, max_candidates, &fit_input)?,

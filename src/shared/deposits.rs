@@ -1,5 +1,5 @@
 //! Twin of `wgsl/shared/deposits.wgsl`: the layout of a splat's photon deposit and the shares
-//! `em_share` weighs a deposit by (design §6, "Deposits").
+//! `deposit_share` weighs a deposit by (design §6, "Deposits").
 
 use glam::Vec3;
 
@@ -70,7 +70,7 @@ pub fn front_share(n: Vec3, m: Vec3) -> f32 {
 }
 
 /// The fixed-point value of `x` ≥ 0 in `units`, rounded to nearest, at most u32's largest
-/// (`fixed` in `em_deposit.wgsl`).
+/// (`fixed` in `deposit_add.wgsl`).
 pub fn fixed(x: f32, units: f32) -> u32 {
     (x * units + 0.5).min(4294967040.0) as u32
 }

@@ -18,47 +18,48 @@ pub const EM_SUBGROUP_REDUCE: u32 = 8;
 /// Fitted splats take only their irradiance from the photons; a dispatch over final
 /// gathering's samples fits their lobes after (`em_fit.wgsl`, "Gathered samples").
 pub const EM_DEFER_FIT: u32 = 16;
-/// The bins hold deposits: `em_share` lights every splat, and `em_select` lists only the
+/// The bins hold deposits: `deposit_share` lights every splat, and `fit_select` lists only the
 /// fitted splats (on the fit list).
 pub const EM_SHARE: u32 = 32;
-/// The fitted splats share fits in groups (`fit_groups`): `em_select` lists the groups'
+/// The fitted splats share fits in groups (`fit_groups`): `fit_select` lists the groups'
 /// leaders alone, and `final_gather` casts a group's rays from its members.
 pub const EM_GROUPS: u32 = 64;
-/// `em_coverage`'s second pass: each splat's irradiance divided by its group's share (the
+/// `estimate_coverage`'s second pass: each splat's irradiance divided by its group's share (the
 /// first measures the share once a group, `fit_groups::CoverGroups`).
 pub const EM_COVER_APPLY: u32 = 128;
-/// `em_smooth`'s second pass: each splat's chosen irradiance copied into its light (the first
+/// `estimate_smooth`'s second pass: each splat's chosen irradiance copied into its light (the first
 /// chooses it from the neighbours' light, which must not change under it).
 pub const EM_SMOOTH_APPLY: u32 = 256;
-/// `em_share`'s second pass: each splat's light copied from its coverage group's leader (the
+/// `deposit_share`'s second pass: each splat's light copied from its coverage group's leader (the
 /// first sums the deposits once a group, at the leader).
 pub const EM_SHARE_COPY: u32 = 512;
-/// `em_smooth`: a neighbour counts where it faces within this cosine of the splat (11°): the
+/// `estimate_smooth`: a neighbour counts where it faces within this cosine of the splat (11°): the
 /// same flat stretch of surface. On a curved model the light changes with the normal, and not
 /// linearly; at the shared fits' 26° a diffuse ball read 1.3 % brighter (tests/accuracy.rs).
 pub const SMOOTH_COS_MIN: f32 = 0.98;
-/// `em_smooth`: the half width of a scale's interval, in its standard deviations. Wider keeps
+/// `estimate_smooth`: the half width of a scale's interval, in its standard deviations. Wider keeps
 /// more noise out and lets more of a change of the light in.
 pub const SMOOTH_CONFIDENCE: f32 = 2.0;
-/// `em_smooth`: past this many photons in its gather disk a splat's own estimate is within
+/// `estimate_smooth`: past this many photons in its gather disk a splat's own estimate is within
 /// half a percent, and it keeps it (no work where the photons already suffice).
 pub const SMOOTH_PHOTONS_ENOUGH: u32 = 40_000;
-/// `em_smooth`: the most deposit records a splat's fit visits. The default box's splats find
+/// `estimate_smooth`: the most deposit records a splat's fit visits. The default box's splats find
 /// 100–200 in their boxes; past the budget (a dense scan, whose every R holds thousands of
 /// splats) an even subset, every ⌈records / budget⌉-th, so that the stage's time follows the
 /// splats, not their density, and stays within lavapipe's loop limit.
 pub const SMOOTH_BUDGET: u32 = 128;
-/// `em_smooth`: the least determinant of a scale's moments (over the cube of its total weight)
-/// for a plane through the neighbours' light: below it they lie along a line, or are too few.
+/// `estimate_smooth`: the least determinant of a scale's moments (over the cube of its total
+/// weight) for a plane through the neighbours' light: below it they lie along a line, or are too
+/// few.
 pub const SMOOTH_DET_MIN: f32 = 1e-6;
-/// `em_smooth`: the most cells its box spans per axis, less one. The deposit bins' cells are
+/// `estimate_smooth`: the most cells its box spans per axis, less one. The deposit bins' cells are
 /// half a reach (R plus a deposit's spread past its mean); the box's radius, the widest kernel
 /// plus a deposit's reach past R, is at most 2 reach for kernels up to 2 R (`MAX_SMOOTH`): 4
 /// reach wide, 8 cells and a part.
 pub const SMOOTH_SPAN: u32 = 8;
 /// A splat's word in the groups when another splat's fit serves it (`fit_groups`).
 pub const FOLLOWER_BIT: u32 = 0x8000_0000;
-/// Most candidate photons of a splat `em_gather` sums in one invocation.
+/// Most candidate photons of a splat `estimate_gather` sums in one invocation.
 pub const GATHER_MAX: u32 = 16384;
 
 pub const SPARSE_THRESHOLD: f32 = 0.02;

@@ -1,7 +1,7 @@
 // #import types
 // #import sampling
 
-// Per-splat photon deposits (docs/design.md section 6, "Deposits"): what em_deposit sums of
+// Per-splat photon deposits (docs/design.md section 6, "Deposits"): what deposit_add sums of
 // the photons that landed on a splat, as 64-bit integers (two u32 words, low first) so that
 // the sums are exact and do not depend on the order the photons arrive in. Twin:
 // src/shared/deposits.rs.

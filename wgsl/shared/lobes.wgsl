@@ -26,18 +26,18 @@ const EM_SUBGROUP_REDUCE: u32 = 8u;
 // Fitted splats take only their irradiance from the photons: a dispatch over final gathering's
 // samples fits their lobes after (em_fit.wgsl, "Gathered samples").
 const EM_DEFER_FIT: u32 = 16u;
-// The bins hold deposits: em_share lights every splat, and em_select lists only the fitted
+// The bins hold deposits: deposit_share lights every splat, and fit_select lists only the fitted
 // splats (on the fit list).
 const EM_SHARE: u32 = 32u;
-// The fitted splats share fits in groups (src/fit_groups.rs): em_select lists the groups'
+// The fitted splats share fits in groups (src/fit_groups.rs): fit_select lists the groups'
 // leaders alone, and final_gather casts a group's rays from its members.
 const EM_GROUPS: u32 = 64u;
-// em_coverage's second pass: each splat's irradiance divided by its group's share.
+// estimate_coverage's second pass: each splat's irradiance divided by its group's share.
 const EM_COVER_APPLY: u32 = 128u;
-// em_smooth's second pass: each splat's chosen irradiance copied into its light.
+// estimate_smooth's second pass: each splat's chosen irradiance copied into its light.
 const EM_SMOOTH_APPLY: u32 = 256u;
 const EM_SHARE_COPY: u32 = 512u;
-// em_smooth (src/shared/lobes.rs says why each): a neighbour faces within this cosine of the
+// estimate_smooth (src/shared/lobes.rs says why each): a neighbour faces within this cosine of the
 // splat (11 degrees), the intervals' half width in standard deviations,
 // the photons past which the own estimate is kept, the records a splat's fit visits, and the
 // least determinant of a plane's moments over the cube of their weight.
@@ -52,7 +52,7 @@ const FOLLOWER_BIT: u32 = 0x80000000u;
 
 // A fit-list entry is a splat index with this bit set when the splat's lobes are fitted.
 const FIT_BIT: u32 = 0x80000000u;
-// Most candidate photons of a splat em_gather sums in one invocation (em_select): well under
+// Most candidate photons of a splat estimate_gather sums in one invocation (fit_select): well under
 // llvmpipe's loop limit of about 65k iterations.
 const GATHER_MAX: u32 = 16384u;
 

@@ -1,4 +1,4 @@
-//! `em_coverage`: the share of a splat's gather disk that its surface covers, and its photon
+//! `estimate_coverage`: the share of a splat's gather disk that its surface covers, and its photon
 //! irradiance divided by it (docs/design.md section 6), on the device and the mirror.
 
 mod common;
@@ -8,7 +8,7 @@ use std::path::Path;
 use glam::Vec3;
 
 use lobelight::cpu::CpuExecutor;
-use lobelight::cpu::em_coverage::{COVERAGE_POINTS, surface_weight};
+use lobelight::cpu::estimate_coverage::{COVERAGE_POINTS, surface_weight};
 use lobelight::fit_groups::{COVER_CELL, CoverGroups};
 use lobelight::gpu::exec::GpuExecutor;
 use lobelight::gpu::scene::GpuScene;
@@ -16,7 +16,7 @@ use lobelight::scene::{self, Scene};
 use lobelight::sequence::{CoverInput, Executor, cover_light};
 use lobelight::types::{EmParams, SplatLight};
 
-/// Every splat's light after `em_coverage` on `ex`, each splat starting with irradiance 1,
+/// Every splat's light after `estimate_coverage` on `ex`, each splat starting with irradiance 1,
 /// each measuring its own coverage.
 fn covered<E: Executor>(ex: &mut E, scene: &Scene, em: &EmParams) -> Vec<f32> {
     covered_in(ex, scene, em, None)
@@ -244,7 +244,7 @@ fn coverage_of_a_sphere_counts_the_photons_its_surface_sends() {
 /// these are the spiral (point k at radius √((k + ½)/N), the golden angle on from the last).
 #[test]
 fn the_coverage_points_are_one_spiral_in_both_twins() {
-    let wgsl = std::fs::read_to_string("wgsl/em_coverage.wgsl").unwrap();
+    let wgsl = std::fs::read_to_string("wgsl/estimate_coverage.wgsl").unwrap();
     let table = wgsl.split("const COVERAGE_POINTS").nth(1).unwrap();
     let table = &table[..table.find(");").unwrap()];
     let values: Vec<f32> = table

@@ -1,8 +1,8 @@
-//! `em_smooth` (docs/design.md section 6, "Smoothing"): the photons' estimate widened where the
-//! light is smooth, on the device against the mirror, and what it must do to known light: keep
+//! `estimate_smooth` (docs/design.md section 6, "Smoothing"): the photons' estimate widened where
+//! the light is smooth, on the device against the mirror, and what it must do to known light: keep
 //! light that changes linearly exactly (at edges too, and where a group's choice serves its
-//! members), lower the noise of flat light, and move no splat's estimate further than its own
-//! noise allows across a step.
+//! members), lower the noise of flat light, and move no splat's estimate further than its own noise
+//! allows across a step.
 
 mod common;
 
@@ -25,7 +25,7 @@ use common::Rng;
 const PHOTONS: u32 = 400;
 
 /// The default scene with the deposits of 200 k photons traced on the mirror (the records
-/// `em_smooth` finds neighbours by), and its fit parameters.
+/// `estimate_smooth` finds neighbours by), and its fit parameters.
 fn cornell() -> (Scene, DepositBins, EmParams) {
     let mut scene = lobelight::scene::load(Path::new("scenes/cornell.toml")).unwrap();
     scene.bake.photons = 200_000;
@@ -43,7 +43,7 @@ fn cornell() -> (Scene, DepositBins, EmParams) {
     (scene, deposits, em.params(n, n, shape))
 }
 
-/// Every splat's light after `em_smooth` on `ex`, from `light`, chosen once a group of
+/// Every splat's light after `estimate_smooth` on `ex`, from `light`, chosen once a group of
 /// `cover` (once a splat without).
 fn smoothed<E: Executor>(
     ex: &mut E,

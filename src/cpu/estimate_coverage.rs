@@ -1,4 +1,4 @@
-//! Mirror of `wgsl/em_coverage.wgsl`: the share of its gather disk a group's leader's surface
+//! Mirror of `wgsl/estimate_coverage.wgsl`: the share of its gather disk a group's leader's surface
 //! covers (first pass, one invocation a group), and each splat's photon irradiance divided by
 //! its group's share (second pass, `EM_COVER_APPLY`).
 // `!(x < y)` is meant: NaN must fail these tests, as it does in the WGSL twin.
@@ -236,7 +236,7 @@ fn share(em: &EmParams, geo: &Geometry, i: usize) -> f32 {
 /// The first pass: each of `em.active_count` groups' share, at its leader (`cover`'s words
 /// after the splats'); the second (`EM_COVER_APPLY`): each splat's irradiance divided by its
 /// group's share.
-pub fn em_coverage(
+pub fn estimate_coverage(
     em: &EmParams,
     light: &mut [SplatLight],
     (cover, shares): (&[u32], &mut [f32]),
@@ -265,13 +265,14 @@ pub fn em_coverage(
         });
 }
 
-/// The executor's entry: `em_coverage`'s bindings, unpacked in the order its WGSL declares them.
+/// The executor's entry: `estimate_coverage`'s bindings, unpacked in the order its WGSL declares
+/// them.
 pub fn dispatch(b: &Bindings, geo: &Geometry, groups: u32) -> Result<()> {
     let em = b.param(0)?;
     let mut light = b.get_mut(1)?;
     let cover = b.get(2)?;
     let mut shares = b.get_mut(3)?;
-    em_coverage(
+    estimate_coverage(
         &em,
         view_mut(&mut light),
         (view(&cover), view_mut(&mut shares)),
@@ -284,7 +285,7 @@ pub fn dispatch(b: &Bindings, geo: &Geometry, groups: u32) -> Result<()> {
 /// This file's row of the mirrors' table (`cpu::MIRRORS`).
 pub const ROWS: &[MirrorRow] = &[
     MirrorRow {
-        stage: Stage::EmCoverage,
+        stage: Stage::EstimateCoverage,
         workgroup_size: Some(WG),
         items: 1,
         run: Some(Mirror::Traced(dispatch)),

@@ -1,4 +1,4 @@
-//! Mirror of `wgsl/em_gather.wgsl`: the irradiance of each splat on the gather list, one
+//! Mirror of `wgsl/estimate_gather.wgsl`: the irradiance of each splat on the gather list, one
 //! invocation per splat, summed in the candidates' order.
 
 use super::{Mirror, MirrorRow};
@@ -15,7 +15,7 @@ use crate::types::{BinParams, BinnedPhoton, EmParams, Splat, SplatLight};
 pub const WG: u32 = 64;
 
 #[allow(clippy::too_many_arguments)]
-pub fn em_gather(
+pub fn estimate_gather(
     em: &EmParams,
     bins: &BinParams,
     splats: &[Splat],
@@ -74,7 +74,8 @@ pub fn em_gather(
     }
 }
 
-/// The executor's entry: `em_gather`'s bindings, unpacked in the order its WGSL declares them.
+/// The executor's entry: `estimate_gather`'s bindings, unpacked in the order its WGSL declares
+/// them.
 pub fn dispatch(b: &Bindings, groups: u32) -> Result<()> {
     let em = b.param(0)?;
     let bins = b.param(1)?;
@@ -84,7 +85,7 @@ pub fn dispatch(b: &Bindings, groups: u32) -> Result<()> {
     let geom = b.get(5)?;
     let power = b.get(6)?;
     let mut light = b.get_mut(7)?;
-    em_gather(
+    estimate_gather(
         &em,
         &bins,
         view(&splats),
@@ -101,7 +102,7 @@ pub fn dispatch(b: &Bindings, groups: u32) -> Result<()> {
 /// This file's row of the mirrors' table (`cpu::MIRRORS`).
 pub const ROWS: &[MirrorRow] = &[
     MirrorRow {
-        stage: Stage::EmGather,
+        stage: Stage::EstimateGather,
         workgroup_size: Some(WG),
         items: 1,
         run: Some(Mirror::Plain(dispatch)),

@@ -1,4 +1,4 @@
-//! Mirror of `wgsl/em_deposit_list.wgsl`: each splat with a deposit lists it as a photon
+//! Mirror of `wgsl/deposit_list.wgsl`: each splat with a deposit lists it as a photon
 //! record at its photons' mean, and writes their spread and count, for one range of splats.
 //! Sequential, so the list is in splat order (the device's is in any order; binning sorts both
 //! alike).
@@ -17,7 +17,7 @@ use crate::types::{DepositParams, Photon, Splat};
 
 pub const WG: u32 = 64;
 
-pub fn em_deposit_list(
+pub fn deposit_list(
     deposit: &DepositParams,
     splats: &[Splat],
     deposits: &[u32],
@@ -60,7 +60,7 @@ pub fn em_deposit_list(
     }
 }
 
-/// The executor's entry: `em_deposit_list`'s bindings, unpacked in the order its WGSL declares them.
+/// The executor's entry: `deposit_list`'s bindings, unpacked in the order its WGSL declares them.
 pub fn dispatch(b: &Bindings, groups: u32) -> Result<()> {
     let p = b.param(0)?;
     let splats = b.get(1)?;
@@ -71,7 +71,7 @@ pub fn dispatch(b: &Bindings, groups: u32) -> Result<()> {
     let listed = listed
         .first_mut()
         .ok_or_else(|| b.internal("no list counter"))?;
-    em_deposit_list(
+    deposit_list(
         &p,
         view(&splats),
         &deposits,
@@ -86,7 +86,7 @@ pub fn dispatch(b: &Bindings, groups: u32) -> Result<()> {
 /// This file's row of the mirrors' table (`cpu::MIRRORS`).
 pub const ROWS: &[MirrorRow] = &[
     MirrorRow {
-        stage: Stage::EmDepositList,
+        stage: Stage::DepositList,
         workgroup_size: Some(WG),
         items: 1,
         run: Some(Mirror::Plain(dispatch)),

@@ -6,7 +6,7 @@
 // radius rho about their mean) and the share that arrives at the splat's front (front_share:
 // photons spread as cosine about the deposit's normal). In flat surroundings that is the
 // photons' estimate with each photon's position smoothed over its deposit's disk.
-// The deposits are em_deposit_list's records, binned (cells of deposit.reach, which bounds
+// The deposits are deposit_list's records, binned (cells of deposit.reach, which bounds
 // how far a deposit's photons lie from its mean, plus R). The sum is made once a coverage
 // group (splats within R/16 of each other facing within 11 degrees: a dense scan's R holds
 // thousands, whose sums differ by little), at its leader, in the leaders' order (a list of the
@@ -14,7 +14,7 @@
 // list's scheduling order cost a 3 M-splat terrain 0.8 s). Two passes: the first (one
 // invocation a group) writes each leader's light; the second (EM_SHARE_COPY, one a splat)
 // copies it to the members, and counters[3] counts the splats lit that are not fitted
-// (em_select lists and counts those). CPU mirror: src/cpu/em_share.rs.
+// (fit_select lists and counts those). CPU mirror: src/cpu/deposit_share.rs.
 
 // #import types
 // #import dispatch
@@ -41,7 +41,7 @@
 @group(0) @binding(10) var<storage, read> spread: array<vec2<f32>>;
 // #paged
 @group(0) @binding(11) var<storage, read_write> light: array<SplatLight>;
-// em_coverage's groups: each splat's group, then each group's leader.
+// estimate_coverage's groups: each splat's group, then each group's leader.
 // #paged
 @group(0) @binding(12) var<storage, read> cover: array<u32>;
 
@@ -100,7 +100,7 @@ fn main(@builtin(workgroup_id) wg: vec3<u32>, @builtin(num_workgroups) num_wg: v
 }
 
 // The second pass: splat i's light, its group's leader's, and whether it counts as lit and
-// not fitted (em_select listed the fitted ones, counters[2]).
+// not fitted (fit_select listed the fitted ones, counters[2]).
 fn copy_from_leader(i: u32) {
     let leader = cover_at(em.splat_count + cover_at(i));
     let l = light_at(leader);

@@ -5,8 +5,8 @@
 // order this pass writes in. Beside it, in `spread` at the splat's index: the radius of the
 // uniform disk with its photons' spread about their mean (rho^2 = 2 E|x - mean|^2, at most
 // deposit.spread_max) and their count. One invocation per splat of one range
-// (deposit.first_splat on; see em_deposit), whose records go to the range's own list.
-// CPU mirror: src/cpu/em_deposit_list.rs.
+// (deposit.first_splat on; see deposit_add), whose records go to the range's own list.
+// CPU mirror: src/cpu/deposit_list.rs.
 
 // #import types
 // #import dispatch

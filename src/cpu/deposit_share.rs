@@ -1,4 +1,4 @@
-//! Mirror of `wgsl/em_share.wgsl`: each coverage group's photon irradiance from the binned
+//! Mirror of `wgsl/deposit_share.wgsl`: each coverage group's photon irradiance from the binned
 //! deposits around its leader, in the candidates' order (first pass), then each splat's, its
 //! leader's, and the count of splats lit (second pass, `EM_SHARE_COPY`).
 
@@ -17,7 +17,7 @@ use crate::types::{BinParams, BinnedPhoton, DepositParams, EmParams, Material, S
 
 pub const WG: u32 = 64;
 
-/// The binned deposits `em_share` reads: list starts, keys, geometry, power, and each splat's
+/// The binned deposits `deposit_share` reads: list starts, keys, geometry, power, and each splat's
 /// spread and count.
 pub struct BinnedDeposits<'a> {
     pub cell_start: &'a [u32],
@@ -80,7 +80,7 @@ fn share(
 /// after the splats'); the second (`EM_SHARE_COPY`): each splat's light its leader's, and the
 /// splats lit that are not fitted counted.
 #[allow(clippy::too_many_arguments)]
-pub fn em_share(
+pub fn deposit_share(
     em: &EmParams,
     deposit: &DepositParams,
     bins: &BinParams,
@@ -125,7 +125,7 @@ pub fn em_share(
     counters[3] += lit.count() as u32;
 }
 
-/// The executor's entry: `em_share`'s bindings, unpacked in the order its WGSL declares them.
+/// The executor's entry: `deposit_share`'s bindings, unpacked in the order its WGSL declares them.
 pub fn dispatch(b: &Bindings, groups: u32) -> Result<()> {
     let em = b.param(0)?;
     let deposit = b.param(1)?;
@@ -148,7 +148,7 @@ pub fn dispatch(b: &Bindings, groups: u32) -> Result<()> {
         power: view(&power),
         spread: view(&spread),
     };
-    em_share(
+    deposit_share(
         &em,
         &deposit,
         &bins,
@@ -165,7 +165,7 @@ pub fn dispatch(b: &Bindings, groups: u32) -> Result<()> {
 /// This file's row of the mirrors' table (`cpu::MIRRORS`).
 pub const ROWS: &[MirrorRow] = &[
     MirrorRow {
-        stage: Stage::EmShare,
+        stage: Stage::DepositShare,
         workgroup_size: Some(WG),
         items: 1,
         run: Some(Mirror::Plain(dispatch)),

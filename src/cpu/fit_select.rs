@@ -1,4 +1,4 @@
-//! Mirror of `wgsl/em_select.wgsl`. Sequential, so the list and the lobe slots are in splat
+//! Mirror of `wgsl/fit_select.wgsl`. Sequential, so the list and the lobe slots are in splat
 //! order.
 
 use super::{Mirror, MirrorRow};
@@ -12,11 +12,11 @@ use crate::shared::lobes::{EM_FIT_ALL, EM_GROUPS, EM_SHARE, FOLLOWER_BIT, GATHER
 use crate::types::{BinParams, EmParams, Material, Splat};
 
 pub const WG: u32 = 64;
-/// The fit-list entry's flag: fit this splat's lobes (see `wgsl/em_select.wgsl`).
+/// The fit-list entry's flag: fit this splat's lobes (see `wgsl/fit_select.wgsl`).
 pub const FIT_BIT: u32 = 0x8000_0000;
 
 #[allow(clippy::too_many_arguments)]
-pub fn em_select(
+pub fn fit_select(
     em: &EmParams,
     bins: &BinParams,
     splats: &[Splat],
@@ -73,7 +73,7 @@ pub fn em_select(
     }
 }
 
-/// The executor's entry: `em_select`'s bindings, unpacked in the order its WGSL declares them.
+/// The executor's entry: `fit_select`'s bindings, unpacked in the order its WGSL declares them.
 pub fn dispatch(b: &Bindings, groups: u32) -> Result<()> {
     let em = b.param(0)?;
     let bins = b.param(1)?;
@@ -86,7 +86,7 @@ pub fn dispatch(b: &Bindings, groups: u32) -> Result<()> {
     let fit_groups = b.get(8)?;
     let counters = b.counters::<4>(&mut counters)?;
     let (splats, materials) = (view(&splats), view(&materials));
-    em_select(
+    fit_select(
         &em,
         &bins,
         splats,
@@ -104,7 +104,7 @@ pub fn dispatch(b: &Bindings, groups: u32) -> Result<()> {
 /// This file's row of the mirrors' table (`cpu::MIRRORS`).
 pub const ROWS: &[MirrorRow] = &[
     MirrorRow {
-        stage: Stage::EmSelect,
+        stage: Stage::FitSelect,
         workgroup_size: Some(WG),
         items: 1,
         run: Some(Mirror::Plain(dispatch)),

@@ -1,4 +1,4 @@
-// Lobe fit, after em_coverage on the deposits' path (docs/design.md section 6, "Smoothing"):
+// Lobe fit, after estimate_coverage on the deposits' path (docs/design.md section 6, "Smoothing"):
 // the photons' estimate widened where the light is smooth. A splat's irradiance counts the
 // photons within R, a few hundred on the default scene, and neighbours within R share most of
 // them: the estimate's noise is low-frequency blotches of the size of R. Where the light does
@@ -17,13 +17,13 @@
 // noise is one over the square root of its photons. A neighbour counts where it belongs to the
 // splat's object, faces within SMOOTH_COS_MIN of it and its centre lies within the slab: the
 // same surface (a reflecting light's disks, just below the ceiling, are another). The
-// neighbours are the deposits' records (splats a photon landed on), in the em_share bins. The
+// neighbours are the deposits' records (splats a photon landed on), in the deposit_share bins. The
 // choice is made once a coverage group (splats within R/16 of each other facing within
 // SMOOTH_COS_MIN: a dense scan's R holds thousands, whose choices differ by little), at its
 // leader. Two passes: the first (EM_SMOOTH_APPLY unset, one invocation a group) writes each
 // group's choice to `smoothed`, with its plane's slopes; the second (one invocation a splat)
 // reads its group's plane at the splat's place into the light (a splat must not read a
-// neighbour the pass has already changed). CPU mirror: src/cpu/em_smooth.rs.
+// neighbour the pass has already changed). CPU mirror: src/cpu/estimate_smooth.rs.
 
 // #import types
 // #import dispatch
@@ -50,7 +50,7 @@
 // The smoothed splats by the scale they took (0, 1, 2), and those whose group's choice came
 // from a subset of its records.
 @group(0) @binding(8) var<storage, read_write> counters: array<atomic<u32>, 4>;
-// em_coverage's groups: each splat's group, then each group's leader.
+// estimate_coverage's groups: each splat's group, then each group's leader.
 // #paged
 @group(0) @binding(9) var<storage, read> cover: array<u32>;
 

@@ -1,4 +1,4 @@
-//! Mirror of `wgsl/em_deposit.wgsl`: each photon adds itself to its splat's deposit, in 64-bit
+//! Mirror of `wgsl/deposit_add.wgsl`: each photon adds itself to its splat's deposit, in 64-bit
 //! integer sums (added here as u64, which is what the device's carried words hold).
 
 use super::{Mirror, MirrorRow};
@@ -22,7 +22,7 @@ fn add_wide(deposits: &mut [u32], at: usize, v: u32) {
     deposits[at + 1] = (sum >> 32) as u32;
 }
 
-pub fn em_deposit(
+pub fn deposit_add(
     deposit: &DepositParams,
     photons: &[Photon],
     splats: &[Splat],
@@ -51,20 +51,20 @@ pub fn em_deposit(
     }
 }
 
-/// The executor's entry: `em_deposit`'s bindings, unpacked in the order its WGSL declares them.
+/// The executor's entry: `deposit_add`'s bindings, unpacked in the order its WGSL declares them.
 pub fn dispatch(b: &Bindings, groups: u32) -> Result<()> {
     let p = b.param(0)?;
     let photons = b.get(1)?;
     let splats = b.get(2)?;
     let mut deposits = b.get_mut(3)?;
-    em_deposit(&p, view(&photons), view(&splats), &mut deposits, groups);
+    deposit_add(&p, view(&photons), view(&splats), &mut deposits, groups);
     Ok(())
 }
 
 /// This file's row of the mirrors' table (`cpu::MIRRORS`).
 pub const ROWS: &[MirrorRow] = &[
     MirrorRow {
-        stage: Stage::EmDeposit,
+        stage: Stage::DepositAdd,
         workgroup_size: Some(WG),
         items: 1,
         run: Some(Mirror::Plain(dispatch)),

@@ -1,7 +1,7 @@
-//! Mirror of `wgsl/em_smooth.wgsl`: each splat's photon irradiance, the least noisy of its own
-//! and planes fitted to its surface's estimates within half of and all of `smooth` search
-//! radii that agree with the narrower ones within their noise; chosen once a coverage group,
-//! at its leader (first pass), and read by each member at its own place (second pass).
+//! Mirror of `wgsl/estimate_smooth.wgsl`: each splat's photon irradiance, the least noisy of its
+//! own and planes fitted to its surface's estimates within half of and all of `smooth` search radii
+//! that agree with the narrower ones within their noise; chosen once a coverage group, at its
+//! leader (first pass), and read by each member at its own place (second pass).
 // `!(x > y)` is meant: NaN must fail these tests (a degenerate fit, an unlit splat), as it does
 // in the WGSL twin.
 #![allow(clippy::neg_cmp_op_on_partial_ord)]
@@ -23,7 +23,7 @@ use crate::types::{BinParams, DepositParams, EmParams, Splat, SplatLight};
 
 pub const WG: u32 = 64;
 
-/// The deposit records `em_smooth` finds its neighbours by: list starts and keys.
+/// The deposit records `estimate_smooth` finds its neighbours by: list starts and keys.
 pub struct Records<'a> {
     pub cell_start: &'a [u32],
     pub keys: &'a [[u32; 2]],
@@ -245,7 +245,7 @@ fn read_choice(
 /// after the splats'); the second (`EM_SMOOTH_APPLY`): each smoothable splat's irradiance read
 /// from its group's choice, counted by scale, and by whether its group fitted a subset.
 #[allow(clippy::too_many_arguments)]
-pub fn em_smooth(
+pub fn estimate_smooth(
     em: &EmParams,
     deposit: &DepositParams,
     bins: &BinParams,
@@ -291,7 +291,8 @@ pub fn em_smooth(
     }
 }
 
-/// The executor's entry: `em_smooth`'s bindings, unpacked in the order its WGSL declares them.
+/// The executor's entry: `estimate_smooth`'s bindings, unpacked in the order its WGSL declares
+/// them.
 pub fn dispatch(b: &Bindings, groups: u32) -> Result<()> {
     let em = b.param(0)?;
     let deposit = b.param(1)?;
@@ -308,7 +309,7 @@ pub fn dispatch(b: &Bindings, groups: u32) -> Result<()> {
         cell_start: &cell_start,
         keys: view(&keys),
     };
-    em_smooth(
+    estimate_smooth(
         &em,
         &deposit,
         &bins,
@@ -325,7 +326,7 @@ pub fn dispatch(b: &Bindings, groups: u32) -> Result<()> {
 /// This file's row of the mirrors' table (`cpu::MIRRORS`).
 pub const ROWS: &[MirrorRow] = &[
     MirrorRow {
-        stage: Stage::EmSmooth,
+        stage: Stage::EstimateSmooth,
         workgroup_size: Some(WG),
         items: 1,
         run: Some(Mirror::Plain(dispatch)),

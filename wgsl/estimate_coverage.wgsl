@@ -18,7 +18,7 @@
 // 11 degrees): a dense scan, whose every R holds thousands of splats, measures it once a group,
 // not once a splat. Two passes of this stage: the first (EM_COVER_APPLY unset), one invocation
 // per group, measures the share at the group's leader; the second, one per splat with photons,
-// divides its irradiance by its group's share. CPU mirror: src/cpu/em_coverage.rs.
+// divides its irradiance by its group's share. CPU mirror: src/cpu/estimate_coverage.rs.
 
 // #import types
 // #import dispatch

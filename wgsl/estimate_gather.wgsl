@@ -1,10 +1,10 @@
 // Lobe fit, pass 2 of 3: the irradiance of each splat on the gather list (not fitted, at most
-// GATHER_MAX candidates; see em_select), one invocation per splat. It sums what em_fit's final
+// GATHER_MAX candidates; see fit_select), one invocation per splat. It sums what em_fit's final
 // pass sums for a splat without lobes: the count, power and weight of the photons within R of
 // the centre, on its front side, inside the slab around its plane and on its surface, in the
 // candidates' order. Diffuse scans of millions of splats are mostly such splats; a workgroup
 // each cost them the bake's time.
-// CPU mirror: src/cpu/em_gather.rs.
+// CPU mirror: src/cpu/estimate_gather.rs.
 
 // #import types
 // #import dispatch

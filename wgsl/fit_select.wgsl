@@ -1,17 +1,16 @@
 // Lobe fit, pass 1 of 3: list the splats that have binned photons near them, so em_fit and
-// em_gather spend no work on the others (their outputs stay zero). A splat that is not fitted
-// and has at most GATHER_MAX candidates goes to the gather list: em_gather sums its irradiance
-// in one invocation, where a workgroup of em_fit would cost many times more. An entry is the splat index, with the
-// top bit set when the splat's lobes are fitted (a glossy material, or EM_FIT_ALL), and the
-// fitted splat's slot in the lobe buffer, so that it holds lobes for fitted splats alone;
-// other listed splats only gather their total irradiance. The list's order and the slots
-// depend on scheduling, but each em_fit workgroup writes only its own splat's light and slot,
-// and the host packs the lobes in splat order (LobeMap::pack), so the results do not.
-// counters = [fit-list splats, most candidate photons of a fit-list splat, splats fitted,
-// gather-list splats]. With shared fits (EM_GROUPS) only each group's leader is listed among
-// the fitted splats. With deposits (EM_SHARE) em_share lights every splat, and only the
-// fitted splats are listed (on the fit list), without a look at the others' candidates.
-// CPU mirror: src/cpu/em_select.rs.
+// estimate_gather spend no work on the others (their outputs stay zero). A splat that is not fitted
+// and has at most GATHER_MAX candidates goes to the gather list: estimate_gather sums its
+// irradiance in one invocation, where a workgroup of em_fit would cost many times more. An entry is
+// the splat index, with the top bit set when the splat's lobes are fitted (a glossy material, or
+// EM_FIT_ALL), and the fitted splat's slot in the lobe buffer, so that it holds lobes for fitted
+// splats alone; other listed splats only gather their total irradiance. The list's order and the
+// slots depend on scheduling, but each em_fit workgroup writes only its own splat's light and slot,
+// and the host packs the lobes in splat order (LobeMap::pack), so the results do not. counters =
+// [fit-list splats, most candidate photons of a fit-list splat, splats fitted, gather-list splats].
+// With shared fits (EM_GROUPS) only each group's leader is listed among the fitted splats. With
+// deposits (EM_SHARE) deposit_share lights every splat, and only the fitted splats are listed (on
+// the fit list), without a look at the others' candidates. CPU mirror: src/cpu/fit_select.rs.
 
 // #import types
 // #import dispatch
@@ -45,7 +44,7 @@ fn main(@builtin(workgroup_id) wg: vec3<u32>, @builtin(num_workgroups) num_wg: v
     // A splat another's fit serves (EM_GROUPS) is lit as a diffuse splat is, not fitted.
     let served = (em.flags & EM_GROUPS) != 0u && (groups[i] & FOLLOWER_BIT) != 0u;
     let fit = (glossy || (em.flags & EM_FIT_ALL) != 0u) && !served;
-    // With deposits em_share lights every splat; only the fitted ones are listed.
+    // With deposits deposit_share lights every splat; only the fitted ones are listed.
     if (em.flags & EM_SHARE) != 0u && !fit {
         return;
     }

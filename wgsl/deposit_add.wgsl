@@ -5,7 +5,7 @@
 // on the order the photons arrive in, so the deposits are the same on every run. The
 // deposit buffer holds the splats [first_splat, first_splat + splat_count): where the
 // deposits outgrow one storage binding, each range has its own and its own dispatches.
-// One invocation per photon. CPU mirror: src/cpu/em_deposit.rs.
+// One invocation per photon. CPU mirror: src/cpu/deposit_add.rs.
 
 // #import types
 // #import dispatch
