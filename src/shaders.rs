@@ -103,6 +103,39 @@ impl Stage {
     }
 }
 
+/// One compute entry point of a stage: `main`, or another of the stage's passes (its second,
+/// say) that binds the same buffers. A stage converts to its `main`.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Hash)]
+pub struct Pass {
+    pub stage: Stage,
+    pub entry: &'static str,
+}
+
+impl From<Stage> for Pass {
+    fn from(stage: Stage) -> Pass {
+        Pass { stage, entry: MAIN }
+    }
+}
+
+/// The entry point a stage's dispatch runs unless it names another.
+pub const MAIN: &str = "main";
+
+impl Stage {
+    /// The stage's entry point `entry` (see `Pass`).
+    pub const fn entry(self, entry: &'static str) -> Pass {
+        Pass { stage: self, entry }
+    }
+}
+
+impl std::fmt::Display for Pass {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        match self.entry {
+            MAIN => write!(f, "{}", self.stage),
+            entry => write!(f, "{}::{entry}", self.stage),
+        }
+    }
+}
+
 impl std::fmt::Display for Stage {
     fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
         f.write_str(self.name())
@@ -114,8 +147,9 @@ impl std::fmt::Display for Stage {
 /// a test checks those against this.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub struct StageShape {
-    /// `@workgroup_size` of the compute entry point `main` (its x; y and z are 1), or `None`
-    /// where a pipeline-overridable constant sets it (`em_fit`) or the stage draws triangles.
+    /// `@workgroup_size` of the compute entry points (its x; y and z are 1; every entry point
+    /// of a stage has the same), or `None` where a pipeline-overridable constant sets it
+    /// (`em_fit`), the entry points differ or the stage draws triangles.
     pub workgroup_size: Option<u32>,
     /// The stage's `const ITEMS`, values per invocation; 1 where it has none.
     pub items: u32,
@@ -142,6 +176,8 @@ impl StageShape {
 struct Reflected {
     shape: StageShape,
     paged: Vec<PagedBinding>,
+    /// The names of its compute entry points.
+    entries: Vec<String>,
 }
 
 /// A stage's WGSL read with naga, once per process.
@@ -162,6 +198,7 @@ fn reflect(stage: Stage) -> Result<Arc<Reflected>> {
     let reflected = Arc::new(Reflected {
         shape: read_shape(&module),
         paged: read_paged(&module),
+        entries: compute_entries(&module).map(|e| e.name.clone()).collect(),
     });
     if let Ok(mut m) = cache.lock() {
         m.insert(stage, reflected.clone());
@@ -174,14 +211,31 @@ pub fn stage_shape(stage: Stage) -> Result<StageShape> {
     reflect(stage).map(|r| r.shape)
 }
 
-fn read_shape(module: &naga::Module) -> StageShape {
-    let workgroup_size = module
+/// The names of `stage`'s compute entry points, in the order its WGSL declares them.
+pub fn stage_entries(stage: Stage) -> Result<Vec<String>> {
+    reflect(stage).map(|r| r.entries.clone())
+}
+
+fn compute_entries(module: &naga::Module) -> impl Iterator<Item = &naga::EntryPoint> {
+    module
         .entry_points
         .iter()
-        .find(|e| e.name == "main" && e.stage == naga::ShaderStage::Compute)
-        .filter(|e| e.workgroup_size_overrides.is_none())
-        .filter(|e| e.workgroup_size[1] == 1 && e.workgroup_size[2] == 1)
-        .map(|e| e.workgroup_size[0]);
+        .filter(|e| e.stage == naga::ShaderStage::Compute)
+}
+
+fn read_shape(module: &naga::Module) -> StageShape {
+    let size = |e: &naga::EntryPoint| {
+        Some(e)
+            .filter(|e| e.workgroup_size_overrides.is_none())
+            .filter(|e| e.workgroup_size[1] == 1 && e.workgroup_size[2] == 1)
+            .map(|e| e.workgroup_size[0])
+    };
+    let sizes: Vec<Option<u32>> = compute_entries(module).map(size).collect();
+    let workgroup_size = sizes
+        .first()
+        .copied()
+        .flatten()
+        .filter(|&first| sizes.iter().all(|&s| s == Some(first)));
     let items = module
         .constants
         .iter()

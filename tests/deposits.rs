@@ -431,23 +431,18 @@ fn shared_light_of_a_flat_field_is_the_photons_estimate() {
     let matte = [lobelight::types::Material::default()];
     // Each splat its own group and leader: the sum, then the copy that counts.
     let cover: Vec<u32> = (0..n).chain(0..n).collect();
-    let copy = EmParams {
-        flags: params.flags | lobelight::shared::lobes::EM_SHARE_COPY,
-        ..params
-    };
-    for p in [params, copy] {
-        cpu::deposit_share::deposit_share(
-            &p,
-            &d.params,
-            &d.bins.params,
-            &splats,
-            &binned,
-            &matte,
-            (&mut shared, &cover),
-            &mut counters,
-            groups,
-        );
-    }
+    let on = (&mut shared[..], &cover[..]);
+    cpu::deposit_share::deposit_share(
+        &params,
+        &d.params,
+        &d.bins.params,
+        &splats,
+        &binned,
+        on,
+        groups,
+    );
+    let on = (&mut shared[..], &cover[..]);
+    cpu::deposit_share::copy(&params, (&splats, &matte), on, &mut counters, groups);
     assert_eq!(counters[3], n, "every splat of the field is lit");
 
     let bins = Engine::Mirror

@@ -142,33 +142,44 @@ fn unbalanced_ifdef_names_file_and_line() {
 
 /// The device host takes every stage's workgroup size (and items per invocation) from the
 /// WGSL, read with naga; the CPU mirrors write theirs for their loops, in their rows of the
-/// mirrors' table (`cpu::MIRRORS`). The two must agree, and every stage has one row.
+/// mirrors' table (`cpu::MIRRORS`). The two must agree, and every compute entry point of a
+/// stage has one row (a stage that draws triangles, one row for its `main`).
 #[test]
 fn mirror_workgroup_shapes_match_the_wgsl() {
     use lobelight::cpu::{mirror_rows, tonemap_reduce};
-    use lobelight::shaders::stage_shape;
-    // Every stage has one row, in its mirror's file, whose shape is the WGSL's: `em_fit`'s
+    use lobelight::shaders::{stage_entries, stage_shape};
+    // Every stage has its rows in its mirror's file, whose shape is the WGSL's: `em_fit`'s
     // workgroup size is a pipeline constant (`em::workgroup_size`), and the splat raster
     // passes, the reference gather and present draw triangles, so none of them has one.
+    let mut passes = 0;
     for &stage in Stage::ALL {
-        let rows: Vec<_> = mirror_rows().filter(|r| r.stage == stage).collect();
-        assert_eq!(
-            rows.len(),
-            1,
-            "{}: rows in the mirrors' table",
-            stage.name()
-        );
-        let (row, shape) = (rows[0], stage_shape(stage).unwrap());
-        assert_eq!(
-            row.workgroup_size, shape.workgroup_size,
-            "{stage}: workgroup size"
-        );
-        if let Some(wg) = row.workgroup_size {
-            assert_eq!(shape.items, row.items, "{stage}: items per invocation");
-            assert_eq!(shape.per_group(stage).unwrap(), wg * row.items, "{stage}");
+        let mut rows: Vec<&str> = mirror_rows()
+            .filter(|r| r.stage == stage)
+            .map(|r| r.entry)
+            .collect();
+        let mut entries = stage_entries(stage).unwrap();
+        if entries.is_empty() {
+            entries.push("main".into());
+        }
+        rows.sort();
+        entries.sort();
+        assert_eq!(rows, entries, "{stage}: rows in the mirrors' table");
+        passes += entries.len();
+        let shape = stage_shape(stage).unwrap();
+        for row in mirror_rows().filter(|r| r.stage == stage) {
+            assert_eq!(
+                row.workgroup_size, shape.workgroup_size,
+                "{stage}: workgroup size"
+            );
+            if let Some(wg) = row.workgroup_size {
+                assert_eq!(shape.items, row.items, "{stage}: items per invocation");
+                assert_eq!(shape.per_group(stage).unwrap(), wg * row.items, "{stage}");
+            }
         }
     }
-    assert_eq!(mirror_rows().count(), Stage::ALL.len());
+    assert_eq!(mirror_rows().count(), passes);
+    // Three stages run a second pass over coverage groups' members.
+    assert_eq!(passes, Stage::ALL.len() + 3);
     assert_eq!(
         tonemap_reduce::BLOCK,
         tonemap_reduce::WG * tonemap_reduce::ITEMS
@@ -213,10 +224,13 @@ fn stage_bindings_are_read_from_the_wgsl() {
             );
             traced += 1;
         }
-        match lobelight::cpu::mirror(stage) {
-            Some(Mirror::Traced(_)) => assert!(traces, "{stage}: a traced mirror"),
-            Some(Mirror::Plain(_)) => assert!(!traces, "{stage}: a mirror without geometry"),
-            None => {}
+        for row in lobelight::cpu::mirror_rows().filter(|r| r.stage == stage) {
+            let pass = stage.entry(row.entry);
+            match row.run {
+                Some(Mirror::Traced(_)) => assert!(traces, "{pass}: a traced mirror"),
+                Some(Mirror::Plain(_)) => assert!(!traces, "{pass}: a mirror without geometry"),
+                None => {}
+            }
         }
         assert!(shape.bindings[0] > 0, "{}", stage.name());
     }
@@ -374,9 +388,6 @@ fn em_flags_match_the_wgsl() {
         ("EM_DEFER_FIT", EM_DEFER_FIT),
         ("EM_SHARE", EM_SHARE),
         ("EM_GROUPS", EM_GROUPS),
-        ("EM_COVER_APPLY", EM_COVER_APPLY),
-        ("EM_SMOOTH_APPLY", EM_SMOOTH_APPLY),
-        ("EM_SHARE_COPY", EM_SHARE_COPY),
         ("FOLLOWER_BIT", FOLLOWER_BIT),
     ] {
         assert_eq!(wgsl_const_u32(&source, name), value, "{name}");

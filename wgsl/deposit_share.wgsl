@@ -11,9 +11,8 @@
 // group (splats within R/16 of each other facing within 11 degrees: a dense scan's R holds
 // thousands, whose sums differ by little), at its leader, in the leaders' order (a list of the
 // splats with deposits near them saves nothing: the reach holds hundreds of splats, and the
-// list's scheduling order cost a 3 M-splat terrain 0.8 s). Two passes: the first (one
-// invocation a group) writes each leader's light; the second (EM_SHARE_COPY, one a splat)
-// copies it to the members, and counters[3] counts the splats lit that are not fitted
+// list's scheduling order cost a 3 M-splat terrain 0.8 s). Two entry points: main (one
+// invocation a group) writes each leader's light; copy (one a splat) copies it to the members, and counters[3] counts the splats lit that are not fitted
 // (fit_select lists and counts those). CPU mirror: src/cpu/deposit_share.rs.
 
 // #import types
@@ -51,12 +50,6 @@ const WG: u32 = 64u;
 fn main(@builtin(workgroup_id) wg: vec3<u32>, @builtin(num_workgroups) num_wg: vec3<u32>,
         @builtin(local_invocation_index) lid: u32) {
     let invocation = linear_workgroup(wg, num_wg) * WG + lid;
-    if (em.flags & EM_SHARE_COPY) != 0u {
-        if invocation < em.splat_count {
-            copy_from_leader(invocation);
-        }
-        return;
-    }
     if invocation >= em.active_count {
         return;
     }
@@ -99,9 +92,15 @@ fn main(@builtin(workgroup_id) wg: vec3<u32>, @builtin(num_workgroups) num_wg: v
     light_put(i, out);
 }
 
-// The second pass: splat i's light, its group's leader's, and whether it counts as lit and
-// not fitted (fit_select listed the fitted ones, counters[2]).
-fn copy_from_leader(i: u32) {
+// The second pass, one invocation a splat: splat i's light, its group's leader's, and whether
+// it counts as lit and not fitted (fit_select listed the fitted ones, counters[2]).
+@compute @workgroup_size(64)
+fn copy(@builtin(workgroup_id) wg: vec3<u32>, @builtin(num_workgroups) num_wg: vec3<u32>,
+        @builtin(local_invocation_index) lid: u32) {
+    let i = linear_workgroup(wg, num_wg) * WG + lid;
+    if i >= em.splat_count {
+        return;
+    }
     let leader = cover_at(em.splat_count + cover_at(i));
     let l = light_at(leader);
     if leader != i {

@@ -16,9 +16,9 @@
 // The share changes little over a small part of R (at most about 0.64 per R the centre moves),
 // so splats share it in groups (src/fit_groups.rs, CoverGroups: cells of R/16, facing within
 // 11 degrees): a dense scan, whose every R holds thousands of splats, measures it once a group,
-// not once a splat. Two passes of this stage: the first (EM_COVER_APPLY unset), one invocation
-// per group, measures the share at the group's leader; the second, one per splat with photons,
-// divides its irradiance by its group's share. CPU mirror: src/cpu/estimate_coverage.rs.
+// not once a splat. Two entry points: main, one invocation per group, measures the share at
+// the group's leader; apply, one per splat with photons, divides its irradiance by its group's
+// share. CPU mirror: src/cpu/estimate_coverage.rs.
 
 // #import types
 // #import dispatch
@@ -251,13 +251,17 @@ fn share_of(i: u32) -> f32 {
 fn main(@builtin(workgroup_id) wg: vec3<u32>, @builtin(num_workgroups) num_wg: vec3<u32>,
         @builtin(local_invocation_index) lid: u32) {
     let i = linear_workgroup(wg, num_wg) * WG + lid;
-    // First pass: group i's share, at its leader (em.active_count groups).
-    if (em.flags & EM_COVER_APPLY) == 0u {
-        if i < em.active_count {
-            shares_put(i, share_of(cover_at(em.splat_count + i)));
-        }
-        return;
+    // Group i's share, at its leader (em.active_count groups).
+    if i < em.active_count {
+        shares_put(i, share_of(cover_at(em.splat_count + i)));
     }
+}
+
+// The second pass: splat i's irradiance divided by its group's share.
+@compute @workgroup_size(64)
+fn apply(@builtin(workgroup_id) wg: vec3<u32>, @builtin(num_workgroups) num_wg: vec3<u32>,
+         @builtin(local_invocation_index) lid: u32) {
+    let i = linear_workgroup(wg, num_wg) * WG + lid;
     if i >= em.splat_count {
         return;
     }

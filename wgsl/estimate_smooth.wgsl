@@ -20,9 +20,8 @@
 // neighbours are the deposits' records (splats a photon landed on), in the deposit_share bins. The
 // choice is made once a coverage group (splats within R/16 of each other facing within
 // SMOOTH_COS_MIN: a dense scan's R holds thousands, whose choices differ by little), at its
-// leader. Two passes: the first (EM_SMOOTH_APPLY unset, one invocation a group) writes each
-// group's choice to `smoothed`, with its plane's slopes; the second (one invocation a splat)
-// reads its group's plane at the splat's place into the light (a splat must not read a
+// leader. Two entry points: main (one invocation a group) writes each group's choice to
+// `smoothed`, with its plane's slopes; apply (one invocation a splat) reads its group's plane at the splat's place into the light (a splat must not read a
 // neighbour the pass has already changed). CPU mirror: src/cpu/estimate_smooth.rs.
 
 // #import types
@@ -126,7 +125,13 @@ fn smoothable(l: SplatLight) -> bool {
 
 // The second pass: splat i's irradiance read from its group's plane at its place in the
 // leader's tangent plane, and counted.
-fn apply_choice(i: u32) {
+@compute @workgroup_size(64)
+fn apply(@builtin(workgroup_id) wg: vec3<u32>, @builtin(num_workgroups) num_wg: vec3<u32>,
+         @builtin(local_invocation_index) lid: u32) {
+    let i = linear_workgroup(wg, num_wg) * WG + lid;
+    if i >= em.splat_count {
+        return;
+    }
     var l = light_at(i);
     if !smoothable(l) {
         return;
@@ -171,12 +176,6 @@ fn choice_put(g: u32, choice: array<vec4<f32>, 3>) {
 fn main(@builtin(workgroup_id) wg: vec3<u32>, @builtin(num_workgroups) num_wg: vec3<u32>,
         @builtin(local_invocation_index) lid: u32) {
     let invocation = linear_workgroup(wg, num_wg) * WG + lid;
-    if (em.flags & EM_SMOOTH_APPLY) != 0u {
-        if invocation < em.splat_count {
-            apply_choice(invocation);
-        }
-        return;
-    }
     if invocation >= em.active_count {
         return;
     }

@@ -87,6 +87,7 @@ pub fn dispatch(b: &Bindings, groups: u32) -> Result<()> {
 pub const ROWS: &[MirrorRow] = &[
     MirrorRow {
         stage: Stage::DepositList,
+        entry: "main",
         workgroup_size: Some(WG),
         items: 1,
         run: Some(Mirror::Plain(dispatch)),

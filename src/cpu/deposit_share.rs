@@ -1,6 +1,6 @@
 //! Mirror of `wgsl/deposit_share.wgsl`: each coverage group's photon irradiance from the binned
-//! deposits around its leader, in the candidates' order (first pass), then each splat's, its
-//! leader's, and the count of splats lit (second pass, `EM_SHARE_COPY`).
+//! deposits around its leader, in the candidates' order (`main`), then each splat's, its
+//! leader's, and the count of splats lit (`copy`).
 
 use super::{Mirror, MirrorRow};
 use crate::shaders::Stage;
@@ -11,7 +11,7 @@ use rayon::prelude::*;
 
 use crate::shared::bins::{SURFACE_COS_MIN, bin_box, bin_row, bin_row_count, photon_weight};
 use crate::shared::deposits::{disk_share, front_share};
-use crate::shared::lobes::{EM_FIT_ALL, EM_SHARE_COPY};
+use crate::shared::lobes::EM_FIT_ALL;
 use crate::shared::octahedral::surface_decode;
 use crate::types::{BinParams, BinnedPhoton, DepositParams, EmParams, Material, Splat, SplatLight};
 
@@ -76,9 +76,8 @@ fn share(
     }
 }
 
-/// The first pass: each of `em.active_count` groups' light, at its leader (`cover`'s words
-/// after the splats'); the second (`EM_SHARE_COPY`): each splat's light its leader's, and the
-/// splats lit that are not fitted counted.
+/// The first pass (`main`): each of `em.active_count` groups' light, at its leader
+/// (`cover`'s words after the splats').
 #[allow(clippy::too_many_arguments)]
 pub fn deposit_share(
     em: &EmParams,
@@ -86,24 +85,32 @@ pub fn deposit_share(
     bins: &BinParams,
     splats: &[Splat],
     d: &BinnedDeposits,
-    materials: &[Material],
+    (light, cover): (&mut [SplatLight], &[u32]),
+    groups: u32,
+) {
+    let invocations = (groups * WG) as usize;
+    let leaders = &cover[em.splat_count as usize..];
+    let count = invocations.min(em.active_count as usize);
+    let sums: Vec<SplatLight> = leaders[..count]
+        .par_iter()
+        .map(|&leader| share(em, deposit, bins, splats, d, &splats[leader as usize]))
+        .collect();
+    for (&leader, l) in leaders.iter().zip(sums) {
+        light[leader as usize] = l;
+    }
+}
+
+/// The second pass (`copy`): each splat's light its leader's, and the splats lit that are
+/// not fitted counted.
+pub fn copy(
+    em: &EmParams,
+    (splats, materials): (&[Splat], &[Material]),
     (light, cover): (&mut [SplatLight], &[u32]),
     counters: &mut [u32; 4],
     groups: u32,
 ) {
     let invocations = (groups * WG) as usize;
     let leaders = &cover[em.splat_count as usize..];
-    if em.flags & EM_SHARE_COPY == 0 {
-        let count = invocations.min(em.active_count as usize);
-        let sums: Vec<SplatLight> = leaders[..count]
-            .par_iter()
-            .map(|&leader| share(em, deposit, bins, splats, d, &splats[leader as usize]))
-            .collect();
-        for (&leader, l) in leaders.iter().zip(sums) {
-            light[leader as usize] = l;
-        }
-        return;
-    }
     let count = invocations.min(em.splat_count as usize);
     // The leaders' light apart, a group's a word (the pass writes members, never leaders).
     let led: Vec<SplatLight> = leaders.iter().map(|&l| light[l as usize]).collect();
@@ -125,14 +132,13 @@ pub fn deposit_share(
     counters[3] += lit.count() as u32;
 }
 
-/// The executor's entry: `deposit_share`'s bindings, unpacked in the order its WGSL declares them.
+/// The executor's entry of `main`: `deposit_share`'s bindings, unpacked in the order its WGSL
+/// declares them.
 pub fn dispatch(b: &Bindings, groups: u32) -> Result<()> {
     let em = b.param(0)?;
     let deposit = b.param(1)?;
     let bins = b.param(2)?;
     let splats = b.get(3)?;
-    let materials = b.get(4)?;
-    let mut counters = b.get_mut(5)?;
     let cell_start = b.get(6)?;
     let keys = b.get(7)?;
     let geom = b.get(8)?;
@@ -140,7 +146,6 @@ pub fn dispatch(b: &Bindings, groups: u32) -> Result<()> {
     let spread = b.get(10)?;
     let mut light = b.get_mut(11)?;
     let cover = b.get(12)?;
-    let counters = b.counters::<4>(&mut counters)?;
     let binned = BinnedDeposits {
         cell_start: &cell_start,
         keys: view(&keys),
@@ -148,26 +153,39 @@ pub fn dispatch(b: &Bindings, groups: u32) -> Result<()> {
         power: view(&power),
         spread: view(&spread),
     };
-    deposit_share(
-        &em,
-        &deposit,
-        &bins,
-        view(&splats),
-        &binned,
-        view(&materials),
-        (view_mut(&mut light), view(&cover)),
-        counters,
-        groups,
-    );
+    let on = (view_mut(&mut light), view(&cover));
+    deposit_share(&em, &deposit, &bins, view(&splats), &binned, on, groups);
     Ok(())
 }
 
-/// This file's row of the mirrors' table (`cpu::MIRRORS`).
+/// The executor's entry of `copy`.
+pub fn dispatch_copy(b: &Bindings, groups: u32) -> Result<()> {
+    let em = b.param(0)?;
+    let splats = b.get(3)?;
+    let materials = b.get(4)?;
+    let mut counters = b.get_mut(5)?;
+    let mut light = b.get_mut(11)?;
+    let cover = b.get(12)?;
+    let counters = b.counters::<4>(&mut counters)?;
+    let of = (view(&splats), view(&materials));
+    copy(&em, of, (view_mut(&mut light), view(&cover)), counters, groups);
+    Ok(())
+}
+
+/// This file's rows of the mirrors' table (`cpu::MIRRORS`).
 pub const ROWS: &[MirrorRow] = &[
     MirrorRow {
         stage: Stage::DepositShare,
+        entry: "main",
         workgroup_size: Some(WG),
         items: 1,
         run: Some(Mirror::Plain(dispatch)),
+    },
+    MirrorRow {
+        stage: Stage::DepositShare,
+        entry: "copy",
+        workgroup_size: Some(WG),
+        items: 1,
+        run: Some(Mirror::Plain(dispatch_copy)),
     },
 ];

@@ -770,6 +770,7 @@ pub fn dispatch(b: &Bindings, groups: u32) -> Result<()> {
 pub const ROWS: &[MirrorRow] = &[
     MirrorRow {
         stage: Stage::EmFit,
+        entry: "main",
         workgroup_size: None,
         items: 1,
         run: Some(Mirror::Plain(dispatch)),

@@ -1,6 +1,6 @@
 //! Mirror of `wgsl/estimate_coverage.wgsl`: the share of its gather disk a group's leader's surface
-//! covers (first pass, one invocation a group), and each splat's photon irradiance divided by
-//! its group's share (second pass, `EM_COVER_APPLY`).
+//! covers (`main`, one invocation a group), and each splat's photon irradiance divided by its
+//! group's share (`apply`).
 // `!(x < y)` is meant: NaN must fail these tests, as it does in the WGSL twin.
 #![allow(clippy::neg_cmp_op_on_partial_ord)]
 
@@ -13,7 +13,6 @@ use rayon::prelude::*;
 
 use crate::grid::{DIST_MASK, cell_index, point_cell};
 use crate::shared::bins::SURFACE_COS_MIN;
-use crate::shared::lobes::EM_COVER_APPLY;
 use crate::shared::sampling::frame_of;
 use crate::shared::trace::Geometry;
 use crate::types::{EmParams, GridParams, SplatLight};
@@ -233,26 +232,26 @@ fn share(em: &EmParams, geo: &Geometry, i: usize) -> f32 {
     (area / n as f32).clamp(COVERAGE_MIN, 1.0)
 }
 
-/// The first pass: each of `em.active_count` groups' share, at its leader (`cover`'s words
-/// after the splats'); the second (`EM_COVER_APPLY`): each splat's irradiance divided by its
-/// group's share.
+/// The first pass (`main`): each of `em.active_count` groups' share, at its leader (`cover`'s
+/// words after the splats').
 pub fn estimate_coverage(
     em: &EmParams,
-    light: &mut [SplatLight],
     (cover, shares): (&[u32], &mut [f32]),
     geo: &Geometry,
     groups: u32,
 ) {
     let invocations = (groups * WG) as usize;
-    if em.flags & EM_COVER_APPLY == 0 {
-        let count = invocations.min(em.active_count as usize);
-        let leaders = &cover[em.splat_count as usize..];
-        shares[..count]
-            .par_iter_mut()
-            .zip(&leaders[..count])
-            .for_each(|(share_out, &leader)| *share_out = share(em, geo, leader as usize));
-        return;
-    }
+    let count = invocations.min(em.active_count as usize);
+    let leaders = &cover[em.splat_count as usize..];
+    shares[..count]
+        .par_iter_mut()
+        .zip(&leaders[..count])
+        .for_each(|(share_out, &leader)| *share_out = share(em, geo, leader as usize));
+}
+
+/// The second pass (`apply`): each splat's irradiance divided by its group's share.
+pub fn apply(em: &EmParams, light: &mut [SplatLight], (cover, shares): (&[u32], &[f32]), groups: u32) {
+    let invocations = (groups * WG) as usize;
     let count = invocations.min(em.splat_count as usize);
     light[..count]
         .par_iter_mut()
@@ -265,29 +264,41 @@ pub fn estimate_coverage(
         });
 }
 
-/// The executor's entry: `estimate_coverage`'s bindings, unpacked in the order its WGSL declares
-/// them.
+/// The executor's entry of `main`: `estimate_coverage`'s bindings, unpacked in the order its
+/// WGSL declares them.
 pub fn dispatch(b: &Bindings, geo: &Geometry, groups: u32) -> Result<()> {
     let em = b.param(0)?;
-    let mut light = b.get_mut(1)?;
     let cover = b.get(2)?;
     let mut shares = b.get_mut(3)?;
-    estimate_coverage(
-        &em,
-        view_mut(&mut light),
-        (view(&cover), view_mut(&mut shares)),
-        geo,
-        groups,
-    );
+    let on = (view(&cover), view_mut(&mut shares));
+    estimate_coverage(&em, on, geo, groups);
     Ok(())
 }
 
-/// This file's row of the mirrors' table (`cpu::MIRRORS`).
+/// The executor's entry of `apply` (bound as `main` is, the scene's geometry unread).
+pub fn dispatch_apply(b: &Bindings, _geo: &Geometry, groups: u32) -> Result<()> {
+    let em = b.param(0)?;
+    let mut light = b.get_mut(1)?;
+    let cover = b.get(2)?;
+    let shares = b.get(3)?;
+    apply(&em, view_mut(&mut light), (view(&cover), view(&shares)), groups);
+    Ok(())
+}
+
+/// This file's rows of the mirrors' table (`cpu::MIRRORS`).
 pub const ROWS: &[MirrorRow] = &[
     MirrorRow {
         stage: Stage::EstimateCoverage,
+        entry: "main",
         workgroup_size: Some(WG),
         items: 1,
         run: Some(Mirror::Traced(dispatch)),
+    },
+    MirrorRow {
+        stage: Stage::EstimateCoverage,
+        entry: "apply",
+        workgroup_size: Some(WG),
+        items: 1,
+        run: Some(Mirror::Traced(dispatch_apply)),
     },
 ];

@@ -15,7 +15,7 @@ use rayon::prelude::*;
 
 use crate::shared::bins::{bin_box_spanning, bin_row, bin_row_count, bin_row_untrimmed};
 use crate::shared::lobes::{
-    EM_SMOOTH_APPLY, SMOOTH_BUDGET, SMOOTH_CONFIDENCE, SMOOTH_COS_MIN, SMOOTH_DET_MIN,
+    SMOOTH_BUDGET, SMOOTH_CONFIDENCE, SMOOTH_COS_MIN, SMOOTH_DET_MIN,
     SMOOTH_PHOTONS_ENOUGH, SMOOTH_SPAN,
 };
 use crate::shared::sampling::frame_of;
@@ -241,9 +241,8 @@ fn read_choice(
     ((e + u * du + v * dv).into(), scale)
 }
 
-/// The first pass: each of `em.active_count` groups' choice, at its leader (`cover`'s words
-/// after the splats'); the second (`EM_SMOOTH_APPLY`): each smoothable splat's irradiance read
-/// from its group's choice, counted by scale, and by whether its group fitted a subset.
+/// The first pass (`main`): each of `em.active_count` groups' choice, at its leader
+/// (`cover`'s words after the splats').
 #[allow(clippy::too_many_arguments)]
 pub fn estimate_smooth(
     em: &EmParams,
@@ -251,24 +250,33 @@ pub fn estimate_smooth(
     bins: &BinParams,
     splats: &[Splat],
     records: &Records,
-    (light, cover): (&mut [SplatLight], &[u32]),
+    (light, cover): (&[SplatLight], &[u32]),
     smoothed: &mut [Choice],
+    groups: u32,
+) {
+    let invocations = (groups * WG) as usize;
+    let leaders = &cover[em.splat_count as usize..];
+    let count = invocations.min(em.active_count as usize);
+    smoothed[..count]
+        .par_iter_mut()
+        .zip(&leaders[..count])
+        .for_each(|(out, &leader)| {
+            *out = choose(em, deposit, bins, splats, records, light, leader as usize)
+        });
+}
+
+/// The second pass (`apply`): each smoothable splat's irradiance read from its group's choice,
+/// counted by scale, and by whether its group fitted a subset.
+pub fn apply(
+    em: &EmParams,
+    splats: &[Splat],
+    (light, cover): (&mut [SplatLight], &[u32]),
+    smoothed: &[Choice],
     counters: &mut [u32; 4],
     groups: u32,
 ) {
     let invocations = (groups * WG) as usize;
     let leaders = &cover[em.splat_count as usize..];
-    if em.flags & EM_SMOOTH_APPLY == 0 {
-        let light = &*light;
-        let count = invocations.min(em.active_count as usize);
-        smoothed[..count]
-            .par_iter_mut()
-            .zip(&leaders[..count])
-            .for_each(|(out, &leader)| {
-                *out = choose(em, deposit, bins, splats, records, light, leader as usize)
-            });
-        return;
-    }
     let count = invocations.min(em.splat_count as usize);
     let counts = light[..count]
         .par_iter_mut()
@@ -291,8 +299,8 @@ pub fn estimate_smooth(
     }
 }
 
-/// The executor's entry: `estimate_smooth`'s bindings, unpacked in the order its WGSL declares
-/// them.
+/// The executor's entry of `main`: `estimate_smooth`'s bindings, unpacked in the order its
+/// WGSL declares them.
 pub fn dispatch(b: &Bindings, groups: u32) -> Result<()> {
     let em = b.param(0)?;
     let deposit = b.param(1)?;
@@ -300,35 +308,47 @@ pub fn dispatch(b: &Bindings, groups: u32) -> Result<()> {
     let splats = b.get(3)?;
     let cell_start = b.get(4)?;
     let keys = b.get(5)?;
-    let mut light = b.get_mut(6)?;
+    let light = b.get(6)?;
     let mut smoothed = b.get_mut(7)?;
-    let mut counters = b.get_mut(8)?;
     let cover = b.get(9)?;
-    let counters = b.counters::<4>(&mut counters)?;
     let records = Records {
         cell_start: &cell_start,
         keys: view(&keys),
     };
-    estimate_smooth(
-        &em,
-        &deposit,
-        &bins,
-        view(&splats),
-        &records,
-        (view_mut(&mut light), view(&cover)),
-        view_mut(&mut smoothed),
-        counters,
-        groups,
-    );
+    let on = (view(&light), view(&cover));
+    let (splats, smoothed) = (view(&splats), view_mut(&mut smoothed));
+    estimate_smooth(&em, &deposit, &bins, splats, &records, on, smoothed, groups);
     Ok(())
 }
 
-/// This file's row of the mirrors' table (`cpu::MIRRORS`).
+/// The executor's entry of `apply`.
+pub fn dispatch_apply(b: &Bindings, groups: u32) -> Result<()> {
+    let em = b.param(0)?;
+    let splats = b.get(3)?;
+    let mut light = b.get_mut(6)?;
+    let smoothed = b.get(7)?;
+    let mut counters = b.get_mut(8)?;
+    let cover = b.get(9)?;
+    let counters = b.counters::<4>(&mut counters)?;
+    let on = (view_mut(&mut light), view(&cover));
+    apply(&em, view(&splats), on, view(&smoothed), counters, groups);
+    Ok(())
+}
+
+/// This file's rows of the mirrors' table (`cpu::MIRRORS`).
 pub const ROWS: &[MirrorRow] = &[
     MirrorRow {
         stage: Stage::EstimateSmooth,
+        entry: "main",
         workgroup_size: Some(WG),
         items: 1,
         run: Some(Mirror::Plain(dispatch)),
+    },
+    MirrorRow {
+        stage: Stage::EstimateSmooth,
+        entry: "apply",
+        workgroup_size: Some(WG),
+        items: 1,
+        run: Some(Mirror::Plain(dispatch_apply)),
     },
 ];

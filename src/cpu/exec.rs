@@ -10,7 +10,7 @@ use super::Mirror;
 use super::bindings::{Bindings, CpuBuffer, view};
 use crate::error::{Error, Result};
 use crate::sequence::Executor;
-use crate::shaders::Stage;
+use crate::shaders::{Pass, Stage};
 use crate::shared::trace::Geometry;
 
 /// Runs sequences on the CPU; tracing stages read `geometry` as their bind group 1.
@@ -50,15 +50,21 @@ impl Executor for CpuExecutor<'_> {
         self.upload(label, std::slice::from_ref(value))
     }
 
-    fn dispatch(&mut self, stage: Stage, b: &[&CpuBuffer], groups: u32) -> Result<()> {
-        run(stage, b, None, groups)
+    fn dispatch(&mut self, pass: impl Into<Pass>, b: &[&CpuBuffer], groups: u32) -> Result<()> {
+        run(pass.into(), b, None, groups)
     }
 
-    fn dispatch_traced(&mut self, stage: Stage, b: &[&CpuBuffer], groups: u32) -> Result<()> {
+    fn dispatch_traced(
+        &mut self,
+        pass: impl Into<Pass>,
+        b: &[&CpuBuffer],
+        groups: u32,
+    ) -> Result<()> {
+        let pass = pass.into();
         let geo = self
             .geometry
-            .ok_or_else(|| Error::Internal(format!("{stage}: no scene geometry to trace")))?;
-        run(stage, b, Some(&geo), groups)
+            .ok_or_else(|| Error::Internal(format!("{pass}: no scene geometry to trace")))?;
+        run(pass, b, Some(&geo), groups)
     }
 
     fn dispatch_variant(
@@ -70,7 +76,7 @@ impl Executor for CpuExecutor<'_> {
         groups: u32,
     ) -> Result<()> {
         // The mirrors read the lobe count, family and the rest from the stage's parameters.
-        run(stage, b, None, groups)
+        run(stage.into(), b, None, groups)
     }
 
     fn copy(
@@ -113,11 +119,11 @@ impl Executor for CpuExecutor<'_> {
     }
 }
 
-/// Runs `stage`'s mirror over `groups` workgroups with the dispatch's bindings, `geometry` as
+/// Runs `pass`'s mirror over `groups` workgroups with the dispatch's bindings, `geometry` as
 /// a tracing stage's bind group 1.
-fn run(stage: Stage, b: &[&CpuBuffer], geometry: Option<&Geometry>, groups: u32) -> Result<()> {
-    let bindings = Bindings::new(stage, b)?;
-    match (super::mirror(stage), geometry) {
+fn run(pass: Pass, b: &[&CpuBuffer], geometry: Option<&Geometry>, groups: u32) -> Result<()> {
+    let bindings = Bindings::new(pass.stage, b)?;
+    match (super::mirror(pass), geometry) {
         (Some(Mirror::Plain(run)), _) => run(&bindings, groups),
         (Some(Mirror::Traced(run)), Some(geo)) => run(&bindings, geo, groups),
         (Some(Mirror::Traced(_)), None) => Err(bindings.internal("no scene geometry to trace")),

@@ -105,6 +105,7 @@ pub fn dispatch(b: &Bindings, groups: u32) -> Result<()> {
 pub const ROWS: &[MirrorRow] = &[
     MirrorRow {
         stage: Stage::FitSelect,
+        entry: "main",
         workgroup_size: Some(WG),
         items: 1,
         run: Some(Mirror::Plain(dispatch)),

@@ -70,7 +70,7 @@ pub use exec::CpuExecutor;
 pub use host::*;
 
 use crate::error::Result;
-use crate::shaders::Stage;
+use crate::shaders::{Pass, Stage};
 use crate::shared::trace::Geometry;
 use bindings::Bindings;
 
@@ -90,6 +90,9 @@ pub enum Mirror {
 #[derive(Clone, Copy)]
 pub struct MirrorRow {
     pub stage: Stage,
+    /// The compute entry point it mirrors (`shaders::Pass`): `main`, or another pass of the
+    /// stage, each a row of its own.
+    pub entry: &'static str,
     pub workgroup_size: Option<u32>,
     pub items: u32,
     pub run: Option<Mirror>,
@@ -100,7 +103,9 @@ pub fn mirror_rows() -> impl Iterator<Item = &'static MirrorRow> {
     MIRRORS.iter().flat_map(|rows| rows.iter())
 }
 
-/// The mirror the executor runs for `stage`, where it runs one.
-pub fn mirror(stage: Stage) -> Option<Mirror> {
-    mirror_rows().find(|r| r.stage == stage).and_then(|r| r.run)
+/// The mirror the executor runs for `pass`, where it runs one.
+pub fn mirror(pass: Pass) -> Option<Mirror> {
+    mirror_rows()
+        .find(|r| r.stage == pass.stage && r.entry == pass.entry)
+        .and_then(|r| r.run)
 }

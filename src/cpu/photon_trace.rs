@@ -217,6 +217,7 @@ pub fn dispatch(b: &Bindings, geo: &Geometry, groups: u32) -> Result<()> {
 pub const ROWS: &[MirrorRow] = &[
     MirrorRow {
         stage: Stage::PhotonTrace,
+        entry: "main",
         workgroup_size: Some(WG),
         items: 1,
         run: Some(Mirror::Traced(dispatch)),

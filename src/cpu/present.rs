@@ -92,6 +92,7 @@ pub fn upsample(params: &PresentParams, hdr: &[[f32; 4]]) -> Vec<[f32; 4]> {
 pub const ROWS: &[MirrorRow] = &[
     MirrorRow {
         stage: Stage::Present,
+        entry: "main",
         workgroup_size: None,
         items: 1,
         run: None,

@@ -114,6 +114,7 @@ pub fn reference_gather(
 pub const ROWS: &[MirrorRow] = &[
     MirrorRow {
         stage: Stage::ReferenceGather,
+        entry: "main",
         workgroup_size: None,
         items: 1,
         run: None,

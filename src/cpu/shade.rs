@@ -353,6 +353,7 @@ pub fn shade(
 pub const ROWS: &[MirrorRow] = &[
     MirrorRow {
         stage: Stage::Shade,
+        entry: "main",
         workgroup_size: Some(WG),
         items: 1,
         run: None,

@@ -104,6 +104,7 @@ pub fn splat_attributes(
 pub const ROWS: &[MirrorRow] = &[
     MirrorRow {
         stage: Stage::SplatAttributes,
+        entry: "main",
         workgroup_size: None,
         items: 1,
         run: None,

@@ -23,6 +23,7 @@ pub fn splat_list(offsets: &[u32], drawn: &[f32], tree: &LodTree, visits: &[u32]
 pub const ROWS: &[MirrorRow] = &[
     MirrorRow {
         stage: Stage::SplatList,
+        entry: "main",
         workgroup_size: Some(WG),
         items: 1,
         run: None,

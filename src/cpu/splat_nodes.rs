@@ -45,6 +45,7 @@ pub fn walk(cam: &Camera, tree: &LodTree) -> Vec<Vec<u32>> {
 pub const ROWS: &[MirrorRow] = &[
     MirrorRow {
         stage: Stage::SplatNodes,
+        entry: "main",
         workgroup_size: Some(WG),
         items: 1,
         run: None,

@@ -125,6 +125,7 @@ pub fn drawn_splats(splats: &[Splat], drawn: &[f32]) -> Vec<Splat> {
 pub const ROWS: &[MirrorRow] = &[
     MirrorRow {
         stage: Stage::SplatSelect,
+        entry: "main",
         workgroup_size: Some(WG),
         items: 1,
         run: None,

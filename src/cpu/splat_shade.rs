@@ -52,6 +52,7 @@ pub fn splat_shade(
 pub const ROWS: &[MirrorRow] = &[
     MirrorRow {
         stage: Stage::SplatShade,
+        entry: "main",
         workgroup_size: Some(WG),
         items: 1,
         run: None,

@@ -85,18 +85,21 @@ pub fn dispatch_tile_scatter(b: &Bindings, _groups: u32) -> Result<()> {
 pub const ROWS: &[MirrorRow] = &[
     MirrorRow {
         stage: Stage::SplatCompute,
+        entry: "main",
         workgroup_size: Some(WG),
         items: 1,
         run: None,
     },
     MirrorRow {
         stage: Stage::SplatTileCount,
+        entry: "main",
         workgroup_size: Some(WG),
         items: 1,
         run: Some(Mirror::Plain(dispatch_tile_count)),
     },
     MirrorRow {
         stage: Stage::SplatTileScatter,
+        entry: "main",
         workgroup_size: Some(WG),
         items: 1,
         run: Some(Mirror::Plain(dispatch_tile_scatter)),

@@ -195,6 +195,7 @@ pub struct Visible {
 pub const ROWS: &[MirrorRow] = &[
     MirrorRow {
         stage: Stage::SplatVisibility,
+        entry: "main",
         workgroup_size: None,
         items: 1,
         run: None,

@@ -262,6 +262,7 @@ pub fn dispatch(b: &Bindings, _groups: u32) -> Result<()> {
 pub const ROWS: &[MirrorRow] = &[
     MirrorRow {
         stage: Stage::Temporal,
+        entry: "main",
         workgroup_size: Some(WG),
         items: 1,
         run: Some(Mirror::Plain(dispatch)),

@@ -37,6 +37,7 @@ pub fn dispatch(b: &Bindings, _groups: u32) -> Result<()> {
 pub const ROWS: &[MirrorRow] = &[
     MirrorRow {
         stage: Stage::TonemapApply,
+        entry: "main",
         workgroup_size: Some(WG),
         items: 1,
         run: Some(Mirror::Plain(dispatch)),

@@ -68,6 +68,7 @@ pub fn dispatch(b: &Bindings, groups: u32) -> Result<()> {
 pub const ROWS: &[MirrorRow] = &[
     MirrorRow {
         stage: Stage::TonemapReduce,
+        entry: "main",
         workgroup_size: Some(WG),
         items: ITEMS,
         run: Some(Mirror::Plain(dispatch)),

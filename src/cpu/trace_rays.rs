@@ -40,6 +40,7 @@ pub fn trace_rays(
 pub const ROWS: &[MirrorRow] = &[
     MirrorRow {
         stage: Stage::TraceRays,
+        entry: "main",
         workgroup_size: Some(WG),
         items: 1,
         run: None,

@@ -6,7 +6,7 @@ use bytemuck::Pod;
 use super::Gpu;
 use crate::error::Result;
 use crate::sequence::Executor;
-use crate::shaders::Stage;
+use crate::shaders::{Pass, Stage};
 
 /// Buffers in bind group 1 of the tracing stages (`GpuScene::geometry`).
 pub const GEOMETRY_BINDINGS: usize = 6;
@@ -53,21 +53,28 @@ impl Executor for GpuExecutor<'_> {
         Ok(self.gpu.uniform(label, value))
     }
 
-    fn dispatch(&mut self, stage: Stage, bindings: &[&wgpu::Buffer], groups: u32) -> Result<()> {
-        self.gpu.dispatch(self.encoder, stage, bindings, groups)
+    fn dispatch(
+        &mut self,
+        pass: impl Into<Pass>,
+        bindings: &[&wgpu::Buffer],
+        groups: u32,
+    ) -> Result<()> {
+        self.gpu
+            .dispatch_groups(self.encoder, pass, &[bindings], groups)
     }
 
     fn dispatch_traced(
         &mut self,
-        stage: Stage,
+        pass: impl Into<Pass>,
         bindings: &[&wgpu::Buffer],
         groups: u32,
     ) -> Result<()> {
-        let geometry = self.geometry.ok_or_else(|| {
-            crate::Error::Internal(format!("{stage}: no scene geometry to trace"))
-        })?;
+        let pass = pass.into();
+        let geometry = self
+            .geometry
+            .ok_or_else(|| crate::Error::Internal(format!("{pass}: no scene geometry to trace")))?;
         self.gpu
-            .dispatch_groups(self.encoder, stage, &[bindings, &geometry], groups)
+            .dispatch_groups(self.encoder, pass, &[bindings, &geometry], groups)
     }
 
     fn dispatch_variant(

@@ -5,6 +5,7 @@ pub mod bins;
 pub mod em;
 pub mod exec;
 pub mod grid;
+mod layout;
 pub mod passes;
 pub mod photon_view;
 pub mod photons;
@@ -23,8 +24,8 @@ use bytemuck::Pod;
 use wgpu::util::DeviceExt;
 
 use crate::error::{Error, Result};
-use crate::shaders::Stage;
 use crate::shaders::{MAX_PAGES, PAGE_BINDING_STEP, PagedArray, Paging};
+use crate::shaders::{Pass, Stage};
 
 /// Which graphics API to run on.
 #[derive(Clone, Copy, Debug, Default, PartialEq, Eq, serde::Serialize)]
@@ -279,8 +280,22 @@ impl Gpu {
         constants: &[(&str, f64)],
         paging: &Paging,
     ) -> Result<wgpu::ComputePipeline> {
+        self.pass_pipeline(stage.into(), defines, constants, paging)
+    }
+
+    /// `variant_paged` of one entry point of the stage. A stage of several entry points gets
+    /// the layout of every binding it declares (`layout::declared`), so that each pass binds
+    /// the same buffers whichever of them it reads.
+    fn pass_pipeline(
+        &self,
+        pass: Pass,
+        defines: &[&str],
+        constants: &[(&str, f64)],
+        paging: &Paging,
+    ) -> Result<wgpu::ComputePipeline> {
+        let stage = pass.stage;
         let key = constants.iter().fold(
-            format!("{stage} [{}]{}", defines.join(","), paging.key()),
+            format!("{pass} [{}]{}", defines.join(","), paging.key()),
             |k, (c, v)| format!("{k} {c}={v}"),
         );
         let mut cache = self
@@ -292,14 +307,18 @@ impl Gpu {
         }
         let started = std::time::Instant::now();
         let source = crate::shaders::resolve_stage_paged(stage, defines, paging)?;
+        let layout = match crate::shaders::stage_entries(stage)?.len() {
+            0 | 1 => None,
+            _ => Some(layout::declared(&self.device, stage, &source)?),
+        };
         let module = self.shader_module(stage.name(), source);
         let pipeline = self
             .device
             .create_compute_pipeline(&wgpu::ComputePipelineDescriptor {
                 label: Some(stage.name()),
-                layout: None,
+                layout: layout.as_ref(),
                 module: &module,
-                entry_point: Some("main"),
+                entry_point: Some(pass.entry),
                 // Every stage writes its workgroup memory before it reads it, so WGSL's
                 // zero-fill is wasted work (10 % of em_fit on llvmpipe).
                 compilation_options: wgpu::PipelineCompilationOptions {
@@ -334,16 +353,17 @@ impl Gpu {
     pub fn dispatch_groups(
         &self,
         encoder: &mut wgpu::CommandEncoder,
-        stage: Stage,
+        pass: impl Into<Pass>,
         bind_groups: &[&[&wgpu::Buffer]],
         groups: u32,
     ) -> Result<()> {
         if groups == 0 {
             return Ok(());
         }
-        let paging = self.paging(stage, bind_groups)?;
-        let pipeline = self.variant_paged(stage, &[], &[], &paging)?;
-        self.dispatch_pipeline(encoder, stage, &pipeline, &paging, bind_groups, groups)
+        let pass = pass.into();
+        let paging = self.paging(pass.stage, bind_groups)?;
+        let pipeline = self.pass_pipeline(pass, &[], &[], &paging)?;
+        self.dispatch_pipeline(encoder, pass.stage, &pipeline, &paging, bind_groups, groups)
     }
 
     /// Like `dispatch`, with the workgroup counts read on the device from `args` at `offset`

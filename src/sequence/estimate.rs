@@ -3,9 +3,8 @@
 
 use crate::bins::PhotonBins;
 use crate::error::{Error, Result};
-use crate::shaders::Stage;
+use crate::shaders::{Pass, Stage};
 use crate::shared::bins::list_count;
-use crate::shared::lobes::{EM_COVER_APPLY, EM_SHARE_COPY, EM_SMOOTH_APPLY};
 use crate::types::{BinParams, DepositParams, EmParams, GridParams, Photon};
 
 use super::{Executor, exclusive_scan, groups};
@@ -261,7 +260,7 @@ pub fn share_light<E: Executor>(
     let n = params.splat_count;
     let mut own = None;
     let (words, count) = group_words(ex, cover, n, &mut own)?;
-    for (p, invocations) in group_passes(params, count, EM_SHARE_COPY) {
+    for (pass, p, invocations) in group_passes(Stage::DepositShare, "copy", params, count) {
         let uniform = ex.uniform("em share params", &p)?;
         let bindings = [
             &uniform,
@@ -279,7 +278,7 @@ pub fn share_light<E: Executor>(
             words,
         ];
         let groups = groups(Stage::DepositShare, invocations)?;
-        ex.dispatch(Stage::DepositShare, &bindings, groups)?;
+        ex.dispatch(pass, &bindings, groups)?;
     }
     Ok(())
 }
@@ -297,29 +296,32 @@ pub fn cover_light<E: Executor>(
     let mut own = None;
     let (words, count) = group_words(ex, cover, params.splat_count, &mut own)?;
     let shares = ex.zeroed("coverage shares", count.max(1) as u64 * 4)?;
-    for (p, invocations) in group_passes(params, count, EM_COVER_APPLY) {
+    for (pass, p, invocations) in group_passes(Stage::EstimateCoverage, "apply", params, count) {
         let uniform = ex.uniform("em coverage params", &p)?;
         let bindings = [&uniform, light, words, &shares];
         let groups = groups(Stage::EstimateCoverage, invocations)?;
-        ex.dispatch_traced(Stage::EstimateCoverage, &bindings, groups)?;
+        ex.dispatch_traced(pass, &bindings, groups)?;
     }
     Ok(())
 }
 
-/// A stage's two passes over coverage groups, each pass's uniform and invocations: the first
-/// once a group (`groups` of them, at the leaders, `second` unset), the second once a splat
-/// (`second` set).
-fn group_passes(params: &EmParams, groups: u32, second: u32) -> [(EmParams, u32); 2] {
+/// A stage's two passes over coverage groups, each pass's entry point, uniform and
+/// invocations: its `main` once a group (`groups` of them, at the leaders), its entry point
+/// `second` once a splat.
+fn group_passes(
+    stage: Stage,
+    second: &'static str,
+    params: &EmParams,
+    groups: u32,
+) -> [(Pass, EmParams, u32); 2] {
     let first = EmParams {
         active_count: groups,
-        flags: params.flags & !second,
         ..*params
     };
-    let every = EmParams {
-        flags: params.flags | second,
-        ..*params
-    };
-    [(first, groups), (every, params.splat_count)]
+    [
+        (stage.into(), first, groups),
+        (stage.entry(second), *params, params.splat_count),
+    ]
 }
 
 /// The coverage groups' words and their count: `cover`'s, else groups of one splat each, its
@@ -359,7 +361,7 @@ pub fn smooth_light<E: Executor>(
     let (words, count) = group_words(ex, cover, n, &mut own)?;
     let smoothed = ex.zeroed("smoothing choices", count.max(1) as u64 * 48)?;
     let counters = ex.zeroed("smoothing counters", 16)?;
-    for (p, invocations) in group_passes(params, count, EM_SMOOTH_APPLY) {
+    for (pass, p, invocations) in group_passes(Stage::EstimateSmooth, "apply", params, count) {
         let uniform = ex.uniform("em smooth params", &p)?;
         let bindings = [
             &uniform,
@@ -374,7 +376,7 @@ pub fn smooth_light<E: Executor>(
             words,
         ];
         let groups = groups(Stage::EstimateSmooth, invocations)?;
-        ex.dispatch(Stage::EstimateSmooth, &bindings, groups)?;
+        ex.dispatch(pass, &bindings, groups)?;
     }
     match ex.read::<u32>(&counters, 4)?[..] {
         [a, b, c, d] => Ok([a, b, c, d]),

@@ -10,8 +10,8 @@
 use bytemuck::Pod;
 
 use crate::error::Result;
-use crate::shaders::Stage;
 use crate::shaders::stage_shape;
+use crate::shaders::{Pass, Stage};
 use crate::shared::dispatch::groups_for;
 use crate::types::ScanParams;
 
@@ -36,13 +36,19 @@ pub trait Executor {
     fn upload<T: Pod>(&mut self, label: &'static str, data: &[T]) -> Result<Self::Buffer>;
     /// A uniform holding `value`.
     fn uniform<T: Pod>(&mut self, label: &'static str, value: &T) -> Result<Self::Buffer>;
-    /// One dispatch of `stage` over `groups` workgroups, `bindings` in binding order.
-    fn dispatch(&mut self, stage: Stage, bindings: &[&Self::Buffer], groups: u32) -> Result<()>;
+    /// One dispatch of `pass` (a stage's `main`, or another of its entry points) over
+    /// `groups` workgroups, `bindings` in binding order.
+    fn dispatch(
+        &mut self,
+        pass: impl Into<Pass>,
+        bindings: &[&Self::Buffer],
+        groups: u32,
+    ) -> Result<()>;
     /// `dispatch` of a tracing stage, whose bind group 1 is the scene's geometry (splats and
     /// grid) that the executor was made with.
     fn dispatch_traced(
         &mut self,
-        stage: Stage,
+        pass: impl Into<Pass>,
         bindings: &[&Self::Buffer],
         groups: u32,
     ) -> Result<()>;

@@ -24,15 +24,6 @@ pub const EM_SHARE: u32 = 32;
 /// The fitted splats share fits in groups (`fit_groups`): `fit_select` lists the groups'
 /// leaders alone, and `final_gather` casts a group's rays from its members.
 pub const EM_GROUPS: u32 = 64;
-/// `estimate_coverage`'s second pass: each splat's irradiance divided by its group's share (the
-/// first measures the share once a group, `fit_groups::CoverGroups`).
-pub const EM_COVER_APPLY: u32 = 128;
-/// `estimate_smooth`'s second pass: each splat's chosen irradiance copied into its light (the first
-/// chooses it from the neighbours' light, which must not change under it).
-pub const EM_SMOOTH_APPLY: u32 = 256;
-/// `deposit_share`'s second pass: each splat's light copied from its coverage group's leader (the
-/// first sums the deposits once a group, at the leader).
-pub const EM_SHARE_COPY: u32 = 512;
 /// `estimate_smooth`: a neighbour counts where it faces within this cosine of the splat (11°): the
 /// same flat stretch of surface. On a curved model the light changes with the normal, and not
 /// linearly; at the shared fits' 26° a diffuse ball read 1.3 % brighter (tests/accuracy.rs).

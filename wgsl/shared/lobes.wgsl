@@ -32,11 +32,6 @@ const EM_SHARE: u32 = 32u;
 // The fitted splats share fits in groups (src/fit_groups.rs): fit_select lists the groups'
 // leaders alone, and final_gather casts a group's rays from its members.
 const EM_GROUPS: u32 = 64u;
-// estimate_coverage's second pass: each splat's irradiance divided by its group's share.
-const EM_COVER_APPLY: u32 = 128u;
-// estimate_smooth's second pass: each splat's chosen irradiance copied into its light.
-const EM_SMOOTH_APPLY: u32 = 256u;
-const EM_SHARE_COPY: u32 = 512u;
 // estimate_smooth (src/shared/lobes.rs says why each): a neighbour faces within this cosine of the
 // splat (11 degrees), the intervals' half width in standard deviations,
 // the photons past which the own estimate is kept, the records a splat's fit visits, and the
