@@ -343,7 +343,6 @@ fn a_planted_upward_import_is_found() {
 /// Files of the application that still reach an engine themselves, until each draws through
 /// `renderer::Renderer`. The list only shrinks.
 const PICKS_ITS_ENGINE: &[&str] = &[
-    "src/cli/bench.rs",
     "src/cli/mod.rs",
     "src/cli/scale.rs",
     "src/cli/view/baking.rs",

@@ -5,30 +5,20 @@ use std::time::Instant;
 
 use serde::Serialize;
 
-use crate::bake::{
-    self, BakeDevice, Progress, SceneBuffers, bake, bin_traced, deposit_traced, on_device,
-    on_mirror,
-};
+use crate::bake::{self, Progress, SceneBuffers, bin_traced, deposit_traced};
 use crate::camera::View;
 use crate::cli::compare::difference;
 use crate::cli::measure::median;
 use crate::cli::render::Method;
 use crate::cli::view::{ViewOptions, ViewReport};
-use crate::cpu;
-use crate::cpu::frames::{cpu_direct, cpu_draw};
-use crate::direct::DirectMap;
 use crate::em::{EmConfig, EmStats, LobeFamily, LobeMap};
 use crate::error::Result;
-use crate::frame::{FrameConfig, FramePlan, Splatting, camera_uniform, shade_params};
+use crate::frame::{FrameConfig, Splatting};
 
-use crate::gpu::present::PresentPipeline;
-use crate::gpu::scene::GpuScene;
-
-use crate::gpu::renderer::FrameRenderer;
-use crate::gpu::{BackendChoice, Gpu};
 use crate::photons::{PhotonConfig, PhotonMap, PhotonStats, photons_within};
 use crate::plan::{BakeLimits, BakePlan};
-use crate::renderer::{Engine, Renderer};
+use crate::renderer::BackendChoice;
+use crate::renderer::{Engine, Renderer, SceneWork, upsample};
 use crate::scene::Scene;
 use crate::sequence::Executor;
 use crate::timing::ms_since;
@@ -221,11 +211,11 @@ pub struct EmSkipping {
     pub lobe_bytes_fit_all: u64,
 }
 
-/// Traces and bins the scene's photons, then times the lobe fit. On the GPU a first fit
+/// Traces and bins the scene's photons, then times the lobe fit. On a device a first fit
 /// compiles the pipelines and is not timed.
 pub fn em(
-    scene: &Scene,
-    gpu: Option<&Gpu>,
+    scene: &Arc<Scene>,
+    engine: &Engine,
     photons: &PhotonConfig,
     cfg: &EmConfig,
 ) -> Result<EmBench> {
@@ -241,31 +231,14 @@ pub fn em(
         prune: false,
         ..skip_cfg.clone()
     };
-    let cfgs = [&cfg, &skip_cfg, &fixed_cfg];
-    let (fits, adapter, backend) = match gpu {
-        Some(gpu) => {
-            let plan = BakePlan::of(scene, photons.clone(), skip_cfg.clone(), gpu.bake_limits())?;
-            let on_gpu = GpuScene::upload(gpu, scene)?;
-            let fits = on_device(scene, gpu, &on_gpu, |ex, on| {
-                em_fits(ex, scene, &plan, on, cfgs, true)
-            })?;
-            let backend = gpu.backend_name().to_string();
-            (fits, gpu.info.name.clone(), backend)
-        }
-        None => {
-            let plan = BakePlan::of(scene, photons.clone(), skip_cfg.clone(), BakeLimits::host())?;
-            let grid = cpu::scene_grid(scene)?;
-            let fits = on_mirror(scene, &grid, |ex, on| {
-                em_fits(ex, scene, &plan, on, cfgs, false)
-            })?;
-            let threads = rayon::current_num_threads();
-            (
-                fits,
-                format!("CPU mirror ({threads} threads)"),
-                "cpu".into(),
-            )
-        }
-    };
+    let renderer = Renderer::new(scene.clone(), engine)?;
+    let fits = renderer.run(EmFitsWork {
+        scene,
+        photons,
+        cfgs: [&cfg, &skip_cfg, &fixed_cfg],
+        warm: engine.is_device(),
+    })?;
+    let (adapter, backend) = (engine.adapter_and_threads(), engine.backend().to_string());
     let EmFits {
         fits: [map, skipping, fixed],
         traced: traced_stats,
@@ -330,9 +303,33 @@ struct EmFits {
     deposits_ms: Option<f64>,
 }
 
-/// Traces, bins, deposits where the fit as rendered reads deposits, and fits with each of
-/// `cfgs` (every splat over the photons; as rendered; as rendered with a fixed lobe count) on
-/// one executor. With `warm`, fits of one iteration compile the pipelines first.
+/// `em`'s work on the renderer's engine: traces, bins, deposits where the fit as rendered
+/// reads deposits, and fits with each of `cfgs` (every splat over the photons; as rendered; as
+/// rendered with a fixed lobe count) on one executor. With `warm`, fits of one iteration
+/// compile the pipelines first.
+struct EmFitsWork<'a> {
+    scene: &'a Scene,
+    photons: &'a PhotonConfig,
+    cfgs: [&'a EmConfig; 3],
+    warm: bool,
+}
+
+impl SceneWork for EmFitsWork<'_> {
+    type Out = EmFits;
+
+    fn run<E: Executor>(
+        self,
+        ex: &mut E,
+        on: &SceneBuffers<E::Buffer>,
+        limits: &BakeLimits,
+    ) -> Result<EmFits> {
+        let [_, rendered, _] = self.cfgs;
+        let plan = BakePlan::of(self.scene, self.photons.clone(), rendered.clone(), *limits)?;
+        em_fits(ex, self.scene, &plan, on, self.cfgs, self.warm)
+    }
+}
+
+/// `EmFitsWork` within its plan.
 fn em_fits<E: Executor>(
     ex: &mut E,
     scene: &Scene,
@@ -559,16 +556,31 @@ pub const ORBIT_FRAMES: u32 = 30;
 const ORBIT_SIZE: (u32, u32) = (256, 256);
 const ORBIT_DEGREES_PER_FRAME: f32 = 0.5;
 
+/// The still image of `view` (`REFINEMENT_SPP` refinement frames, timed one by one) against
+/// the moving frame drawn alone.
+fn refine(renderer: &mut Renderer, view: &View, cfg: &FrameConfig) -> Result<RefinementTiming> {
+    // A moving frame alone (no temporal history), whatever `cfg.temporal` says.
+    renderer.draw(view, cfg, 0, |_| {})?;
+    let moving = renderer.read_hdr()?;
+    let mut ms = Vec::new();
+    let mut last = Instant::now();
+    renderer.draw(view, cfg, REFINEMENT_SPP, |_| {
+        ms.push(ms_since(last));
+        last = Instant::now();
+    })?;
+    let still = renderer.read_hdr()?;
+    Ok(RefinementTiming {
+        spp: REFINEMENT_SPP,
+        frame_ms: median(ms),
+        moving_rel_mse: difference(&moving, &still)?.rel_mse,
+    })
+}
+
 /// Draws `frames` moving frames of the scene's camera turning about its up axis, with the
 /// temporal pass (its history carried from frame to frame as in the viewer) and alone, each
 /// compared with its view's still image (`REFINEMENT_SPP` refinement frames).
-fn orbit(
-    renderer: &mut FrameRenderer,
-    gpu: &Gpu,
-    scene: &Scene,
-    cfg: &FrameConfig,
-    frames: u32,
-) -> Result<OrbitAccuracy> {
+fn orbit(renderer: &mut Renderer, cfg: &FrameConfig, frames: u32) -> Result<OrbitAccuracy> {
+    let scene = renderer.scene().clone();
     let (w, h) = ORBIT_SIZE;
     let axis = glam::Vec3::from(scene.camera.up);
     let temporal = FrameConfig {
@@ -583,13 +595,13 @@ fn orbit(
             w,
             h,
         );
-        renderer.draw_moving(gpu, scene, &view, &temporal)?;
-        let moving = renderer.read_hdr(gpu)?;
+        renderer.draw_moving(&view, &temporal)?;
+        let moving = renderer.read_hdr()?;
         // `draw` draws the frame alone, whatever `cfg.temporal` says.
-        renderer.draw(gpu, scene, &view, cfg)?;
-        let single = renderer.read_hdr(gpu)?;
-        renderer.draw_refined(gpu, scene, &view, cfg, REFINEMENT_SPP, |_| {})?;
-        let still = renderer.read_hdr(gpu)?;
+        renderer.draw(&view, cfg, 0, |_| {})?;
+        let single = renderer.read_hdr()?;
+        renderer.draw(&view, cfg, REFINEMENT_SPP, |_| {})?;
+        let still = renderer.read_hdr()?;
         rel_mse.push(difference(&moving, &still)?.rel_mse);
         rel_mse_alone.push(difference(&single, &still)?.rel_mse);
     }
@@ -651,126 +663,72 @@ pub const FRAME_SIZES: [(u32, u32); 3] = [(512, 512), (1280, 720), (1920, 1080)]
 const TIMED_FRAMES: u32 = 5;
 
 /// Bakes the scene once, then times frames at each of `FRAME_SIZES` (one untimed warm-up
-/// frame per size compiles the pipelines and allocates the targets).
+/// frame per size compiles the pipelines and allocates the targets). On a device each pass is
+/// waited for apart, the present pass is timed onto a window-format texture, and the still
+/// image, the orbit and the window's orbit are checked.
 pub fn frame(
-    scene: &Scene,
-    gpu: Option<&Gpu>,
-    cfg: &FrameConfig,
-    tone: &ToneConfig,
+    scene: &Arc<Scene>,
+    engine: &Engine,
+    (cfg, tone): (&FrameConfig, &ToneConfig),
     orbit_frames: u32,
     window_orbit: Option<ViewReport>,
 ) -> Result<FrameBench> {
     cfg.validate()?;
-    let progress = Progress::new(false);
-    let mut sizes = Vec::new();
-    let mut direct_bake_ms = None;
-    let mut splatter = "raster";
-    let mut refinement = None;
-    let mut orbit_accuracy = None;
-    let mut window_checked = None;
-    let (adapter, backend, fitted) = match gpu {
-        Some(gpu) => {
-            let mut renderer = FrameRenderer::new(gpu, scene)?;
-            let lobes = crate::bake::bake_frames(gpu, &mut renderer, scene, &progress)?.lobes;
-            if cfg.needs_direct_bake() {
-                direct_bake_ms = Some(renderer.bake_direct(gpu, scene)?);
-            }
-            if renderer.pipelines.splatting(cfg.splatter)? == Splatting::Compute {
-                splatter = "compute";
-            }
-            let present = PresentPipeline::new(gpu, WINDOW_FORMAT)?;
-            for (w, h) in FRAME_SIZES {
-                let view = View::new(&scene.camera, w, h);
-                let usage = wgpu::TextureUsages::RENDER_ATTACHMENT;
-                // An offscreen stand-in for a window's surface texture.
-                let window = gpu.texture_2d("window stand-in", (w, h), WINDOW_FORMAT, usage);
-                let window = window.create_view(&Default::default());
-                let mut times = Vec::new();
-                let mut pass_ms = Vec::new();
-                let mut present_ms = Vec::new();
-                for _ in 0..=TIMED_FRAMES {
-                    let passes = renderer.draw_timed(gpu, scene, &view, cfg)?;
-                    let shade = passes.iter().sum();
-                    pass_ms.push(passes);
-                    let t = Instant::now();
-                    let toned = renderer.tone_map(gpu, tone)?;
-                    times.push((shade, ms_since(t)));
-                    let t = Instant::now();
-                    let mut encoder = gpu.encoder("present");
-                    present.record(gpu, &mut encoder, &window, &toned.rgba, (w, h), (w, h));
-                    gpu.submit_and_wait(encoder)?;
-                    present_ms.push(ms_since(t));
-                }
-                let mut t = timing(w, h, &times[1..]);
-                t.passes_ms = Some(std::array::from_fn(|k| {
-                    median(pass_ms[1..].iter().map(|p| p[k]).collect())
-                }));
-                t.temporal_ms = Some(median(pass_ms[1..].iter().map(|p| p[3]).collect()));
-                t.present_ms = Some(median(present_ms[1..].to_vec()));
-                sizes.push(t);
-                if refinement.is_none() {
-                    // A moving frame alone (`draw`): the last timed frame is one, unless the
-                    // temporal pass blended it.
-                    if cfg.temporal {
-                        renderer.draw(gpu, scene, &view, cfg)?;
-                    }
-                    let moving = renderer.read_hdr(gpu)?;
-                    let mut ms = Vec::new();
-                    let mut last = Instant::now();
-                    renderer.draw_refined(gpu, scene, &view, cfg, REFINEMENT_SPP, |_| {
-                        ms.push(ms_since(last));
-                        last = Instant::now();
-                    })?;
-                    let still = renderer.read_hdr(gpu)?;
-                    refinement = Some(RefinementTiming {
-                        spp: REFINEMENT_SPP,
-                        frame_ms: median(ms),
-                        moving_rel_mse: difference(&moving, &still)?.rel_mse,
-                    });
-                }
-            }
-            if orbit_frames > 0 {
-                orbit_accuracy = Some(orbit(&mut renderer, gpu, scene, cfg, orbit_frames)?);
-            }
-            if let Some(w) = window_orbit {
-                window_checked = Some(check_window_orbit(&mut renderer, gpu, scene, cfg, w)?);
-            }
-            let name = gpu.info.name.clone();
-            (name, gpu.backend_name().to_string(), lobes.stats.fitted)
-        }
-        None => {
-            let grid = cpu::scene_grid(scene)?;
-            let lobes = bake(scene, BakeDevice::Cpu(&grid), &progress)?.lobes;
-            let params = shade_params(scene, &lobes, cfg);
-            // Made once, as the device's: the timed frames are what a moving camera costs.
-            let t = Instant::now();
-            let direct = match cfg.needs_direct_bake() {
-                true => cpu_direct(scene, &grid)?,
-                false => DirectMap::default(),
-            };
-            if cfg.needs_direct_bake() {
-                direct_bake_ms = Some(ms_since(t));
-            }
-            for (w, h) in FRAME_SIZES {
-                let view = View::new(&scene.camera, w, h);
-                let cam = camera_uniform(&view, scene.bounds(), cfg);
-                let plan = FramePlan::new(&cam, params, Splatting::Raster);
-                let mut times = Vec::new();
-                for _ in 0..=TIMED_FRAMES {
-                    let t = Instant::now();
-                    let hdr = cpu_draw(scene, &grid, (&lobes, &direct), &plan, 0);
-                    let shade = ms_since(t);
-                    let t = Instant::now();
-                    cpu::tone_map(tone, &hdr)?;
-                    times.push((shade, ms_since(t)));
-                }
-                sizes.push(timing(w, h, &times[1..]));
-            }
-            let threads = rayon::current_num_threads();
-            let adapter = format!("CPU mirror ({threads} threads)");
-            (adapter, "cpu".to_string(), lobes.stats.fitted)
-        }
+    let mut renderer = Renderer::new(scene.clone(), engine)?;
+    renderer.bake(&Progress::new(false))?;
+    let fitted = renderer.lobes().stats.fitted;
+    let direct_bake_ms = match cfg.needs_direct_bake() {
+        true => Some(renderer.bake_direct()?),
+        false => None,
     };
+    let splatter = match renderer.splatting(cfg)? {
+        Splatting::Compute => "compute",
+        Splatting::Raster => "raster",
+    };
+    let mut sizes = Vec::new();
+    let mut refinement = None;
+    for (w, h) in FRAME_SIZES {
+        let view = View::new(&scene.camera, w, h);
+        let window = renderer.offscreen_target((w, h))?;
+        let (mut times, mut pass_ms, mut present_ms) = (Vec::new(), Vec::new(), Vec::new());
+        for _ in 0..=TIMED_FRAMES {
+            let t = Instant::now();
+            let passes = renderer.draw_timed(&view, cfg)?;
+            // The device's passes each waited for; the mirror's frame as a whole.
+            let shade = passes.map_or_else(|| ms_since(t), |p| p.iter().sum());
+            pass_ms.extend(passes);
+            let t = Instant::now();
+            renderer.tone(tone)?;
+            times.push((shade, ms_since(t)));
+            if let Some(window) = &window {
+                let t = Instant::now();
+                renderer.present(window)?;
+                present_ms.push(ms_since(t));
+            }
+        }
+        let mut t = timing(w, h, &times[1..]);
+        if let [_, timed @ ..] = &pass_ms[..] {
+            t.passes_ms = Some(std::array::from_fn(|k| {
+                median(timed.iter().map(|p| p[k]).collect())
+            }));
+            t.temporal_ms = Some(median(timed.iter().map(|p| p[3]).collect()));
+        }
+        if let [_, timed @ ..] = &present_ms[..] {
+            t.present_ms = Some(median(timed.to_vec()));
+        }
+        sizes.push(t);
+        if refinement.is_none() && engine.is_device() {
+            refinement = Some(refine(&mut renderer, &view, cfg)?);
+        }
+    }
+    let (mut orbit_accuracy, mut window_checked) = (None, None);
+    if engine.is_device() && orbit_frames > 0 {
+        orbit_accuracy = Some(orbit(&mut renderer, cfg, orbit_frames)?);
+    }
+    if let Some(w) = window_orbit.filter(|_| engine.is_device()) {
+        window_checked = Some(check_window_orbit(&mut renderer, cfg, w)?);
+    }
+    let (adapter, backend) = (engine.adapter_and_threads(), engine.backend().to_string());
     Ok(FrameBench {
         scene: scene.path.display().to_string(),
         adapter,
@@ -845,12 +803,11 @@ pub fn window_frames(
 /// `WINDOW_ORBIT_CHECK`-th, upsampled to the window's size as the present pass does, against
 /// the still image of its view (`REFINEMENT_SPP` refinement frames at the window's size).
 fn check_window_orbit(
-    renderer: &mut FrameRenderer,
-    gpu: &Gpu,
-    scene: &Scene,
+    renderer: &mut Renderer,
     cfg: &FrameConfig,
     window: ViewReport,
 ) -> Result<WindowOrbit> {
+    let scene = renderer.scene().clone();
     let axis = glam::Vec3::from(scene.camera.up);
     let size = (window.width, window.height);
     let camera = |k: u32| {
@@ -869,20 +826,17 @@ fn check_window_orbit(
             lod: window.lod.get(k).copied().unwrap_or(cfg.lod),
             ..cfg.clone()
         };
-        renderer.draw_moving(gpu, scene, &view, &moving)?;
+        renderer.draw_moving(&view, &moving)?;
         if checked.contains(&(k as u32)) {
             let params = PresentParams::new((drawn[0], drawn[1]), size, false);
-            shown.push(crate::cpu::present::upsample(
-                &params,
-                &renderer.read_hdr(gpu)?,
-            ));
+            shown.push(upsample(&params, &renderer.read_hdr()?));
         }
     }
     let mut rel_mse = Vec::new();
     for (&k, image) in checked.iter().zip(&shown) {
         let view = View::new(&camera(k), size.0, size.1);
-        renderer.draw_refined(gpu, scene, &view, cfg, REFINEMENT_SPP, |_| {})?;
-        rel_mse.push(difference(image, &renderer.read_hdr(gpu)?)?.rel_mse);
+        renderer.draw(&view, cfg, REFINEMENT_SPP, |_| {})?;
+        rel_mse.push(difference(image, &renderer.read_hdr()?)?.rel_mse);
     }
     let settled = settled_times(&window);
     let settled_ms = median(settled.clone());
@@ -900,9 +854,6 @@ fn check_window_orbit(
         },
     })
 }
-
-/// The usual window surface format (Vulkan's first choice on most platforms).
-const WINDOW_FORMAT: wgpu::TextureFormat = wgpu::TextureFormat::Bgra8Unorm;
 
 fn timing(width: u32, height: u32, times: &[(f64, f64)]) -> FrameTiming {
     let frame_ms = median(times.iter().map(|(a, b)| a + b).collect());

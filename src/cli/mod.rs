@@ -904,7 +904,7 @@ fn bench_scenes(args: BenchArgs) -> Result<()> {
         BenchKind::Frame => EngineChoice::Device,
         _ => EngineChoice::Auto,
     })?;
-    let gpu = engine.gpu();
+    let _gpu = engine.gpu();
     let mut reports = Vec::new();
     for path in &scenes {
         let mut scene = scene::load(path)?;
@@ -929,7 +929,7 @@ fn bench_scenes(args: BenchArgs) -> Result<()> {
                         None => still = Some(report),
                     }
                 }
-                let mut r = bench::frame(&scene, gpu, &frame, &tone, orbit, moving)?;
+                let mut r = bench::frame(&scene, &engine, (&frame, &tone), orbit, moving)?;
                 r.window = still;
                 (r.to_string(), to_json(&r)?)
             }
@@ -939,7 +939,7 @@ fn bench_scenes(args: BenchArgs) -> Result<()> {
             }
             BenchKind::Em => {
                 let em = EmConfig::from_scene(&scene);
-                let r = bench::em(&scene, gpu, &photons, &em)?;
+                let r = bench::em(&scene, &engine, &photons, &em)?;
                 (r.to_string(), to_json(&r)?)
             }
             BenchKind::Convolution | BenchKind::Sweep | BenchKind::Scale | BenchKind::Cluster => {

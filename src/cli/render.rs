@@ -384,7 +384,7 @@ fn tone_skipped() -> StageReport {
 
 /// The renderer's last image, tone-mapped for PNG or read back linear for EXR.
 fn drawn(
-    renderer: &Renderer,
+    renderer: &mut Renderer,
     format: ImageFormat,
     tone: &ToneConfig,
     shade: StageReport,

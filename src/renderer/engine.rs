@@ -92,6 +92,11 @@ impl Engine {
         }
     }
 
+    /// Whether this engine is a device (the mirror is not).
+    pub fn is_device(&self) -> bool {
+        matches!(self, Engine::Device(_))
+    }
+
     /// The adapter's name, or "CPU mirror".
     pub fn adapter(&self) -> String {
         self.gpu()

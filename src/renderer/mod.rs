@@ -12,9 +12,17 @@ use std::sync::Arc;
 use std::time::Instant;
 
 mod engine;
+mod measure;
+/// A smaller image upsampled onto a window's pixels as the present pass draws it (its mirror):
+/// what a window shows of a moving frame drawn at a lower resolution.
+pub use crate::cpu::present::upsample;
 pub use engine::{Engine, EngineChoice, Fallback};
+pub use measure::PresentTarget;
 
-use crate::bake::{BakeDevice, Baked, Binned, Progress, StageReport, bake, bins_cpu, bins_gpu};
+use crate::bake::{
+    BakeDevice, Baked, Binned, Progress, SceneBuffers, StageReport, bake, bins_cpu, bins_gpu,
+    on_device, on_mirror,
+};
 use crate::bins::PhotonBins;
 use crate::camera::View;
 use crate::cpu;
@@ -81,6 +89,8 @@ struct Device {
     stale: bool,
     /// A direct bake of the current lights made by the bake, uploaded with the lobes.
     direct: Option<DirectMap>,
+    /// The last image tone-mapped (`Renderer::tone`).
+    toned: Option<crate::gpu::tone::GpuToned>,
 }
 
 impl Device {
@@ -98,6 +108,7 @@ impl Device {
             bins,
             stale,
             direct,
+            ..
         } = self;
         let frames = match frames {
             Some(frames) => frames,
@@ -139,6 +150,8 @@ struct Mirror {
     hdr: Vec<[f32; 4]>,
     /// The moving frames' history (`draw_moving` with `temporal`); none after a reset.
     history: Option<MirrorHistory>,
+    /// The last image tone-mapped (`Renderer::tone`).
+    toned: Option<Toned>,
 }
 
 /// The last moving frame on the mirror: its plan (jitter included), the moving frames since
@@ -190,6 +203,20 @@ enum On {
     Mirror(Box<Mirror>),
 }
 
+/// Work written once over any executor with the scene's buffers there (a benchmark's own
+/// sequence of bake passes, say), which `Renderer::run` runs on its engine.
+pub trait SceneWork {
+    type Out;
+    /// Runs on `ex`, which traces the scene, with its splats and materials in `on` and the
+    /// engine's `limits`.
+    fn run<E: Executor>(
+        self,
+        ex: &mut E,
+        on: &SceneBuffers<E::Buffer>,
+        limits: &BakeLimits,
+    ) -> Result<Self::Out>;
+}
+
 /// A scene prepared on one engine, and everything drawn from it.
 pub struct Renderer {
     scene: Arc<Scene>,
@@ -235,6 +262,7 @@ impl Renderer {
                 bins: None,
                 stale: false,
                 direct: None,
+                toned: None,
             })),
             Engine::Mirror => {
                 let t = std::time::Instant::now();
@@ -247,6 +275,7 @@ impl Renderer {
                     direct: None,
                     hdr: Vec::new(),
                     history: None,
+                    toned: None,
                 }))
             }
         };
@@ -264,6 +293,20 @@ impl Renderer {
 
     pub fn engine(&self) -> &Engine {
         &self.engine
+    }
+
+    /// Runs `work` on the engine's executor over the scene as prepared there, and waits for
+    /// it.
+    pub fn run<W: SceneWork>(&self, work: W) -> Result<W::Out> {
+        let scene = &self.scene;
+        match &self.on {
+            On::Device(d) => on_device(scene, &d.gpu, &d.scene, |ex, on| {
+                work.run(ex, on, &d.gpu.bake_limits())
+            }),
+            On::Mirror(m) => on_mirror(scene, &m.grid, |ex, on| {
+                work.run(ex, on, &BakeLimits::host())
+            }),
+        }
     }
 
     /// The grid build's milliseconds.
@@ -649,12 +692,33 @@ impl Renderer {
     }
 
     /// The last image tone-mapped (`sequence::tone_map`) and read back.
-    pub fn tone_map(&self, tone: &ToneConfig) -> Result<Toned> {
+    pub fn tone_map(&mut self, tone: &ToneConfig) -> Result<Toned> {
+        self.tone(tone)?;
+        self.read_toned()
+    }
+
+    /// Tone-maps the last image and keeps it where it was drawn (`read_toned`, `present`).
+    pub fn tone(&mut self, tone: &ToneConfig) -> Result<()> {
+        match &mut self.on {
+            On::Device(d) => {
+                let toned = d.drawn()?.tone_map(&d.gpu, tone)?;
+                d.toned = Some(toned);
+            }
+            On::Mirror(m) => {
+                let (rgba, log_sum) = cpu::tone_map(tone, &m.hdr)?;
+                m.toned = Some(Toned { rgba, log_sum });
+            }
+        }
+        Ok(())
+    }
+
+    /// The last image `tone` tone-mapped, in host memory.
+    pub fn read_toned(&self) -> Result<Toned> {
+        let untoned = || Error::internal("an image was read before it was tone-mapped");
         match &self.on {
             On::Device(d) => {
-                let (gpu, frames) = (&d.gpu, d.drawn()?);
-                let toned = frames.tone_map(gpu, tone)?;
-                let targets = frames.targets()?;
+                let (gpu, toned) = (&d.gpu, d.toned.as_ref().ok_or_else(untoned)?);
+                let targets = d.drawn()?.targets()?;
                 let pixels = (targets.width * targets.height) as usize;
                 let log_sum = gpu.read::<[f32; 2]>(&toned.log_sum, 1)?;
                 Ok(Toned {
@@ -663,8 +727,11 @@ impl Renderer {
                 })
             }
             On::Mirror(m) => {
-                let (rgba, log_sum) = cpu::tone_map(tone, &m.hdr)?;
-                Ok(Toned { rgba, log_sum })
+                let toned = m.toned.as_ref().ok_or_else(untoned)?;
+                Ok(Toned {
+                    rgba: toned.rgba.clone(),
+                    log_sum: toned.log_sum,
+                })
             }
         }
     }
