@@ -20,9 +20,8 @@ use std::process::ExitCode;
 
 use crate::em::{EmConfig, Estimate, LobeFamily};
 use crate::frame::{Direct, FrameConfig, Show, Splatter};
-use crate::gpu::{BackendChoice, Gpu};
 use crate::photons::PhotonConfig;
-use crate::renderer::{Engine, EngineChoice, Fallback};
+use crate::renderer::{BackendChoice, Engine, EngineChoice, Fallback};
 use crate::scene::file::StoreRange;
 use crate::tone::{ToneConfig, ToneMode};
 use crate::{Error, Result, scene};
@@ -88,27 +87,14 @@ impl DeviceArgs {
         Ok(engine)
     }
 
-    /// The device, or none for the CPU mirror: with `--cpu`, or when no adapter is found and
-    /// no backend was named (one line on stderr says so, and how to install lavapipe). A
-    /// backend named with `--backend` that has no adapter stays an error.
-    fn gpu(&self) -> Result<Option<Gpu>> {
-        if self.cpu {
-            return Ok(None);
+    /// Where the bake runs beside the device `draw` that draws: the mirror where it is a
+    /// software rasterizer and neither `--gpu` nor `--backend` asks for it (the mirror outruns
+    /// it at baking), else the device itself.
+    fn bake_engine(&self, draw: &Engine) -> Engine {
+        match draw.is_software() && !self.gpu && self.backend == BackendChoice::Auto {
+            true => Engine::Mirror,
+            false => draw.clone(),
         }
-        match Gpu::new(self.backend) {
-            Ok(gpu) => Ok(Some(gpu)),
-            Err(Error::NoAdapter(why)) if self.backend == BackendChoice::Auto => {
-                eprintln!("lobelight: running on the CPU mirror (slower): {why}");
-                Ok(None)
-            }
-            Err(e) => Err(e),
-        }
-    }
-
-    /// Whether bakes and still images run on the CPU mirror beside `gpu`: where it is a
-    /// software rasterizer and neither `--gpu` nor `--backend` asks for it.
-    fn prefers_mirror(&self, gpu: &Gpu) -> bool {
-        gpu.is_software() && !self.gpu && self.backend == BackendChoice::Auto
     }
 }
 
@@ -799,19 +785,18 @@ fn bench_scale(args: BenchArgs) -> Result<()> {
         material,
         ..
     } = args;
-    let Some(gpu) = device.gpu()? else {
+    let draw = device.engine(EngineChoice::Device)?;
+    if !draw.is_device() {
         return Err(Error::Invalid(
             "bench scale draws its frames on a device and needs a GPU adapter (lavapipe \
              will do; where it is one, the bake runs on the CPU mirror)"
                 .into(),
         ));
-    };
+    }
     // The bake where still images bake: on the mirror beside a software rasterizer.
-    let engine = match device.prefers_mirror(&gpu) {
-        true => scale::BakeEngine::Mirror,
-        false => scale::BakeEngine::Device,
-    };
-    let r = scale::scale(&gpu, engine, (&sizes, material), &output, &|scene| {
+    let baking = device.bake_engine(&draw);
+    let engines = (&draw, &baking);
+    let r = scale::scale(engines, (&sizes, material), &output, &|scene| {
         bake.apply(scene)
     })?;
     print_report(json, &r)?;

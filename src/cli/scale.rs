@@ -7,19 +7,17 @@
 
 use std::io::Write;
 use std::path::{Path, PathBuf};
+use std::sync::Arc;
 use std::time::Instant;
 
 use serde::Serialize;
 
-use crate::bake::{BakeDevice, Progress, bake};
+use crate::bake::Progress;
 use crate::camera::View;
 use crate::cli::measure::median;
-use crate::cpu;
-use crate::cpu::frames::cpu_direct;
 use crate::error::{Error, Result};
 use crate::frame::FrameConfig;
-use crate::gpu::Gpu;
-use crate::gpu::renderer::FrameRenderer;
+use crate::renderer::{Engine, Renderer};
 use crate::scene;
 use crate::scene::file::CameraDesc;
 use crate::timing::ms_since;
@@ -158,10 +156,9 @@ pub struct Growth {
 pub type Settings<'a> = &'a dyn Fn(&mut crate::scene::Scene) -> Result<()>;
 
 /// Runs the scale benchmark for clouds of `sizes` splats of `material`, writing them to `dir`:
-/// the bake on `engine`, the frames on `gpu`.
+/// the frames on `device`, the bake on `baking` (the device, or the mirror beside it).
 pub fn scale(
-    gpu: &Gpu,
-    engine: BakeEngine,
+    (device, baking): (&Engine, &Engine),
     (sizes, material): (&[u64], Material),
     dir: &Path,
     settings: Settings,
@@ -184,7 +181,7 @@ pub fn scale(
         smallest_scene.get_or_insert_with(|| scene_path.clone());
         // One cloud on the device at a time, so that each row's peak memory is its own.
         drop(largest.take());
-        let (row, drawn) = measure(gpu, engine, &scene_path, n, settings)?;
+        let (row, drawn) = measure((device, baking), &scene_path, n, settings)?;
         rows.push(row);
         largest = Some(drawn);
     }
@@ -195,13 +192,16 @@ pub fn scale(
         eprintln!(
             "bench scale: the {smallest}-splat cloud again, its frames and the largest's in turn"
         );
-        let (mut small, _) = bake_cloud(gpu, engine, path, *smallest, settings)?;
-        growth.frame_ratio_interleaved = Some(interleaved_ratio(gpu, &mut small, large)?);
+        let (mut small, _) = bake_cloud((device, baking), path, *smallest, settings)?;
+        growth.frame_ratio_interleaved = Some(interleaved_ratio(&mut small, large)?);
     }
     Ok(ScaleBench {
-        adapter: gpu.info.name.clone(),
-        backend: gpu.backend_name().into(),
-        bake_engine: engine,
+        adapter: device.adapter(),
+        backend: device.backend().into(),
+        bake_engine: match baking.is_device() {
+            true => BakeEngine::Device,
+            false => BakeEngine::Mirror,
+        },
         material,
         rows,
         growth,
@@ -210,8 +210,8 @@ pub fn scale(
 
 /// A generated cloud loaded, baked and ready to draw.
 struct Drawn {
-    scene: crate::scene::Scene,
-    renderer: FrameRenderer,
+    scene: Arc<crate::scene::Scene>,
+    renderer: Renderer,
 }
 
 /// `ScaleRow::corner_frame_ms`'s view: 0.7 above the terrain's corner quarter's centre, looking
@@ -221,43 +221,48 @@ const CORNER_VIEW: ([f32; 3], [f32; 3]) = ([-0.5, 0.7, -0.5], [-0.5, 0.0, -0.5])
 impl Drawn {
     /// One moving frame at `FRAME_SIZE` from the scene's camera, tone map included, waited
     /// for: its milliseconds.
-    fn frame_ms(&mut self, gpu: &Gpu) -> Result<f64> {
+    fn frame_ms(&mut self) -> Result<f64> {
         let camera = self.scene.camera.clone();
-        self.frame_ms_from(gpu, &camera)
+        self.frame_ms_from(&camera)
     }
 
     /// The same from `CORNER_VIEW`.
-    fn corner_frame_ms(&mut self, gpu: &Gpu) -> Result<f64> {
+    fn corner_frame_ms(&mut self) -> Result<f64> {
         let camera = CameraDesc {
             eye: CORNER_VIEW.0,
             target: CORNER_VIEW.1,
             up: [0.0, 0.0, -1.0],
             ..self.scene.camera.clone()
         };
-        self.frame_ms_from(gpu, &camera)
+        self.frame_ms_from(&camera)
     }
 
-    /// The scene camera's frame with each pass waited for (`FrameRenderer::draw_timed`).
-    fn passes_ms(&mut self, gpu: &Gpu) -> Result<[f64; 4]> {
+    /// The scene camera's frame with each pass waited for (`Renderer::draw_timed`).
+    fn passes_ms(&mut self) -> Result<[f64; 4]> {
         let view = View::new(&self.scene.camera, FRAME_SIZE.0, FRAME_SIZE.1);
-        (self.renderer).draw_timed(gpu, &self.scene, &view, &FrameConfig::default())
+        let passes = self.renderer.draw_timed(&view, &FrameConfig::default())?;
+        passes.ok_or_else(on_a_device)
     }
 
-    /// The scene camera's frame's selection alone (`FrameRenderer::select_timed`).
-    fn select_ms(&mut self, gpu: &Gpu) -> Result<f64> {
+    /// The scene camera's frame's selection alone (`Renderer::select_timed`).
+    fn select_ms(&mut self) -> Result<f64> {
         let view = View::new(&self.scene.camera, FRAME_SIZE.0, FRAME_SIZE.1);
-        (self.renderer).select_timed(gpu, &self.scene, &view, &FrameConfig::default())
+        let ms = self.renderer.select_timed(&view, &FrameConfig::default())?;
+        ms.ok_or_else(on_a_device)
     }
 
-    fn frame_ms_from(&mut self, gpu: &Gpu, camera: &CameraDesc) -> Result<f64> {
+    fn frame_ms_from(&mut self, camera: &CameraDesc) -> Result<f64> {
         let view = View::new(camera, FRAME_SIZE.0, FRAME_SIZE.1);
         let t = Instant::now();
         self.renderer
-            .draw(gpu, &self.scene, &view, &FrameConfig::default())?;
-        self.renderer
-            .tone_map(gpu, &crate::tone::ToneConfig::default())?;
+            .draw(&view, &FrameConfig::default(), 0, |_| {})?;
+        self.renderer.tone(&crate::tone::ToneConfig::default())?;
         Ok(ms_since(t))
     }
+}
+
+fn on_a_device() -> Error {
+    Error::internal("bench scale times each pass on a device")
 }
 
 /// Rounds of the smallest and largest clouds' frames in turn (`interleaved_ratio`).
@@ -266,13 +271,13 @@ const INTERLEAVED_ROUNDS: usize = 7;
 /// The median over `INTERLEAVED_ROUNDS` of the largest cloud's frame time over the smallest's,
 /// each round one frame of each, after one untimed frame of each: a busy machine's load
 /// drifts over the minutes between the two rows' frames, not between two frames in turn.
-fn interleaved_ratio(gpu: &Gpu, small: &mut Drawn, large: &mut Drawn) -> Result<f64> {
-    small.frame_ms(gpu)?;
-    large.frame_ms(gpu)?;
+fn interleaved_ratio(small: &mut Drawn, large: &mut Drawn) -> Result<f64> {
+    small.frame_ms()?;
+    large.frame_ms()?;
     let mut ratios = Vec::with_capacity(INTERLEAVED_ROUNDS);
     for _ in 0..INTERLEAVED_ROUNDS {
-        let a = small.frame_ms(gpu)?;
-        let b = large.frame_ms(gpu)?;
+        let a = small.frame_ms()?;
+        let b = large.frame_ms()?;
         ratios.push(b / a.max(1e-9));
     }
     Ok(median(ratios))
@@ -280,18 +285,17 @@ fn interleaved_ratio(gpu: &Gpu, small: &mut Drawn, large: &mut Drawn) -> Result<
 
 /// Loads, bakes and times cloud `n`'s frames: its row, and the cloud ready to draw again.
 fn measure(
-    gpu: &Gpu,
-    engine: BakeEngine,
+    engines: (&Engine, &Engine),
     scene_path: &Path,
     n: u64,
     settings: Settings,
 ) -> Result<(ScaleRow, Drawn)> {
-    let (mut drawn, mut row) = bake_cloud(gpu, engine, scene_path, n, settings)?;
-    row.frame_ms = median(timed(|| drawn.frame_ms(gpu))?);
-    row.corner_frame_ms = median(timed(|| drawn.corner_frame_ms(gpu))?);
-    let passes = timed(|| drawn.passes_ms(gpu))?;
+    let (mut drawn, mut row) = bake_cloud(engines, scene_path, n, settings)?;
+    row.frame_ms = median(timed(|| drawn.frame_ms())?);
+    row.corner_frame_ms = median(timed(|| drawn.corner_frame_ms())?);
+    let passes = timed(|| drawn.passes_ms())?;
     row.passes_ms = std::array::from_fn(|k| median(passes.iter().map(|p| p[k]).collect()));
-    row.select_ms = median(timed(|| drawn.select_ms(gpu))?);
+    row.select_ms = median(timed(|| drawn.select_ms())?);
     row.peak_rss_bytes = crate::cli::measure::peak_rss_bytes();
     Ok((row, drawn))
 }
@@ -305,8 +309,7 @@ fn timed<T>(mut measure: impl FnMut() -> Result<T>) -> Result<Vec<T>> {
 
 /// Loads and bakes cloud `n`: the cloud ready to draw, and its row but for the frames.
 fn bake_cloud(
-    gpu: &Gpu,
-    engine: BakeEngine,
+    (device, baking): (&Engine, &Engine),
     scene_path: &Path,
     n: u64,
     settings: Settings,
@@ -323,39 +326,13 @@ fn bake_cloud(
     let mut scene = scene::load(scene_path)?;
     let load_ms = ms_since(t);
     settings(&mut scene)?;
-    let mut renderer = FrameRenderer::new(gpu, &scene)?;
-    let grid_ms = renderer.on_gpu.grid_ms;
-    let progress = Progress::new(true);
+    let scene = Arc::new(scene);
+    let mut renderer = Renderer::new(scene.clone(), device)?;
+    let grid_ms = renderer.grid_ms();
     // Where final gathering ran, its direct bake serves the frames (its time is in the EM's):
     // a direct bake of its own here would count it twice.
-    let (baked, direct_ms, mirror_grid_ms) = match engine {
-        BakeEngine::Device => {
-            let baked = crate::bake::bake_frames(gpu, &mut renderer, &scene, &progress)?;
-            let direct_ms = match baked.direct {
-                Some(_) => 0.0,
-                None => renderer.bake_direct(gpu, &scene)?,
-            };
-            (baked, direct_ms, 0.0)
-        }
-        BakeEngine::Mirror => {
-            let t = Instant::now();
-            let grid = cpu::scene_grid(&scene)?;
-            let grid_ms = ms_since(t);
-            let baked = bake(&scene, BakeDevice::Cpu(&grid), &progress)?;
-            renderer.set_baked(gpu, &scene, (&baked.lobes, baked.direct.as_ref()))?;
-            let direct_ms = match &baked.direct {
-                Some(_) => 0.0,
-                None => {
-                    let t = Instant::now();
-                    let direct = cpu_direct(&scene, &grid)?;
-                    let ms = ms_since(t);
-                    renderer.set_direct(gpu, &scene, &direct, ms)?;
-                    ms
-                }
-            };
-            (baked, direct_ms, grid_ms)
-        }
-    };
+    let lit = renderer.bake_lit(baking, &Progress::new(true))?;
+    let (baked, direct_ms, mirror_grid_ms) = (lit.bake, lit.direct_ms, lit.grid_ms);
     let stage = |r: &crate::bake::StageReport| r.ms.unwrap_or(0.0);
     let (photons_ms, binning_ms, em_ms) = (
         stage(&baked.photons),

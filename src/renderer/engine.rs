@@ -97,6 +97,11 @@ impl Engine {
         matches!(self, Engine::Device(_))
     }
 
+    /// Whether this engine is a software rasterizer (lavapipe, llvmpipe).
+    pub fn is_software(&self) -> bool {
+        self.gpu().is_some_and(Gpu::is_software)
+    }
+
     /// The adapter's name, or "CPU mirror".
     pub fn adapter(&self) -> String {
         self.gpu()

@@ -54,6 +54,16 @@ pub struct BakeReport {
     pub em: StageReport,
 }
 
+/// What `Renderer::bake_lit` reports besides the bake's stages.
+#[derive(Clone, Debug)]
+pub struct LitBake {
+    pub bake: BakeReport,
+    /// The grid the bake's engine built for it where that is not the renderer's (0 there).
+    pub grid_ms: f64,
+    /// The direct bake after it; 0 where the bake made it (final gathering's).
+    pub direct_ms: f64,
+}
+
 /// A tone-mapped image: RGBA8 pixels (red in the low byte), rows from the top, and
 /// (Σ log(ε + Y), count) of the log-average the operator keyed on.
 pub struct Toned {
@@ -412,6 +422,64 @@ impl Renderer {
         };
         self.set_baked(baked);
         Ok(report)
+    }
+
+    /// Bakes the scene's light on `engine` — the renderer's own, or another (the mirror beside
+    /// a software rasterizer that draws, which it outruns at baking) — and its direct light
+    /// where the bake made none, there too; draws with both from now on.
+    pub fn bake_lit(&mut self, engine: &Engine, progress: &Progress) -> Result<LitBake> {
+        let same = match (engine, &self.engine) {
+            (Engine::Mirror, Engine::Mirror) => true,
+            (Engine::Device(a), Engine::Device(b)) => Arc::ptr_eq(a, b),
+            _ => false,
+        };
+        if same {
+            let bake = self.bake(progress)?;
+            let direct_ms = match self.made_direct() {
+                true => 0.0,
+                false => self.bake_direct()?,
+            };
+            return Ok(LitBake {
+                bake,
+                grid_ms: 0.0,
+                direct_ms,
+            });
+        }
+        let mut there = Renderer::new(self.scene.clone(), engine)?;
+        let bake = there.bake(progress)?;
+        let direct_ms = match there.made_direct() {
+            true => 0.0,
+            false => there.bake_direct()?,
+        };
+        let direct = match &mut there.on {
+            On::Device(d) => match (d.direct.take(), &mut d.frames) {
+                (Some(direct), _) => Some(direct),
+                (None, Some(frames)) => Some(frames.read_direct(&d.gpu, &self.scene)?),
+                (None, None) => None,
+            },
+            On::Mirror(m) => m.direct.take(),
+        };
+        self.set_baked(Baked {
+            lobes: std::mem::take(&mut there.lobes),
+            direct,
+            photons: StageReport::default(),
+            binning: StageReport::default(),
+            em: StageReport::default(),
+        });
+        Ok(LitBake {
+            bake,
+            grid_ms: there.grid_ms(),
+            direct_ms,
+        })
+    }
+
+    /// Whether a direct bake of the current lights waits to be drawn with (final gathering
+    /// made one, or `bake_direct` did), in host memory.
+    fn made_direct(&self) -> bool {
+        match &self.on {
+            On::Device(d) => d.direct.is_some(),
+            On::Mirror(m) => m.direct.is_some(),
+        }
     }
 
     /// Draws with a bake made elsewhere from now on: its lobes, and the direct bake final
