@@ -340,10 +340,6 @@ fn a_planted_upward_import_is_found() {
     std::fs::remove_dir_all(&root).expect("temp folder removed");
 }
 
-/// Files of the application that still reach an engine themselves, until each draws through
-/// `renderer::Renderer`. The list only shrinks.
-const PICKS_ITS_ENGINE: &[&str] = &["src/cli/view/baking.rs", "src/cli/view/mod.rs"];
-
 /// The paths of `text` that name an engine: the mirrors (`cpu::`), the device (`gpu::`) or
 /// its frame passes.
 fn engine_paths(text: &str) -> Vec<String> {
@@ -361,10 +357,11 @@ fn engine_paths(text: &str) -> Vec<String> {
     found
 }
 
+/// No file of the application names an engine (`cpu::`, `gpu::`, the device's frame passes):
+/// it draws through `renderer::Renderer`, which picks the engine once.
 #[test]
 fn the_application_picks_no_engine() {
-    let mut files = module_files(Path::new("src/cli"));
-    files.retain(|(path, _)| !PICKS_ITS_ENGINE.contains(&path.to_string_lossy().as_ref()));
+    let files = module_files(Path::new("src/cli"));
     assert!(files.len() >= 5, "found only {files:?}");
     for (path, _) in files {
         let text = std::fs::read_to_string(&path).expect("readable source");
@@ -373,13 +370,6 @@ fn the_application_picks_no_engine() {
             found.is_empty(),
             "{} reaches an engine itself: {found:?}",
             path.display()
-        );
-    }
-    for listed in PICKS_ITS_ENGINE {
-        let text = std::fs::read_to_string(listed).expect("a listed file exists");
-        assert!(
-            !engine_paths(&text).is_empty(),
-            "{listed} no longer reaches an engine: take it off PICKS_ITS_ENGINE"
         );
     }
 }

@@ -462,8 +462,8 @@ fn a_moved_light_bakes_a_preview_then_in_full() {
     use std::sync::atomic::AtomicU64;
 
     use lobelight::bake::{BakeDevice, Progress, bake};
-    use lobelight::cli::view::baking::{BakeEngine, BakeResult, Baking, spawn};
     use lobelight::cli::view::{move_first_light, passes};
+    use lobelight::renderer::{BakeEngine, BakeResult, Baking, Engine, Renderer};
 
     let gpu = Arc::new(common::gpu());
     let mut scene = scene::load(std::path::Path::new(COMMON[0])).unwrap();
@@ -471,6 +471,7 @@ fn a_moved_light_bakes_a_preview_then_in_full() {
     let moved = Arc::new(move_first_light(&scene, 1.0, 0.0).unwrap());
     assert_ne!(moved.lights[0].position, scene.lights[0].position);
     let on_gpu = Arc::new(GpuScene::upload(&gpu, &moved).unwrap());
+    let renderer = Renderer::new(moved.clone(), &Engine::Device(gpu.clone())).unwrap();
     let generation = Arc::new(AtomicU64::new(0));
     let wait = |baking: &mut Baking| -> Vec<BakeResult> {
         let mut got = Vec::new();
@@ -490,24 +491,12 @@ fn a_moved_light_bakes_a_preview_then_in_full() {
     assert_eq!(plan[0].photons, 25_000);
     assert!(plan[0].iterations < plan[1].iterations);
     // An older bake, then a newer one at once: the older stops after its first pass at most.
-    let mut older = spawn(
-        &gpu,
-        &on_gpu,
-        &BakeEngine::Device,
-        &moved,
-        plan.clone(),
-        None,
-        &generation,
-    );
-    let mut newer = spawn(
-        &gpu,
-        &on_gpu,
-        &BakeEngine::Device,
-        &moved,
-        plan,
-        None,
-        &generation,
-    );
+    let spawn = |plan| {
+        let engine = BakeEngine::Device;
+        (renderer.spawn_bake(&engine, &moved, (plan, None), &generation)).unwrap()
+    };
+    let mut older = spawn(plan.clone());
+    let mut newer = spawn(plan);
     let results = wait(&mut newer);
     assert_eq!(results.len(), 2);
     assert!(results[0].preview && !results[1].preview);

@@ -88,12 +88,11 @@ impl Renderer {
         let On::Device(d) = &self.on else {
             return Err(Error::internal("the mirror has nothing to present onto"));
         };
-        let toned = d
+        let (toned, image) = d
             .toned
             .as_ref()
             .ok_or_else(|| Error::internal("an image was presented before it was tone-mapped"))?;
-        let targets = d.drawn()?.targets()?;
-        let image = (targets.width, targets.height);
+        let image = *image;
         d.gpu.record_and_wait("present", |encoder| {
             let (view, rgba) = (&target.view, &toned.rgba);
             target

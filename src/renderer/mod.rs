@@ -11,13 +11,17 @@
 use std::sync::Arc;
 use std::time::Instant;
 
+mod background;
 mod engine;
 mod measure;
+mod window;
 /// A smaller image upsampled onto a window's pixels as the present pass draws it (its mirror):
 /// what a window shows of a moving frame drawn at a lower resolution.
 pub use crate::cpu::present::upsample;
+pub use background::{BakeEngine, BakeResult, Baking, PREVIEW_FRACTION, passes};
 pub use engine::{Engine, EngineChoice, Fallback};
 pub use measure::PresentTarget;
+pub use window::{WindowFrame, WindowSurface, shown_in_window};
 
 use crate::bake::{
     BakeDevice, Baked, Binned, Progress, SceneBuffers, StageReport, bake, bins_cpu, bins_gpu,
@@ -99,8 +103,11 @@ struct Device {
     stale: bool,
     /// A direct bake of the current lights made by the bake, uploaded with the lobes.
     direct: Option<DirectMap>,
-    /// The last image tone-mapped (`Renderer::tone`).
-    toned: Option<crate::gpu::tone::GpuToned>,
+    /// The last image tone-mapped (`Renderer::tone`, a window's frame), and its size.
+    toned: Option<(crate::gpu::tone::GpuToned, (u32, u32))>,
+    /// A background bake's photons (`take_bake`) and how many were emitted: the photon and
+    /// reference views of a window draw them.
+    photons: Option<(crate::gpu::photons::GpuPhotons, u64)>,
 }
 
 impl Device {
@@ -273,6 +280,7 @@ impl Renderer {
                 stale: false,
                 direct: None,
                 toned: None,
+                photons: None,
             })),
             Engine::Mirror => {
                 let t = std::time::Instant::now();
@@ -769,8 +777,10 @@ impl Renderer {
     pub fn tone(&mut self, tone: &ToneConfig) -> Result<()> {
         match &mut self.on {
             On::Device(d) => {
-                let toned = d.drawn()?.tone_map(&d.gpu, tone)?;
-                d.toned = Some(toned);
+                let frames = d.drawn()?;
+                let targets = frames.targets()?;
+                let size = (targets.width, targets.height);
+                d.toned = Some((frames.tone_map(&d.gpu, tone)?, size));
             }
             On::Mirror(m) => {
                 let (rgba, log_sum) = cpu::tone_map(tone, &m.hdr)?;
@@ -785,9 +795,8 @@ impl Renderer {
         let untoned = || Error::internal("an image was read before it was tone-mapped");
         match &self.on {
             On::Device(d) => {
-                let (gpu, toned) = (&d.gpu, d.toned.as_ref().ok_or_else(untoned)?);
-                let targets = d.drawn()?.targets()?;
-                let pixels = (targets.width * targets.height) as usize;
+                let (gpu, (toned, size)) = (&d.gpu, d.toned.as_ref().ok_or_else(untoned)?);
+                let pixels = (size.0 * size.1) as usize;
                 let log_sum = gpu.read::<[f32; 2]>(&toned.log_sum, 1)?;
                 Ok(Toned {
                     rgba: gpu.read::<u32>(&toned.rgba, pixels)?,

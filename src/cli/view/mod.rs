@@ -9,7 +9,6 @@
 //! OUT.png` draws N frames once the bake is in, saves the last and exits (scripted runs and
 //! tests; `--turn` turns the camera every frame).
 
-pub mod baking;
 mod orbit;
 mod resolution;
 
@@ -25,23 +24,16 @@ use winit::event_loop::{ActiveEventLoop, EventLoop, OwnedDisplayHandle};
 use winit::keyboard::{Key, NamedKey};
 use winit::window::{Window, WindowId};
 
-use crate::bake::{Progress, bin_traced, on_device};
 use crate::camera::View;
 use crate::cli::render::Method;
-use crate::cpu::photon_view::scene_scale;
 use crate::error::{Error, Result};
 use crate::frame::{FrameConfig, Show, Terms, camera_uniform};
-use crate::gpu::photon_view::photon_image;
-use crate::gpu::present::PresentPipeline;
-use crate::gpu::renderer::FrameRenderer;
-use crate::gpu::tone::tone_map;
-use crate::gpu::{BackendChoice, Gpu};
-use crate::plan::BakePlan;
+use crate::renderer::{BackendChoice, BakeEngine, Baking, Renderer};
+pub use crate::renderer::{PREVIEW_FRACTION, passes};
+use crate::renderer::{WindowFrame, WindowSurface, shown_in_window};
 use crate::scene::Scene;
 use crate::tone::ToneConfig;
 use crate::types::Camera;
-use baking::{BakeEngine, BakeResult, Baking};
-pub use baking::{PREVIEW_FRACTION, passes};
 pub use orbit::Orbit;
 pub use resolution::{DEFAULT_TARGET_MS, Resolution};
 
@@ -132,14 +124,14 @@ struct App {
 /// Everything a drawn window holds.
 struct State {
     window: Arc<Window>,
-    gpu: Arc<Gpu>,
-    surface: wgpu::Surface<'static>,
-    config: wgpu::SurfaceConfiguration,
-    /// The scene on the device, the splat passes, the lobes and the targets.
-    renderer: FrameRenderer,
-    present: PresentPipeline,
-    /// The last bake's photons and bins, on the device (reference and photon views).
-    baked: Option<BakeResult>,
+    /// The scene on the device, the splat passes, the lobes, the last bake's photons and
+    /// bins (reference and photon views), and the targets.
+    renderer: Renderer,
+    surface: WindowSurface,
+    /// The scene's bounds (the frames' depth range), walked once.
+    bounds: (glam::Vec3, glam::Vec3),
+    /// Whether the lobes drawn are a preview bake's.
+    preview: bool,
     orbit: Orbit,
     tone: ToneConfig,
     method: Method,
@@ -192,37 +184,11 @@ impl App {
                 )
                 .map_err(|e| Error::Gpu(format!("cannot open a window: {e}")))?,
         );
-        let (gpu, surface) = Gpu::for_window(self.opts.backend, &self.display, &window)?;
-        let gpu = Arc::new(gpu);
-        let caps = surface.get_capabilities(&gpu.adapter);
-        // A plain (non-sRGB) 8-bit format takes the tone map's bytes as they are.
-        let format = caps
-            .formats
-            .iter()
-            .copied()
-            .find(|f| !f.is_srgb())
-            .or(caps.formats.first().copied())
-            .ok_or_else(|| Error::Gpu("the window's surface offers no format".into()))?;
         let inner = window.inner_size();
-        let config = wgpu::SurfaceConfiguration {
-            usage: wgpu::TextureUsages::RENDER_ATTACHMENT,
-            format,
-            width: inner.width.max(1),
-            height: inner.height.max(1),
-            present_mode: wgpu::PresentMode::AutoVsync,
-            desired_maximum_frame_latency: 2,
-            alpha_mode: caps
-                .alpha_modes
-                .first()
-                .copied()
-                .unwrap_or(wgpu::CompositeAlphaMode::Auto),
-            view_formats: vec![],
-            color_space: wgpu::SurfaceColorSpace::Auto,
-        };
-        surface.configure(&gpu.device, &config);
-        let mut renderer = FrameRenderer::new(&gpu, &self.scene)?;
-        let present = PresentPipeline::new(&gpu, format)?;
-        renderer.resize(&gpu, config.width, config.height)?;
+        let size = (inner.width.max(1), inner.height.max(1));
+        let scene = self.scene.clone();
+        let at = (&self.display, &window);
+        let (mut renderer, surface) = Renderer::for_window(scene, self.opts.backend, at, size)?;
         let cached = match &self.opts.cache {
             Some(path) => crate::cache::load(
                 path,
@@ -233,17 +199,16 @@ impl App {
             None => None,
         };
         let generation = Arc::new(AtomicU64::new(0));
-        let engine = if gpu.is_software() && !self.opts.gpu_bake {
+        let on_mirror = renderer.engine().is_software() && !self.opts.gpu_bake;
+        if on_mirror {
             eprintln!(
                 "lobelight: {} is a software rasterizer: bakes run on the CPU mirror ({} \
                  threads), faster here, and frames on it (--gpu bakes on it too)",
-                gpu.info.name,
+                renderer.engine().adapter(),
                 rayon::current_num_threads()
             );
-            BakeEngine::Mirror(Arc::new(crate::cpu::scene_grid(&self.scene)?))
-        } else {
-            BakeEngine::Device
-        };
+        }
+        let engine = renderer.bake_engine(on_mirror)?;
         // A cached bake is in from the first frame; else direct light until the bake is.
         // The reference and photon views need the photons, which no cache holds.
         let (baking, bake_s) = match (&cached, self.opts.method) {
@@ -255,23 +220,20 @@ impl App {
                     None
                 };
                 let full = passes(&self.scene.bake, false);
-                let on_gpu = &renderer.on_gpu;
-                let b = baking::spawn(&gpu, on_gpu, &engine, &self.scene, full, save, &generation);
+                let b = renderer.spawn_bake(&engine, &self.scene, (full, save), &generation)?;
                 (Some(b), None)
             }
         };
-        if let Some(lobes) = &cached {
-            renderer.set_lobes(&gpu, &self.scene, lobes)?;
+        if let Some(lobes) = cached {
+            renderer.set_lobes(lobes);
         }
         eprintln!("{HELP}");
         Ok(State {
             window,
-            gpu,
-            surface,
-            config,
             renderer,
-            present,
-            baked: None,
+            surface,
+            bounds: self.scene.bounds(),
+            preview: false,
             orbit: Orbit::new(&self.scene.camera),
             tone: self.opts.tone,
             method: self.opts.method,
@@ -294,7 +256,7 @@ impl App {
                 .find(|s| s.terms() == self.opts.frame.show)
                 .unwrap_or_default(),
             resolution: Resolution::new(self.opts.target_ms),
-            drawn: (inner.width.max(1), inner.height.max(1)),
+            drawn: size,
             drawn_lod: self.opts.frame.lod,
             lit_drawn: Vec::new(),
             lit_lod: Vec::new(),
@@ -304,7 +266,7 @@ impl App {
 
 impl State {
     /// Takes a bake pass's result when one has come in.
-    fn poll_bake(&mut self, scene: &Scene) -> Result<()> {
+    fn poll_bake(&mut self) -> Result<()> {
         let Some(baking) = self.baking.as_mut() else {
             return Ok(());
         };
@@ -324,98 +286,74 @@ impl State {
                 result.emitted, result.seconds
             );
         }
-        self.renderer.set_lobes(&self.gpu, scene, &result.lobes)?;
-        self.baked = Some(result);
+        self.preview = result.preview;
+        self.renderer.take_bake(result)?;
         self.version += 1;
         Ok(())
     }
 
     /// Bakes `scene` again (a moved light: a preview first) or for the photons a view needs.
-    fn rebake(&mut self, scene: &Arc<Scene>, preview: bool) {
+    fn rebake(&mut self, scene: &Arc<Scene>, preview: bool) -> Result<()> {
         let counts = passes(&scene.bake, preview);
-        let b = baking::spawn(
-            &self.gpu,
-            &self.renderer.on_gpu,
-            &self.engine,
-            scene,
-            counts,
-            None,
-            &self.generation,
-        );
+        let b =
+            (self.renderer).spawn_bake(&self.engine, scene, (counts, None), &self.generation)?;
         self.baking = Some(b);
         self.bake_s = None;
-    }
-
-    fn resize(&mut self, size: PhysicalSize<u32>) -> Result<()> {
-        if size.width == 0 || size.height == 0 {
-            return Ok(()); // minimised: nothing to draw into
-        }
-        self.config.width = size.width;
-        self.config.height = size.height;
-        self.surface.configure(&self.gpu.device, &self.config);
-        // Too large for this device: say so and draw nothing until the window is smaller
-        // (`draw` skips frames whose targets do not match the window).
-        if let Err(e) = self.gpu.check_image(size.width, size.height) {
-            eprintln!("lobelight: {e}");
-            return Ok(());
-        }
-        self.renderer.resize(&self.gpu, size.width, size.height)?;
         Ok(())
     }
 
-    /// Records the HDR image of the chosen method into `encoder`; returns its buffer and size
-    /// (a moving frame's internal resolution, else the window's).
-    fn record_hdr<'a>(
-        &'a mut self,
-        scene: &Scene,
-        frame: &FrameConfig,
-        encoder: &mut wgpu::CommandEncoder,
-    ) -> Result<(std::borrow::Cow<'a, wgpu::Buffer>, (u32, u32))> {
-        let (w, h) = (self.config.width, self.config.height);
+    fn resize(&mut self, size: PhysicalSize<u32>) -> Result<()> {
+        self.surface
+            .resize(&self.renderer, (size.width, size.height));
+        // Too large for this device: say so and draw nothing until the window is smaller
+        // (`draw` skips frames the device cannot hold).
+        if let Err(e) = self.renderer.engine().check_image(size.width, size.height) {
+            eprintln!("lobelight: {e}");
+        }
+        Ok(())
+    }
+
+    /// Draws one frame of the chosen method and presents it; returns the size it was drawn
+    /// at (a moving frame's internal resolution, else the window's), or none when the surface
+    /// could not give a texture this time.
+    fn draw(&mut self, frame: &FrameConfig) -> Result<Option<(u32, u32)>> {
+        let (w, h) = self.surface.size();
+        // A window too large for this device draws nothing until it is smaller (`resize`
+        // said so).
+        if self.renderer.engine().check_image(w, h).is_err() {
+            return Ok(None);
+        }
+        let start = Instant::now();
+        let frame = FrameConfig {
+            show: self.show.terms(),
+            ..frame.clone()
+        };
         let camera = self.orbit.camera();
-        let bounds = self.renderer.extent().bounds;
-        let cam = camera_uniform(&View::new(&camera, w, h), bounds, frame);
-        let gpu = &self.gpu;
-        // A moving frame coarsens it where the target asks (below).
-        self.drawn_lod = frame.lod;
-        match (self.method, &mut self.baked) {
-            (Method::Photons, Some(baked)) => {
-                let scale = scene_scale(&scene.lights, baked.emitted)?;
-                let on_gpu = &self.renderer.on_gpu;
-                let hdr = photon_image(gpu, encoder, on_gpu, &baked.photons, &cam, scale)?;
-                Ok((std::borrow::Cow::Owned(hdr), (w, h)))
-            }
-            (Method::Reference, Some(baked)) => {
-                // Bins the first time the view is shown, where the bake needed none.
-                let binned = match baked.binned.take() {
-                    Some(b) => b,
-                    None => {
-                        let (on_gpu, quiet) = (&self.renderer.on_gpu, Progress::new(false));
-                        let plan = BakePlan::new(scene, gpu.bake_limits())?;
-                        on_device(scene, gpu, on_gpu, |ex, on| {
-                            bin_traced(ex, &plan, on, &baked.photons, &quiet)
-                        })?
-                    }
-                };
-                let binned = baked.binned.insert(binned);
-                let (bins, em) = (&binned.bins, &binned.em);
-                self.renderer.resize(gpu, w, h)?;
-                let hdr = self
-                    .renderer
-                    .record_reference(gpu, encoder, scene, bins, em, &cam, frame)?;
-                Ok((std::borrow::Cow::Borrowed(hdr), (w, h)))
-            }
+        let window = View::new(&camera, w, h);
+        let tone = self.tone;
+        let present = |s: &mut State, shown: WindowFrame| {
+            s.renderer.present_frame(&mut s.surface, &shown, &tone)
+        };
+        let (drawn, lod) = match (self.method, self.renderer.has_photons()) {
+            (Method::Photons, true) => (
+                present(self, WindowFrame::Photons(&window, &frame))?,
+                frame.lod,
+            ),
+            (Method::Reference, true) => (
+                present(self, WindowFrame::Reference(&window, &frame))?,
+                frame.lod,
+            ),
             // The lobes, and what shows while the photons a view needs are on their way: a
             // moving frame (at the internal resolution), then refinement frames while the
             // camera rests, then the still image as it stands (at the window's size).
             _ => {
+                let cam = camera_uniform(&window, self.bounds, &frame);
                 let key = Some((cam, frame.show, self.method, self.version));
                 // Without refinement every frame is drawn anew, as for a moving camera.
                 if self.still != key || self.spp == 0 {
-                    self.still = key;
-                    self.samples = 0;
-                    if frame.needs_direct_bake() && !self.renderer.direct_is_baked() {
-                        let ms = self.renderer.bake_direct(gpu, scene)?;
+                    if frame.needs_direct_bake()
+                        && let Some(ms) = self.renderer.ensure_direct()?
+                    {
                         eprintln!("direct bake: {ms:.0} ms");
                     }
                     let (iw, ih) = self.resolution.size((w, h));
@@ -423,77 +361,33 @@ impl State {
                         lod: self.resolution.lod(frame.lod),
                         ..frame.clone()
                     };
-                    let cam = camera_uniform(&View::new(&camera, iw, ih), bounds, &moving);
-                    self.renderer.resize(gpu, iw, ih)?;
-                    self.renderer
-                        .record_moving(gpu, encoder, scene, &cam, &moving)?;
-                    self.drawn_lod = moving.lod;
+                    let view = View::new(&camera, iw, ih);
+                    let drawn = present(self, WindowFrame::Moving(&view, &moving))?;
+                    if drawn.is_some() {
+                        (self.still, self.samples) = (key, 0);
+                    }
+                    (drawn, moving.lod)
                 } else if self.samples < self.spp {
-                    let (k, spp) = (self.samples, self.spp);
-                    self.renderer.resize(gpu, w, h)?;
-                    self.renderer
-                        .record_sample(gpu, encoder, scene, &cam, frame, k, spp)?;
-                    self.samples += 1;
+                    let sample = WindowFrame::Sample(&window, &frame, self.samples, self.spp);
+                    let drawn = present(self, sample)?;
+                    self.samples += u32::from(drawn.is_some());
+                    (drawn, frame.lod)
+                } else {
+                    (present(self, WindowFrame::Again)?, frame.lod)
                 }
-                let t = self.renderer.targets()?;
-                Ok((std::borrow::Cow::Borrowed(&t.hdr), (t.width, t.height)))
             }
-        }
-    }
-
-    /// Draws one frame; returns the tone-mapped image's buffer (for screenshots) and its
-    /// size, or none when the surface could not give a texture this time.
-    fn draw(
-        &mut self,
-        scene: &Scene,
-        frame: &FrameConfig,
-    ) -> Result<Option<(wgpu::Buffer, (u32, u32))>> {
-        let (w, h) = (self.config.width, self.config.height);
-        // A window too large for this device draws nothing until it is smaller (`resize`
-        // said so).
-        if self.gpu.check_image(w, h).is_err() {
+        };
+        let Some(drawn) = drawn else {
             return Ok(None);
-        }
-        let texture = match self.surface.get_current_texture() {
-            wgpu::CurrentSurfaceTexture::Success(t)
-            | wgpu::CurrentSurfaceTexture::Suboptimal(t) => t,
-            wgpu::CurrentSurfaceTexture::Timeout | wgpu::CurrentSurfaceTexture::Occluded => {
-                return Ok(None);
-            }
-            wgpu::CurrentSurfaceTexture::Outdated | wgpu::CurrentSurfaceTexture::Lost => {
-                self.surface.configure(&self.gpu.device, &self.config);
-                return Ok(None);
-            }
-            other => {
-                return Err(Error::Gpu(format!(
-                    "the window's surface failed: {other:?}"
-                )));
-            }
         };
-        let start = Instant::now();
-        let frame = FrameConfig {
-            show: self.show.terms(),
-            ..frame.clone()
-        };
-        let gpu = self.gpu.clone();
-        let mut encoder = gpu.encoder("view frame");
-        let tone = self.tone;
-        let (hdr, (iw, ih)) = self.record_hdr(scene, &frame, &mut encoder)?;
-        let toned = tone_map(&gpu, &mut encoder, &hdr, iw * ih, &tone)?;
-        drop(hdr);
-        let target = texture.texture.create_view(&Default::default());
-        let present = &self.present;
-        present.record(&gpu, &mut encoder, &target, &toned.rgba, (iw, ih), (w, h));
-        gpu.submit_and_wait(encoder)?;
-        gpu.queue.present(texture);
         self.frame_ms = crate::timing::ms_since(start);
-        self.drawn = (iw, ih);
+        (self.drawn, self.drawn_lod) = (drawn, lod);
         // Moving frames (which leave no refinement sample) keep the target; refinement
         // frames are at the window's size anyway.
         if self.samples == 0 && self.method == Method::Lobes {
             self.resolution.record(self.frame_ms);
         }
-        Ok(Some((toned.rgba, (iw, ih))))
+        Ok(Some(drawn))
     }
 
     /// The image on screen is final until something changes: the lobes' still image is
@@ -521,17 +415,17 @@ impl State {
                 };
                 format!(
                     "{}; baking {total} photons: {stage}, {:.1} s",
-                    match &self.baked {
-                        Some(r) if r.preview => "preview bake",
-                        Some(_) => "indirect light of the last bake",
-                        None => "direct light",
+                    match (self.renderer.has_photons(), self.preview) {
+                        (true, true) => "preview bake",
+                        (true, false) => "indirect light of the last bake",
+                        (false, _) => "direct light",
                     },
                     b.started.elapsed().as_secs_f64()
                 )
             }
             (None, None) => "direct light".into(),
         };
-        let waiting = self.method != Method::Lobes && self.baked.is_none();
+        let waiting = self.method != Method::Lobes && !self.renderer.has_photons();
         let still = match (self.method, self.samples) {
             // The internal resolution (`--target-ms`) the present pass upsamples.
             (Method::Lobes, 0) if self.drawn_lod > 0.0 => format!(
@@ -555,23 +449,12 @@ impl State {
         )
     }
 
-    /// Saves the tone-mapped image `shot` (its buffer and size) as the window showed it: a
+    /// Saves the last tone-mapped image, drawn at `image` pixels, as the window showed it: a
     /// moving frame drawn smaller is upsampled as the present pass did (its mirror).
-    fn screenshot(&self, shot: &(wgpu::Buffer, (u32, u32)), path: &std::path::Path) -> Result<()> {
-        let (rgba, image) = (&shot.0, shot.1);
-        let pixels = self.gpu.read::<u32>(rgba, (image.0 * image.1) as usize)?;
-        let window = (self.config.width, self.config.height);
-        if image == window {
-            return crate::cli::render::write_rgba8(path, &pixels, window.0, window.1);
-        }
-        let params = crate::types::PresentParams::new(image, window, false);
-        let shown: Vec<u32> = crate::cpu::present::present(&params, &pixels)
-            .iter()
-            .map(|c| {
-                let byte = |v: f32| (v * 255.0).round().clamp(0.0, 255.0) as u32;
-                byte(c[0]) | byte(c[1]) << 8 | byte(c[2]) << 16 | 0xff00_0000
-            })
-            .collect();
+    fn screenshot(&self, image: (u32, u32), path: &std::path::Path) -> Result<()> {
+        let toned = self.renderer.read_toned()?;
+        let window = self.surface.size();
+        let shown = shown_in_window(&toned.rgba, image, window);
         crate::cli::render::write_rgba8(path, &shown, window.0, window.1)
     }
 
@@ -650,7 +533,7 @@ impl App {
         let Some(state) = self.state.as_mut() else {
             return Ok(());
         };
-        state.poll_bake(&scene)?;
+        state.poll_bake()?;
         let scripted = self.opts.frames.is_some();
         // A scripted run waits for the bake: its frames are meant to show the full light.
         if scripted && state.baking.is_some() {
@@ -658,7 +541,7 @@ impl App {
             state.window.request_redraw();
             return Ok(());
         }
-        let Some(rgba) = state.draw(&scene, &self.opts.frame)? else {
+        let Some(drawn) = state.draw(&self.opts.frame)? else {
             state.window.request_redraw();
             return Ok(());
         };
@@ -675,13 +558,14 @@ impl App {
             && state.frames_lit >= n
         {
             if let Some(path) = &self.opts.screenshot {
-                state.screenshot(&rgba, path)?;
+                state.screenshot(drawn, path)?;
                 eprintln!("wrote {}", path.display());
             }
             let frame_ms = crate::cli::measure::median(state.lit_ms.clone());
+            let (width, height) = state.surface.size();
             self.report = ViewReport {
-                width: state.config.width,
-                height: state.config.height,
+                width,
+                height,
                 frames: state.lit_ms.len() as u32,
                 frame_ms,
                 bake_s: state.bake_s.unwrap_or(0.0),
@@ -781,8 +665,8 @@ impl App {
                         state.screenshots += 1;
                         let path = PathBuf::from(format!("lobelight-{}.png", state.screenshots));
                         // The next frame's image is the one on screen after this key.
-                        if let Some(rgba) = state.draw(&self.scene, &self.opts.frame)? {
-                            state.screenshot(&rgba, &path)?;
+                        if let Some(drawn) = state.draw(&self.opts.frame)? {
+                            state.screenshot(drawn, &path)?;
                             eprintln!("wrote {}", path.display());
                         }
                     }
@@ -794,10 +678,10 @@ impl App {
                         };
                         // A cached start has no photons: bake them (the lobes stay on).
                         if state.method != Method::Lobes
-                            && state.baked.is_none()
+                            && !state.renderer.has_photons()
                             && state.baking.is_none()
                         {
-                            state.rebake(&self.scene, false);
+                            state.rebake(&self.scene, false)?;
                         }
                     }
                     Some(KeyAction::MoveLight(dx, dz)) => {
@@ -807,9 +691,9 @@ impl App {
                         self.scene = Arc::new(moved);
                         // Direct light follows at once; the indirect light with the preview
                         // bake, then the full one (a bake for the old position stops).
-                        state.renderer.set_lights(&state.gpu, &self.scene)?;
+                        state.renderer.relight(self.scene.clone())?;
                         state.version += 1;
-                        state.rebake(&self.scene, true);
+                        state.rebake(&self.scene, true)?;
                     }
                     None => {}
                 }

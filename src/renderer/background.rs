@@ -1,5 +1,6 @@
-//! The viewer's bakes, on a second thread beside the frames (same device). A bake sends its
-//! result after each of its passes: a light that moved gets a quick preview bake with a
+//! Bakes on a second thread beside a window's frames (the same device, or the CPU mirror
+//! beside a software rasterizer): the viewer's. A bake sends its result after each of its
+//! passes: a light that moved gets a quick preview bake with a
 //! fraction of the photons first, then the full bake. Starting a newer bake makes the older
 //! one stop at its next pass (a generation counter), so keys pressed in a row never queue
 //! bakes up. The photons stay on the device for the photon view, and their bins for the
@@ -47,13 +48,21 @@ pub struct BakeResult {
     pub seconds: f64,
 }
 
-/// Where the viewer's bakes run: on the window's device, or on the CPU mirror (with the scene's
+/// Where background bakes run: on the window's device, or on the CPU mirror (with the scene's
 /// grid built on the host), which bakes faster where the device is a software rasterizer; the
 /// lobes and photons go to the device either way.
 #[derive(Clone)]
 pub enum BakeEngine {
     Device,
     Mirror(Arc<SplatGrid>),
+}
+
+impl BakeEngine {
+    /// The CPU mirror, with `scene`'s grid built on the host (the same splats' scenes, lights
+    /// moved, bake there too).
+    pub fn mirror(scene: &Scene) -> Result<BakeEngine> {
+        Ok(BakeEngine::Mirror(Arc::new(crate::cpu::scene_grid(scene)?)))
+    }
 }
 
 /// A bake running on its thread.
@@ -83,9 +92,8 @@ pub fn passes(full: &BakeDesc, preview: bool) -> Vec<BakeDesc> {
 
 /// Starts a bake of `scene` over `passes`, as generation `generation.fetch_add(1) + 1`; the
 /// full (last) pass is saved to `cache` when given.
-pub fn spawn(
-    gpu: &Arc<Gpu>,
-    on_gpu: &Arc<GpuScene>,
+pub(super) fn spawn(
+    (gpu, on_gpu): (&Arc<Gpu>, &Arc<GpuScene>),
     engine: &BakeEngine,
     scene: &Arc<Scene>,
     passes: Vec<BakeDesc>,
