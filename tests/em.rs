@@ -115,10 +115,7 @@ fn on_cpu_shaped(
     materials: &[Material],
     shape: FitShape,
 ) -> LobeMap {
-    let from = FitFrom::photons(bins);
-    Engine::Mirror
-        .fit_lobes(cfg, from, (splats, materials), shape)
-        .unwrap()
+    fit_on(&Engine::Mirror, cfg, bins, splats, materials, shape)
 }
 
 fn on_gpu(
@@ -128,18 +125,13 @@ fn on_gpu(
     splats: &[Splat],
     materials: &[Material],
 ) -> LobeMap {
-    on_gpu_shaped(
-        device,
-        cfg,
-        bins,
-        splats,
-        materials,
-        device.bake_limits().fit_shape,
-    )
+    let shape = device.bake_limits().fit_shape;
+    fit_on(device, cfg, bins, splats, materials, shape)
 }
 
-fn on_gpu_shaped(
-    device: &Engine,
+/// The photon fit of `splats` to `bins` on `engine`, in `shape`.
+fn fit_on(
+    engine: &Engine,
     cfg: &EmConfig,
     bins: &PhotonBins,
     splats: &[Splat],
@@ -147,9 +139,7 @@ fn on_gpu_shaped(
     shape: FitShape,
 ) -> LobeMap {
     let from = FitFrom::photons(bins);
-    device
-        .fit_lobes(cfg, from, (splats, materials), shape)
-        .unwrap()
+    (engine.fit_lobes(cfg, from, (splats, materials), shape)).unwrap()
 }
 
 /// The device's fit shape, and the portable reduction too where it uses subgroups: parity
@@ -477,7 +467,7 @@ fn gpu_fit_equals_cpu_fit_on_the_same_photons() {
         let may_part = sparse || lobes > 5;
         for shape in shapes(&device) {
             let c = on_cpu_shaped(&em, &bins, &scene.splats, &scene.materials, shape);
-            let g = on_gpu_shaped(&device, &em, &bins, &scene.splats, &scene.materials, shape);
+            let g = fit_on(&device, &em, &bins, &scene.splats, &scene.materials, shape);
             assert!(c.stats.fitted > 1000, "{} splats fitted", c.stats.fitted);
             assert_eq!(c.stats.fitted, g.stats.fitted);
             assert!(c.fitted().any(|l| l.lobes < em.lobes), "nothing pruned");
@@ -509,7 +499,7 @@ fn streamed_photons_fit_as_cached_ones() {
         for shape in shapes(&device) {
             let (splats, materials) = (&fixture.splats, &fixture.materials);
             let c = on_cpu_shaped(&cfg, &bins, splats, materials, shape);
-            let g = on_gpu_shaped(&device, &cfg, &bins, splats, materials, shape);
+            let g = fit_on(&device, &cfg, &bins, splats, materials, shape);
             for (i, set) in sets.iter().enumerate() {
                 assert_eq!(g.light[i].photons as usize, set.len(), "GPU, splat {i}");
                 assert_eq!(c.light[i].photons as usize, set.len(), "CPU, splat {i}");
@@ -573,7 +563,7 @@ fn a_bounded_fit_keeps_the_irradiance_and_the_lobes() {
     check_recovery_of(3, LobeFamily::Ward, &truth, "CPU, bounded", &part);
     for shape in shapes(&device) {
         let c = on_cpu_shaped(&bounded, &bins, splats, materials, shape);
-        let g = on_gpu_shaped(&device, &bounded, &bins, splats, materials, shape);
+        let g = fit_on(&device, &bounded, &bins, splats, materials, shape);
         check_recovery_of(3, LobeFamily::Ward, &truth, "GPU, bounded", &g);
         assert_parity(&format!("bounded {shape:?}"), false, &c, &g);
     }
@@ -875,8 +865,8 @@ fn gathered_irradiance_equals_the_fit_pass() {
     };
     let shape = shapes(&device)[0];
     let c = on_cpu_shaped(&em, &bins, &scene.splats, &scene.materials, shape);
-    let g = on_gpu_shaped(&device, &em, &bins, &scene.splats, &scene.materials, shape);
-    let fit = on_gpu_shaped(&device, &all, &bins, &scene.splats, &scene.materials, shape);
+    let g = fit_on(&device, &em, &bins, &scene.splats, &scene.materials, shape);
+    let fit = fit_on(&device, &all, &bins, &scene.splats, &scene.materials, shape);
     let diffuse = |i: usize| {
         let m = scene.materials[scene.splats[i].material as usize];
         m.specular.iter().all(|&s| s == 0.0)
