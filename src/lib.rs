@@ -5,9 +5,10 @@
 //! modules, from the bottom up (each uses only those before it; `tests/layering.rs` holds the
 //! order, docs/architecture.md §2 explains it):
 //!
-//! - `error`, `large_pages` (the command's allocator), `timing`, `types` (the `#[repr(C)]`
-//!   records shared with WGSL), `grid` (the splat grid's cells), `shared` (math shared by the
-//!   mirrors and the host), `shaders` (the WGSL sources, the stage table and what naga reads);
+//! - `error`, `large_pages` (the command's allocator), `timing`, `budget` (the memory budget),
+//!   `types` (the `#[repr(C)]` records shared with WGSL), `grid` (the splat grid's cells),
+//!   `shared` (math shared by the mirrors and the host), `shaders` (the WGSL sources, the stage
+//!   table and what naga reads);
 //! - `photons`, `em`, `bins`, `tone`, `lobe_norms`, `convolution`, `fit_groups`, `lod`: each
 //!   stage's settings, limits and host-side data;
 //! - `scene` (the scene file, procedural shapes and model files) and `camera`;
@@ -39,6 +40,7 @@
 
 pub mod bake;
 pub mod bins;
+pub mod budget;
 pub mod cache;
 pub mod camera;
 pub mod convolution;

@@ -239,6 +239,7 @@ const ORDER: &[&str] = &[
     "error",
     "large_pages",
     "timing",
+    "budget",
     "types",
     "grid",
     "shared",

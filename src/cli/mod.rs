@@ -36,6 +36,12 @@ use clap::{Args, Parser, Subcommand, ValueEnum};
 struct Cli {
     #[command(subcommand)]
     command: Command,
+    /// The memory budget of what a scene makes (its splats and decompressed files), e.g.
+    /// `8G`; past it the scene is refused with the spacing or subsampling that fits. Default:
+    /// half the machine's memory (or of `ulimit -v`); a scene file's `max_memory` sets it
+    /// where this is not given.
+    #[arg(long, global = true, value_parser = crate::budget::parse_size)]
+    max_memory: Option<u64>,
 }
 
 /// Where stages run, shared by the subcommands.
@@ -530,6 +536,9 @@ fn checked_target_ms(ms: f64) -> Result<f64> {
 }
 
 fn run(cli: Cli) -> Result<()> {
+    if let Some(bytes) = cli.max_memory {
+        crate::budget::set_default(bytes);
+    }
     match cli.command {
         Command::Info(args) => info_command(args),
         Command::Render(args) => render_command(args),

@@ -52,6 +52,10 @@ pub struct SceneFile {
     pub lights: Vec<toml::Spanned<LightDesc>>,
     #[serde(default, rename = "object")]
     pub objects: Vec<toml::Spanned<ObjectDesc>>,
+    /// The memory budget of what the scene makes (`budget::parse_size`: `"8G"`); the
+    /// command line's `--max-memory` wins.
+    #[serde(default)]
+    pub max_memory: Option<String>,
 }
 
 #[derive(Clone, Debug, PartialEq, Deserialize)]

@@ -11,6 +11,7 @@ use std::path::{Path, PathBuf};
 
 use glam::{Affine3A, Quat, Vec3};
 
+use crate::budget::Budget;
 use crate::error::{Error, Result};
 use crate::grid::{GridConfig, SplatGrid, splat_is_sane};
 use crate::shared::trace::Geometry;
@@ -156,6 +157,11 @@ pub fn parse(path: &Path, text: &str) -> Result<Scene> {
 
     validate_camera(&file.camera).map_err(|m| invalid(format!("[camera]: {m}")))?;
     validate_bake(&file.bake).map_err(|m| invalid(format!("[bake]: {m}")))?;
+    let max_memory = (file.max_memory.as_deref())
+        .map(crate::budget::parse_size)
+        .transpose()
+        .map_err(|m| invalid(format!("max_memory: {m}")))?;
+    let budget = Budget::for_scene(max_memory);
 
     // Materials: "default" first (grey diffuse unless the file defines it), then by name.
     let mut material_names = vec!["default".to_string()];
@@ -211,6 +217,7 @@ pub fn parse(path: &Path, text: &str) -> Result<Scene> {
                 name: surface_name(k, obj),
                 extra_materials: &mut extra_materials,
                 first_extra: material_names.len() as u32,
+                budget,
             },
             &at,
         )?;
@@ -273,6 +280,11 @@ pub fn parse(path: &Path, text: &str) -> Result<Scene> {
                 ),
             ));
         }
+        let what = format!("the scene with light #{}'s surface", k + 1);
+        let made = splats.len() as f64;
+        let count_at = |s: f32| made + shapes::quad_count(&frame, size, s);
+        (budget.check_splats(&what, spacing, &count_at))
+            .map_err(|m| at_line(file.lights[k].span(), m))?;
         let mut disks = Vec::new();
         shapes::quad(&frame, size, spacing, &mut disks);
         let clip = shapes::quad_clip(&frame, size, spacing);
@@ -645,6 +657,8 @@ struct Built<'a> {
     /// `first_extra` materials.
     extra_materials: &'a mut Vec<(String, MaterialDesc)>,
     first_extra: u32,
+    /// What the scene's splats may take, this object's with those before it.
+    budget: Budget,
 }
 
 /// An object's name in object-ID images: its place in the file and its shape, and its
@@ -717,7 +731,14 @@ fn build_object(
         name,
         extra_materials,
         first_extra,
+        budget,
     } = out;
+    // Splats this object and the ones before it make, against the memory budget.
+    let made = splats.len() as f64;
+    let within = |spacing: f32, count_at: &dyn Fn(f32) -> f64| {
+        let what = "the scene up to this object";
+        budget.check_splats(what, spacing, &|s| made + count_at(s))
+    };
     for key in set_keys(o) {
         if !allowed_keys(o.shape).contains(&key) {
             return Err(at(format!("key `{key}` does not apply to this shape")));
@@ -748,13 +769,14 @@ fn build_object(
                 });
             }
         };
-    let planned = match o.shape {
+    let planned_at = |spacing: f32| match o.shape {
         ShapeKind::CornellBox => shapes::cornell_count(&m, spacing),
         ShapeKind::Box => shapes::cube_count(&m, spacing),
         ShapeKind::Sphere => shapes::sphere_count(&m, o.radius.unwrap_or(1.0), spacing),
         ShapeKind::Quad => shapes::quad_count(&m, o.size.unwrap_or([1.0, 1.0]), spacing),
         ShapeKind::Model => 0.0,
     };
+    let planned = planned_at(spacing);
     // A NaN count (a transform that is not finite) is refused too.
     if planned.is_nan() || planned > MAX_OBJECT_SPLATS as f64 {
         return Err(at(format!(
@@ -762,6 +784,7 @@ fn build_object(
              {MAX_OBJECT_SPLATS} one object may have: raise `spacing` or lower `scale`"
         )));
     }
+    within(spacing, &planned_at).map_err(at)?;
     let mut disks = Vec::new();
     let mut source = None;
     let mut dropped = 0;
@@ -817,11 +840,23 @@ fn build_object(
                 .as_ref()
                 .ok_or_else(|| at("a model needs `path`".into()))?;
             let file = base_dir.join(rel);
-            let mesh = model::load(&file)?;
+            let mesh = model::load_within(&file, &budget)?;
             let fit = o.fit.map(|f| positive(f, "fit")).transpose().map_err(at)?;
             let splat_set = match model_spacing(&mesh, o, fit, &m) {
-                Some(step) => model::surface::sample_surface(&mesh, step),
-                None => model::to_splats(&mesh, &file)?,
+                Some(step) => {
+                    // The sampled surface's splats, counted before any is made.
+                    // In the file's units: `spacing` over the scene's scale of them.
+                    let per = step / spacing;
+                    let count_at = |s: f32| model::surface::planned(&mesh, s * per);
+                    within(spacing, &count_at).map_err(at)?;
+                    model::surface::sample_surface(&mesh, step)
+                }
+                None => {
+                    let points = made + mesh.positions.len() as f64;
+                    let what = "the scene up to this object";
+                    budget.check_points(what, points).map_err(at)?;
+                    model::to_splats(&mesh, &file)?
+                }
             };
             dropped = splat_set.dropped;
             let placed = model::place(

@@ -16,6 +16,8 @@ pub mod text;
 use std::io::Read;
 use std::path::Path;
 
+use crate::budget::{self, Budget};
+
 use glam::{Affine3A, Vec3};
 
 use crate::error::{Error, Result};
@@ -78,15 +80,35 @@ impl Mesh {
 /// Largest decompressed model accepted, so a small gzip bomb cannot exhaust memory.
 const MAX_MODEL_BYTES: u64 = 4 << 30;
 
-/// Reads a `.ply`, `.obj` (optionally `.gz`) file.
+/// Reads a `.ply`, `.obj` (optionally `.gz`) file within the memory budget in force.
 pub fn load(path: &Path) -> Result<Mesh> {
+    load_within(path, &Budget::current())
+}
+
+/// `load` within `budget`: a gzip file inflates to at most `MAX_MODEL_BYTES` and to the
+/// budget's share for the file (a quarter: its parse and splats take the rest), else it is
+/// refused, never cut short.
+pub fn load_within(path: &Path, budget: &Budget) -> Result<Mesh> {
     let raw = Error::read_regular_file(path)?;
     let bytes = if raw.starts_with(&[0x1f, 0x8b]) {
+        let limit = MAX_MODEL_BYTES.min(budget.bytes / 4);
         let mut out = Vec::new();
         flate2::read::GzDecoder::new(&raw[..])
-            .take(MAX_MODEL_BYTES)
+            .take(limit + 1)
             .read_to_end(&mut out)
             .map_err(|e| Error::parse(path, "gzip", format!("cannot decompress: {e}")))?;
+        if out.len() as u64 > limit {
+            return Err(Error::parse(
+                path,
+                "gzip",
+                format!(
+                    "it inflates to more than {} (a quarter of the memory budget of {}, 4 GiB \
+                     at most): subsample its points, or raise --max-memory",
+                    budget::human(limit),
+                    budget::human(budget.bytes)
+                ),
+            ));
+        }
         out
     } else {
         raw

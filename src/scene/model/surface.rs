@@ -24,18 +24,11 @@ pub fn sample_surface(mesh: &Mesh, spacing: f32) -> SplatSet {
     let mut materials = (!mesh.face_materials.is_empty()).then(Vec::new);
     for (f, face) in mesh.faces.iter().enumerate() {
         let [a, b, c] = face.map(|i| mesh.positions[i as usize]);
-        let normal = (b - a).cross(c - a);
-        if !normal.is_finite() || normal.length() <= 0.0 {
+        let Some(k) = cuts(a, b, c, spacing) else {
             set.dropped += 1;
             continue;
-        }
-        let area = 0.5 * normal.length();
-        let normal = normal.normalize();
-        let longest = (b - a).length().max((c - b).length()).max((a - c).length());
-        let k = (area.sqrt() / spacing)
-            .ceil()
-            .max((longest / (2.0 * spacing)).ceil())
-            .clamp(1.0, 4096.0) as u32;
+        };
+        let normal = (b - a).cross(c - a).normalize();
         let (du, dv) = ((b - a) / k as f32, (c - a) / k as f32);
         let corner = |i: u32, j: u32| a + i as f32 * du + j as f32 * dv;
         // Barycentric weights of a point a + s du + t dv, for colours.
@@ -84,6 +77,35 @@ pub fn sample_surface(mesh: &Mesh, spacing: f32) -> SplatSet {
     set.colors = colors;
     set.materials = materials;
     set
+}
+
+/// Splats `sample_surface` makes of `mesh` at `spacing`, counted before any is made (the
+/// memory budget's estimate).
+pub fn planned(mesh: &Mesh, spacing: f32) -> f64 {
+    mesh.faces
+        .iter()
+        .filter_map(|face| {
+            let [a, b, c] = face.map(|i| mesh.positions[i as usize]);
+            cuts(a, b, c, spacing)
+        })
+        .map(|k| k as f64 * k as f64)
+        .sum()
+}
+
+/// The cuts k of triangle abc's edges at `spacing` (k² sub-triangles), or none for a
+/// degenerate triangle (no area, or not finite).
+fn cuts(a: Vec3, b: Vec3, c: Vec3, spacing: f32) -> Option<u32> {
+    let normal = (b - a).cross(c - a);
+    if !normal.is_finite() || normal.length() <= 0.0 {
+        return None;
+    }
+    let area = 0.5 * normal.length();
+    let longest = (b - a).length().max((c - b).length()).max((a - c).length());
+    let k = (area.sqrt() / spacing)
+        .ceil()
+        .max((longest / (2.0 * spacing)).ceil())
+        .clamp(1.0, 4096.0);
+    Some(k as u32)
 }
 
 /// The mean edge length of a mesh's triangles, in model units (0 without triangles).
