@@ -36,6 +36,21 @@ pub enum Error {
 
 pub type Result<T, E = Error> = std::result::Result<T, E>;
 
+/// The most characters of a parse error's message, whose middle is cut past it.
+pub const MESSAGE_CHARS: usize = 400;
+
+/// `message` with its middle cut where it is longer than `MESSAGE_CHARS`, saying how much.
+fn shortened(message: String) -> String {
+    let count = message.chars().count();
+    if count <= MESSAGE_CHARS {
+        return message;
+    }
+    let (head, tail) = (MESSAGE_CHARS * 3 / 4, MESSAGE_CHARS / 8);
+    let start: String = message.chars().take(head).collect();
+    let end: String = message.chars().skip(count - tail).collect();
+    format!("{start} … ({} characters cut) … {end}", count - head - tail)
+}
+
 impl Error {
     pub fn io(path: &Path, source: std::io::Error) -> Self {
         Error::Io {
@@ -44,11 +59,13 @@ impl Error {
         }
     }
 
+    /// A malformed input at `at` of `path`; a message past `MESSAGE_CHARS` (a file's token
+    /// echoed whole: a 50 MB line) keeps its start and end, its middle cut.
     pub fn parse(path: &Path, at: impl Into<String>, message: impl Into<String>) -> Self {
         Error::Parse {
             path: path.to_owned(),
             at: at.into(),
-            message: message.into(),
+            message: shortened(message.into()),
         }
     }
 

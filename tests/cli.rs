@@ -99,6 +99,66 @@ fn errors_are_one_line_with_non_zero_exit() {
     assert!(lines[0].contains("scenes/does_not_exist.toml"), "{err}");
 }
 
+/// Where a command writes is checked before its work (the scene is not even loaded): an image
+/// in a folder that does not exist, an image path that names a folder, a cache in a missing
+/// folder, a viewer's screenshot likewise. Each is one line naming the path.
+#[test]
+fn outputs_are_checked_before_the_work() {
+    let dir = std::env::temp_dir().join("lobelight-outputs");
+    std::fs::create_dir_all(&dir).unwrap();
+    let folder = dir.display().to_string();
+    let missing = dir.join("missing/out.png").display().to_string();
+    let cache = dir.join("missing/bake.cache").display().to_string();
+    // A scene that does not exist: were the scene read first, its error would come instead.
+    let cases: [(&[&str], &str); 4] = [
+        (
+            &["render", "scenes/nope.toml", "-o", &missing],
+            "does not exist; create it first",
+        ),
+        (
+            &["render", "scenes/nope.toml", "-o", &folder],
+            "names a folder",
+        ),
+        (
+            &[
+                "render",
+                "scenes/nope.toml",
+                "-o",
+                "x.png",
+                "--cache",
+                &cache,
+            ],
+            "does not exist; create it first",
+        ),
+        (
+            &[
+                "view",
+                "scenes/nope.toml",
+                "--frames",
+                "1",
+                "--screenshot",
+                &missing,
+            ],
+            "does not exist; create it first",
+        ),
+    ];
+    for (args, says) in cases {
+        let out = lobelight(args, &[]);
+        assert_eq!(out.status.code(), Some(1), "{args:?}");
+        let err = String::from_utf8_lossy(&out.stderr);
+        assert_eq!(err.lines().count(), 1, "{err}");
+        assert!(err.contains(says), "{args:?}: {err}");
+        assert!(
+            !err.contains("nope.toml"),
+            "{args:?}: the scene was read first: {err}"
+        );
+    }
+    assert!(
+        !std::path::Path::new("x.png").exists(),
+        "the probe left its file"
+    );
+}
+
 /// `bench frame`: its keys, timed with the passes apart (the temporal pass too) and with the
 /// level of detail that moving frames draw with by default (whose merge tree must be built for
 /// those frames too), and a two-frame orbit.

@@ -205,3 +205,28 @@ fn paths_that_are_not_regular_files_are_refused() {
         );
     }
 }
+
+/// A byte-order mark before an OBJ's or a text cloud's first line is read past, not reported
+/// as an unknown statement; a 1 MB token in a text cloud's bad line is cut in the middle of the
+/// message, which keeps the file and line.
+#[test]
+fn a_byte_order_mark_is_read_past_and_a_long_token_is_cut() {
+    use lobelight::scene::model::{obj, text};
+    let path = Path::new("bom.obj");
+    let mesh = obj::parse(
+        path,
+        "\u{feff}v 0 0 0\nv 1 0 0\nv 0 1 0\nf 1 2 3\n".as_bytes(),
+    );
+    assert_eq!(mesh.unwrap().faces.len(), 1);
+    let cloud = text::parse(
+        Path::new("bom.xyz"),
+        "\u{feff}0 0 0\n1 0 0\n0 1 0\n".as_bytes(),
+    );
+    assert_eq!(cloud.unwrap().positions.len(), 3);
+    let long = format!("0 0 0\n{} 1 2\n", "q".repeat(1 << 20));
+    let e = text::parse(Path::new("long.xyz"), long.as_bytes());
+    let e = e.unwrap_err().to_string();
+    assert!(e.starts_with("long.xyz: line 2: `qqq"), "{}", &e[..100]);
+    assert!(e.len() < 1000, "{} bytes of message", e.len());
+    assert!(e.contains("characters cut"), "{e}");
+}

@@ -8,6 +8,7 @@ pub mod compare;
 pub mod convolution;
 pub mod info;
 pub mod measure;
+mod output;
 pub mod plot;
 pub mod rebake;
 pub mod render;
@@ -595,6 +596,12 @@ fn render_command(args: RenderArgs) -> Result<()> {
     } = args;
     if let Some(path) = &object_ids {
         compare::check_ids_path(path)?;
+        output::check_writable(path, "object-ID image")?;
+    }
+    // Where the work will be written, before the work.
+    output::check_writable(&output, "image")?;
+    if let Some(path) = &cache {
+        output::check_writable(path, "bake cache")?;
     }
     let mut scene = scene::load(&scene)?;
     bake.apply(&mut scene)?;
@@ -665,6 +672,11 @@ fn view_command(args: ViewArgs) -> Result<()> {
         None => crate::cli::view::DEFAULT_TARGET_MS,
     };
     let target_ms = checked_target_ms(target_ms.unwrap_or(default_ms))?;
+    for (path, what) in [(&screenshot, "screenshot"), (&cache, "bake cache")] {
+        if let Some(path) = path {
+            output::check_writable(path, what)?;
+        }
+    }
     if !turn.is_finite() {
         return Err(Error::Invalid(format!("--turn must be finite, not {turn}")));
     }

@@ -53,6 +53,8 @@ pub fn parse(path: &Path, bytes: &[u8]) -> Result<Mesh> {
             + 1;
         Error::at_line(path, line, "not a text file (invalid UTF-8)")
     })?;
+    // A byte-order mark some tools write first is no statement.
+    let text = text.strip_prefix('\u{feff}').unwrap_or(text);
     let mut mesh = Mesh::default();
     let mut colored = None;
     let mut idx = Vec::new();

@@ -88,6 +88,8 @@ fn numbers(line: &str) -> std::result::Result<Vec<f64>, String> {
 pub fn parse(path: &Path, bytes: &[u8]) -> Result<Mesh> {
     let text = std::str::from_utf8(bytes)
         .map_err(|e| Error::parse(path, "text", format!("not UTF-8 text: {e}")))?;
+    // A byte-order mark some tools write first is no statement.
+    let text = text.strip_prefix('\u{feff}').unwrap_or(text);
     let mut mesh = Mesh::default();
     let mut layout: Option<Layout> = None;
     let mut first_data = true;
