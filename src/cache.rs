@@ -127,6 +127,13 @@ pub fn load(path: &Path, key: u64, splats: usize) -> Result<std::result::Result<
         stats: EmStats::default(),
     };
     map.check_packed().map_err(|why| bad(&why))?;
+    map.check_values().map_err(|why| {
+        Error::parse(
+            path,
+            "values",
+            format!("{why}: the file is damaged; delete it to bake again"),
+        )
+    })?;
     Ok(Ok(map))
 }
 

@@ -405,6 +405,32 @@ impl LobeMap {
         }
     }
 
+    /// Refuses values no fit writes (a cache whose checksum was made to match them): a
+    /// splat's irradiance or a lobe's that is not finite or is negative, a lobe's axis or
+    /// sharpness that is not finite, a negative sharpness.
+    pub fn check_values(&self) -> std::result::Result<(), String> {
+        let irradiance = |rgb: &[f32; 3]| rgb.iter().all(|&x| x.is_finite() && x >= 0.0);
+        if let Some(i) = self.light.iter().position(|l| !irradiance(&l.irradiance)) {
+            let rgb = self.light[i].irradiance;
+            return Err(format!(
+                "splat {i}'s irradiance {rgb:?} is not finite and non-negative"
+            ));
+        }
+        let good_lobe = |l: &Lobe| {
+            irradiance(&l.irradiance)
+                && l.axis.iter().all(|x| x.is_finite())
+                && l.sharpness.is_finite()
+                && l.sharpness >= 0.0
+        };
+        match self.lobes.iter().position(|l| !good_lobe(l)) {
+            Some(k) => Err(format!(
+                "lobe {k} holds values no fit writes (not finite, or negative): {:?}",
+                self.lobes[k]
+            )),
+            None => Ok(()),
+        }
+    }
+
     /// The lobes of splat `i` that were written.
     pub fn splat_lobes(&self, i: usize) -> &[Lobe] {
         let l = &self.light[i];

@@ -230,3 +230,25 @@ fn a_byte_order_mark_is_read_past_and_a_long_token_is_cut() {
     assert!(e.len() < 1000, "{} bytes of message", e.len());
     assert!(e.contains("characters cut"), "{e}");
 }
+
+/// A light whose power overflows f32 once multiplied out (an intensity times 4π) is named at
+/// its line, not summed into "the scene's lights emit no power".
+#[test]
+fn a_light_whose_power_overflows_is_named() {
+    let text = MINIMAL.replace("power = 10.0", "intensity = 3e38");
+    let e = err(&text);
+    assert!(e.contains("scenes/bad.toml: line 2: light #1"), "{e}");
+    assert!(e.contains("past what f32 holds"), "{e}");
+}
+
+/// A colour of two numbers says what a colour is, at its line.
+#[test]
+fn a_colour_of_two_numbers_says_what_a_colour_is() {
+    let text = format!("{MINIMAL}\n[materials.default]\ndiffuse = [0.5, 0.5]\n");
+    let e = err(&text);
+    assert!(e.contains("line 11"), "{e}");
+    assert!(
+        e.contains("a colour is one number (grey) or three, [r, g, b]: got 2"),
+        "{e}"
+    );
+}

@@ -12,11 +12,50 @@ pub use crate::photons::StoreRange;
 pub type Vec3 = [f32; 3];
 
 /// An RGB triple, or one number for grey.
-#[derive(Clone, Copy, Debug, PartialEq, Deserialize)]
-#[serde(untagged)]
+#[derive(Clone, Copy, Debug, PartialEq)]
 pub enum Rgb {
     Grey(f32),
     Rgb(Vec3),
+}
+
+/// Read by hand, so that a wrong colour says what a colour is (an untagged enum's error names
+/// no form: "data did not match any variant").
+impl<'de> Deserialize<'de> for Rgb {
+    fn deserialize<D: serde::Deserializer<'de>>(d: D) -> std::result::Result<Rgb, D::Error> {
+        struct Colour;
+        impl<'de> serde::de::Visitor<'de> for Colour {
+            type Value = Rgb;
+            fn expecting(&self, f: &mut std::fmt::Formatter) -> std::fmt::Result {
+                f.write_str("a colour: one number (grey) or three, [r, g, b]")
+            }
+            fn visit_f64<E: serde::de::Error>(self, v: f64) -> std::result::Result<Rgb, E> {
+                Ok(Rgb::Grey(v as f32))
+            }
+            fn visit_i64<E: serde::de::Error>(self, v: i64) -> std::result::Result<Rgb, E> {
+                Ok(Rgb::Grey(v as f32))
+            }
+            fn visit_u64<E: serde::de::Error>(self, v: u64) -> std::result::Result<Rgb, E> {
+                Ok(Rgb::Grey(v as f32))
+            }
+            fn visit_seq<A: serde::de::SeqAccess<'de>>(
+                self,
+                mut seq: A,
+            ) -> std::result::Result<Rgb, A::Error> {
+                let mut c = Vec::new();
+                while let Some(v) = seq.next_element::<f32>()? {
+                    c.push(v);
+                }
+                match c[..] {
+                    [r, g, b] => Ok(Rgb::Rgb([r, g, b])),
+                    _ => Err(serde::de::Error::custom(format!(
+                        "a colour is one number (grey) or three, [r, g, b]: got {} numbers",
+                        c.len()
+                    ))),
+                }
+            }
+        }
+        d.deserialize_any(Colour)
+    }
 }
 
 impl Rgb {

@@ -574,6 +574,14 @@ fn light(l: &LightDesc, (lo, hi): (Vec3, Vec3)) -> std::result::Result<Light, St
             out.power = nonneg_rgb(irradiance.rgb(), "irradiance")?.map(|x| x * area);
         }
     }
+    // Each value finite, its power (times 4π, an area or the scene's cross-section) may not be.
+    if !out.power.iter().all(|x| x.is_finite()) {
+        return Err(format!(
+            "its power comes to {:?} W, past what f32 holds (3.4e38): give a smaller power, \
+             intensity, radiance or irradiance",
+            out.power
+        ));
+    }
     Ok(out)
 }
 
