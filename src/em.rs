@@ -405,16 +405,14 @@ impl LobeMap {
         }
     }
 
-    /// Refuses values no fit writes (a cache whose checksum was made to match them): a
-    /// splat's irradiance or a lobe's that is not finite or is negative, a lobe's axis or
-    /// sharpness that is not finite, a negative sharpness.
+    /// Refuses values no fit writes (a cache whose checksum was made to match them): an
+    /// irradiance, a lobe's axis or sharpness that is not finite, a negative sharpness. (A
+    /// splat's irradiance may be a little below zero: the smoothing's planes extrapolate.)
     pub fn check_values(&self) -> std::result::Result<(), String> {
-        let irradiance = |rgb: &[f32; 3]| rgb.iter().all(|&x| x.is_finite() && x >= 0.0);
+        let irradiance = |rgb: &[f32; 3]| rgb.iter().all(|x| x.is_finite());
         if let Some(i) = self.light.iter().position(|l| !irradiance(&l.irradiance)) {
             let rgb = self.light[i].irradiance;
-            return Err(format!(
-                "splat {i}'s irradiance {rgb:?} is not finite and non-negative"
-            ));
+            return Err(format!("splat {i}'s irradiance {rgb:?} is not finite"));
         }
         let good_lobe = |l: &Lobe| {
             irradiance(&l.irradiance)
@@ -424,7 +422,7 @@ impl LobeMap {
         };
         match self.lobes.iter().position(|l| !good_lobe(l)) {
             Some(k) => Err(format!(
-                "lobe {k} holds values no fit writes (not finite, or negative): {:?}",
+                "lobe {k} holds values no fit writes (not finite, or a negative sharpness): {:?}",
                 self.lobes[k]
             )),
             None => Ok(()),

@@ -68,18 +68,19 @@ fn every_flipped_byte_is_an_error_naming_the_file() {
 }
 
 /// Values no fit writes, in a file whose checksum matches them (saved as they are): a NaN
-/// irradiance, an infinite lobe sharpness, a negative lobe irradiance. Each is an error naming
-/// the file, not a black image.
+/// irradiance, an infinite lobe sharpness, a NaN lobe axis, a negative sharpness. Each is an
+/// error naming the file, not a black image.
 #[test]
 fn values_no_fit_writes_are_refused_though_the_checksum_matches() {
     let dir = std::env::temp_dir().join(format!("lobelight-cache-nan-{}", std::process::id()));
     std::fs::create_dir_all(&dir).unwrap();
     let path = dir.join("bake.cache");
     let key = 7;
-    let spoil: [fn(&mut LobeMap); 3] = [
+    let spoil: [fn(&mut LobeMap); 4] = [
         |m| m.light[1].irradiance[0] = f32::NAN,
         |m| m.lobes[2].sharpness = f32::INFINITY,
-        |m| m.lobes[0].irradiance[2] = -1.0,
+        |m| m.lobes[0].axis[1] = f32::NAN,
+        |m| m.lobes[1].sharpness = -1.0,
     ];
     for (k, spoil) in spoil.iter().enumerate() {
         let mut bad = map();
