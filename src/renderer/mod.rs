@@ -442,11 +442,7 @@ impl Renderer {
             _ => false,
         };
         if same {
-            let bake = self.bake(progress)?;
-            let direct_ms = match self.made_direct() {
-                true => 0.0,
-                false => self.bake_direct()?,
-            };
+            let (bake, direct_ms) = self.bake_with_direct(progress)?;
             return Ok(LitBake {
                 bake,
                 grid_ms: 0.0,
@@ -454,11 +450,7 @@ impl Renderer {
             });
         }
         let mut there = Renderer::new(self.scene.clone(), engine)?;
-        let bake = there.bake(progress)?;
-        let direct_ms = match there.made_direct() {
-            true => 0.0,
-            false => there.bake_direct()?,
-        };
+        let (bake, direct_ms) = there.bake_with_direct(progress)?;
         let direct = match &mut there.on {
             On::Device(d) => match (d.direct.take(), &mut d.frames) {
                 (Some(direct), _) => Some(direct),
@@ -479,6 +471,17 @@ impl Renderer {
             grid_ms: there.grid_ms(),
             direct_ms,
         })
+    }
+
+    /// `bake`, then the direct bake where the bake made none: its report and the direct
+    /// bake's milliseconds (0 where the bake made it).
+    fn bake_with_direct(&mut self, progress: &Progress) -> Result<(BakeReport, f64)> {
+        let bake = self.bake(progress)?;
+        let direct_ms = match self.made_direct() {
+            true => 0.0,
+            false => self.bake_direct()?,
+        };
+        Ok((bake, direct_ms))
     }
 
     /// Whether a direct bake of the current lights waits to be drawn with (final gathering
