@@ -12,6 +12,7 @@ use std::path::Path;
 use crate::em::{EmStats, LobeMap};
 use crate::error::{Error, Result};
 use crate::scene::Scene;
+use crate::shared::lobes::MAX_LOBES;
 use crate::types::{Lobe, SplatLight};
 
 const MAGIC: &[u8; 8] = b"LOBELITE";
@@ -72,16 +73,28 @@ pub enum Miss {
 
 /// The lobes in `path` if it was written for `key`; a file that is not a cache is an error.
 pub fn load(path: &Path, key: u64, splats: usize) -> Result<std::result::Result<LobeMap, Miss>> {
-    let bytes = match std::fs::read(path) {
-        Ok(b) => b,
-        Err(e) if e.kind() == std::io::ErrorKind::NotFound => return Ok(Err(Miss::Missing)),
-        Err(e) => return Err(io(path)(e)),
-    };
     let bad = |why: &str| Error::Parse {
         path: path.to_path_buf(),
         at: "header".into(),
         message: format!("not a lobelight bake cache: {why}"),
     };
+    // What the file may hold is bounded by the scene before a byte is read: a file larger
+    // than any cache of this scene is some other file, never read into memory.
+    let size = match std::fs::metadata(path) {
+        Ok(m) if !m.is_file() => return Err(bad("it is not a regular file")),
+        Ok(m) => m.len(),
+        Err(e) if e.kind() == std::io::ErrorKind::NotFound => return Ok(Err(Miss::Missing)),
+        Err(e) => return Err(io(path)(e)),
+    };
+    let per_splat = size_of::<SplatLight>() + MAX_LOBES as usize * size_of::<Lobe>();
+    let most = (HEADER + splats.saturating_mul(per_splat)) as u64;
+    if size > most {
+        return Err(bad(&format!(
+            "its {size} bytes are more than a bake cache of this scene's {splats} splats holds \
+             ({most} at most); name another --cache file"
+        )));
+    }
+    let bytes = std::fs::read(path).map_err(io(path))?;
     if bytes.len() < 12 || &bytes[..8] != MAGIC {
         return Err(bad("wrong magic bytes"));
     }

@@ -91,3 +91,23 @@ fn values_no_fit_writes_are_refused_though_the_checksum_matches() {
         assert!(e.contains("delete it to bake again"), "case {k}: {e}");
     }
 }
+
+/// A file larger than any cache of the scene could be, or a folder, is refused before it is
+/// read: a `--cache` pointed at some other big file never loads it into memory.
+#[test]
+fn a_file_larger_than_the_scene_allows_is_not_read() {
+    let dir = std::env::temp_dir().join(format!("lobelight-cache-size-{}", std::process::id()));
+    std::fs::create_dir_all(&dir).unwrap();
+    let path = dir.join("video.mp4");
+    // Sparse: 64 GiB that take no disk, far past what 3 splats' cache holds.
+    let file = std::fs::File::create(&path).unwrap();
+    file.set_len(64 << 30).unwrap();
+    let e = load(&path, 1, 3).unwrap_err().to_string();
+    assert!(
+        e.contains("video.mp4") && e.contains("more than a bake cache"),
+        "{e}"
+    );
+    let e = load(&dir, 1, 3).unwrap_err().to_string();
+    assert!(e.contains("not a regular file"), "{e}");
+    std::fs::remove_dir_all(&dir).ok();
+}

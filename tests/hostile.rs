@@ -10,8 +10,16 @@ mod common;
 use std::path::Path;
 
 use lobelight::scene;
-use lobelight::scene::model::{Mesh, lidar, obj, ply, scan, text, to_splats};
+use lobelight::scene::model::{Mesh, Reading, lidar, obj, ply, scan, text, to_splats};
 use proptest::prelude::*;
+
+/// The default reading: a bad point is skipped and counted.
+fn lenient() -> Reading {
+    Reading {
+        strict: false,
+        ..Reading::current()
+    }
+}
 
 /// Values an attacker would try where a number goes.
 const HOSTILE: [&str; 14] = [
@@ -128,21 +136,21 @@ fn config(cases: u32) -> ProptestConfig {
 #[test]
 fn the_files_the_mutations_start_from_load() {
     for format in ["ascii", "binary_little_endian"] {
-        let mesh = ply::parse(Path::new("t.ply"), &ply_file(format)).unwrap();
+        let mesh = ply::parse(Path::new("t.ply"), &ply_file(format), &lenient()).unwrap();
         assert_eq!(to_splats(&mesh, Path::new("t.ply")).unwrap().disks.len(), 4);
     }
     let mesh = obj::parse(Path::new("t.obj"), OBJ.as_bytes()).unwrap();
     assert!(to_splats(&mesh, Path::new("t.obj")).unwrap().disks.len() >= 4);
     for laz in [false, true] {
         let bytes = common::write_las(&common::fibonacci_sphere(40), None, laz);
-        let mesh = lidar::parse(Path::new("t.las"), bytes).unwrap();
+        let mesh = lidar::parse(Path::new("t.las"), bytes, &lenient()).unwrap();
         assert_eq!(
             to_splats(&mesh, Path::new("t.las")).unwrap().disks.len(),
             40
         );
     }
     for (name, text) in [("t.pts", PTS), ("t.xyz", XYZ)] {
-        let mesh = text::parse(Path::new(name), text.as_bytes()).unwrap();
+        let mesh = text::parse(Path::new(name), text.as_bytes(), &lenient()).unwrap();
         assert_eq!(to_splats(&mesh, Path::new(name)).unwrap().disks.len(), 5);
     }
     let s = scene::parse(Path::new("t.toml"), SCENE).unwrap();
@@ -258,7 +266,7 @@ proptest! {
         for m in &changes {
             bytes = apply(&bytes, m);
         }
-        if let Ok(mesh) = ply::parse(Path::new("fuzz.ply"), &bytes) {
+        if let Ok(mesh) = ply::parse(Path::new("fuzz.ply"), &bytes, &lenient()) {
             check_mesh(&mesh, bytes.len())?;
         }
     }
@@ -289,7 +297,7 @@ proptest! {
         for m in &changes {
             bytes = apply(&bytes, m);
         }
-        if let Ok(mesh) = text::parse(Path::new(name), &bytes) {
+        if let Ok(mesh) = text::parse(Path::new(name), &bytes, &lenient()) {
             check_mesh(&mesh, bytes.len())?;
         }
     }
@@ -304,7 +312,7 @@ proptest! {
         for m in &changes {
             bytes = apply(&bytes, m);
         }
-        if let Ok(mesh) = ply::parse(Path::new("fuzz.ply"), &bytes) {
+        if let Ok(mesh) = ply::parse(Path::new("fuzz.ply"), &bytes, &lenient()) {
             check_mesh(&mesh, bytes.len())?;
         }
     }
@@ -318,7 +326,7 @@ proptest! {
         for m in &changes {
             bytes = apply(&bytes, m);
         }
-        if let Ok(mesh) = scan::parse(Path::new("fuzz.e57"), bytes.clone()) {
+        if let Ok(mesh) = scan::parse(Path::new("fuzz.e57"), bytes.clone(), &lenient()) {
             check_mesh(&mesh, bytes.len())?;
         }
     }
@@ -334,7 +342,7 @@ proptest! {
         for m in &changes {
             bytes = apply(&bytes, m);
         }
-        if let Ok(mesh) = lidar::parse(Path::new("fuzz.las"), bytes.clone()) {
+        if let Ok(mesh) = lidar::parse(Path::new("fuzz.las"), bytes.clone(), &lenient()) {
             // A LAZ record may pack into a byte or two: bound by the file's size in points.
             check_mesh(&mesh, 8 * bytes.len())?;
         }

@@ -183,11 +183,20 @@ fn lying_header_count_is_refused_before_allocating() {
 #[test]
 fn nan_coordinates_name_the_vertex() {
     let text = "ply\nformat ascii 1.0\nelement vertex 3\nproperty float x\nproperty float y\nproperty float z\nend_header\n0 0 0\n1 nan 0\n0 1 0\n";
-    let msg = err_of("nan.ply", text.as_bytes());
-    assert!(
-        msg.contains("element vertex #1 (line 9)") && msg.contains("not finite"),
-        "{msg}"
-    );
+    let path = tmp("nan.ply", text.as_bytes());
+    let mesh = model::load(&path).unwrap();
+    assert_eq!((mesh.positions.len(), mesh.left_out.skipped), (2, 1));
+    let strict = model::Reading {
+        strict: true,
+        ..model::Reading::current()
+    };
+    let msg = model::load_with(&path, &strict).unwrap_err().to_string();
+    for msg in [&msg, mesh.left_out.first_skipped.as_ref().unwrap()] {
+        assert!(
+            msg.contains("element vertex #1 (line 9)") && msg.contains("not a finite number"),
+            "{msg}"
+        );
+    }
 }
 
 #[test]
@@ -430,16 +439,44 @@ fn text_point_clouds_read_every_layout() {
     }
 }
 
-/// Malformed text clouds are errors naming the file and line.
+/// Malformed text clouds: a bad line is skipped and counted, with the first named by its line;
+/// read strictly (`--strict`) it is an error naming the file and line; a file with no good
+/// point, or whose columns are neither a normal nor a colour, is an error either way.
 #[test]
 fn malformed_text_clouds_name_the_line() {
+    let strict = model::Reading {
+        strict: true,
+        ..model::Reading::current()
+    };
     for (name, text, expect) in [
         ("a.xyz", "0 0 0\n1 0 0\n0 1 zero\n", "line 3"),
-        ("b.xyz", "0 0 0\n1 0 0 5\n", "line 2"),
+        ("b.xyz", "0 0 0\n1 0 0\n1 0 0 5\n", "line 3"),
+        ("f.pts", "2\n0 0 0\n1 0 0\nnan 0 0\n", "line 4"),
+    ] {
+        let path = tmp(name, text.as_bytes());
+        let mesh = model::load(&path).unwrap_or_else(|e| panic!("{name}: {e}"));
+        assert_eq!(
+            (mesh.positions.len(), mesh.left_out.skipped),
+            (2, 1),
+            "{name}"
+        );
+        let first = mesh.left_out.first_skipped.as_deref().unwrap_or_default();
+        assert!(
+            first.contains(name) && first.contains(expect),
+            "{name}: {first}"
+        );
+        let err = model::load_with(&path, &strict).unwrap_err().to_string();
+        assert!(err.contains(name) && err.contains(expect), "{name}: {err}");
+    }
+    for (name, text, expect) in [
         ("c.xyz", "0 0 0 1 2\n", "5 numbers"),
-        ("d.xyz", "# nothing\n\n", "no point"),
-        ("e.xyz", "0 0 0 0 0 1 300 0 0\n", "not 8-bit"),
-        ("f.pts", "2\n0 0 0\nnan 0 0\n", "line 3"),
+        ("d.xyz", "# nothing\n\n", "no vertices or points"),
+        ("e.xyz", "0 0 0 0 0 1 300 0 0\n", "columns 7–9 hold neither"),
+        (
+            "g.xyz",
+            "nan 0 0\n0 zero 0\n",
+            "2 could not be read (the first: ",
+        ),
     ] {
         let err = err_of(name, text.as_bytes());
         assert!(err.contains(name) && err.contains(expect), "{name}: {err}");
@@ -518,7 +555,10 @@ fn gaussian_splat_plys_become_splats() {
         let name = if two_d { "2dgs.ply" } else { "3dgs.ply" };
         let path = tmp(name, &common::gaussian_ply(&pts, two_d, &colour));
         let mesh = model::load(&path).unwrap_or_else(|e| panic!("{name}: {e}"));
-        assert_eq!(mesh.dropped, 200, "{name}");
+        assert_eq!(mesh.left_out.dropped(), 200, "{name}");
+        let rules = &mesh.left_out.by_rule;
+        assert_eq!(rules.len(), 1, "{name}: {rules:?}");
+        assert_eq!(rules[0].rule, model::gaussians::FAINT, "{name}");
         assert_eq!(mesh.positions.len(), 800, "{name}");
         let set = model::to_splats(&mesh, &path).unwrap();
         assert_eq!(set.disks.len(), 800, "{name}");
@@ -566,7 +606,7 @@ fn e57_scans_read_back_in_one_frame() {
     let path = tmp("scan.e57", &bytes);
     let mesh = model::load(&path).unwrap();
     assert_eq!(mesh.positions.len(), pts.len());
-    assert_eq!(mesh.dropped, 2, "one invalid return a scan");
+    assert_eq!(mesh.left_out.dropped(), 2, "one invalid return a scan");
     for (got, want) in mesh.positions.iter().zip(upper.iter().chain(&lower)) {
         assert!((*got - *want).length() < 1e-5, "{got} vs {want}");
     }

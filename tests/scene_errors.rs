@@ -4,6 +4,15 @@
 use std::path::Path;
 
 use lobelight::scene;
+use lobelight::scene::model::Reading;
+
+/// A reading that refuses a file at its first bad point (`--strict`).
+fn strict() -> Reading {
+    Reading {
+        strict: true,
+        ..Reading::current()
+    }
+}
 
 fn err(text: &str) -> String {
     scene::parse(Path::new("scenes/bad.toml"), text)
@@ -221,10 +230,11 @@ fn a_byte_order_mark_is_read_past_and_a_long_token_is_cut() {
     let cloud = text::parse(
         Path::new("bom.xyz"),
         "\u{feff}0 0 0\n1 0 0\n0 1 0\n".as_bytes(),
+        &strict(),
     );
     assert_eq!(cloud.unwrap().positions.len(), 3);
     let long = format!("0 0 0\n{} 1 2\n", "q".repeat(1 << 20));
-    let e = text::parse(Path::new("long.xyz"), long.as_bytes());
+    let e = text::parse(Path::new("long.xyz"), long.as_bytes(), &strict());
     let e = e.unwrap_err().to_string();
     assert!(e.starts_with("long.xyz: line 2: `qqq"), "{}", &e[..100]);
     assert!(e.len() < 1000, "{} bytes of message", e.len());
@@ -250,5 +260,42 @@ fn a_colour_of_two_numbers_says_what_a_colour_is() {
     assert!(
         e.contains("a colour is one number (grey) or three, [r, g, b]: got 2"),
         "{e}"
+    );
+}
+
+/// A search radius that makes the indirect light vanish (past the scene's size, or a
+/// millionth of it) is refused with the key and the range that suits the scene.
+#[test]
+fn a_search_radius_out_of_scale_gives_the_range() {
+    for radius in ["1e30", "1e-9"] {
+        let text = format!("{MINIMAL}\n[bake]\nradius = {radius}\n");
+        let e = err(&text);
+        assert!(e.contains("[bake]: radius"), "{e}");
+        assert!(e.contains("suits it") && e.contains("the default"), "{e}");
+    }
+    let fine = format!("{MINIMAL}\n[bake]\nradius = 0.05\n");
+    assert!(scene::parse(Path::new("fine.toml"), &fine).is_ok());
+}
+
+/// An orbit of 1e38 degrees names `degrees` and its range, not the camera's vectors.
+#[test]
+fn an_orbit_out_of_range_names_degrees() {
+    let base = scene::parse(Path::new("s.toml"), MINIMAL).unwrap().camera;
+    let views = |text: &str| scene::views::parse(Path::new("v.toml"), text, &base);
+    let e = views("[orbit]\nframes = 8\ndegrees = 1e38\n")
+        .unwrap_err()
+        .to_string();
+    assert!(
+        e.contains("v.toml: orbit: degrees = 1") && e.contains("36000"),
+        "{e}"
+    );
+    assert!(!e.contains("eye"), "{e}");
+    let e = views("[orbit]\nframes = 8\naxis = [0, 0, 0]\n")
+        .unwrap_err()
+        .to_string();
+    assert!(e.contains("axis"), "{e}");
+    assert_eq!(
+        views("[orbit]\nframes = 8\ndegrees = 720\n").unwrap().len(),
+        8
     );
 }

@@ -132,12 +132,24 @@ impl std::fmt::Display for Info {
                 .as_deref()
                 .map(|s| format!(" {s}"))
                 .unwrap_or_default();
-            let dropped = if o.dropped > 0 {
-                format!(" ({} unused vertices dropped)", o.dropped)
+            let unused =
+                (o.dropped).saturating_sub(o.dropped_by.iter().map(|r| r.count).sum::<usize>());
+            let dropped = if unused > 0 {
+                format!(" ({unused} unused vertices dropped)")
             } else {
                 String::new()
             };
             writeln!(f, "  {}{src}: {} splats{dropped}", o.shape, o.splats)?;
+            for r in &o.dropped_by {
+                writeln!(f, "    left out: {} {}", r.count, r.rule)?;
+            }
+            if let Some(first) = &o.first_skipped {
+                let n = o.skipped;
+                writeln!(
+                    f,
+                    "    skipped: {n} points that could not be read (the first: {first})"
+                )?;
+            }
         }
         writeln!(f, "lights     {}", self.lights)?;
         writeln!(

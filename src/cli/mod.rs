@@ -43,6 +43,10 @@ struct Cli {
     /// where this is not given.
     #[arg(long, global = true, value_parser = crate::budget::parse_size)]
     max_memory: Option<u64>,
+    /// Refuse a model file at its first point that cannot be read or is not finite, instead
+    /// of skipping such points and counting them (as `info`, `--stats` and `--json` report).
+    #[arg(long, global = true)]
+    strict: bool,
 }
 
 /// Where stages run, shared by the subcommands.
@@ -181,6 +185,8 @@ impl BakeArgs {
         }
         if let Some(r) = self.radius {
             scene.bake.radius = Some(r);
+            crate::em::check_radius(r).map_err(|m| Error::Invalid(format!("--radius: {m}")))?;
+            (scene.check_radius()).map_err(|m| Error::Invalid(format!("--radius: {m}")))?;
         }
         if let Some(f) = self.family {
             scene.bake.family = f;
@@ -536,10 +542,24 @@ fn checked_target_ms(ms: f64) -> Result<f64> {
     }
 }
 
+/// Loads a scene, saying on stderr where a model's points were skipped (they could not be
+/// read or were not finite: `--strict` refuses them).
+fn load_scene(path: &std::path::Path) -> Result<scene::Scene> {
+    let scene = scene::load(path)?;
+    if let (n @ 1.., Some(first)) = scene.skipped_points() {
+        eprintln!(
+            "warning: skipped {n} model points that could not be read or are not finite (the \
+             first: {first}); --strict refuses them"
+        );
+    }
+    Ok(scene)
+}
+
 fn run(cli: Cli) -> Result<()> {
     if let Some(bytes) = cli.max_memory {
         crate::budget::set_default(bytes);
     }
+    scene::model::reading::set_strict(cli.strict);
     match cli.command {
         Command::Info(args) => info_command(args),
         Command::Render(args) => render_command(args),
@@ -568,7 +588,7 @@ fn info_command(args: InfoArgs) -> Result<()> {
         json,
         device,
     } = args;
-    let scene = std::sync::Arc::new(scene::load(&scene)?);
+    let scene = std::sync::Arc::new(load_scene(&scene)?);
     let engine = device.engine(EngineChoice::Device)?;
     let info = info::info(&scene, &engine)?;
     print_report(json, &info)?;
@@ -603,7 +623,7 @@ fn render_command(args: RenderArgs) -> Result<()> {
     if let Some(path) = &cache {
         output::check_writable(path, "bake cache")?;
     }
-    let mut scene = scene::load(&scene)?;
+    let mut scene = load_scene(&scene)?;
     bake.apply(&mut scene)?;
     let views = match &views {
         Some(path) => scene::views::load(path, &scene.camera)?,
@@ -680,7 +700,7 @@ fn view_command(args: ViewArgs) -> Result<()> {
     if !turn.is_finite() {
         return Err(Error::Invalid(format!("--turn must be finite, not {turn}")));
     }
-    let mut scene = scene::load(&scene)?;
+    let mut scene = load_scene(&scene)?;
     bake.apply(&mut scene)?;
     let [w0, h0] = scene.camera.resolution;
     let (width, height) = (width.unwrap_or(w0), height.unwrap_or(h0));
@@ -859,7 +879,7 @@ fn bench_sweep(args: BenchArgs) -> Result<()> {
     }
     let mut loaded = Vec::new();
     for path in &scenes {
-        let mut scene = scene::load(path)?;
+        let mut scene = load_scene(path)?;
         bake.apply(&mut scene)?;
         let name = path
             .file_stem()
@@ -913,7 +933,7 @@ fn bench_scenes(args: BenchArgs) -> Result<()> {
     let _gpu = engine.gpu();
     let mut reports = Vec::new();
     for path in &scenes {
-        let mut scene = scene::load(path)?;
+        let mut scene = load_scene(path)?;
         bake.apply(&mut scene)?;
         let scene = std::sync::Arc::new(scene);
         let photons = PhotonConfig::from_scene(&scene);

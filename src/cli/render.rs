@@ -115,6 +115,11 @@ pub struct RenderReport {
     /// The log-average luminance the tone map keyed on (0 when it did not run).
     pub log_average: f32,
     pub stages: Stages,
+    /// Model points skipped because they could not be read or were not finite, and the first
+    /// of them (its file, place and fault).
+    pub skipped_points: usize,
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub first_skipped: Option<String>,
     /// With `--views`: each image drawn (this shard's), with its time from the bake in memory.
     #[serde(skip_serializing_if = "Vec::is_empty")]
     pub views: Vec<ShotReport>,
@@ -127,6 +132,10 @@ impl std::fmt::Display for RenderReport {
     fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
         writeln!(f, "device   {} ({})", self.adapter, self.backend)?;
         writeln!(f, "splats   {}", self.splats)?;
+        if let Some(first) = &self.first_skipped {
+            let n = self.skipped_points;
+            writeln!(f, "skipped  {n} model points (the first: {first})")?;
+        }
         let s = &self.stages;
         let rows = [
             ("grid", &s.grid),
@@ -277,6 +286,8 @@ pub fn render(
         cache_hit,
         log_average,
         stages,
+        skipped_points: scene.skipped_points().0,
+        first_skipped: scene.skipped_points().1.map(str::to_string),
         views,
         pipelines: engine.compiled(),
     })

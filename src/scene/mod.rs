@@ -58,9 +58,23 @@ pub struct ObjectSummary {
     pub shape: String,
     pub source: Option<String>,
     pub splats: usize,
-    /// Model vertices dropped because no face used them (they have no normal or extent).
+    /// Model vertices left out: by a rule of the format (`dropped_by`), or because no face
+    /// used them (they have no normal or extent).
     pub dropped: usize,
+    /// The rules of the model's format that left points out, and how many each.
+    #[serde(skip_serializing_if = "Vec::is_empty")]
+    pub dropped_by: Vec<model::reading::RuleCount>,
+    /// The model's points that could not be read or were not finite, skipped (`--strict`
+    /// refuses them instead).
+    pub skipped: usize,
+    /// The first of them: the file, where in it and what was wrong.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub first_skipped: Option<String>,
 }
+
+/// The search radii a scene accepts, as fractions of its size: past its size a photon counts
+/// everywhere; below a millionth of it none lands near a splat.
+pub const RADIUS_RANGE: (f32, f32) = (1e-6, 1.0);
 
 /// A scene whose centre lies farther from the origin than this many times its size is moved
 /// to the origin.
@@ -115,6 +129,40 @@ impl Scene {
             true => crate::lod::LodTree::build(&self.splats, self.has_glossy()),
             false => crate::lod::LodTree::flat(&self.splats),
         }
+    }
+
+    /// Model points skipped over all objects because they could not be read or were not
+    /// finite, and the first of them (`model::LeftOut`).
+    pub fn skipped_points(&self) -> (usize, Option<&str>) {
+        let count = self.objects.iter().map(|o| o.skipped).sum();
+        let first = (self.objects.iter()).find_map(|o| o.first_skipped.as_deref());
+        (count, first)
+    }
+
+    /// Refuses a search radius that makes the indirect light vanish: larger than the scene
+    /// (every photon counts at every splat, its power spread over the whole scene's area), or
+    /// so small against it that no photon lands within it. The message gives the sensible
+    /// range and the default.
+    pub fn check_radius(&self) -> std::result::Result<(), String> {
+        let Some(r) = self.bake.radius else {
+            return Ok(());
+        };
+        let (lo, hi) = self.bounds();
+        let size = (hi - lo).max_element();
+        let (least, most) = (size * RADIUS_RANGE.0, size * RADIUS_RANGE.1);
+        if (least..=most).contains(&r) || size.is_nan() || size <= 0.0 {
+            return Ok(());
+        }
+        let which = if r > most {
+            "larger than"
+        } else {
+            "too small for"
+        };
+        Err(format!(
+            "radius {r} is {which} the scene, {size} across: a radius from {least:.3e} to \
+             {most:.3e} suits it (the default, 1/40 of its size, is {:.3e})",
+            size / 40.0
+        ))
     }
 
     /// Photon search radius: the scene's, or 1/40 of the largest extent of the bounds.
@@ -316,6 +364,9 @@ pub fn parse(path: &Path, text: &str) -> Result<Scene> {
         clips,
         origin: Vec3::ZERO,
     };
+    scene
+        .check_radius()
+        .map_err(|m| invalid(format!("[bake]: {m}")))?;
     scene.recentre();
     Ok(scene)
 }
@@ -796,6 +847,7 @@ fn build_object(
     let mut disks = Vec::new();
     let mut source = None;
     let mut dropped = 0;
+    let mut left_out = model::LeftOut::default();
     match o.shape {
         ShapeKind::CornellBox => {
             let counts = shapes::cornell_walls(&m, spacing, &mut disks);
@@ -848,7 +900,7 @@ fn build_object(
                 .as_ref()
                 .ok_or_else(|| at("a model needs `path`".into()))?;
             let file = base_dir.join(rel);
-            let mesh = model::load_within(&file, &budget)?;
+            let mesh = model::load_with(&file, &model::Reading::within(budget))?;
             let fit = o.fit.map(|f| positive(f, "fit")).transpose().map_err(at)?;
             let splat_set = match model_spacing(&mesh, o, fit, &m) {
                 Some(step) => {
@@ -867,6 +919,7 @@ fn build_object(
                 }
             };
             dropped = splat_set.dropped;
+            left_out = mesh.left_out.clone();
             let placed = model::place(
                 &splat_set.disks,
                 fit,
@@ -943,5 +996,8 @@ fn build_object(
         source,
         splats: splats.len() - before,
         dropped,
+        dropped_by: left_out.by_rule,
+        skipped: left_out.skipped,
+        first_skipped: left_out.first_skipped,
     })
 }

@@ -22,6 +22,8 @@ use crate::error::{Error, Result};
 
 /// Most views one file may make: past it a typo in `frames` is likelier than intent.
 pub const MAX_VIEWS: u32 = 1_000_000;
+/// The most an orbit turns, in degrees either way: 100 turns.
+pub const MAX_ORBIT_DEGREES: f32 = 36_000.0;
 
 #[derive(Debug, Default, Deserialize)]
 #[serde(deny_unknown_fields)]
@@ -87,10 +89,18 @@ pub fn parse(path: &Path, text: &str, base: &CameraDesc) -> Result<Vec<CameraDes
             )));
         }
         let axis = Vec3::from(o.axis.unwrap_or(base.up));
-        if !(o.degrees.is_finite() && axis.is_finite() && axis.length() > 1e-6) {
-            return Err(bad(
-                "degrees must be a number and axis a nonzero vector".into()
-            ));
+        // NaN too: it is within no range.
+        if !(-MAX_ORBIT_DEGREES..=MAX_ORBIT_DEGREES).contains(&o.degrees) {
+            return Err(bad(format!(
+                "degrees = {} is out of range: an orbit turns at most ±{MAX_ORBIT_DEGREES} \
+                 degrees (100 turns; 360 is one)",
+                o.degrees
+            )));
+        }
+        if !(axis.is_finite() && axis.length() > 1e-6) {
+            return Err(bad(format!(
+                "axis = {axis} must be a nonzero vector of finite numbers"
+            )));
         }
         for k in 0..o.frames {
             let cam = turned(base, axis, o.degrees * k as f32 / o.frames as f32);

@@ -42,17 +42,27 @@ pub struct Gaussian {
     pub color: [f32; 3],
 }
 
-/// The splat of the Gaussian in `values`, or none where it is too faint or degenerate (a
-/// rotation of zero length, a scale or colour that is not finite).
-pub fn read(c: &Columns, values: &[f64]) -> Option<Gaussian> {
+/// The rules that leave a Gaussian out, in the words `LeftOut` counts them by.
+pub const FAINT: &str = "Gaussians fainter than opacity 0.5 (a logit below 0 in the file)";
+pub const NO_ROTATION: &str =
+    "Gaussians whose rotation is zero, too short to normalise or not finite";
+pub const NO_RADIUS: &str =
+    "Gaussians of zero radius (log scales below -87: exp() rounds them to 0)";
+pub const HUGE: &str =
+    "Gaussians whose scale overflows f32 (a log scale above 88) or is not a number";
+pub const NO_COLOUR: &str = "Gaussians whose colour is not finite";
+
+/// The splat of the Gaussian in `values`, or the rule that leaves it out (too faint, or
+/// degenerate: a rotation of zero length, a scale or colour that is not finite).
+pub fn read(c: &Columns, values: &[f64]) -> Result<Gaussian, &'static str> {
     let opacity = 1.0 / (1.0 + (-values[c.opacity]).exp());
     if !(opacity >= OPACITY_MIN as f64) {
-        return None;
+        return Err(FAINT);
     }
     let [w, x, y, z] = c.rot.map(|i| values[i] as f32);
     let q = Quat::from_xyzw(x, y, z, w);
     if !(q.length() > 1e-12) || !q.is_finite() {
-        return None;
+        return Err(NO_ROTATION);
     }
     let q = q.normalize();
     let axes = [q * Vec3::X, q * Vec3::Y, q * Vec3::Z];
@@ -72,11 +82,19 @@ pub fn read(c: &Columns, values: &[f64]) -> Option<Gaussian> {
         c.dc.map(|i| (0.5 + SH_C0 * values[i] as f32).clamp(0.0, 1.0));
     // A rotation of denormal components normalises poorly: its axes are then not unit.
     let normal = axes[k];
-    let sane = radius.is_finite()
-        && radius > 0.0
-        && color.iter().all(|x| x.is_finite())
-        && (normal.length() - 1.0).abs() < 1e-3;
-    sane.then_some(Gaussian {
+    if !radius.is_finite() {
+        return Err(HUGE);
+    }
+    if !(radius > 0.0) {
+        return Err(NO_RADIUS);
+    }
+    if !color.iter().all(|x| x.is_finite()) {
+        return Err(NO_COLOUR);
+    }
+    if !((normal.length() - 1.0).abs() < 1e-3) {
+        return Err(NO_ROTATION);
+    }
+    Ok(Gaussian {
         normal,
         radius,
         color,

@@ -2,7 +2,9 @@
 //! scale and offset applied) and colours where the point format has them. Lidar points carry
 //! no normals: the splats' normals come from their neighbours (`normals::pca_normals`).
 //! Colours are 16-bit in the standard; files whose colours never exceed 255 hold 8-bit values,
-//! and are read as such.
+//! and are read as such. A point whose position is not finite or past f32's range is skipped
+//! and counted (`Reading`); a header whose points would lie past the file's end is an error
+//! giving both, before any is read.
 
 use std::io::Cursor;
 use std::path::Path;
@@ -10,6 +12,7 @@ use std::path::Path;
 use glam::Vec3;
 
 use super::Mesh;
+use super::reading::{LeftOut, Reading, point_f32};
 use crate::error::{Error, Result};
 
 /// Points read per batch: the reader never holds more than one batch of raw records.
@@ -58,9 +61,26 @@ fn laz_chunks_plausible(bytes: &[u8]) -> bool {
     }
 }
 
+/// The offset of the point data the header gives (bytes 96–99).
+fn point_data_offset(bytes: &[u8]) -> Option<u64> {
+    let b = bytes.get(96..100)?;
+    Some(u32::from_le_bytes([b[0], b[1], b[2], b[3]]) as u64)
+}
+
+/// A reader's error in words: a read past the end names the file's size.
+fn read_error(e: las::Error, size: usize) -> String {
+    match e {
+        las::Error::Io(io) if io.kind() == std::io::ErrorKind::UnexpectedEof => {
+            format!("the file ends (at byte {size}) before what its header announces")
+        }
+        e => e.to_string(),
+    }
+}
+
 /// Parses a LAS or LAZ file's `bytes` (the reader keeps them: no copy of a large file).
-pub fn parse(path: &Path, bytes: Vec<u8>) -> Result<Mesh> {
-    let bad = |at: &str, e: las::Error| Error::parse(path, at, e.to_string());
+pub fn parse(path: &Path, bytes: Vec<u8>, reading: &Reading) -> Result<Mesh> {
+    let size = bytes.len();
+    let bad = |at: &str, e: las::Error| Error::parse(path, at, read_error(e, size));
     if !laz_chunks_plausible(&bytes) {
         return Err(Error::parse(
             path,
@@ -68,7 +88,7 @@ pub fn parse(path: &Path, bytes: Vec<u8>) -> Result<Mesh> {
             "its LAZ chunk table announces more chunks than the file has bytes",
         ));
     }
-    let size = bytes.len();
+    let offset = point_data_offset(&bytes);
     let mut reader = las::Reader::new(Cursor::new(bytes)).map_err(|e| bad("header", e))?;
     let header = reader.header();
     let count = header.number_of_points();
@@ -81,7 +101,24 @@ pub fn parse(path: &Path, bytes: Vec<u8>) -> Result<Mesh> {
             format!("it announces {count} points, more than its {size} bytes hold"),
         ));
     }
+    if let Some(start) = offset.filter(|_| !format.is_compressed) {
+        let end = start.saturating_add(count.saturating_mul(record));
+        if end > size as u64 {
+            return Err(Error::parse(
+                path,
+                "header",
+                format!(
+                    "its {count} points of {record} bytes start at byte {start} and end at byte \
+                     {end}, past the file's end at byte {size}: the file is truncated or its \
+                     header is wrong"
+                ),
+            ));
+        }
+    }
+    reading.check_points(path, "header", count)?;
     let mut mesh = Mesh::default();
+    let mut left_out = LeftOut::default();
+    let mut seen = 0u64;
     let mut colors16: Vec<[u16; 3]> = Vec::new();
     let mut data = las::PointDataBuilder::new()
         .for_header(reader.header())
@@ -89,36 +126,34 @@ pub fn parse(path: &Path, bytes: Vec<u8>) -> Result<Mesh> {
     // Batches sized by what is left, so that a header's claims bound no allocation.
     let batch = BATCH.min(BATCH_BYTES / record.max(1)).max(1);
     loop {
-        let left = count.saturating_sub(mesh.positions.len() as u64);
+        let left = count.saturating_sub(seen);
         if left == 0 {
             break;
         }
         let read = reader
             .fill_points(batch.min(left), &mut data)
-            .map_err(|e| bad(&format!("point #{}", mesh.positions.len() + 1), e))?;
+            .map_err(|e| bad(&format!("point #{}", seen + 1), e))?;
         if read == 0 {
             break;
         }
         for point in data.points() {
-            let k = mesh.positions.len() + 1;
-            let p = point.map_err(|e| bad(&format!("point #{k}"), e))?;
-            let v = Vec3::new(p.x as f32, p.y as f32, p.z as f32);
-            if !v.is_finite() {
-                return Err(Error::parse(
-                    path,
-                    format!("point #{k}"),
-                    format!("position {v} is not finite"),
-                ));
-            }
+            seen += 1;
+            let at = format!("point #{seen}");
+            let p = point.map_err(|e| bad(&at, e))?;
+            let v: Vec3 = match point_f32("position", [p.x, p.y, p.z]) {
+                Ok(v) => v,
+                Err(m) => {
+                    left_out.skip(reading, Error::parse(path, at, m))?;
+                    continue;
+                }
+            };
             mesh.positions.push(v);
             if let Some(c) = p.color.filter(|_| format.has_color) {
                 colors16.push([c.red, c.green, c.blue]);
             }
         }
     }
-    if mesh.positions.is_empty() {
-        return Err(Error::parse(path, "points", "the file holds no point"));
-    }
+    mesh.left_out = left_out;
     if colors16.len() == mesh.positions.len() {
         let eight_bit = colors16.iter().flatten().all(|&c| c <= 255);
         let full = if eight_bit { 255.0 } else { 65535.0 };

@@ -9,6 +9,7 @@ pub mod lidar;
 pub mod normals;
 pub mod obj;
 pub mod ply;
+pub mod reading;
 pub mod scan;
 pub mod surface;
 pub mod text;
@@ -16,7 +17,8 @@ pub mod text;
 use std::io::Read;
 use std::path::Path;
 
-use crate::budget::{self, Budget};
+use crate::budget;
+pub use reading::{LeftOut, Reading};
 
 use glam::{Affine3A, Vec3};
 
@@ -34,8 +36,9 @@ pub struct Mesh {
     /// Per-vertex splat radii where the file gives them (Gaussian splats); a cloud without
     /// them takes radii from its neighbour spacing.
     pub radii: Option<Vec<f32>>,
-    /// Vertices the reader left out (Gaussians too faint to be a surface).
-    pub dropped: usize,
+    /// Points the reader skipped (unreadable, not finite) or left out by a rule (Gaussians
+    /// too faint to be a surface).
+    pub left_out: LeftOut,
     /// The file's materials (OBJ `usemtl`, defined by its `mtllib` files) and each face's
     /// index into them (`u32::MAX`: none); empty where the file names none.
     pub materials: Vec<MeshMaterial>,
@@ -80,15 +83,16 @@ impl Mesh {
 /// Largest decompressed model accepted, so a small gzip bomb cannot exhaust memory.
 const MAX_MODEL_BYTES: u64 = 4 << 30;
 
-/// Reads a `.ply`, `.obj` (optionally `.gz`) file within the memory budget in force.
+/// Reads a model file with the reading in force (`Reading::current`).
 pub fn load(path: &Path) -> Result<Mesh> {
-    load_within(path, &Budget::current())
+    load_with(path, &Reading::current())
 }
 
-/// `load` within `budget`: a gzip file inflates to at most `MAX_MODEL_BYTES` and to the
-/// budget's share for the file (a quarter: its parse and splats take the rest), else it is
-/// refused, never cut short.
-pub fn load_within(path: &Path, budget: &Budget) -> Result<Mesh> {
+/// `load` with `reading`: its budget bounds what the file may announce, and a gzip file
+/// inflates to at most `MAX_MODEL_BYTES` and to the budget's share for the file (a quarter:
+/// its parse and splats take the rest), else it is refused, never cut short.
+pub fn load_with(path: &Path, reading: &Reading) -> Result<Mesh> {
+    let budget = &reading.budget;
     let raw = Error::read_regular_file(path)?;
     let bytes = if raw.starts_with(&[0x1f, 0x8b]) {
         let limit = MAX_MODEL_BYTES.min(budget.bytes / 4);
@@ -116,17 +120,17 @@ pub fn load_within(path: &Path, budget: &Budget) -> Result<Mesh> {
     let name = path.to_string_lossy().to_ascii_lowercase();
     let name = name.strip_suffix(".gz").unwrap_or(&name);
     let mesh = if name.ends_with(".ply") {
-        ply::parse(path, &bytes)?
+        ply::parse(path, &bytes, reading)?
     } else if name.ends_with(".obj") {
         let mut mesh = obj::parse(path, &bytes)?;
         obj::materials(path, &mut mesh)?;
         mesh
     } else if name.ends_with(".xyz") || name.ends_with(".pts") {
-        text::parse(path, &bytes)?
+        text::parse(path, &bytes, reading)?
     } else if name.ends_with(".las") || name.ends_with(".laz") {
-        lidar::parse(path, bytes)?
+        lidar::parse(path, bytes, reading)?
     } else if name.ends_with(".e57") {
-        scan::parse(path, bytes)?
+        scan::parse(path, bytes, reading)?
     } else {
         return Err(Error::parse(
             path,
@@ -141,7 +145,11 @@ pub fn load_within(path: &Path, budget: &Budget) -> Result<Mesh> {
 
 fn validate(path: &Path, m: &Mesh) -> Result<()> {
     if m.positions.is_empty() {
-        return Err(Error::parse(path, "vertices", "the model has no vertices"));
+        let why = match m.left_out.skipped + m.left_out.dropped() {
+            0 => "the model has no vertices or points".to_string(),
+            _ => format!("no point of the file is kept: {}", m.left_out.why_none()),
+        };
+        return Err(Error::parse(path, "points", why));
     }
     let materials = m.materials.len() as u32;
     let bad_material = !m.face_materials.is_empty() && m.face_materials.len() != m.faces.len()
@@ -231,7 +239,7 @@ pub fn to_splats(mesh: &Mesh, path: &Path) -> Result<SplatSet> {
         mesh_normals_and_radii(mesh)
     };
     let mut set = SplatSet {
-        dropped: mesh.dropped,
+        dropped: mesh.left_out.dropped(),
         ..Default::default()
     };
     let mut colors = mesh.colors.as_ref().map(|_| Vec::new());
@@ -251,14 +259,43 @@ pub fn to_splats(mesh: &Mesh, path: &Path) -> Result<SplatSet> {
         }
     }
     if set.disks.is_empty() {
-        return Err(Error::parse(
-            path,
-            "vertices",
-            "no usable vertex: every face is degenerate",
-        ));
+        return Err(Error::parse(path, "points", no_usable_point(mesh)));
     }
     set.colors = colors;
     Ok(set)
+}
+
+/// Why `mesh` made no splat: a mesh's faces have no area; a cloud's points have no
+/// neighbours apart from them to take a normal and a radius from.
+fn no_usable_point(mesh: &Mesh) -> String {
+    let n = mesh.positions.len();
+    if !mesh.faces.is_empty() {
+        return format!(
+            "no usable vertex: every face of the {} is degenerate (no area)",
+            mesh.faces.len()
+        );
+    }
+    let first = mesh.positions[0];
+    if mesh.positions.iter().all(|&p| p == first) {
+        return format!(
+            "all {n} points are the one point {first}: a cloud needs points spread over a surface"
+        );
+    }
+    let (lo, hi) = (mesh.positions.iter())
+        .fold((Vec3::INFINITY, Vec3::NEG_INFINITY), |(lo, hi), &p| {
+            (lo.min(p), hi.max(p))
+        });
+    // Neighbour searches and normals square distances: past 1.8e19 they overflow f32.
+    if !(hi - lo).length_squared().is_finite() {
+        return format!(
+            "its {n} points span {lo} to {hi}, too far for f32 to square their distances \
+             (past 1.8e19 apart): scale the cloud down"
+        );
+    }
+    format!(
+        "none of its {n} points has a normal and a radius: they lie on a line, or are too few \
+         (under 3) to span a surface"
+    )
 }
 
 /// Area-weighted vertex normals, and per-vertex radii that cover every incident triangle:

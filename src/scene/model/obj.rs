@@ -6,7 +6,7 @@
 
 use std::path::Path;
 
-use super::{Mesh, MeshMaterial};
+use super::{Mesh, MeshMaterial, reading};
 use crate::error::{Error, Result};
 
 /// Statements that carry nothing splats use.
@@ -68,10 +68,12 @@ pub fn parse(path: &Path, bytes: &[u8]) -> Result<Mesh> {
         };
         match keyword {
             "v" => {
+                // Read as f64, so that 1e300 is out of f32's range rather than infinite.
                 let vals: Vec<f32> = words
                     .map(|w| {
-                        w.parse::<f32>()
-                            .map_err(|_| err(format!("`{w}` is not a number")))
+                        let v = (w.parse::<f64>())
+                            .map_err(|_| err(format!("`{w}` is not a number")))?;
+                        reading::to_f32(v).map_err(|m| err(format!("vertex coordinate {m}")))
                     })
                     .collect::<Result<_>>()?;
                 let has_color = match vals.len() {

@@ -1,10 +1,14 @@
 //! PLY reader: ASCII and binary (little and big endian), any element layout. Reads vertex
 //! positions, optional normals and colours, and face index lists; skips other elements and
-//! properties. Header counts are checked against the data size before anything is allocated,
-//! so a lying header cannot exhaust memory. Errors name the file and line or element.
+//! properties. Header counts are checked against the data size and the memory budget before
+//! anything is allocated, so a lying header cannot exhaust memory. Lines may end in LF, CRLF
+//! or CR alone (old Mac tools), the same throughout. A vertex whose position is not finite or
+//! cannot be read is skipped and counted (`Reading`); other errors name the file and line or
+//! element.
 
 use std::path::Path;
 
+use super::reading::{LeftOut, Reading, point_f32};
 use super::{Mesh, gaussians, normals};
 use crate::error::{Error, Result};
 
@@ -75,6 +79,17 @@ struct Header {
     /// Byte offset of the data, and the line number the data starts on (for ASCII errors).
     data_start: usize,
     data_line: usize,
+    /// Whether lines end in CR alone.
+    cr_only: bool,
+}
+
+/// The line ending the first line (`ply`) shows: LF, CRLF or CR alone.
+fn line_end(bytes: &[u8]) -> &'static [u8] {
+    match bytes.get(3..5) {
+        Some([b'\r', b'\n']) => b"\r\n",
+        Some([b'\r', _]) | Some([b'\r']) => b"\r",
+        _ => b"\n",
+    }
 }
 
 fn parse_header(path: &Path, bytes: &[u8]) -> Result<Header> {
@@ -90,15 +105,23 @@ fn parse_header(path: &Path, bytes: &[u8]) -> Result<Header> {
     let mut elements: Vec<Element> = Vec::new();
     let mut pos = 0;
     let mut line_no = 0;
+    let eol = line_end(bytes);
     loop {
         let end = bytes[pos..]
-            .iter()
-            .position(|&b| b == b'\n')
-            .ok_or_else(|| err(line_no + 1, "header ends before `end_header`".into()))?;
+            .windows(eol.len())
+            .position(|w| w == eol)
+            .ok_or_else(|| {
+                err(
+                    line_no + 1,
+                    "the header ends before `end_header` (no line `end_header` followed by a \
+                     line end)"
+                        .into(),
+                )
+            })?;
         let line = std::str::from_utf8(&bytes[pos..pos + end])
             .map_err(|_| err(line_no + 1, "header is not text".into()))?
             .trim_end_matches('\r');
-        pos += end + 1;
+        pos += end + eol.len();
         line_no += 1;
         let words: Vec<&str> = line.split_whitespace().collect();
         match words.as_slice() {
@@ -114,7 +137,12 @@ fn parse_header(path: &Path, bytes: &[u8]) -> Result<Header> {
             ["comment", ..] | ["obj_info", ..] | [] => {}
             ["element", name, count] => {
                 let count = count.parse::<usize>().map_err(|_| {
-                    err(line_no, format!("element count `{count}` is not a number"))
+                    let digits = count.bytes().all(|b| b.is_ascii_digit());
+                    let why = match digits {
+                        true => "is too large (more than 2^64)",
+                        false => "is not a whole number",
+                    };
+                    err(line_no, format!("element count `{count}` {why}"))
                 })?;
                 elements.push(Element {
                     name: name.to_string(),
@@ -156,11 +184,16 @@ fn parse_header(path: &Path, bytes: &[u8]) -> Result<Header> {
         elements,
         data_start: pos,
         data_line: line_no + 1,
+        cr_only: eol == b"\r",
     })
 }
 
 /// Reads values element by element from ASCII or binary data.
 trait Source {
+    /// Called before each element (ASCII starts its line).
+    fn begin_element(&mut self) -> std::result::Result<(), String> {
+        Ok(())
+    }
     fn scalar(&mut self, t: Scalar) -> std::result::Result<f64, String>;
     /// Called after each element (ASCII checks the line ended).
     fn end_element(&mut self) -> std::result::Result<(), String> {
@@ -203,32 +236,34 @@ impl Source for Binary<'_> {
     }
 }
 
+/// ASCII data: one element a line.
 struct Ascii<'a> {
-    lines: std::iter::Peekable<std::str::Lines<'a>>,
+    lines: Box<dyn Iterator<Item = &'a str> + 'a>,
     tokens: Vec<&'a str>,
     next: usize,
     line: usize,
 }
 
-impl<'a> Ascii<'a> {
-    fn fill(&mut self) -> std::result::Result<(), String> {
-        while self.next >= self.tokens.len() {
+impl Source for Ascii<'_> {
+    fn begin_element(&mut self) -> std::result::Result<(), String> {
+        self.tokens.clear();
+        self.next = 0;
+        while self.tokens.is_empty() {
             let l = self
                 .lines
                 .next()
                 .ok_or_else(|| "file is truncated".to_string())?;
             self.line += 1;
             self.tokens = l.split_whitespace().collect();
-            self.next = 0;
         }
         Ok(())
     }
-}
 
-impl Source for Ascii<'_> {
     fn scalar(&mut self, t: Scalar) -> std::result::Result<f64, String> {
-        self.fill()?;
-        let tok = self.tokens[self.next];
+        let tok = *self
+            .tokens
+            .get(self.next)
+            .ok_or_else(|| format!("the line ends after {} values", self.tokens.len()))?;
         self.next += 1;
         let v: f64 = tok
             .parse()
@@ -268,7 +303,7 @@ fn min_element_bytes(e: &Element, format: Format) -> usize {
         .max(1)
 }
 
-pub fn parse(path: &Path, bytes: &[u8]) -> Result<Mesh> {
+pub fn parse(path: &Path, bytes: &[u8], reading: &Reading) -> Result<Mesh> {
     let header = parse_header(path, bytes)?;
     let data = &bytes[header.data_start..];
     let mut budget = data.len();
@@ -286,13 +321,20 @@ pub fn parse(path: &Path, bytes: &[u8]) -> Result<Mesh> {
             ));
         }
         budget -= need;
+        if e.name == "vertex" {
+            reading.check_points(path, "element vertex", e.count as u64)?;
+        }
     }
     let mut source: Box<dyn Source> = match header.format {
         Format::Ascii => {
             let text = std::str::from_utf8(data)
                 .map_err(|_| Error::parse(path, "data", "ASCII data is not text"))?;
+            let lines: Box<dyn Iterator<Item = &str>> = match header.cr_only {
+                true => Box::new(text.split('\r')),
+                false => Box::new(text.lines()),
+            };
             Box::new(Ascii {
-                lines: text.lines().peekable(),
+                lines,
                 tokens: Vec::new(),
                 next: 0,
                 line: header.data_line - 1,
@@ -305,9 +347,17 @@ pub fn parse(path: &Path, bytes: &[u8]) -> Result<Mesh> {
         }),
     };
     let mut mesh = Mesh::default();
+    let mut left_out = LeftOut::default();
     for e in &header.elements {
-        read_element(path, e, source.as_mut(), &mut mesh)?;
+        read_element(
+            path,
+            e,
+            source.as_mut(),
+            &mut mesh,
+            (reading, &mut left_out),
+        )?;
     }
+    mesh.left_out = left_out;
     // Gaussians' normals have no sign: turn them to one side, as a cloud's PCA normals are.
     if mesh.radii.is_some()
         && let Some(n) = mesh.normals.as_mut()
@@ -329,7 +379,13 @@ fn gaussian_columns(find: &dyn Fn(&[&str]) -> Option<usize>) -> Option<gaussians
     })
 }
 
-fn read_element(path: &Path, e: &Element, src: &mut dyn Source, mesh: &mut Mesh) -> Result<()> {
+fn read_element(
+    path: &Path,
+    e: &Element,
+    src: &mut dyn Source,
+    mesh: &mut Mesh,
+    (reading, left_out): (&Reading, &mut LeftOut),
+) -> Result<()> {
     let find = |names: &[&str]| {
         e.properties
             .iter()
@@ -381,11 +437,19 @@ fn read_element(path: &Path, e: &Element, src: &mut dyn Source, mesh: &mut Mesh)
             };
             Error::parse(path, place, msg)
         };
+        src.begin_element().map_err(|m| at(m, src.line()))?;
+        // An ASCII vertex that cannot be read is one bad point: its line is skipped.
+        let mut unread = None;
         for (j, p) in e.properties.iter().enumerate() {
             match p {
-                Property::Scalar(_, t) => {
-                    values[j] = src.scalar(*t).map_err(|m| at(m, src.line()))?
-                }
+                Property::Scalar(_, t) => match src.scalar(*t) {
+                    Ok(v) => values[j] = v,
+                    Err(m) if is_vertex && src.line().is_some() => {
+                        unread = Some(m);
+                        break;
+                    }
+                    Err(m) => return Err(at(m, src.line())),
+                },
                 Property::List(_, c, t) => {
                     let n = src.scalar(*c).map_err(|m| at(m, src.line()))?;
                     if !(0.0..=1e6).contains(&n) {
@@ -404,27 +468,39 @@ fn read_element(path: &Path, e: &Element, src: &mut dyn Source, mesh: &mut Mesh)
                 }
             }
         }
-        src.end_element().map_err(|m| at(m, src.line()))?;
-        if let Some(c) = &gaussian {
-            let p = pos.map(|i| values[i.unwrap_or(0)] as f32);
-            if !p.iter().all(|x| x.is_finite()) {
-                return Err(at(format!("position {p:?} is not finite"), src.line()));
+        let ended = match unread {
+            Some(m) => Err(m),
+            None => src.end_element(),
+        };
+        if let Err(m) = ended {
+            if !is_vertex {
+                return Err(at(m, src.line()));
             }
+            left_out.skip(reading, at(m, src.line()))?;
+            continue;
+        }
+        let position = match is_vertex {
+            true => match point_f32("position", pos.map(|i| values[i.unwrap_or(0)])) {
+                Ok(p) => p,
+                Err(m) => {
+                    left_out.skip(reading, at(m, src.line()))?;
+                    continue;
+                }
+            },
+            false => glam::Vec3::ZERO,
+        };
+        if let Some(c) = &gaussian {
             match gaussians::read(c, &values) {
-                Some(g) => {
-                    mesh.positions.push(p.into());
+                Ok(g) => {
+                    mesh.positions.push(position);
                     mesh.normals.get_or_insert_with(Vec::new).push(g.normal);
                     mesh.radii.get_or_insert_with(Vec::new).push(g.radius);
                     mesh.colors.get_or_insert_with(Vec::new).push(g.color);
                 }
-                None => mesh.dropped += 1,
+                Err(rule) => left_out.drop_by(rule),
             }
         } else if is_vertex {
-            let p = pos.map(|i| values[i.unwrap_or(0)] as f32);
-            if !p.iter().all(|x| x.is_finite()) {
-                return Err(at(format!("position {p:?} is not finite"), src.line()));
-            }
-            mesh.positions.push(p.into());
+            mesh.positions.push(position);
             if let Some(normals) = mesh.normals.as_mut().filter(|_| has_normals) {
                 normals.push(nrm.map(|i| values[i.unwrap_or(0)] as f32).into());
             }

@@ -17,7 +17,7 @@ use crate::scene::shapes::Disk;
 /// faces have them. Degenerate triangles (no area) make no splat and are counted.
 pub fn sample_surface(mesh: &Mesh, spacing: f32) -> SplatSet {
     let mut set = SplatSet {
-        dropped: mesh.dropped,
+        dropped: mesh.left_out.dropped(),
         ..Default::default()
     };
     let mut colors = mesh.colors.as_ref().map(|_| Vec::new());
