@@ -19,6 +19,12 @@ pub const DEFAULT_SHARE: f64 = 0.5;
 /// rounded up.
 pub const SPLAT_BYTES: u64 = 400;
 
+/// What one pixel of a still image costs through the CPU mirror's frames (its samples,
+/// accumulations, history and the written image): measured 187 B (peak RSS of `render
+/// scenes/cornell.toml --cpu --photons 20000` at 256² and 1024²: 183 MB more for 983 k more
+/// pixels), rounded up. A device holds its frames in its own memory, within its limits.
+pub const PIXEL_BYTES: u64 = 192;
+
 /// The budget `--max-memory` set (0: none, the machine's share).
 static DEFAULT: AtomicU64 = AtomicU64::new(0);
 
@@ -131,6 +137,21 @@ impl Budget {
             if fits(mid) { hi = mid } else { lo = mid }
         }
         Some(hi)
+    }
+
+    /// `check` of a `width` × `height` image drawn on the CPU mirror (`PIXEL_BYTES` a pixel):
+    /// the advice is the size that fits, at the same aspect.
+    pub fn check_image(&self, width: u32, height: u32) -> std::result::Result<(), String> {
+        let pixels = width as u64 * height as u64;
+        self.check(
+            &format!("a {width}×{height} image on the CPU mirror"),
+            pixels.saturating_mul(PIXEL_BYTES),
+            |factor| {
+                let shrink = factor.sqrt();
+                let side = |s: u32| (s as f64 / shrink).floor() as u32;
+                format!("render at {}×{} or less", side(width), side(height))
+            },
+        )
     }
 
     /// `check` of a cloud's `points`, a splat each: the advice is the subsampling that fits.

@@ -88,6 +88,16 @@ fn a_bad_point_is_skipped_and_counted_unless_strict() {
     assert_eq!((mesh.positions.len(), mesh.left_out.skipped), (2, 1));
     let first = mesh.left_out.first_skipped.unwrap();
     assert!(first.contains("element vertex #1"), "{first}");
+    // A mesh's bad vertex is an error: skipping it would shift its faces' indices.
+    let with_face = ascii.replace(
+        "property float z\nend_header",
+        "property float z\nelement face 1\nproperty list uchar int vertex_indices\nend_header",
+    ) + "3 0 1 2\n";
+    let e = err_of("mesh.ply", with_face.as_bytes());
+    assert!(
+        e.contains("element vertex #1") && e.contains("not a number"),
+        "{e}"
+    );
 }
 
 /// `info --json` reports the skipped points per object and the first; `render --stats` and the

@@ -152,3 +152,72 @@ fn a_scene_budget_wins_over_the_machine_share() {
     let scene = Budget::for_scene(Some(64 << 20));
     assert_eq!((scene.bytes, scene.source), (64 << 20, Source::Scene));
 }
+
+/// A bake whose photons would store past the budget is refused after its first batch, with the
+/// photon count that fits, and that count bakes.
+#[test]
+fn photons_past_the_budget_are_refused_after_the_first_batch() {
+    use lobelight::photons::PhotonConfig;
+    use lobelight::renderer::{Engine, Renderer};
+    let scene = lobelight::scene::load(Path::new("scenes/cornell.toml")).unwrap();
+    let budget = Budget {
+        bytes: 4 << 20,
+        source: Source::Flag,
+    };
+    let cfg = PhotonConfig {
+        photons: 4_000_000_000,
+        batch: 8192,
+        memory: budget,
+        ..PhotonConfig::from_scene(&scene)
+    };
+    let renderer = Renderer::new(std::sync::Arc::new(scene), &Engine::Mirror).unwrap();
+    let t = std::time::Instant::now();
+    let Err(e) = renderer.trace_photons(&cfg, &mut |_, _| {}) else {
+        panic!("4 G photons traced within 4 MiB");
+    };
+    let e = e.to_string();
+    assert!(e.contains("past the budget of 4.0 MiB"), "{e}");
+    assert!(t.elapsed().as_secs() < 30, "{:?}", t.elapsed());
+    let fits: u64 = e
+        .split("lower `photons` to ")
+        .nth(1)
+        .and_then(|s| s.split_whitespace().next())
+        .and_then(|s| s.parse().ok())
+        .unwrap_or_else(|| panic!("no count in {e}"));
+    let cfg = PhotonConfig {
+        photons: fits * 9 / 10,
+        ..cfg
+    };
+    let traced = renderer.trace_photons(&cfg, &mut |_, _| {}).unwrap();
+    let bytes = traced.map.photons.len() as u64 * lobelight::photons::STORED_PHOTON_BYTES;
+    assert!(bytes <= budget.bytes, "{bytes}");
+}
+
+/// A still image on the CPU mirror past the budget is refused before the bake, with the size
+/// that fits.
+#[test]
+fn an_image_past_the_budget_is_refused_before_the_bake() {
+    let exe = env!("CARGO_BIN_EXE_lobelight");
+    let out = dir("image").join("huge.png");
+    let t = std::time::Instant::now();
+    let run = Command::new(exe)
+        .args([
+            "render",
+            "scenes/cornell.toml",
+            "--cpu",
+            "--max-memory",
+            "1G",
+        ])
+        .args(["--width", "16384", "--height", "8192", "-o"])
+        .arg(&out)
+        .output()
+        .unwrap();
+    let stderr = String::from_utf8_lossy(&run.stderr);
+    assert_eq!(run.status.code(), Some(1), "{stderr}");
+    assert!(
+        stderr.contains("a 16384×8192 image on the CPU mirror"),
+        "{stderr}"
+    );
+    assert!(stderr.contains("render at 3344×1672 or less"), "{stderr}");
+    assert!(t.elapsed().as_secs() < 20, "{:?}", t.elapsed());
+}

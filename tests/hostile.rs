@@ -21,6 +21,53 @@ fn lenient() -> Reading {
     }
 }
 
+/// Writes each starting file into its fuzz target's corpus folder under `dir`.
+fn write_seeds(dir: &Path) {
+    let colour = |k: usize| [0.1 * (k % 10) as f32, 0.5, 0.9];
+    let sphere = common::fibonacci_sphere(30);
+    let byte_colour = |k: usize| [k as u8, 20, 30];
+    let seeds: Vec<(&str, &str, Vec<u8>)> = vec![
+        ("ply", "ascii.ply", ply_file("ascii")),
+        ("ply", "binary.ply", ply_file("binary_little_endian")),
+        (
+            "ply",
+            "3dgs.ply",
+            common::gaussian_ply(&sphere, false, &colour),
+        ),
+        (
+            "ply",
+            "2dgs.ply",
+            common::gaussian_ply(&sphere, true, &colour),
+        ),
+        ("obj", "quad.obj", OBJ.into()),
+        ("text", "leica.pts", PTS.into()),
+        ("text", "normals.xyz", XYZ.into()),
+        ("las", "sphere.las", common::write_las(&sphere, None, false)),
+        ("las", "sphere.laz", common::write_las(&sphere, None, true)),
+        (
+            "e57",
+            "sphere.e57",
+            common::write_e57(&[(sphere.clone(), [0.0; 3])], &byte_colour),
+        ),
+        ("scene", "scene.toml", SCENE.into()),
+        (
+            "views",
+            "orbit.toml",
+            b"[orbit]\nframes = 4\ndegrees = 90\n".to_vec(),
+        ),
+        (
+            "views",
+            "views.toml",
+            b"[[view]]\neye = [0, 1, 3]\n\n[[view]]\nfov = 30\n".to_vec(),
+        ),
+    ];
+    for (target, name, bytes) in seeds {
+        let folder = dir.join(target);
+        std::fs::create_dir_all(&folder).unwrap();
+        std::fs::write(folder.join(name), bytes).unwrap();
+    }
+}
+
 /// Values an attacker would try where a number goes.
 const HOSTILE: [&str; 14] = [
     "nan",
@@ -132,9 +179,13 @@ fn config(cases: u32) -> ProptestConfig {
     }
 }
 
-/// The unmutated files load: the properties below see the success path too.
+/// The unmutated files load: the properties below see the success path too. With
+/// `LOBELIGHT_FUZZ_SEEDS=fuzz/corpus` they are written as the fuzz targets' first corpus.
 #[test]
 fn the_files_the_mutations_start_from_load() {
+    if let Some(dir) = std::env::var_os("LOBELIGHT_FUZZ_SEEDS") {
+        write_seeds(Path::new(&dir));
+    }
     for format in ["ascii", "binary_little_endian"] {
         let mesh = ply::parse(Path::new("t.ply"), &ply_file(format), &lenient()).unwrap();
         assert_eq!(to_splats(&mesh, Path::new("t.ply")).unwrap().disks.len(), 4);

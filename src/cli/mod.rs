@@ -989,6 +989,14 @@ fn bench_scenes(args: BenchArgs) -> Result<()> {
 /// The `lobelight` binary: parses the command line and runs it.
 pub fn main() -> ExitCode {
     env_logger::Builder::from_env(env_logger::Env::default().default_filter_or("error")).init();
+    // A decoder's panic on a damaged file becomes an error naming the file
+    // (`reading::guarded`): it is not printed as a crash of lobelight.
+    let default_hook = std::panic::take_hook();
+    std::panic::set_hook(Box::new(move |info| {
+        if !scene::model::reading::in_decoder() {
+            default_hook(info)
+        }
+    }));
     let cli = Cli::parse();
     // The viewer keeps the session's own environment (a window system may live there).
     if !matches!(cli.command, Command::View { .. }) {

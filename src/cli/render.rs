@@ -215,6 +215,9 @@ pub fn render(
     let (width, height) = image_size(scene, opts);
     crate::scene::check_resolution(width, height).map_err(Error::Invalid)?;
     engine.check_image(width, height)?;
+    if !engine.is_device() {
+        (scene.budget.check_image(width, height)).map_err(Error::Invalid)?;
+    }
     let format = ImageFormat::of(output)?;
     opts.frame.validate()?;
     opts.tone.validate()?;

@@ -51,6 +51,9 @@ pub struct Scene {
     /// Where this scene's origin lies in the file's coordinates (`recentre`); zero for a
     /// scene near the origin.
     pub origin: Vec3,
+    /// The memory budget of what the scene makes (`--max-memory`, its `max_memory`, or the
+    /// machine's share): its splats at load, its photons in the bake.
+    pub budget: Budget,
 }
 
 #[derive(Clone, Debug, serde::Serialize)]
@@ -363,6 +366,7 @@ pub fn parse(path: &Path, text: &str) -> Result<Scene> {
         surfaces,
         clips,
         origin: Vec3::ZERO,
+        budget,
     };
     scene
         .check_radius()

@@ -16,6 +16,7 @@ impl PhotonConfig {
             iteration_budget: ITERATION_BUDGET,
             initial_capacity: 0,
             page_limit: 0,
+            memory: scene.budget,
         }
     }
 }

@@ -144,6 +144,7 @@ pub fn trace_photons<E: Executor>(
             page.count = counters.stored as u64;
             stats.add_batch(paths, before, &counters);
             planner.record(paths, (counters.stored - before) as u64);
+            planner.check_budget(&cfg.memory)?;
             done += paths as u64;
             progress(done, cfg.photons);
             continue;

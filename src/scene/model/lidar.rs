@@ -77,8 +77,47 @@ fn read_error(e: las::Error, size: usize) -> String {
     }
 }
 
-/// Parses a LAS or LAZ file's `bytes` (the reader keeps them: no copy of a large file).
+/// Whether a compressed file's LAZ description (the `laszip encoded` record 22204) lists at
+/// least one item: the LAZ reader takes the first without asking (it panicked on a fuzzed
+/// file). Files that are not compressed, or hold no such record, pass: the reader judges them.
+fn laz_items_listed(bytes: &[u8]) -> bool {
+    let u16_at = |o: usize| {
+        bytes
+            .get(o..o + 2)
+            .map(|b| u16::from_le_bytes([b[0], b[1]]))
+    };
+    let u32_at =
+        |o: usize| (bytes.get(o..o + 4)).map(|b| u32::from_le_bytes([b[0], b[1], b[2], b[3]]));
+    let compressed = bytes.get(104).is_some_and(|f| f & 0x80 != 0);
+    let (Some(header), Some(records)) = (u16_at(94), u32_at(100)) else {
+        return true;
+    };
+    if !compressed {
+        return true;
+    }
+    // Each variable-length record: 54 bytes of header (its user ID at 2, its record ID at 18,
+    // its length at 20), then its data; the LAZ item count is at byte 32 of the data.
+    let mut at = header as usize;
+    for _ in 0..records.min(1 << 16) {
+        let (Some(id), Some(len)) = (u16_at(at + 18), u16_at(at + 20)) else {
+            return true;
+        };
+        let user = bytes.get(at + 2..at + 18).unwrap_or_default();
+        if user.starts_with(b"laszip encoded") && id == 22204 {
+            return len >= 34 && u16_at(at + 54 + 32).is_some_and(|n| n > 0);
+        }
+        at += 54 + len as usize;
+    }
+    true
+}
+
+/// Parses a LAS or LAZ file's `bytes` (the reader keeps them: no copy of a large file); a
+/// panic of the LAS/LAZ crates on a damaged file is an error (`reading::guarded`).
 pub fn parse(path: &Path, bytes: Vec<u8>, reading: &Reading) -> Result<Mesh> {
+    super::reading::guarded(path, || parse_unguarded(path, bytes, reading))
+}
+
+fn parse_unguarded(path: &Path, bytes: Vec<u8>, reading: &Reading) -> Result<Mesh> {
     let size = bytes.len();
     let bad = |at: &str, e: las::Error| Error::parse(path, at, read_error(e, size));
     if !laz_chunks_plausible(&bytes) {
@@ -86,6 +125,13 @@ pub fn parse(path: &Path, bytes: Vec<u8>, reading: &Reading) -> Result<Mesh> {
             path,
             "chunk table",
             "its LAZ chunk table announces more chunks than the file has bytes",
+        ));
+    }
+    if !laz_items_listed(&bytes) {
+        return Err(Error::parse(
+            path,
+            "laszip record",
+            "its LAZ description lists no compressed item: the file is damaged",
         ));
     }
     let offset = point_data_offset(&bytes);

@@ -2,9 +2,9 @@
 //! positions, optional normals and colours, and face index lists; skips other elements and
 //! properties. Header counts are checked against the data size and the memory budget before
 //! anything is allocated, so a lying header cannot exhaust memory. Lines may end in LF, CRLF
-//! or CR alone (old Mac tools), the same throughout. A vertex whose position is not finite or
-//! cannot be read is skipped and counted (`Reading`); other errors name the file and line or
-//! element.
+//! or CR alone (old Mac tools), the same throughout. A cloud's vertex whose position is not
+//! finite or cannot be read is skipped and counted (`Reading`; a mesh's is an error, as its
+//! faces index the vertices); other errors name the file and line or element.
 
 use std::path::Path;
 
@@ -135,6 +135,14 @@ fn parse_header(path: &Path, bytes: &[u8]) -> Result<Header> {
                 })
             }
             ["comment", ..] | ["obj_info", ..] | [] => {}
+            ["element", name @ ("vertex" | "face"), _]
+                if elements.iter().any(|e| e.name == *name) =>
+            {
+                return Err(err(
+                    line_no,
+                    format!("a second `element {name}`: a PLY file holds one of each"),
+                ));
+            }
             ["element", name, count] => {
                 let count = count.parse::<usize>().map_err(|_| {
                     let digits = count.bytes().all(|b| b.is_ascii_digit());
@@ -348,6 +356,13 @@ pub fn parse(path: &Path, bytes: &[u8], reading: &Reading) -> Result<Mesh> {
     };
     let mut mesh = Mesh::default();
     let mut left_out = LeftOut::default();
+    // A mesh's faces index its vertices: a skipped vertex would shift them, so a mesh's bad
+    // vertex is an error, as with --strict.
+    let has_faces = (header.elements.iter()).any(|e| e.name == "face" && e.count > 0);
+    let reading = &Reading {
+        strict: reading.strict || has_faces,
+        ..*reading
+    };
     for e in &header.elements {
         read_element(
             path,

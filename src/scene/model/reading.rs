@@ -18,6 +18,36 @@ pub fn set_strict(strict: bool) {
     STRICT.store(strict, Ordering::Relaxed);
 }
 
+thread_local! {
+    /// Whether this thread runs a decoder of another crate (`guarded`).
+    static DECODING: std::cell::Cell<bool> = const { std::cell::Cell::new(false) };
+}
+
+/// Whether this thread is inside `guarded`: a panic hook may leave the decoder's panics
+/// unsaid, as `guarded` turns them into an error naming the file.
+pub fn in_decoder() -> bool {
+    DECODING.with(|d| d.get())
+}
+
+/// Runs `decode`, a decoder of another crate, turning a panic in it into an error: the LAZ
+/// decoder indexes past its tables and takes items it did not check on some damaged files
+/// (found by fuzzing, `fuzz/crashes/las`), and no file may take the process down.
+pub fn guarded<T>(path: &std::path::Path, decode: impl FnOnce() -> Result<T>) -> Result<T> {
+    DECODING.with(|d| d.set(true));
+    let caught = std::panic::catch_unwind(std::panic::AssertUnwindSafe(decode));
+    DECODING.with(|d| d.set(false));
+    caught.unwrap_or_else(|panic| {
+        let why = (panic.downcast_ref::<&str>().map(|s| s.to_string()))
+            .or_else(|| panic.downcast_ref::<String>().cloned())
+            .unwrap_or_default();
+        Err(Error::parse(
+            path,
+            "data",
+            format!("the decoder failed on this file ({why}): it is damaged"),
+        ))
+    })
+}
+
 /// What a reader may take: the memory budget of what it makes, and whether a bad point
 /// refuses the file (strict) or is skipped and counted.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]

@@ -18,7 +18,12 @@ use crate::error::{Error, Result};
 const NO_RETURN: &str = "points with no valid position (returns that did not come back)";
 
 /// Parses an E57 file's `bytes` (the reader keeps them: no copy of a large file).
+/// A panic of the E57 crate on a damaged file is an error (`reading::guarded`).
 pub fn parse(path: &Path, bytes: Vec<u8>, reading: &Reading) -> Result<Mesh> {
+    super::reading::guarded(path, || parse_unguarded(path, bytes, reading))
+}
+
+fn parse_unguarded(path: &Path, bytes: Vec<u8>, reading: &Reading) -> Result<Mesh> {
     let bad = |at: String, e: e57::Error| Error::parse(path, at, e.to_string());
     let mut reader =
         e57::E57Reader::new(Cursor::new(bytes)).map_err(|e| bad("header".into(), e))?;
