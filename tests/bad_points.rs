@@ -186,10 +186,14 @@ fn text_cloud_columns_come_from_header_and_values() {
     assert_eq!(colours[1], [200.0 / 255.0, 100.0 / 255.0, 1.0 / 255.0]);
     let mesh = model::load(&tmp("fractions.xyz", fractions.as_bytes())).unwrap();
     assert_eq!(mesh.colors.unwrap()[1], [200.0 / 255.0, 0.5, 0.25]);
-    let mesh = model::load(&tmp("named.xyz", named.as_bytes())).unwrap();
-    assert_eq!(mesh.positions.len(), 200);
-    assert!((mesh.normals.unwrap()[7] - pts[7]).length() < 1e-6);
-    assert_eq!(mesh.colors.unwrap()[1][0], 200.0 / 255.0);
+    // The header first, or after a comment line.
+    for text in [named.clone(), format!("# exported by a scanner\n{named}")] {
+        let mesh = model::load(&tmp("named.xyz", text.as_bytes())).unwrap();
+        assert_eq!(mesh.positions.len(), 200);
+        assert_eq!(mesh.left_out.skipped, 0);
+        assert!((mesh.normals.unwrap()[7] - pts[7]).length() < 1e-6);
+        assert_eq!(mesh.colors.unwrap()[1][0], 200.0 / 255.0);
+    }
     let e = err_of("neither.xyz", b"0 0 0 5 -3 2.5\n1 0 0 5 -3 2.5\n");
     assert!(
         e.contains("neither.xyz: line 1: columns 4–6 hold neither a normal"),

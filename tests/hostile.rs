@@ -180,7 +180,8 @@ fn config(cases: u32) -> ProptestConfig {
 }
 
 /// The unmutated files load: the properties below see the success path too. With
-/// `LOBELIGHT_FUZZ_SEEDS=fuzz/corpus` they are written as the fuzz targets' first corpus.
+/// `LOBELIGHT_FUZZ_SEEDS=DIR` they are written as the fuzz targets' first corpus, one folder
+/// a target (the kept corpus, `fuzz/corpus/*.tar.gz`, began with them).
 #[test]
 fn the_files_the_mutations_start_from_load() {
     if let Some(dir) = std::env::var_os("LOBELIGHT_FUZZ_SEEDS") {

@@ -183,30 +183,32 @@ fn layout_of(text: &str) -> std::result::Result<(Layout, usize), (usize, String)
     let mut skip = 0;
     let mut header = None;
     let mut rows = Vec::new();
-    let mut first = true;
+    let mut first_point = true;
     for (k, line) in lines.by_ref() {
         if line.is_empty() {
             continue;
         }
         let numeric = numbers(line);
-        if first {
-            first = false;
-            // A header: the first line, a comment or words, naming x, y and z.
-            if let Some(l) = header_layout(line).filter(|_| numeric.is_err()) {
-                header = Some(l);
-                skip = k + 1;
-                continue;
-            }
-            // A `.pts` count: one whole number before any point.
-            if let Ok([n]) = numeric.as_deref()
-                && n.fract() == 0.0
-                && *n >= 0.0
-            {
-                skip = k + 1;
-                continue;
-            }
+        // A header: a comment or a line of words before the first point, naming x, y and z.
+        if rows.is_empty()
+            && header.is_none()
+            && numeric.is_err()
+            && let Some(l) = header_layout(line)
+        {
+            header = Some(l);
+            skip = k + 1;
+            continue;
         }
         if is_comment(line) {
+            continue;
+        }
+        // A `.pts` count: one whole number before any point.
+        if std::mem::take(&mut first_point)
+            && let Ok([n]) = numeric.as_deref()
+            && n.fract() == 0.0
+            && *n >= 0.0
+        {
+            skip = k + 1;
             continue;
         }
         if let Some(v) = numeric.ok().filter(|v| v.iter().all(|x| x.is_finite())) {
