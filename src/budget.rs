@@ -139,6 +139,18 @@ impl Budget {
         Some(hi)
     }
 
+    /// Reads the whole of `path` (a regular file: `Error::read_regular_file`), refusing before
+    /// a byte is read a file larger than the budget: a reader holds the file's bytes whole.
+    pub fn read_file(&self, path: &std::path::Path) -> crate::error::Result<Vec<u8>> {
+        use crate::error::Error;
+        if let Ok(meta) = std::fs::metadata(path) {
+            let advice = |factor: f64| format!("it must be {factor:.1} times smaller: split it");
+            (self.check("the file", meta.len(), advice))
+                .map_err(|m| Error::parse(path, "size", m))?;
+        }
+        Error::read_regular_file(path)
+    }
+
     /// `check` of a `width` × `height` image drawn on the CPU mirror (`PIXEL_BYTES` a pixel):
     /// the advice is the size that fits, at the same aspect.
     pub fn check_image(&self, width: u32, height: u32) -> std::result::Result<(), String> {

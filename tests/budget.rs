@@ -221,3 +221,26 @@ fn an_image_past_the_budget_is_refused_before_the_bake() {
     assert!(stderr.contains("render at 3344×1672 or less"), "{stderr}");
     assert!(t.elapsed().as_secs() < 20, "{:?}", t.elapsed());
 }
+
+/// A model file larger than the budget is refused before a byte is read (a reader holds the
+/// file whole).
+#[test]
+fn a_file_past_the_budget_is_not_read() {
+    use lobelight::scene::model::{self, Reading};
+    let path = dir("file").join("huge.xyz");
+    let file = std::fs::File::create(&path).unwrap();
+    // Sparse: 2 GiB that take no disk.
+    file.set_len(2 << 30).unwrap();
+    let reading = Reading::within(Budget {
+        bytes: 1 << 30,
+        source: Source::Flag,
+    });
+    let t = std::time::Instant::now();
+    let e = model::load_with(&path, &reading).unwrap_err().to_string();
+    assert!(
+        e.contains("huge.xyz: size: the file would take about 2.0 GiB"),
+        "{e}"
+    );
+    assert!(t.elapsed().as_millis() < 1000, "{:?}", t.elapsed());
+    std::fs::remove_file(&path).ok();
+}

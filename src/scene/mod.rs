@@ -179,7 +179,7 @@ impl Scene {
 
 /// Reads and builds a scene file.
 pub fn load(path: &Path) -> Result<Scene> {
-    let bytes = Error::read_regular_file(path)?;
+    let bytes = Budget::current().read_file(path)?;
     let text = String::from_utf8(bytes)
         .map_err(|e| Error::parse(path, "encoding", format!("not UTF-8 text: {e}")))?;
     parse(path, &text)

@@ -58,7 +58,7 @@ fn full_turn() -> f32 {
 
 /// The cameras `path` lists, in order, each completing `base` (the scene's camera).
 pub fn load(path: &Path, base: &CameraDesc) -> Result<Vec<CameraDesc>> {
-    let bytes = Error::read_regular_file(path)?;
+    let bytes = crate::budget::Budget::current().read_file(path)?;
     let text = std::str::from_utf8(&bytes)
         .map_err(|e| Error::parse(path, "text", format!("not UTF-8 text: {e}")))?;
     parse(path, text, base)

@@ -93,7 +93,7 @@ pub fn load(path: &Path) -> Result<Mesh> {
 /// its parse and splats take the rest), else it is refused, never cut short.
 pub fn load_with(path: &Path, reading: &Reading) -> Result<Mesh> {
     let budget = &reading.budget;
-    let raw = Error::read_regular_file(path)?;
+    let raw = budget.read_file(path)?;
     let bytes = if raw.starts_with(&[0x1f, 0x8b]) {
         let limit = MAX_MODEL_BYTES.min(budget.bytes / 4);
         let mut out = Vec::new();
