@@ -269,6 +269,8 @@ fn numbers_out_of_range_say_so() {
     assert!(e.contains("line 3") && e.contains("is too large"), "{e}");
     let word = big.replace("18446744073709551616", "many");
     assert!(err_of("word.ply", word.as_bytes()).contains("is not a whole number"));
+    let negative = big.replace("18446744073709551616", "-5");
+    assert!(err_of("negative.ply", negative.as_bytes()).contains("`-5` is negative"));
     let mut double = b"ply\nformat binary_little_endian 1.0\nelement vertex 1\nproperty double x\n\
                        property double y\nproperty double z\nend_header\n"
         .to_vec();

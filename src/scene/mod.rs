@@ -161,10 +161,21 @@ impl Scene {
         } else {
             "too small for"
         };
+        // Four significant digits, in the notation a reader takes in at a glance.
+        let short = |x: f32| match x.abs() {
+            a if (1e-3..1e4).contains(&a) => {
+                let decimals = (3 - a.log10().floor() as i32).max(0) as usize;
+                format!("{x:.decimals$}")
+            }
+            _ => format!("{x:.3e}"),
+        };
         Err(format!(
-            "radius {r} is {which} the scene, {size} across: a radius from {least:.3e} to \
-             {most:.3e} suits it (the default, 1/40 of its size, is {:.3e})",
-            size / 40.0
+            "radius {r} is {which} the scene, {} across: a radius from {} to {} suits it (the \
+             default, 1/40 of its size, is {})",
+            short(size),
+            short(least),
+            short(most),
+            short(size / 40.0)
         ))
     }
 

@@ -287,9 +287,12 @@ fn no_usable_point(mesh: &Mesh) -> String {
         });
     // Neighbour searches and normals square distances: past 1.8e19 they overflow f32.
     if !(hi - lo).length_squared().is_finite() {
+        let at = |p: Vec3| format!("[{:.2e}, {:.2e}, {:.2e}]", p.x, p.y, p.z);
         return format!(
-            "its {n} points span {lo} to {hi}, too far for f32 to square their distances \
-             (past 1.8e19 apart): scale the cloud down"
+            "its {n} points span {} to {}, too far for f32 to square their distances (past \
+             1.8e19 apart): scale the cloud down",
+            at(lo),
+            at(hi)
         );
     }
     format!(

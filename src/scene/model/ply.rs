@@ -145,10 +145,11 @@ fn parse_header(path: &Path, bytes: &[u8]) -> Result<Header> {
             }
             ["element", name, count] => {
                 let count = count.parse::<usize>().map_err(|_| {
-                    let digits = count.bytes().all(|b| b.is_ascii_digit());
-                    let why = match digits {
-                        true => "is too large (more than 2^64)",
-                        false => "is not a whole number",
+                    let digits = |s: &str| !s.is_empty() && s.bytes().all(|b| b.is_ascii_digit());
+                    let why = match count.strip_prefix('-') {
+                        _ if digits(count) => "is too large (more than 2^64)",
+                        Some(rest) if digits(rest) => "is negative",
+                        _ => "is not a whole number",
                     };
                     err(line_no, format!("element count `{count}` {why}"))
                 })?;
