@@ -1,0 +1,180 @@
+#!/usr/bin/env python3
+"""Single-view scans made from a closed model, as a scanner standing at one place sees it: an
+open sheet of the faces it sees, with ragged borders, and optionally holes and a scanner's noise
+along the line of sight. Each is written as an OBJ with the Cornell-box scene around it (the
+model on the floor, as scenes/bunny.toml places the bunny), diffuse and glossy, for
+benches/objects.py.
+
+    benches/open_scans.py [--model scenes/models/data/bunny.obj] [--view X Y Z] [-o DIR]
+
+Writes DIR/<kind>.obj and DIR/<kind>_<finish>.toml for the kinds `sheet` (the faces whose normal
+n has n · v > 0.15, v the view direction normalised, in the model's own frame), `holes` (the
+sheet less the faces within 24 random spheres of 4 % of the model's size) and `noisy` (the
+sheet with each vertex moved along v by Gaussian noise of 0.4 % of the model's size), and the
+finishes `diffuse` and `glossy` (Ward, specular 0.4, roughness 0.1, as the bunny scene's).
+Seeded: the same files every run.
+"""
+
+import argparse
+import math
+import os
+import random
+
+FACING = 0.15
+HOLES = 24
+HOLE_RADIUS = 0.04
+NOISE = 0.004
+
+SCENE = """# A single-view scan ({kind}) of {model} in the Cornell box: benches/open_scans.py.
+
+[camera]
+eye = [0.0, 0.0, 3.9]
+target = [0.0, 0.0, 0.0]
+fov = 39.3077
+resolution = [512, 512]
+
+[materials.white]
+diffuse = [0.885809, 0.698859, 0.666422]
+
+[materials.red]
+diffuse = [0.570068, 0.0430135, 0.0443706]
+
+[materials.green]
+diffuse = [0.105421, 0.37798, 0.076425]
+
+[materials.model]
+{finish}
+
+[[light]]
+type = "area"
+center = [0.0, 0.99, 0.01]
+size = [0.46, 0.38]
+normal = [0.0, -1.0, 0.0]
+u_axis = [1.0, 0.0, 0.0]
+radiance = [18.387, 13.9873, 6.75357]
+
+[[object]]
+shape = "cornell_box"
+material = "white"
+left_material = "red"
+right_material = "green"
+spacing = 0.025
+
+[[object]]
+shape = "model"
+path = "{obj}"
+material = "model"
+fit = 1.1
+anchor = "bottom"
+translate = [0.0, -1.0, 0.0]
+"""
+
+FINISHES = {
+    "diffuse": "diffuse = [0.45, 0.4, 0.35]",
+    "glossy": "diffuse = [0.45, 0.4, 0.35]\nspecular = 0.4\nroughness = 0.1",
+}
+
+
+def read_obj(path):
+    verts, faces = [], []
+    with open(path) as f:
+        for line in f:
+            w = line.split()
+            if not w:
+                continue
+            if w[0] == "v":
+                verts.append([float(x) for x in w[1:4]])
+            elif w[0] == "f":
+                idx = [int(x.split("/")[0]) for x in w[1:]]
+                idx = [i - 1 if i > 0 else len(verts) + i for i in idx]
+                faces.extend([idx[0], idx[k], idx[k + 1]] for k in range(1, len(idx) - 1))
+    return verts, faces
+
+
+def sub(a, b):
+    return [a[i] - b[i] for i in range(3)]
+
+
+def cross(a, b):
+    return [a[1] * b[2] - a[2] * b[1], a[2] * b[0] - a[0] * b[2], a[0] * b[1] - a[1] * b[0]]
+
+
+def dot(a, b):
+    return sum(a[i] * b[i] for i in range(3))
+
+
+def unit(a):
+    n = math.sqrt(dot(a, a))
+    return [x / n for x in a] if n > 0 else a
+
+
+def seen(verts, faces, view):
+    """The faces whose normal faces `view` by more than FACING."""
+    out = []
+    for f in faces:
+        a, b, c = (verts[i] for i in f)
+        n = unit(cross(sub(b, a), sub(c, a)))
+        if dot(n, view) > FACING:
+            out.append(f)
+    return out
+
+
+def holed(verts, faces, size, rng):
+    centres = [verts[f[rng.randrange(3)]] for f in rng.sample(faces, HOLES)]
+    r2 = (HOLE_RADIUS * size) ** 2
+
+    def kept(f):
+        c = [sum(verts[i][k] for i in f) / 3 for k in range(3)]
+        return all(dot(sub(c, h), sub(c, h)) > r2 for h in centres)
+
+    return [f for f in faces if kept(f)]
+
+
+def noisy(verts, view, size, rng):
+    return [[v[k] + rng.gauss(0.0, NOISE * size) * view[k] for k in range(3)] for v in verts]
+
+
+def write_obj(path, verts, faces):
+    used = sorted({i for f in faces for i in f})
+    index = {old: new + 1 for new, old in enumerate(used)}
+    with open(path, "w") as f:
+        f.write("# a single-view scan: benches/open_scans.py\n")
+        for i in used:
+            f.write("v {:.6f} {:.6f} {:.6f}\n".format(*verts[i]))
+        for t in faces:
+            f.write("f {} {} {}\n".format(*(index[i] for i in t)))
+    return len(used), len(faces)
+
+
+def main():
+    p = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
+    p.add_argument("--model", default="scenes/models/data/bunny.obj")
+    p.add_argument("--view", type=float, nargs=3, default=[0.3, 0.2, 1.0])
+    p.add_argument("-o", "--out", default="out/open_scans")
+    args = p.parse_args()
+    os.makedirs(args.out, exist_ok=True)
+    verts, faces = read_obj(args.model)
+    lo = [min(v[k] for v in verts) for k in range(3)]
+    hi = [max(v[k] for v in verts) for k in range(3)]
+    size = max(hi[k] - lo[k] for k in range(3))
+    view = unit(args.view)
+    rng = random.Random(1)
+    sheet = seen(verts, faces, view)
+    kinds = {
+        "sheet": (verts, sheet),
+        "holes": (verts, holed(verts, sheet, size, rng)),
+        "noisy": (noisy(verts, view, size, rng), sheet),
+    }
+    name = os.path.basename(args.model)
+    for kind, (v, f) in kinds.items():
+        obj = os.path.join(args.out, f"{kind}.obj")
+        n_verts, n_faces = write_obj(obj, v, f)
+        for finish, desc in FINISHES.items():
+            scene = os.path.join(args.out, f"{kind}_{finish}.toml")
+            with open(scene, "w") as s:
+                s.write(SCENE.format(kind=kind, model=name, finish=desc, obj=f"{kind}.obj"))
+        print(f"{kind}: {n_verts} vertices, {n_faces} faces of {len(faces)} -> {obj}")
+
+
+if __name__ == "__main__":
+    main()
