@@ -1,8 +1,8 @@
 #!/usr/bin/env python3
 """Single-view scans made from a closed model, as a scanner standing at one place sees it: an
 open sheet of the faces it sees, with ragged borders, and optionally holes and a scanner's noise
-along the line of sight. Each is written as an OBJ with the Cornell-box scene around it (the
-model on the floor, as scenes/bunny.toml places the bunny), diffuse and glossy, for
+along the line of sight. Each is written as an OBJ with scenes/bunny.toml around it (the
+Cornell box, the model on the floor), its model and finish replaced, diffuse and glossy, for
 benches/objects.py.
 
     benches/open_scans.py [--model scenes/models/data/bunny.obj] [--view X Y Z] [-o DIR]
@@ -19,60 +19,32 @@ import argparse
 import math
 import os
 import random
+import re
 
 FACING = 0.15
 HOLES = 24
 HOLE_RADIUS = 0.04
 NOISE = 0.004
 
-SCENE = """# A single-view scan ({kind}) of {model} in the Cornell box: benches/open_scans.py.
-
-[camera]
-eye = [0.0, 0.0, 3.9]
-target = [0.0, 0.0, 0.0]
-fov = 39.3077
-resolution = [512, 512]
-
-[materials.white]
-diffuse = [0.885809, 0.698859, 0.666422]
-
-[materials.red]
-diffuse = [0.570068, 0.0430135, 0.0443706]
-
-[materials.green]
-diffuse = [0.105421, 0.37798, 0.076425]
-
-[materials.model]
-{finish}
-
-[[light]]
-type = "area"
-center = [0.0, 0.99, 0.01]
-size = [0.46, 0.38]
-normal = [0.0, -1.0, 0.0]
-u_axis = [1.0, 0.0, 0.0]
-radiance = [18.387, 13.9873, 6.75357]
-
-[[object]]
-shape = "cornell_box"
-material = "white"
-left_material = "red"
-right_material = "green"
-spacing = 0.025
-
-[[object]]
-shape = "model"
-path = "{obj}"
-material = "model"
-fit = 1.1
-anchor = "bottom"
-translate = [0.0, -1.0, 0.0]
-"""
+# The scene the sheets stand in: the bunny's (scenes/bunny.toml), its model and finish replaced.
+BASE_SCENE = os.path.join(os.path.dirname(os.path.abspath(__file__)), "..", "scenes", "bunny.toml")
 
 FINISHES = {
     "diffuse": "diffuse = [0.45, 0.4, 0.35]",
     "glossy": "diffuse = [0.45, 0.4, 0.35]\nspecular = 0.4\nroughness = 0.1",
 }
+
+
+def scene_text(base, kind, finish):
+    """`base` (the bunny's scene) with the model `kind`.obj and the model material `finish`."""
+    # The base's opening comment and its model's line (with its comment) are the bunny's.
+    base = re.sub(r"\A(#[^\n]*\n)+", "", base)
+    text, paths = re.subn(r"(?m)^path = .*$", f'path = "{kind}.obj"', base)
+    text, tables = re.subn(r"(?ms)^\[materials\.model\]\n.*?\n\n",
+                           f"[materials.model]\n{finish}\n\n", text)
+    if (paths, tables) != (1, 1):
+        raise SystemExit(f"open_scans.py: {BASE_SCENE} has no one model path and material")
+    return f"# A single-view scan ({kind}): benches/open_scans.py, from scenes/bunny.toml.\n{text}"
 
 
 def read_obj(path):
@@ -165,14 +137,15 @@ def main():
         "holes": (verts, holed(verts, sheet, size, rng)),
         "noisy": (noisy(verts, view, size, rng), sheet),
     }
-    name = os.path.basename(args.model)
+    with open(BASE_SCENE) as f:
+        base = f.read()
     for kind, (v, f) in kinds.items():
         obj = os.path.join(args.out, f"{kind}.obj")
         n_verts, n_faces = write_obj(obj, v, f)
         for finish, desc in FINISHES.items():
             scene = os.path.join(args.out, f"{kind}_{finish}.toml")
             with open(scene, "w") as s:
-                s.write(SCENE.format(kind=kind, model=name, finish=desc, obj=f"{kind}.obj"))
+                s.write(scene_text(base, kind, desc))
         print(f"{kind}: {n_verts} vertices, {n_faces} faces of {len(faces)} -> {obj}")
 
 

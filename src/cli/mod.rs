@@ -185,7 +185,6 @@ impl BakeArgs {
         }
         if let Some(r) = self.radius {
             scene.bake.radius = Some(r);
-            crate::em::check_radius(r).map_err(|m| Error::Invalid(format!("--radius: {m}")))?;
             (scene.check_radius()).map_err(|m| Error::Invalid(format!("--radius: {m}")))?;
         }
         if let Some(f) = self.family {

@@ -278,6 +278,7 @@ pub fn render(
             (stages, false, log_average)
         }
     };
+    let (skipped_points, first_skipped) = scene.skipped_points();
     Ok(RenderReport {
         adapter: engine.adapter(),
         backend: engine.backend().to_string(),
@@ -289,8 +290,8 @@ pub fn render(
         cache_hit,
         log_average,
         stages,
-        skipped_points: scene.skipped_points().0,
-        first_skipped: scene.skipped_points().1.map(str::to_string),
+        skipped_points,
+        first_skipped: first_skipped.map(str::to_string),
         views,
         pipelines: engine.compiled(),
     })

@@ -75,6 +75,9 @@ pub struct ObjectSummary {
     pub first_skipped: Option<String>,
 }
 
+/// The search radius a scene takes where it sets none is its size over this.
+pub const DEFAULT_RADIUS_DIVISOR: f32 = 40.0;
+
 /// The search radii a scene accepts, as fractions of its size: past its size a photon counts
 /// everywhere; below a millionth of it none lands near a splat.
 pub const RADIUS_RANGE: (f32, f32) = (1e-6, 1.0);
@@ -144,12 +147,13 @@ impl Scene {
 
     /// Refuses a search radius that makes the indirect light vanish: larger than the scene
     /// (every photon counts at every splat, its power spread over the whole scene's area), or
-    /// so small against it that no photon lands within it. The message gives the sensible
-    /// range and the default.
+    /// so small against it that no photon lands within it; and one that is no positive number
+    /// (`em::check_radius`). The message gives the sensible range and the default.
     pub fn check_radius(&self) -> std::result::Result<(), String> {
         let Some(r) = self.bake.radius else {
             return Ok(());
         };
+        crate::em::check_radius(r)?;
         let (lo, hi) = self.bounds();
         let size = (hi - lo).max_element();
         let (least, most) = (size * RADIUS_RANGE.0, size * RADIUS_RANGE.1);
@@ -175,15 +179,16 @@ impl Scene {
             short(size),
             short(least),
             short(most),
-            short(size / 40.0)
+            short(size / DEFAULT_RADIUS_DIVISOR)
         ))
     }
 
-    /// Photon search radius: the scene's, or 1/40 of the largest extent of the bounds.
+    /// Photon search radius: the scene's, or the largest extent of the bounds over
+    /// `DEFAULT_RADIUS_DIVISOR`.
     pub fn search_radius(&self) -> f32 {
         self.bake.radius.unwrap_or_else(|| {
             let (lo, hi) = self.bounds();
-            (hi - lo).max_element() / 40.0
+            (hi - lo).max_element() / DEFAULT_RADIUS_DIVISOR
         })
     }
 }

@@ -27,44 +27,48 @@ fn plausible(points: u64, record: u64, bytes: usize, compressed: bool) -> bool {
     points.saturating_mul(per_point) <= bytes as u64
 }
 
+/// The little-endian integers of a LAS header at byte `o`, where the file has them.
+fn u16_at(bytes: &[u8], o: usize) -> Option<u16> {
+    Some(u16::from_le_bytes(bytes.get(o..o + 2)?.try_into().ok()?))
+}
+
+fn u32_at(bytes: &[u8], o: usize) -> Option<u32> {
+    Some(u32::from_le_bytes(bytes.get(o..o + 4)?.try_into().ok()?))
+}
+
+fn i64_at(bytes: &[u8], o: usize) -> Option<i64> {
+    Some(i64::from_le_bytes(bytes.get(o..o + 8)?.try_into().ok()?))
+}
+
+/// Whether the header's point format (byte 104) has the LAZ compression bit.
+fn is_compressed(bytes: &[u8]) -> bool {
+    bytes.get(104).is_some_and(|f| f & 0x80 != 0)
+}
+
+/// The offset of the point data the header gives (bytes 96–99).
+fn point_data_offset(bytes: &[u8]) -> Option<u64> {
+    u32_at(bytes, 96).map(u64::from)
+}
+
 /// Whether a LAZ file's chunk table announces no more chunks than the file has bytes: the
 /// LAZ reader sizes its table by that count before reading it, so a damaged count would ask
 /// for any amount of memory. The table's offset is the first 8 bytes of the point data (or, if
 /// they are −1, the file's last 8 bytes); other files pass.
 fn laz_chunks_plausible(bytes: &[u8]) -> bool {
-    let u32_at = |o: usize| {
-        bytes
-            .get(o..o + 4)
-            .map(|b| u32::from_le_bytes([b[0], b[1], b[2], b[3]]))
-    };
-    let i64_at = |o: usize| {
-        bytes.get(o..o + 8).map(|b| {
-            let mut a = [0u8; 8];
-            a.copy_from_slice(b);
-            i64::from_le_bytes(a)
-        })
-    };
-    let compressed = bytes.get(104).is_some_and(|f| f & 0x80 != 0);
-    let Some(points_at) = u32_at(96).filter(|_| compressed) else {
+    let Some(points_at) = point_data_offset(bytes).filter(|_| is_compressed(bytes)) else {
         return true;
     };
-    let table = match i64_at(points_at as usize) {
-        Some(-1) => bytes.len().checked_sub(8).and_then(i64_at),
+    let table = match i64_at(bytes, points_at as usize) {
+        Some(-1) => (bytes.len().checked_sub(8)).and_then(|o| i64_at(bytes, o)),
         other => other,
     };
     match table
         .and_then(|t| usize::try_from(t).ok())
-        .and_then(|t| u32_at(t + 4))
+        .and_then(|t| u32_at(bytes, t + 4))
     {
         Some(chunks) => chunks as usize <= bytes.len(),
         None => true,
     }
-}
-
-/// The offset of the point data the header gives (bytes 96–99).
-fn point_data_offset(bytes: &[u8]) -> Option<u64> {
-    let b = bytes.get(96..100)?;
-    Some(u32::from_le_bytes([b[0], b[1], b[2], b[3]]) as u64)
 }
 
 /// A reader's error in words: a read past the end names the file's size.
@@ -81,30 +85,22 @@ fn read_error(e: las::Error, size: usize) -> String {
 /// least one item: the LAZ reader takes the first without asking (it panicked on a fuzzed
 /// file). Files that are not compressed, or hold no such record, pass: the reader judges them.
 fn laz_items_listed(bytes: &[u8]) -> bool {
-    let u16_at = |o: usize| {
-        bytes
-            .get(o..o + 2)
-            .map(|b| u16::from_le_bytes([b[0], b[1]]))
-    };
-    let u32_at =
-        |o: usize| (bytes.get(o..o + 4)).map(|b| u32::from_le_bytes([b[0], b[1], b[2], b[3]]));
-    let compressed = bytes.get(104).is_some_and(|f| f & 0x80 != 0);
-    let (Some(header), Some(records)) = (u16_at(94), u32_at(100)) else {
+    let (Some(header), Some(records)) = (u16_at(bytes, 94), u32_at(bytes, 100)) else {
         return true;
     };
-    if !compressed {
+    if !is_compressed(bytes) {
         return true;
     }
     // Each variable-length record: 54 bytes of header (its user ID at 2, its record ID at 18,
     // its length at 20), then its data; the LAZ item count is at byte 32 of the data.
     let mut at = header as usize;
     for _ in 0..records.min(1 << 16) {
-        let (Some(id), Some(len)) = (u16_at(at + 18), u16_at(at + 20)) else {
+        let (Some(id), Some(len)) = (u16_at(bytes, at + 18), u16_at(bytes, at + 20)) else {
             return true;
         };
         let user = bytes.get(at + 2..at + 18).unwrap_or_default();
         if user.starts_with(b"laszip encoded") && id == 22204 {
-            return len >= 34 && u16_at(at + 54 + 32).is_some_and(|n| n > 0);
+            return len >= 34 && u16_at(bytes, at + 54 + 32).is_some_and(|n| n > 0);
         }
         at += 54 + len as usize;
     }

@@ -281,10 +281,7 @@ fn no_usable_point(mesh: &Mesh) -> String {
             "all {n} points are the one point {first}: a cloud needs points spread over a surface"
         );
     }
-    let (lo, hi) = (mesh.positions.iter())
-        .fold((Vec3::INFINITY, Vec3::NEG_INFINITY), |(lo, hi), &p| {
-            (lo.min(p), hi.max(p))
-        });
+    let (lo, hi) = bounds(mesh.positions.iter().copied());
     // Neighbour searches and normals square distances: past 1.8e19 they overflow f32.
     if !(hi - lo).length_squared().is_finite() {
         let at = |p: Vec3| format!("[{:.2e}, {:.2e}, {:.2e}]", p.x, p.y, p.z);
@@ -358,13 +355,16 @@ pub fn triangle_cover_radius(a: Vec3, b: Vec3, c: Vec3) -> f32 {
     ab * bc * ca / (2.0 * area2)
 }
 
+/// The least and greatest corner of `points` (infinite, inverted, where there is none).
+fn bounds(points: impl Iterator<Item = Vec3>) -> (Vec3, Vec3) {
+    points.fold((Vec3::INFINITY, Vec3::NEG_INFINITY), |(lo, hi), p| {
+        (lo.min(p), hi.max(p))
+    })
+}
+
 /// Moves model splats into the scene: optional fit to a size and anchor, then the transform.
 pub fn place(disks: &[Disk], fit: Option<f32>, anchor: Anchor, m: &Affine3A) -> Vec<Disk> {
-    let (lo, hi) = disks
-        .iter()
-        .fold((Vec3::INFINITY, Vec3::NEG_INFINITY), |(lo, hi), d| {
-            (lo.min(d.center), hi.max(d.center))
-        });
+    let (lo, hi) = bounds(disks.iter().map(|d| d.center));
     let (offset, scale) = match fit {
         Some(size) => {
             let extent = (hi - lo).max_element().max(f32::MIN_POSITIVE);
