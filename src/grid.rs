@@ -328,3 +328,51 @@ fn spread_bits(x: u32) -> u32 {
     x = (x | x << 4) & 0x030c30c3;
     (x | x << 2) & 0x09249249
 }
+
+/// The cell lists of `splats` over `params`, built on the host, with no distance field and no
+/// facing cones (every ray steps cell by cell and reads every list it meets): for the few
+/// rays the host traces at load (`scene::sides`), where building the stages' grid would cost
+/// more than the rays.
+pub fn host_lists(params: &GridParams, splats: &[Splat]) -> SplatGrid {
+    let cells = params.cell_count as usize;
+    let mut cell_start = vec![0u32; cells + 1];
+    for s in splats {
+        each_cell(s, params, |c| cell_start[c + 1] += 1);
+    }
+    for c in 0..cells {
+        cell_start[c + 1] += cell_start[c];
+    }
+    let mut next = cell_start.clone();
+    let mut cell_splats = vec![0u32; cell_start[cells] as usize];
+    // Splat by splat in index order, so that every list is sorted as the stages' lists are.
+    for (i, s) in splats.iter().enumerate() {
+        each_cell(s, params, |c| {
+            cell_splats[next[c] as usize] = i as u32;
+            next[c] += 1;
+        });
+    }
+    let cell_dist = (0..cells)
+        .map(|c| u32::from(cell_start[c + 1] == cell_start[c]))
+        .collect();
+    SplatGrid {
+        params: GridParams {
+            entry_count: cell_start[cells],
+            ..*params
+        },
+        cell_start,
+        cell_splats,
+        cell_dist,
+    }
+}
+
+/// Calls `f` with the index of every cell splat `s`'s bounding box touches.
+fn each_cell(s: &Splat, params: &GridParams, mut f: impl FnMut(usize)) {
+    let (lo, hi) = disk_cell_range(s, params);
+    for z in lo.z..=hi.z {
+        for y in lo.y..=hi.y {
+            for x in lo.x..=hi.x {
+                f(cell_index(UVec3::new(x, y, z), params) as usize);
+            }
+        }
+    }
+}

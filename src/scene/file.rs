@@ -304,6 +304,20 @@ pub enum Anchor {
     Bottom,
 }
 
+/// Which of a model's disks get a back side (`scene::sides`).
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Deserialize)]
+#[serde(rename_all = "lowercase")]
+pub enum Sides {
+    /// Every disk, where the model's backs face the scene (an open sheet); none on a closed
+    /// model, whose backs face its inside.
+    #[default]
+    Auto,
+    /// None: one-sided disks, light passes a disk from behind.
+    One,
+    /// Every disk.
+    Two,
+}
+
 /// One object. The keys that apply depend on `shape`; the loader rejects the others.
 #[derive(Clone, Debug, PartialEq, Deserialize)]
 #[serde(deny_unknown_fields)]
@@ -328,6 +342,8 @@ pub struct ObjectDesc {
     pub anchor: Option<Anchor>,
     /// model: use per-vertex colours as diffuse albedo when the file has them (default true).
     pub vertex_colors: Option<bool>,
+    /// model: which disks get a back side (default "auto").
+    pub sides: Option<Sides>,
     /// Applied as scale, then rotation (degrees about x, then y, then z), then translation.
     pub scale: Option<Scale>,
     pub rotate: Option<Vec3>,

@@ -5,6 +5,7 @@ pub mod file;
 pub mod model;
 mod settings;
 pub mod shapes;
+pub mod sides;
 pub mod views;
 
 use std::path::{Path, PathBuf};
@@ -73,6 +74,8 @@ pub struct ObjectSummary {
     /// The first of them: the file, where in it and what was wrong.
     #[serde(skip_serializing_if = "Option::is_none")]
     pub first_skipped: Option<String>,
+    /// Of `splats`, the back sides a model's open surface was given (`sides`).
+    pub back_sides: usize,
 }
 
 /// The search radius a scene takes where it sets none is its size over this.
@@ -263,6 +266,7 @@ pub fn parse(path: &Path, text: &str) -> Result<Scene> {
     let mut surfaces = Vec::new();
     let mut clips = Vec::new();
     let mut extra_materials = Vec::new();
+    let mut models = Vec::new();
     for (k, obj) in file.objects.iter().enumerate() {
         let span = obj.span();
         let obj = obj.get_ref();
@@ -288,6 +292,13 @@ pub fn parse(path: &Path, text: &str) -> Result<Scene> {
             },
             &at,
         )?;
+        if obj.shape == ShapeKind::Model {
+            models.push(sides::ModelSplats {
+                object: objects.len(),
+                range: splats.len() - summary.splats..splats.len(),
+                sides: obj.sides.unwrap_or_default(),
+            });
+        }
         objects.push(summary);
     }
     if splats.is_empty() {
@@ -388,6 +399,7 @@ pub fn parse(path: &Path, text: &str) -> Result<Scene> {
         .check_radius()
         .map_err(|m| invalid(format!("[bake]: {m}")))?;
     scene.recentre();
+    sides::add_back_sides(&mut scene, &models).map_err(invalid)?;
     Ok(scene)
 }
 
@@ -703,7 +715,7 @@ fn allowed_keys(shape: ShapeKind) -> &'static [&'static str] {
         ShapeKind::Box => &["spacing"],
         ShapeKind::Sphere => &["radius", "spacing"],
         ShapeKind::Quad => &["size", "spacing"],
-        ShapeKind::Model => &["path", "fit", "anchor", "vertex_colors", "spacing"],
+        ShapeKind::Model => &["path", "fit", "anchor", "vertex_colors", "sides", "spacing"],
     }
 }
 
@@ -723,6 +735,7 @@ fn set_keys(o: &ObjectDesc) -> Vec<&'static str> {
     add(o.fit.is_some(), "fit");
     add(o.anchor.is_some(), "anchor");
     add(o.vertex_colors.is_some(), "vertex_colors");
+    add(o.sides.is_some(), "sides");
     keys
 }
 
@@ -1019,5 +1032,6 @@ fn build_object(
         dropped_by: left_out.by_rule,
         skipped: left_out.skipped,
         first_skipped: left_out.first_skipped,
+        back_sides: 0,
     })
 }

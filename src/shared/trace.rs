@@ -67,8 +67,49 @@ fn select_i(f: IVec3, t: IVec3, m: BVec3) -> IVec3 {
     IVec3::select(m, t, f)
 }
 
+/// Ray parameter of the hit with a disk from either side, or −1: the host's test of what the
+/// back of a disk faces (`scene::sides`), not the stages' policy.
+pub fn intersect_either_side(s: &Splat, o: Vec3, d: Vec3) -> f32 {
+    let n = Vec3::from(s.normal);
+    let c = Vec3::from(s.center);
+    let denom = n.dot(d);
+    if !(denom.abs() > PARALLEL_COS) {
+        return -1.0;
+    }
+    let t = n.dot(c - o) / denom;
+    let q = o + t * d - c;
+    if !(t > 0.0 && q.dot(q) <= s.radius * s.radius) {
+        return -1.0;
+    }
+    t
+}
+
 /// `d` must be a unit vector; t is then a distance.
 pub fn trace_ray(geo: &Geometry, o: Vec3, d: Vec3, skip: u32, t_max: f32, budget: &mut u32) -> Hit {
+    trace::<false>(geo, o, d, skip, t_max, budget)
+}
+
+/// `trace_ray` meeting disks from either side (no facing cones): the nearest disk, which the
+/// caller tells front from back by its normal. Host only: the stages' disks are one-sided.
+pub fn trace_ray_either_side(
+    geo: &Geometry,
+    o: Vec3,
+    d: Vec3,
+    skip: u32,
+    t_max: f32,
+    budget: &mut u32,
+) -> Hit {
+    trace::<true>(geo, o, d, skip, t_max, budget)
+}
+
+fn trace<const EITHER_SIDE: bool>(
+    geo: &Geometry,
+    o: Vec3,
+    d: Vec3,
+    skip: u32,
+    t_max: f32,
+    budget: &mut u32,
+) -> Hit {
     let g = &geo.grid.params;
     let mut hit = miss(t_max);
     let lo = Vec3::from(g.origin);
@@ -120,7 +161,7 @@ pub fn trace_ray(geo: &Geometry, o: Vec3, d: Vec3, skip: u32, t_max: f32, budget
         // A listed cell whose disks all face away from the ray: none read, the budget spent
         // as if each had been (as the WGSL twin).
         let mut search = dist == 0;
-        if search && cone_faces_away(word, d) {
+        if search && !EITHER_SIDE && cone_faces_away(word, d) {
             let listed = geo.grid.cell_start[ci + 1] - geo.grid.cell_start[ci];
             if *budget < listed {
                 *budget = 0;
@@ -148,7 +189,11 @@ pub fn trace_ray(geo: &Geometry, o: Vec3, d: Vec3, skip: u32, t_max: f32, budget
                     if s == skip {
                         continue;
                     }
-                    let th = intersect_disk(&geo.splats[s as usize], o, d);
+                    let disk = &geo.splats[s as usize];
+                    let th = match EITHER_SIDE {
+                        true => intersect_either_side(disk, o, d),
+                        false => intersect_disk(disk, o, d),
+                    };
                     let past =
                         th > floor_t || (th == floor_t && floor_e != NO_SPLAT && e > floor_e);
                     if past && th < best_t && th <= limit {

@@ -1,6 +1,8 @@
 //! Helpers shared by the integration tests.
 #![allow(dead_code)]
 
+pub mod scans;
+
 use lobelight::gpu::{BackendChoice, Gpu};
 use lobelight::types::Splat;
 
