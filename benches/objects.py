@@ -9,7 +9,7 @@ For each scene: the path tracer's direct and indirect images (with the object ID
 renderer's at its default settings (one bake, cached, for both; `--frames N` refinement frames
 in place of the default 16), and `lobelight compare
 --objects` of each pair. Writes DIR/objects.md (a row per object: its pixels and its mean's
-bias in direct and in indirect light, and the largest |bias| of the scene) and
+bias in direct, in indirect and in all light, and the largest |bias| of the scene) and
 DIR/objects.json, and prints the table. The engine is the one `render` picks (the CPU mirror
 beside a software rasterizer). Needs a built `target/release/lobelight` (or LOBELIGHT=path).
 """
@@ -57,18 +57,23 @@ def measure(lobelight, scene, size, spp, out, frames=None, reuse=False):
     rows = []
     for obj, d in biases["direct"].items():
         i = biases["indirect"].get(obj, {})
+        # All light: the two terms' means summed, against the path tracer's.
+        both = i and d["reference_mean"] + i["reference_mean"]
         rows.append({
             "object": obj,
             "pixels": d["pixels"],
             "direct_bias": d["bias"],
             "indirect_bias": i.get("bias"),
+            "all_bias": (d["mean"] + i["mean"]) / both - 1 if both else None,
         })
     counted = [r for r in rows if r["pixels"] >= MIN_PIXELS]
     worst = max((abs(b) for r in counted for b in (r["direct_bias"], r["indirect_bias"])
                  if b is not None), default=0.0)
+    worst_all = max((abs(r["all_bias"]) for r in counted if r["all_bias"] is not None),
+                    default=0.0)
     return {"scene": scene, "size": size, "spp": spp, "frames": frames or 16,
             "seconds": time.time() - t,
-            "rows": rows, "largest_bias": worst}
+            "rows": rows, "largest_bias": worst, "largest_all_bias": worst_all}
 
 
 def percent(b):
@@ -76,14 +81,17 @@ def percent(b):
 
 
 def table(results):
-    lines = ["| scene | object | pixels | direct | indirect |", "| --- | --- | ---: | ---: | ---: |"]
+    lines = ["| scene | object | pixels | direct | indirect | all light |",
+             "| --- | --- | ---: | ---: | ---: | ---: |"]
     for r in results:
         name = os.path.splitext(os.path.basename(r["scene"]))[0]
         for row in r["rows"]:
             lines.append(f"| {name} | {row['object']} | {row['pixels']} | "
-                         f"{percent(row['direct_bias'])} | {percent(row['indirect_bias'])} |")
+                         f"{percent(row['direct_bias'])} | {percent(row['indirect_bias'])} | "
+                         f"{percent(row['all_bias'])} |")
         lines.append(f"| {name} | **largest \\|bias\\| (objects of {MIN_PIXELS}+ pixels; "
-                     f"{r['frames']} frames)** | | **{100 * r['largest_bias']:.2f} %** | |")
+                     f"{r['frames']} frames)** | | **{100 * r['largest_bias']:.2f} %** | | "
+                     f"**{100 * r['largest_all_bias']:.2f} %** |")
     return "\n".join(lines) + "\n"
 
 

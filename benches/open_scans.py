@@ -6,13 +6,20 @@ Cornell box, the model on the floor), its model and finish replaced, diffuse and
 benches/objects.py.
 
     benches/open_scans.py [--model scenes/models/data/bunny.obj] [--view X Y Z] [-o DIR]
+                          [--figure OUT.png]
 
 Writes DIR/<kind>.obj and DIR/<kind>_<finish>.toml for the kinds `sheet` (the faces whose normal
 n has n · v > 0.15, v the view direction normalised, in the model's own frame), `holes` (the
 sheet less the faces within 24 random spheres of 4 % of the model's size) and `noisy` (the
 sheet with each vertex moved along v by Gaussian noise of 0.4 % of the model's size), and the
-finishes `diffuse` and `glossy` (Ward, specular 0.4, roughness 0.1, as the bunny scene's).
-Seeded: the same files every run.
+finishes `diffuse` and `glossy` (Ward, specular 0.4, roughness 0.1, as the bunny scene's),
+and each scene again as <kind>_<finish>_one.toml with `sides = "one"`: one-sided disks, as
+lobelight drew open models before they got back sides. Seeded: the same files every run.
+
+`--figure OUT.png` also renders the floor under the sheet (diffuse, 256², no tone curve: the
+same exposure for all) with the path tracer at 1,024 samples and the renderer at its defaults,
+one-sided (top row) and with back sides (bottom row), cropped, not enlarged, into one PNG
+(needs Pillow; LOBELIGHT names the binary, else target/release/lobelight).
 """
 
 import argparse
@@ -118,11 +125,33 @@ def write_obj(path, verts, faces):
     return len(used), len(faces)
 
 
+def figure(out, path):
+    """The floor under the sheet: path tracer and renderer, one-sided and with back sides."""
+    import subprocess
+    from PIL import Image
+    lobelight = os.environ.get("LOBELIGHT", "target/release/lobelight")
+    size, crop = 256, (32, 136, 224, 248)
+    tiles = []
+    for scene in ("sheet_diffuse_one", "sheet_diffuse"):
+        for method in (["--method", "path", "--spp", "1024"], []):
+            png = os.path.join(out, f"{scene}_{'path' if method else 'lobes'}.png")
+            subprocess.run([lobelight, "render", os.path.join(out, f"{scene}.toml"), "-o", png,
+                            "--width", str(size), "--height", str(size), "--tonemap", "none",
+                            *method], check=True, capture_output=True)
+            tiles.append(Image.open(png).convert("RGB").crop(crop))
+    w, h = crop[2] - crop[0], crop[3] - crop[1]
+    sheet = Image.new("RGB", (2 * w + 4, 2 * h + 4), "white")
+    for k, tile in enumerate(tiles):
+        sheet.paste(tile, ((k % 2) * (w + 4), (k // 2) * (h + 4)))
+    sheet.save(path)
+
+
 def main():
     p = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
     p.add_argument("--model", default="scenes/models/data/bunny.obj")
     p.add_argument("--view", type=float, nargs=3, default=[0.3, 0.2, 1.0])
     p.add_argument("-o", "--out", default="out/open_scans")
+    p.add_argument("--figure", help="also render the floor under the sheet into this PNG")
     args = p.parse_args()
     os.makedirs(args.out, exist_ok=True)
     verts, faces = read_obj(args.model)
@@ -144,9 +173,15 @@ def main():
         n_verts, n_faces = write_obj(obj, v, f)
         for finish, desc in FINISHES.items():
             scene = os.path.join(args.out, f"{kind}_{finish}.toml")
+            text = scene_text(base, kind, desc)
             with open(scene, "w") as s:
-                s.write(scene_text(base, kind, desc))
+                s.write(text)
+            one = text.replace(f'path = "{kind}.obj"', f'path = "{kind}.obj"\nsides = "one"')
+            with open(os.path.join(args.out, f"{kind}_{finish}_one.toml"), "w") as s:
+                s.write(one)
         print(f"{kind}: {n_verts} vertices, {n_faces} faces of {len(faces)} -> {obj}")
+    if args.figure:
+        figure(args.out, args.figure)
 
 
 if __name__ == "__main__":

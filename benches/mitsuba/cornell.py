@@ -42,6 +42,11 @@ from pathlib import Path
 ROOT = Path(__file__).resolve().parents[2]
 LOBELIGHT = ROOT / "target" / "release" / "lobelight"
 SCENES = {"diffuse": ROOT / "scenes" / "diffuse.toml", "cornell": ROOT / "scenes" / "cornell.toml"}
+# The open scan: `diffuse.toml`'s walls and light with a single-view sheet of the bunny
+# (`benches/open_scans.py`) standing on the floor, written into the output folder. In Mitsuba
+# the sheet is its mesh with a two-sided diffuse BSDF: what lobelight's back sides make of an
+# open model.
+SHEET = {"fit": 1.1, "translate": [0.0, -1.0, 0.0], "albedo": [0.45, 0.4, 0.35]}
 # The largest |bias| of an object's mean against Mitsuba's converged image that the check allows.
 BOUND_PATH = 0.01
 BOUND_RENDERER = 0.015
@@ -66,6 +71,14 @@ def mitsuba_scene(mi, name, size, spp, max_depth):
     film["width"] = film["height"] = size
     film["rfilter"] = {"type": "box"}
     scene["sensor"]["sampler"]["sample_count"] = spp
+    if name == "sheet":
+        del scene["small-box"], scene["large-box"]
+        scene["sheet"] = {
+            "type": "obj", "filename": str(SCENES["sheet"].with_suffix(".obj")),
+            "to_world": sheet_to_world(mi, SCENES["sheet"].with_suffix(".obj")),
+            "bsdf": {"type": "twosided", "bsdf": {
+                "type": "diffuse", "reflectance": {"type": "rgb", "value": SHEET["albedo"]}}},
+        }
     if name == "cornell":
         # The tall block in the scene file's glossy material, lobelight's Ward.
         import ward
@@ -73,6 +86,40 @@ def mitsuba_scene(mi, name, size, spp, max_depth):
         specular = m["specular"] if isinstance(m["specular"], list) else [m["specular"]] * 3
         scene["large-box"]["bsdf"] = {"type": ward.register(m["diffuse"], specular, m["roughness"])}
     return mi.load_dict(scene)
+
+
+def sheet_to_world(mi, obj):
+    """Where lobelight puts the sheet: its vertices' bounding box `fit` long, its bottom face
+    centred at the origin (`anchor = "bottom"`), then moved by `translate`."""
+    vertices = [list(map(float, line.split()[1:4])) for line in open(obj) if line.startswith("v ")]
+    lo = [min(v[k] for v in vertices) for k in range(3)]
+    hi = [max(v[k] for v in vertices) for k in range(3)]
+    scale = SHEET["fit"] / max(h - l for l, h in zip(lo, hi))
+    anchor = [0.5 * (lo[0] + hi[0]), lo[1], 0.5 * (lo[2] + hi[2])]
+    T = mi.ScalarTransform4f
+    return T().translate(SHEET["translate"]) @ T().scale(scale) @ T().translate([-a for a in anchor])
+
+
+def write_sheet_scene(out, obj=None):
+    """The open scan's scene in `out`, with its sheet: `obj`, or the single-view sheet of the
+    bunny (made by `benches/open_scans.py`)."""
+    made = out / "open_scans"
+    if obj is None and not (made / "sheet.obj").exists():
+        subprocess.run([sys.executable, str(ROOT / "benches" / "open_scans.py"), "-o", str(made)],
+                       check=True, stdout=subprocess.DEVNULL)
+    walls = SCENES["diffuse"].read_text().split("[[object]]                     # small block")[0]
+    scene = out / "sheet.toml"
+    (out / "sheet.obj").write_bytes(Path(obj or made / "sheet.obj").read_bytes())
+    scene.write_text(
+        f"{walls}\n[materials.model]\ndiffuse = {SHEET['albedo']}\n\n[[object]]\n"
+        f"shape = \"model\"\npath = \"sheet.obj\"\nmaterial = \"model\"\nfit = {SHEET['fit']}\n"
+        f"anchor = \"bottom\"\ntranslate = {SHEET['translate']}\n")
+    return scene
+
+
+def shown(path):
+    """`path` as the table names it: from the project's root where it lies under it."""
+    return path.relative_to(ROOT) if path.is_relative_to(ROOT) else path
 
 
 def render_mitsuba(mi, name, size, spp, max_depth, seed, path):
@@ -187,10 +234,13 @@ def main():
     p.add_argument("--size", type=int, default=256, help="image side in pixels")
     p.add_argument("--spp", type=int, default=4096, help="Mitsuba's converged samples per pixel")
     p.add_argument("--scenes", default="diffuse,cornell",
-                   help="the box scenes of the per-object table, comma-separated")
+                   help="the box scenes of the per-object table, comma-separated (and `sheet`: "
+                        "an open scan in the diffuse box)")
     p.add_argument("--photons", default="1000000,4000000",
                    help="lobelight's photon counts on diffuse.toml, comma-separated: one render "
                         "and one equal-time Mitsuba image each (empty: none)")
+    p.add_argument("--sheet", type=Path,
+                   help="the `sheet` scene's model (OBJ; default: the bunny's single-view sheet)")
     p.add_argument("--variant", default="llvm_ad_rgb", help="Mitsuba variant")
     p.add_argument("-o", "--output", type=Path, default=Path("mitsuba-out"))
     p.add_argument("--path-spp", type=int, default=2048,
@@ -207,7 +257,7 @@ def main():
                         "more, as its depth counts the emitter vertex")
     args = p.parse_args()
     names = [n for n in args.scenes.split(",") if n]
-    unknown = [n for n in names if n not in SCENES]
+    unknown = [n for n in names if n not in SCENES and n != "sheet"]
     if unknown:
         sys.exit(f"unknown scene {unknown[0]!r}: the check knows {', '.join(SCENES)}")
     if not LOBELIGHT.exists():
@@ -226,11 +276,13 @@ def main():
     sys.path.insert(0, str(Path(__file__).resolve().parent))
     out = args.output
     out.mkdir(parents=True, exist_ok=True)
+    if "sheet" in names:
+        SCENES["sheet"] = write_sheet_scene(out, args.sheet)
     depth = args.max_depth + 1
 
     scenes = [per_object(mi, name, args, depth, out) for name in names]
     (out / "objects.md").write_text("".join(
-        f"`scenes/{s['scene']}.toml`, Mitsuba at {s['mitsuba_spp']} samples:\n\n{s['table']}\n"
+        f"`{shown(SCENES[s['scene']])}`, Mitsuba at {s['mitsuba_spp']} samples:\n\n{s['table']}\n"
         for s in scenes))
     diffuse = [s for s in scenes if s["scene"] == "diffuse"]
     runs = []

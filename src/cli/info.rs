@@ -139,7 +139,11 @@ impl std::fmt::Display for Info {
             } else {
                 String::new()
             };
-            writeln!(f, "  {}{src}: {} splats{dropped}", o.shape, o.splats)?;
+            let backs = match o.back_sides {
+                0 => String::new(),
+                n => format!(", {n} of them back sides (an open surface)"),
+            };
+            writeln!(f, "  {}{src}: {} splats{backs}{dropped}", o.shape, o.splats)?;
             for r in &o.dropped_by {
                 writeln!(f, "    left out: {} {}", r.count, r.rule)?;
             }

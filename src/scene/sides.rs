@@ -25,7 +25,7 @@ use rayon::prelude::*;
 
 use super::Scene;
 use super::file::Sides;
-use crate::grid::{GridConfig, grid_params, host_lists};
+use crate::grid::{GridConfig, SplatGrid, grid_params, host_lists};
 use crate::shared::trace::{FAR, trace_ray_either_side};
 use crate::types::{NO_SPLAT, Splat, light_kind};
 
@@ -67,7 +67,18 @@ pub struct ModelSplats {
 /// Adds back sides to the models that need them, each model's right after its own splats, and
 /// counts them in the objects' summaries.
 pub fn add_back_sides(scene: &mut Scene, models: &[ModelSplats]) -> Result<(), String> {
-    let open: Vec<bool> = models.iter().map(|m| is_open(scene, m)).collect();
+    // The scene's cell lists, built for the first model whose backs are traced.
+    let mut lists = None;
+    let open: Vec<bool> = (models.iter())
+        .map(|m| match m.sides {
+            Sides::One => false,
+            Sides::Two => true,
+            Sides::Auto => {
+                let grid = lists.get_or_insert_with(|| cell_lists(scene));
+                (grid.as_ref()).is_some_and(|g| open_share(scene, g, &m.range) > OPEN_SHARE)
+            }
+        })
+        .collect();
     let added: usize = models
         .iter()
         .zip(&open)
@@ -108,28 +119,23 @@ pub fn back_side(s: &Splat) -> Splat {
     }
 }
 
-fn is_open(scene: &Scene, m: &ModelSplats) -> bool {
-    match m.sides {
-        Sides::One => false,
-        Sides::Two => true,
-        Sides::Auto => open_share(scene, &m.range) > OPEN_SHARE,
-    }
-}
-
-/// The share of the sampled disks of `range` whose backs see the scene.
-pub fn open_share(scene: &Scene, range: &Range<usize>) -> f64 {
-    if range.is_empty() {
-        return 0.0;
-    }
+/// The cell lists the backs' rays walk: a cell a splat (a grid of the stages' shape would take
+/// 8, for rays that are few), none where the scene's bounds make no grid.
+fn cell_lists(scene: &Scene) -> Option<SplatGrid> {
     let config = GridConfig {
         cells_per_splat: 1.0,
         ..scene.grid
     };
-    let Ok(params) = grid_params(&scene.splats, &config) else {
+    let params = grid_params(&scene.splats, &config).ok()?;
+    Some(host_lists(&params, &scene.splats))
+}
+
+/// The share of the sampled disks of `range` whose backs see the scene.
+fn open_share(scene: &Scene, grid: &SplatGrid, range: &Range<usize>) -> f64 {
+    if range.is_empty() {
         return 0.0;
-    };
-    let grid = host_lists(&params, &scene.splats);
-    let geo = scene.geometry(&grid);
+    }
+    let geo = scene.geometry(grid);
     let stride = range.len().div_ceil(SAMPLES);
     let sampled: Vec<usize> = range.clone().step_by(stride).collect();
     let seeing = sampled
