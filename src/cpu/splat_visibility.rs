@@ -12,8 +12,8 @@ use rayon::prelude::*;
 
 use crate::shared::octahedral::oct_encode;
 use crate::shared::splat::{
-    SPLAT_CORNERS, clip_position, covers, drawn_keeps, faces_camera, pixel_ray, splat_corner,
-    splat_hit, view_depth,
+    SPLAT_CORNERS, clip_position, covers, drawn_keeps, faces_camera, in_view, pixel_ray,
+    splat_corner, splat_hit, view_depth,
 };
 use crate::types::{Camera, Splat, SurfaceClip};
 
@@ -40,26 +40,35 @@ pub struct Rect {
 }
 
 /// The pixels a splat's triangle may cover: the bounds of its projected corners, or the whole
-/// image when a corner lies behind the near plane (the GPU clips such a triangle there; the
-/// per-pixel disk test decides either way). `None` for a back-facing splat, and for one of
-/// radius 0 (left out by the level of detail, `drawn_splats`).
+/// image when some corner, not all, lies behind the near plane (the GPU clips such a triangle
+/// there; the per-pixel disk test decides either way). `None` for a back-facing splat, one of
+/// radius 0 (left out by the level of detail, `drawn_splats`), one outside the view (`in_view`)
+/// and one wholly behind the near plane: a ground seen from just above it has half its splats
+/// behind the eye, and each of them cost every pixel of every frame (a 96² still of a 40,000-
+/// splat ground 47.8 s, where the device, which clips them, took 0.42 s).
 pub fn splat_bounds(cam: &Camera, s: &Splat) -> Option<Rect> {
-    if !faces_camera(s, Vec3::from(cam.eye)) || !(s.radius > 0.0) {
+    if !faces_camera(s, Vec3::from(cam.eye)) || !(s.radius > 0.0) || !in_view(cam, s) {
         return None;
     }
     let size = Vec2::from(cam.size);
     let (mut lo, mut hi) = (Vec2::splat(f32::MAX), Vec2::splat(f32::MIN));
+    let mut behind = 0;
     for i in 0..SPLAT_CORNERS {
         let c = clip_position(cam, splat_corner(s, i));
         if !(c.w > cam.near) {
-            lo = Vec2::ZERO;
-            hi = size;
-            break;
+            behind += 1;
+            continue;
         }
         let ndc = Vec2::new(c.x, c.y) / c.w;
         let p = Vec2::new((ndc.x * 0.5 + 0.5) * size.x, (0.5 - ndc.y * 0.5) * size.y);
         lo = lo.min(p);
         hi = hi.max(p);
+    }
+    if behind == SPLAT_CORNERS {
+        return None;
+    }
+    if behind > 0 {
+        (lo, hi) = (Vec2::ZERO, size);
     }
     let lo = lo.max(Vec2::ZERO).floor();
     let hi = hi.min(size).ceil();
