@@ -35,6 +35,18 @@ struct Budget {
     indirect_spp: u32,
 }
 
+/// The box at 64²: 64 refinement frames, not the default 16 (at 64² a block holds few pixels,
+/// and 16 points a pixel integrate its inner edges, bright top and dim sides, with an error
+/// that does not average out over them: the small block's direct light +2.2 % at 16, +0.9 % at
+/// 64 and +0.3 % at 256 frames, against pixels that 64 points find on it alone); the path
+/// tracer at 256 samples for direct light and 2,048 for indirect.
+const AT_64: Budget = Budget {
+    size: 64,
+    still_spp: 64,
+    direct_spp: 256,
+    indirect_spp: 2048,
+};
+
 /// Each object's figures against the path tracer, for each of the light terms `shows`, of
 /// one bake.
 fn objects_against_path_tracer(
@@ -97,19 +109,9 @@ fn outside(what: &str, objects: &[ObjectDifference], tolerance: f64) -> Vec<Stri
 #[test]
 fn every_object_of_the_diffuse_box_matches_the_path_tracer() {
     let scene = scene::load(Path::new("scenes/diffuse.toml")).unwrap();
-    // 64 refinement frames, not the default 16: at 64² a block holds few pixels, and 16 points
-    // a pixel integrate its inner edges (bright top, dim sides) with an error that does not
-    // average out over them (the small block's direct light +2.2 % at 16, +0.9 % at 64 and
-    // +0.3 % at 256 frames, against pixels that 64 points find on it alone).
-    let budget = Budget {
-        size: 64,
-        still_spp: 64,
-        direct_spp: 256,
-        indirect_spp: 2048,
-    };
     let shows = [Show::Direct, Show::Indirect];
     let mut failed = Vec::new();
-    for (objects, what) in objects_against_path_tracer(&scene, &shows, &budget)
+    for (objects, what) in objects_against_path_tracer(&scene, &shows, &AT_64)
         .iter()
         .zip(["direct", "indirect"])
     {
@@ -154,13 +156,7 @@ fn a_curved_diffuse_model_matches_the_path_tracer() {
     let model = dir.join("bumpy_ball.obj");
     std::fs::write(&model, scans::obj_text(&scans::bumpy_ball(0.3, 130))).unwrap();
     let scene = model_in_the_box(&dir, &model, 0.8);
-    let budget = Budget {
-        size: 64,
-        still_spp: 64,
-        direct_spp: 256,
-        indirect_spp: 2048,
-    };
-    let objects = objects_against_path_tracer(&scene, &[Show::Indirect], &budget).remove(0);
+    let objects = objects_against_path_tracer(&scene, &[Show::Indirect], &AT_64).remove(0);
     let (model, walls): (Vec<_>, Vec<_>) =
         objects.into_iter().partition(|o| o.name.contains("model"));
     assert_eq!(model.len(), 1, "one model");
@@ -193,14 +189,8 @@ fn a_single_view_scan_matches_the_path_tracer(kind: Scan) {
         scene.objects[1].back_sides > 0,
         "an open sheet gets back sides"
     );
-    let budget = Budget {
-        size: 64,
-        still_spp: 64,
-        direct_spp: 256,
-        indirect_spp: 2048,
-    };
     let shows = [Show::Direct, Show::Indirect];
-    let mut figures = objects_against_path_tracer(&scene, &shows, &budget);
+    let mut figures = objects_against_path_tracer(&scene, &shows, &AT_64);
     let mut failed = outside("direct", &figures[0], OBJECT_TOLERANCE);
     let (model, walls): (Vec<_>, Vec<_>) =
         (figures.remove(1).into_iter()).partition(|o| o.name.contains("model"));

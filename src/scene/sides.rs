@@ -26,7 +26,7 @@ use rayon::prelude::*;
 use super::Scene;
 use super::file::Sides;
 use crate::grid::{GridConfig, SplatGrid, grid_params, host_lists};
-use crate::shared::trace::{FAR, trace_ray_either_side};
+use crate::shared::trace::{FAR, trace_sided};
 use crate::types::{NO_SPLAT, Splat, light_kind};
 
 /// Most disks of a model whose backs are traced: enough to tell a sheet from a closed model,
@@ -153,7 +153,7 @@ fn back_sees_scene(scene: &Scene, geo: &crate::shared::trace::Geometry, i: usize
     let from = |d: Vec3| c + s.radius * d;
     let meets_front = |d: Vec3, t_max: f32| -> Option<bool> {
         let mut budget = RAY_BUDGET;
-        let hit = trace_ray_either_side(geo, from(d), d, i as u32, t_max, &mut budget);
+        let hit = trace_sided::<true>(geo, from(d), d, i as u32, t_max, &mut budget);
         if hit.aborted != 0 {
             return Some(false);
         }

@@ -86,23 +86,13 @@ pub fn intersect_either_side(s: &Splat, o: Vec3, d: Vec3) -> f32 {
 
 /// `d` must be a unit vector; t is then a distance.
 pub fn trace_ray(geo: &Geometry, o: Vec3, d: Vec3, skip: u32, t_max: f32, budget: &mut u32) -> Hit {
-    trace::<false>(geo, o, d, skip, t_max, budget)
+    trace_sided::<false>(geo, o, d, skip, t_max, budget)
 }
 
-/// `trace_ray` meeting disks from either side (no facing cones): the nearest disk, which the
-/// caller tells front from back by its normal. Host only: the stages' disks are one-sided.
-pub fn trace_ray_either_side(
-    geo: &Geometry,
-    o: Vec3,
-    d: Vec3,
-    skip: u32,
-    t_max: f32,
-    budget: &mut u32,
-) -> Hit {
-    trace::<true>(geo, o, d, skip, t_max, budget)
-}
-
-fn trace<const EITHER_SIDE: bool>(
+/// `trace_ray`, or with `EITHER_SIDE` meeting disks from either side (no facing cones): the
+/// nearest disk, which the caller tells front from back by its normal. Host only: the stages'
+/// disks are one-sided.
+pub fn trace_sided<const EITHER_SIDE: bool>(
     geo: &Geometry,
     o: Vec3,
     d: Vec3,
