@@ -687,7 +687,8 @@ fn no_adapter_falls_back_to_the_cpu_mirror() {
 }
 
 /// `render --views` draws a sequence from one bake, each view to its numbered file; `--shard
-/// K/N` draws every N-th view from K, so the shards together draw each view once.
+/// K/N` draws every N-th view from K, so the shards together draw each view once; `--shard
+/// auto` takes K and N from a SLURM array or a Kubernetes Indexed Job.
 #[test]
 fn views_render_a_sequence_and_shards_split_it() {
     let dir = std::env::temp_dir().join(format!("lobelight-views-{}", std::process::id()));
@@ -696,7 +697,7 @@ fn views_render_a_sequence_and_shards_split_it() {
     std::fs::write(&views, "[orbit]\nframes = 5\ndegrees = 40.0\n").unwrap();
     let out = |name: &str| dir.join(name).display().to_string();
     let (views_arg, cache) = (views.display().to_string(), out("bake.cache"));
-    let run = |pattern: &str, shard: Option<&str>| {
+    let run_in = |pattern: &str, shard: Option<&str>, env: &[(&str, &str)]| {
         let o = out(pattern);
         let mut args = vec![
             "render",
@@ -720,8 +721,9 @@ fn views_render_a_sequence_and_shards_split_it() {
         if let Some(s) = shard {
             args.extend(["--shard", s]);
         }
-        lobelight(&args, &[])
+        lobelight(&args, env)
     };
+    let run = |pattern: &str, shard: Option<&str>| run_in(pattern, shard, &[]);
     let all = run("all_##.png", None);
     assert!(
         all.status.success(),
@@ -757,6 +759,36 @@ fn views_render_a_sequence_and_shards_split_it() {
         let r = run("bad_##.png", Some(bad));
         assert!(!r.status.success(), "--shard {bad} was accepted");
     }
+    // `--shard auto` from a SLURM array (--array=1-3:2: tasks 1 and 3, the second here) and
+    // from a Kubernetes Indexed Job (index 0 of 2).
+    let slurm = [
+        ("SLURM_ARRAY_TASK_ID", "3"),
+        ("SLURM_ARRAY_TASK_MIN", "1"),
+        ("SLURM_ARRAY_TASK_STEP", "2"),
+        ("SLURM_ARRAY_TASK_COUNT", "2"),
+    ];
+    let k8s = [("JOB_COMPLETION_INDEX", "0"), ("LOBELIGHT_SHARDS", "2")];
+    for (env, want) in [(&slurm[..], vec![1, 3]), (&k8s[..], vec![0, 2, 4])] {
+        let r = run_in("auto_##.png", Some("auto"), env);
+        assert!(r.status.success(), "{}", String::from_utf8_lossy(&r.stderr));
+        let report: serde_json::Value = serde_json::from_slice(&r.stdout).unwrap();
+        let drawn: Vec<u64> = (report["views"].as_array().unwrap().iter())
+            .map(|v| v["index"].as_u64().unwrap())
+            .collect();
+        assert_eq!(drawn, want, "{env:?}");
+    }
+    let alone = run("auto_##.png", Some("auto"));
+    let e = String::from_utf8_lossy(&alone.stderr);
+    assert!(
+        !alone.status.success() && e.contains("SLURM_ARRAY_TASK_ID"),
+        "{e}"
+    );
+    let uncounted = run_in("auto_##.png", Some("auto"), &k8s[..1]);
+    let e = String::from_utf8_lossy(&uncounted.stderr);
+    assert!(
+        !uncounted.status.success() && e.contains("LOBELIGHT_SHARDS"),
+        "{e}"
+    );
     std::fs::remove_dir_all(&dir).ok();
 }
 

@@ -64,15 +64,74 @@ struct DeviceArgs {
     backend: BackendChoice,
 }
 
-/// `--shard K/N`: two whole numbers with K below N.
+/// `--shard K/N`: two whole numbers with K below N; or `auto`, the scheduler's (`shard_from`).
 fn parse_shard(s: &str) -> std::result::Result<(u32, u32), String> {
-    let bad = || format!("`{s}` is not K/N (two whole numbers, K below N, e.g. 0/4)");
+    if s == "auto" {
+        return shard_from(|name| std::env::var(name).ok());
+    }
+    let bad = || format!("`{s}` is not K/N (two whole numbers, K below N, e.g. 0/4) or auto");
     let (k, n) = s.split_once('/').ok_or_else(bad)?;
     let (k, n) = (
         k.trim().parse::<u32>().map_err(|_| bad())?,
         n.trim().parse::<u32>().map_err(|_| bad())?,
     );
     if k < n { Ok((k, n)) } else { Err(bad()) }
+}
+
+/// Where `--shard auto` finds the shard count of a Kubernetes Indexed Job, which sets the
+/// index (`JOB_COMPLETION_INDEX`) but not the count: the Job's manifest passes its
+/// `completions` here.
+pub const SHARD_COUNT_VAR: &str = "LOBELIGHT_SHARDS";
+
+/// `--shard auto`: this task's shard K/N from the scheduler that started it, through `get`
+/// (the environment): a SLURM job array (`SLURM_ARRAY_TASK_ID` in steps of
+/// `SLURM_ARRAY_TASK_STEP` from `SLURM_ARRAY_TASK_MIN`, `SLURM_ARRAY_TASK_COUNT` tasks), or a
+/// Kubernetes Indexed Job (`JOB_COMPLETION_INDEX` of `SHARD_COUNT_VAR`).
+pub fn shard_from(get: impl Fn(&str) -> Option<String>) -> std::result::Result<(u32, u32), String> {
+    let number = |name: &str| -> std::result::Result<Option<u32>, String> {
+        get(name)
+            .map(|v| {
+                (v.trim().parse::<u32>()).map_err(|_| format!("{name}={v} is no whole number"))
+            })
+            .transpose()
+    };
+    let shard = if let Some(id) = number("SLURM_ARRAY_TASK_ID")? {
+        let count = number("SLURM_ARRAY_TASK_COUNT")?
+            .ok_or("SLURM_ARRAY_TASK_ID is set but SLURM_ARRAY_TASK_COUNT is not")?;
+        let min = number("SLURM_ARRAY_TASK_MIN")?.unwrap_or(0);
+        let step = number("SLURM_ARRAY_TASK_STEP")?.unwrap_or(1).max(1);
+        let k = id
+            .checked_sub(min)
+            .filter(|d| d % step == 0)
+            .map(|d| d / step);
+        let range = || {
+            format!(
+                "task {id} of a SLURM array of {count} from {min} in steps of {step} is not \
+                 one of a range (--array=0-{}): give --shard K/N",
+                count.saturating_sub(1)
+            )
+        };
+        (k.ok_or_else(range)?, count)
+    } else if let Some(index) = number("JOB_COMPLETION_INDEX")? {
+        let count = number(SHARD_COUNT_VAR)?.ok_or_else(|| {
+            format!(
+                "JOB_COMPLETION_INDEX is {index} but the shard count is unknown: set \
+                 {SHARD_COUNT_VAR} to the Job's completions"
+            )
+        })?;
+        (index, count)
+    } else {
+        return Err(
+            "--shard auto: neither a SLURM array (SLURM_ARRAY_TASK_ID) nor a \
+                    Kubernetes Indexed Job (JOB_COMPLETION_INDEX) started this task: give \
+                    --shard K/N"
+                .into(),
+        );
+    };
+    match shard {
+        (k, n) if k < n => Ok((k, n)),
+        (k, n) => Err(format!("--shard auto: task {k} of {n} is past the count")),
+    }
 }
 
 impl DeviceArgs {
@@ -351,7 +410,8 @@ struct RenderArgs {
     #[arg(long, value_name = "FILE")]
     views: Option<PathBuf>,
     /// With --views: draw only the views whose index is K modulo N (K in 0..N), so N
-    /// machines that share the bake cache split the sequence.
+    /// machines that share the bake cache split the sequence; `auto`: K and N from a SLURM
+    /// job array or a Kubernetes Indexed Job (with LOBELIGHT_SHARDS, its completions).
     #[arg(long, value_name = "K/N", value_parser = parse_shard, requires = "views")]
     shard: Option<(u32, u32)>,
 }
