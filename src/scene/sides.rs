@@ -30,7 +30,8 @@ use crate::shared::trace::{FAR, trace_sided};
 use crate::types::{NO_SPLAT, Splat, light_kind};
 
 /// Most disks of a model whose backs are traced: enough to tell a sheet from a closed model,
-/// few enough that a 10 M-point scan pays milliseconds.
+/// few enough that their rays cost milliseconds at any size. Most of the load's added time is
+/// the cell lists of all the scene's splats, built once (+0.12 s for a 1 M-point scan).
 pub const SAMPLES: usize = 4096;
 
 /// Of the five rays around a back's normal, how many must meet a front for the back to see the

@@ -40,10 +40,20 @@ impl Geometry<'_> {
 
 /// Ray parameter of the hit with a disk's front face, or −1.
 pub fn intersect_disk(s: &Splat, o: Vec3, d: Vec3) -> f32 {
+    intersect_sided::<false>(s, o, d)
+}
+
+/// `intersect_disk`, or with `EITHER_SIDE` the hit with either face: the host's test of what
+/// the back of a disk faces (`scene::sides`), not the stages' policy.
+fn intersect_sided<const EITHER_SIDE: bool>(s: &Splat, o: Vec3, d: Vec3) -> f32 {
     let n = Vec3::from(s.normal);
     let c = Vec3::from(s.center);
     let denom = n.dot(d);
-    if !(denom < -PARALLEL_COS) {
+    let facing = match EITHER_SIDE {
+        true => denom.abs() > PARALLEL_COS,
+        false => denom < -PARALLEL_COS,
+    };
+    if !facing {
         return -1.0;
     }
     let t = n.dot(c - o) / denom;
@@ -65,23 +75,6 @@ pub fn miss(t_max: f32) -> Hit {
 
 fn select_i(f: IVec3, t: IVec3, m: BVec3) -> IVec3 {
     IVec3::select(m, t, f)
-}
-
-/// Ray parameter of the hit with a disk from either side, or −1: the host's test of what the
-/// back of a disk faces (`scene::sides`), not the stages' policy.
-pub fn intersect_either_side(s: &Splat, o: Vec3, d: Vec3) -> f32 {
-    let n = Vec3::from(s.normal);
-    let c = Vec3::from(s.center);
-    let denom = n.dot(d);
-    if !(denom.abs() > PARALLEL_COS) {
-        return -1.0;
-    }
-    let t = n.dot(c - o) / denom;
-    let q = o + t * d - c;
-    if !(t > 0.0 && q.dot(q) <= s.radius * s.radius) {
-        return -1.0;
-    }
-    t
 }
 
 /// `d` must be a unit vector; t is then a distance.
@@ -179,11 +172,7 @@ pub fn trace_sided<const EITHER_SIDE: bool>(
                     if s == skip {
                         continue;
                     }
-                    let disk = &geo.splats[s as usize];
-                    let th = match EITHER_SIDE {
-                        true => intersect_either_side(disk, o, d),
-                        false => intersect_disk(disk, o, d),
-                    };
+                    let th = intersect_sided::<EITHER_SIDE>(&geo.splats[s as usize], o, d);
                     let past =
                         th > floor_t || (th == floor_t && floor_e != NO_SPLAT && e > floor_e);
                     if past && th < best_t && th <= limit {
