@@ -51,6 +51,10 @@ pub fn bake_key(scene: &Scene) -> u64 {
     h.write(bytemuck::cast_slice(&scene.splats));
     h.write(bytemuck::cast_slice(&scene.materials));
     h.write(bytemuck::cast_slice(&scene.lights));
+    // A sky's map (the header alone, unhashed, where the scene has none: keys stay as they were).
+    if scene.sky.entries().len() > 1 {
+        h.write(bytemuck::cast_slice(scene.sky.entries()));
+    }
     h.write(format!("{:?}", scene.grid).as_bytes());
     h.write(format!("{:?}", scene.bake).as_bytes());
     h.write(&scene.search_radius().to_le_bytes());

@@ -212,6 +212,12 @@ pub fn stage_shape(stage: Stage) -> Result<StageShape> {
 }
 
 /// The names of `stage`'s compute entry points, in the order its WGSL declares them.
+/// Whether `stage` walks the splat grid (it imports `trace`): its bind group 1 is the scene's
+/// geometry (`wgsl/shared/trace.wgsl`).
+pub fn traces(stage: Stage) -> bool {
+    stage.file().text.contains("// #import trace\n")
+}
+
 pub fn stage_entries(stage: Stage) -> Result<Vec<String>> {
     reflect(stage).map(|r| r.entries.clone())
 }

@@ -199,6 +199,13 @@ pub mod light_kind {
     pub const SPOT: u32 = 1;
     pub const AREA: u32 = 2;
     pub const DIRECTIONAL: u32 = 3;
+    pub const ENVIRONMENT: u32 = 4;
+}
+
+/// Whether a light of `kind` is sampled on a grid of strata (`n × n` points of an area light,
+/// or directions of an environment light) rather than at one point.
+pub fn stratified(kind: u32) -> bool {
+    kind == light_kind::AREA || kind == light_kind::ENVIRONMENT
 }
 
 /// Bits of `Light::flags`.
@@ -213,7 +220,11 @@ pub mod light_flags {
 /// area: position is a corner, `edge_u`/`edge_v` span the rectangle (`edge_u × edge_v` points
 /// along `direction`, its normal), `area` its area;
 /// directional: direction (the way light travels); photons start on a disk of area `area`
-/// centred at `position`, perpendicular to the direction, that covers the scene's bounds.
+/// centred at `position`, perpendicular to the direction, that covers the scene's bounds;
+/// environment: the radiance of the scene's sky (`scene::sky::SkyTable`) from every direction,
+/// in the frame of `edge_u` (the map's x), `direction` (its y, up) and `edge_v` (its z);
+/// photons start on a disk of area `area` perpendicular to their direction, two of its radii
+/// out from `position`, the centre of the scene's bounds.
 /// `power` is total emitted RGB power (W) for every kind; emission sampling shares photons by it.
 /// `flags`: `light_flags`.
 #[repr(C)]

@@ -497,6 +497,66 @@ spacing = 0.5
     }
 }
 
+/// A constant sky of radiance L over an open disk facing up: the photons that land on it
+/// carry E·A with E = π L, the irradiance of the upper hemisphere (the disk is one-sided, so
+/// the lower one's photons pass it). Their powers vary (radiance over the map's pdf), so the
+/// bound is 4 σ of the sample itself.
+#[test]
+fn a_constant_sky_delivers_pi_l_on_an_open_disk() {
+    let device = common::device();
+    let radiance = 0.8f64;
+    let mut scene = parse(&format!(
+        r#"
+[[light]]
+type = "environment"
+radiance = {radiance}
+
+[[object]]
+shape = "quad"
+size = [2.0, 2.0]
+rotate = [-90.0, 0.0, 0.0]
+spacing = 0.5
+"#
+    ));
+    let radius = 0.9f32;
+    scene.splats = vec![lobelight::types::Splat {
+        center: [0.0; 3],
+        radius,
+        normal: [0.0, 1.0, 0.0],
+        ..scene.splats[0]
+    }];
+    let n = 40_000u64;
+    let cfg = config(&scene, n, StoreRange::All);
+    let target = std::f64::consts::PI * (radius as f64).powi(2);
+    let expected = std::f64::consts::PI * radiance * target;
+    for (what, map) in [
+        ("GPU", traced_on(&device, &scene, &cfg)),
+        ("CPU", on_cpu(&scene, &cfg)),
+    ] {
+        assert_finite(&map, what);
+        let landed: Vec<f64> = map
+            .photons
+            .iter()
+            .filter(|p| p.bounce == 0)
+            .map(|p| p.power[1] as f64)
+            .collect();
+        let got: f64 = landed.iter().sum();
+        // The sum over n emitted photons, each landing or not: σ² = n E[x²] − (Σ x)² / n.
+        let square: f64 = landed.iter().map(|x| x * x).sum();
+        let sigma = (square - got * got / n as f64).max(0.0).sqrt();
+        eprintln!("{what}: {got:.4} arrived, π L A = {expected:.4} ± {sigma:.4}");
+        assert!(
+            landed.len() > 1000,
+            "{what}: {} photons landed",
+            landed.len()
+        );
+        assert!(
+            (got - expected).abs() < 4.0 * sigma,
+            "{what}: {got} arrived, π L A = {expected} ± {sigma:.4}"
+        );
+    }
+}
+
 // ---------------------------------------------------------------------------------------
 // Store
 

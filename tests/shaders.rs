@@ -354,6 +354,7 @@ fn light_constants_match_the_wgsl() {
         ("LIGHT_SPOT", light_kind::SPOT),
         ("LIGHT_AREA", light_kind::AREA),
         ("LIGHT_DIRECTIONAL", light_kind::DIRECTIONAL),
+        ("LIGHT_ENVIRONMENT", light_kind::ENVIRONMENT),
         ("LIGHT_REFLECTS", light_flags::REFLECTS),
     ] {
         assert_eq!(wgsl_const_u32(&source, name), value, "{name}");

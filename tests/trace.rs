@@ -40,6 +40,7 @@ fn cpu_trace(splats: &[Splat], clips: &[SurfaceClip], rays: &[Ray], budget: u32)
         grid: &grid,
         splats,
         clips,
+        sky: &[[0.0; 4]],
     };
     let mut hits = vec![Hit::default(); rays.len()];
     let groups = groups_for(rays.len() as u32, trace_rays::WG);
@@ -60,6 +61,7 @@ fn gpu_trace(
         .storage("surface clips", &device_clips(clips, splats))
         .unwrap();
     let grid = build_grid(gpu, &p, &splat_buf).unwrap();
+    let sky_buf = gpu.storage("sky", &[[0.0f32; 4]]).unwrap();
     let params_buf = gpu.uniform("trace params", &params(rays.len(), budget));
     let ray_buf = gpu.storage("rays", rays).unwrap();
     let hit_buf = gpu
@@ -78,6 +80,7 @@ fn gpu_trace(
                 &grid.cell_splats,
                 &grid.cell_dist,
                 &clip_buf,
+                &sky_buf,
             ],
         ],
         groups_for(rays.len() as u32, trace_rays::WG),
@@ -480,11 +483,13 @@ fn facing_cones_change_no_ray() {
                 grid: &grid,
                 splats: &splats,
                 clips: &clips,
+                sky: &[[0.0; 4]],
             },
             Geometry {
                 grid: &bare,
                 splats: &splats,
                 clips: &clips,
+                sky: &[[0.0; 4]],
             },
         );
         let rays = leaving_rays(&splats, 4_000, 71);

@@ -1,6 +1,7 @@
 // The direct bake (docs/design.md section 8): what static lights give every splat, once, so
 // that a moving camera casts no shadow ray. Per splat and light, shadow rays from the splat's
-// centre to a samples^2 jittered grid on an area light (one ray to any other light) give
+// centre to a samples^2 jittered grid on an area light or of an environment light's directions
+// (one ray to any other light) give
 // - the shadowed irradiance, summed over the lights: what the diffuse part needs;
 // - the light's visibility, the shadowed share of its unshadowed irradiance: what the glossy
 //   part needs, times the BRDF towards the light, which follows the view.
@@ -43,12 +44,12 @@ fn main(@builtin(workgroup_id) wg: vec3<u32>, @builtin(num_workgroups) num_wg: v
     var total = vec3<f32>(0.0);
     for (var li = 0u; li < params.light_count; li++) {
         let l = lights[li];
-        let n = select(1u, params.samples, l.kind == LIGHT_AREA);
+        let n = strata_side(l.kind, params.samples);
         var open = vec3<f32>(0.0);
         var unshadowed = vec3<f32>(0.0);
         for (var j = 0u; j < n * n; j++) {
             let uv = area_point(j, n, key + (li * n * n + j) * 2u, true);
-            let ls = sample_light(l, s.center, uv.x, uv.y);
+            let ls = sample_light(l, s.center, s.normal, uv.x, uv.y);
             let cos_i = dot(s.normal, ls.wi);
             if !(cos_i > 0.0) || all(ls.e <= vec3<f32>(0.0)) {
                 continue;

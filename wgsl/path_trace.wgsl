@@ -106,6 +106,25 @@ fn blended_normal(o: vec3<f32>, d: vec3<f32>, hit: Hit, skip: u32) -> vec3<f32> 
     return select(h.normal, normalize(sum), dot(sum, sum) > 0.0);
 }
 
+// The radiance of the environment lights along a ray d that left the scene, each weighted by
+// the power heuristic against its next-event pdf where a BRDF sample of pdf `pdf_brdf` at a
+// surface of normal n chose d (0: the camera's ray, which sees the sky whole).
+fn sky_seen(d: vec3<f32>, n: vec3<f32>, pdf_brdf: f32) -> vec3<f32> {
+    var sum = vec3<f32>(0.0);
+    for (var li = 0u; li < params.light_count; li++) {
+        let l = lights[li];
+        if l.kind != LIGHT_ENVIRONMENT {
+            continue;
+        }
+        var w = 1.0;
+        if pdf_brdf > 0.0 {
+            w = power_heuristic(pdf_brdf, sky_pdf(l, n, d));
+        }
+        sum += sky_radiance(l, d) * w;
+    }
+    return sum;
+}
+
 // 1 where params.show has any of `bits`, else 0.
 fn shown(bits: u32) -> f32 {
     return select(0.0, 1.0, (params.show & bits) != 0u);
@@ -129,6 +148,8 @@ fn main(@builtin(workgroup_id) wg: vec3<u32>, @builtin(num_workgroups) num_wg: v
     var skip = NO_SPLAT;
     // The pdf of the BRDF sample that chose d (0: the camera's ray, which sees lights whole).
     var pdf_brdf = 0.0;
+    // The normal of the surface the ray left (the sky's next-event pdf there).
+    var from_normal = vec3<f32>(0.0);
     // Weights of the terms by params.show: a light the ray meets, and next events at vertices
     // past the first; both fixed by the first bounce's part.
     var hit_shown = shown(SHOW_DIRECT_DIFFUSE);
@@ -161,6 +182,10 @@ fn main(@builtin(workgroup_id) wg: vec3<u32>, @builtin(num_workgroups) num_wg: v
                 break;
             }
         }
+        // A ray that leaves the scene sees the sky.
+        if hit.splat == NO_SPLAT && hit.aborted == 0u {
+            radiance += throughput * sky_seen(d, from_normal, pdf_brdf) * hit_shown;
+        }
         if hit.splat == NO_SPLAT || hit.aborted != 0u || depth == params.max_depth {
             break;
         }
@@ -181,7 +206,7 @@ fn main(@builtin(workgroup_id) wg: vec3<u32>, @builtin(num_workgroups) num_wg: v
             let l = lights[li];
             let lkey = pcg_hash(key + li);
             let uv = vec2<f32>(rand(lkey, depth, RNG_LIGHT_U), rand(lkey, depth, RNG_LIGHT_V));
-            let ls = sample_light(l, p, uv.x, uv.y);
+            let ls = sample_light(l, p, n, uv.x, uv.y);
             let cos_i = dot(n, ls.wi);
             if !(cos_i > 0.0) || all(ls.e <= vec3<f32>(0.0)) {
                 continue;
@@ -194,9 +219,14 @@ fn main(@builtin(workgroup_id) wg: vec3<u32>, @builtin(num_workgroups) num_wg: v
             if blocked.splat != NO_SPLAT {
                 continue;
             }
-            var w = 1.0;
+            var pdf_light = 0.0;
             if l.kind == LIGHT_AREA {
-                let pdf_light = ls.dist * ls.dist / (l.area * -dot(ls.wi, l.direction));
+                pdf_light = ls.dist * ls.dist / (l.area * -dot(ls.wi, l.direction));
+            } else if l.kind == LIGHT_ENVIRONMENT {
+                pdf_light = sky_pdf(l, n, ls.wi);
+            }
+            var w = 1.0;
+            if pdf_light > 0.0 {
                 w = power_heuristic(pdf_light, brdf_pdf(n, wo, ls.wi, pd, ps, m.roughness));
             }
             var wd = later_shown;
@@ -234,6 +264,7 @@ fn main(@builtin(workgroup_id) wg: vec3<u32>, @builtin(num_workgroups) num_wg: v
         o = p;
         d = wi;
         skip = hit.splat;
+        from_normal = n;
     }
     let out = vec4<f32>(radiance, 1.0);
     if params.sample == 0u {

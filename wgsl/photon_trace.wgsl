@@ -75,6 +75,18 @@ fn emit(path: u32, key: u32) -> Emission {
             e.origin = l.position + p1 * l.edge_u + p2 * l.edge_v;
             e.direction = to_world(frame_of(l.direction), sample_cosine(d1, d2));
         }
+        case LIGHT_ENVIRONMENT: {
+            // A direction by the map's distribution; the photon comes from a disk across the
+            // scene's bounds, two of its radii out that way, and carries the disk's share of
+            // the light arriving from there: L / pdf times the disk's area over the photons.
+            let s = sample_sky_map(l, d1, d2);
+            let f = frame_of(-s.wi);
+            let r = sqrt(l.area / PI);
+            let q = sample_disk(p1, p2) * r;
+            e.origin = l.position + s.wi * (2.0 * r) + f.t * q.x + f.b * q.y;
+            e.direction = -s.wi;
+            e.power = s.e * (l.area / f32(em.count));
+        }
         default: {  // LIGHT_DIRECTIONAL: from a disk of area l.area across the scene
             let f = frame_of(l.direction);
             let q = sample_disk(p1, p2) * sqrt(l.area / PI);

@@ -77,9 +77,13 @@ fn shade_sample(sf: Surface, l: Light, ls: LightSample, spec_weight: f32) -> vec
     return f * ls.e * cos_i;
 }
 
-// The solid-angle pdf of area light l's uniform point sample seen from distance `dist` along
-// `wi`, times `count` samples.
-fn area_pdf(l: Light, wi: vec3<f32>, dist: f32, count: f32) -> f32 {
+// The solid-angle pdf of a stratified light's sample along `wi` (an area light's uniform point
+// at distance `dist`, an environment light's direction towards a surface of normal n), times
+// `count` samples.
+fn area_pdf(l: Light, n: vec3<f32>, wi: vec3<f32>, dist: f32, count: f32) -> f32 {
+    if l.kind == LIGHT_ENVIRONMENT {
+        return count * sky_pdf(l, n, wi);
+    }
     let cos_l = -dot(wi, l.direction);
     return select(0.0, count * dist * dist / (l.area * cos_l), cos_l > 0.0);
 }
@@ -92,14 +96,19 @@ fn narrow_lobe(sf: Surface, l: Light) -> bool {
     if !(sf.alpha >= MIN_ALPHA) || all(sf.rho_s <= vec3<f32>(0.0)) {
         return false;
     }
+    // A sky surrounds every lobe.
+    if l.kind == LIGHT_ENVIRONMENT {
+        return true;
+    }
     let to = l.position + 0.5 * (l.edge_u + l.edge_v) - sf.p;
     let d2 = dot(to, to);
     let cos_l = -dot(to, l.direction) * inverseSqrt(d2);
     return 4.0 * PI * sf.alpha * sf.alpha * d2 < l.area * max(cos_l, 0.0);
 }
 
-// The glossy part of area light l's direct light by one sample of the Ward lobe (at the unit
-// square's point u), weighted by the power heuristic against the frame's `count` light samples.
+// The glossy part of stratified light l's direct light by one sample of the Ward lobe (at the
+// unit square's point u), weighted by the power heuristic against the frame's `count` light
+// samples.
 fn specular_by_brdf(sf: Surface, l: Light, u: vec2<f32>, count: f32) -> vec3<f32> {
     let s = ward_sample(frame_of(sf.n), sf.wo, u.x, u.y, sf.alpha);
     let wi = s.wo;
@@ -108,7 +117,8 @@ fn specular_by_brdf(sf: Surface, l: Light, u: vec2<f32>, count: f32) -> vec3<f32
         return vec3<f32>(0.0);
     }
     let o = sf.p + params.shadow_bias * sf.n;
-    let t = area_light_hit(l, o, wi);
+    let sky = l.kind == LIGHT_ENVIRONMENT;
+    let t = select(area_light_hit(l, o, wi), FAR, sky);
     if !(t > 0.0) {
         return vec3<f32>(0.0);
     }
@@ -117,8 +127,11 @@ fn specular_by_brdf(sf: Surface, l: Light, u: vec2<f32>, count: f32) -> vec3<f32
         return vec3<f32>(0.0);
     }
     let pdf_brdf = ward_pdf(sf.n, sf.wo, wi, sf.alpha);
-    let pdf_light = area_pdf(l, wi, t, count);
-    let radiance = l.power / (PI * l.area);
+    let pdf_light = area_pdf(l, sf.n, wi, t, count);
+    var radiance = l.power / (PI * l.area);
+    if sky {
+        radiance = sky_radiance(l, wi);
+    }
     // f L cos / pdf_brdf times the heuristic's pdf_brdf^2 / (pdf_brdf^2 + pdf_light^2).
     let scale = pdf_brdf / (pdf_brdf * pdf_brdf + pdf_light * pdf_light);
     return sf.rho_s * ward_specular(sf.n, wi, sf.wo, sf.alpha) * radiance * (cos_i * scale);
@@ -129,15 +142,18 @@ fn direct(sf: Surface, pixel: u32) -> vec3<f32> {
     let key = pcg_hash(pcg_hash(params.seed) + pixel);
     for (var li = 0u; li < params.light_count; li++) {
         let l = lights[li];
-        if l.kind != LIGHT_AREA {
-                sum += shade_sample(sf, l, sample_light(l, sf.p, 0.0, 0.0), 1.0);
+        if !stratified(l.kind) {
+            sum += shade_sample(sf, l, sample_light(l, sf.p, sf.n, 0.0, 0.0), 1.0);
             continue;
         }
         // This frame's strata of the n x n grid: all of them, or a refinement frame's share;
         // a lobe narrower than the light adds one sample of its own, each strategy's glossy
         // part weighted by the power heuristic.
-        let n = params.area_samples;
-        let count = f32(params.area_count);
+        // A sky's grid is finer than an area light's: each frame takes as many more strata.
+        let n = strata_side(l.kind, params.area_samples);
+        let finer = (n * n) / (params.area_samples * params.area_samples);
+        let area_count = params.area_count * finer;
+        let count = f32(area_count);
         let glossy = narrow_lobe(sf, l);
         var area_sum = vec3<f32>(0.0);
         // The strata turned by a per-pixel offset: refinement frame k samples the pixel at
@@ -145,14 +161,14 @@ fn direct(sf: Surface, pixel: u32) -> vec3<f32> {
         // pixel to the point on the light (the diffuse box's blocks read 2 % bright in direct
         // light at 16 frames).
         let turn = pcg_hash(key) % (n * n);
-        for (var k = 0u; k < params.area_count; k++) {
-            let j = (params.area_first + k + turn) % (n * n);
+        for (var k = 0u; k < area_count; k++) {
+            let j = (params.area_first * finer + k + turn) % (n * n);
             let uv = area_point(j, n, key + (li * n * n + j) * 2u, true);
-            let ls = sample_light(l, sf.p, uv.x, uv.y);
+            let ls = sample_light(l, sf.p, sf.n, uv.x, uv.y);
             var w = 1.0;
             if glossy {
                 let pdf_brdf = ward_pdf(sf.n, sf.wo, ls.wi, sf.alpha);
-                w = power_heuristic(area_pdf(l, ls.wi, ls.dist, count), pdf_brdf);
+                w = power_heuristic(area_pdf(l, sf.n, ls.wi, ls.dist, count), pdf_brdf);
             }
             area_sum += shade_sample(sf, l, ls, w);
         }
@@ -205,7 +221,8 @@ const REFLECTING_LIGHT_SLACK: f32 = 0.01;
 
 // The radiance of the nearest area light the view ray meets before t_surface, in xyz; w is 1
 // where the light reflects (its own surface, just behind its face, shows too), 0 where it hides
-// what lies behind it, and -1 where the ray meets no light.
+// what lies behind it, and -1 where the ray meets no light. A ray that meets nothing (t_surface
+// FAR) sees the sky, if the scene has one, as a light that hides nothing.
 fn emitted(d: vec3<f32>, t_surface: f32) -> vec4<f32> {
     var out = vec4<f32>(0.0, 0.0, 0.0, -1.0);
     var t_near = t_surface;
@@ -220,6 +237,9 @@ fn emitted(d: vec3<f32>, t_surface: f32) -> vec4<f32> {
         if t > 0.0 && t < limit {
             t_near = t;
             out = vec4<f32>(l.power / (PI * l.area), select(0.0, 1.0, reflects));
+        }
+        if l.kind == LIGHT_ENVIRONMENT && t_surface >= FAR && out.w < 0.0 {
+            out = vec4<f32>(sky_radiance(l, d), 0.0);
         }
     }
     return out;

@@ -10,11 +10,11 @@ use crate::error::Result;
 use glam::Vec3;
 use rayon::prelude::*;
 
-use crate::shared::lights::{area_point, sample_light, shadow_reach};
+use crate::shared::lights::{area_point, sample_light, shadow_reach, strata_side};
 use crate::shared::rng::pcg_hash;
 use crate::shared::splat::SHADOW_RAY_BUDGET;
 use crate::shared::trace::{Geometry, trace_ray};
-use crate::types::{DirectParams, Light, NO_SPLAT, light_kind};
+use crate::types::{DirectParams, Light, NO_SPLAT};
 
 pub const WG: u32 = 64;
 
@@ -51,16 +51,12 @@ pub fn direct_bake(
             let mut total = Vec3::ZERO;
             for ((li, l), seen) in lights.iter().enumerate().zip(seen_by.iter_mut()) {
                 let li = li as u32;
-                let n = if l.kind == light_kind::AREA {
-                    params.samples
-                } else {
-                    1
-                };
+                let n = strata_side(l.kind, params.samples);
                 let (mut open, mut unshadowed) = (Vec3::ZERO, Vec3::ZERO);
                 for j in 0..n * n {
                     let r = key.wrapping_add((li * n * n + j).wrapping_mul(2));
                     let uv = area_point(j, n, r, true);
-                    let ls = sample_light(l, centre, uv.x, uv.y);
+                    let ls = sample_light(geo.sky, l, centre, normal, uv.x, uv.y);
                     let cos_i = normal.dot(ls.wi);
                     if !(cos_i > 0.0) || ls.e.cmple(Vec3::ZERO).all() {
                         continue;

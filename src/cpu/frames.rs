@@ -153,6 +153,7 @@ pub fn cpu_frame_into(
             lights: &scene.lights,
             direct: &direct.direct,
             visibility: &direct.visibility,
+            sky: scene.sky.entries(),
         },
     };
     let shaded = match &selection {

@@ -11,7 +11,9 @@ use glam::{IVec3, Vec2, Vec3, Vec4};
 use rayon::prelude::*;
 
 use crate::grid::{cell_index, point_cell};
-use crate::shared::lights::{MIN_ALPHA, area_light_hit, sample_light, shadow_reach};
+use crate::shared::lights::{
+    MIN_ALPHA, area_light_hit, sample_light, shadow_reach, sky_pdf, sky_radiance,
+};
 use crate::shared::rng::{
     RNG_BOUNCE_U, RNG_BOUNCE_V, RNG_EMIT_POS_U, RNG_EMIT_POS_V, RNG_ROULETTE, path_key, pcg_hash,
     rand,
@@ -106,6 +108,22 @@ fn blended_normal(geo: &Geometry, o: Vec3, d: Vec3, hit: &Hit, skip: u32) -> Vec
     }
 }
 
+/// The radiance of the environment lights along a ray `d` that left the scene, each weighted
+/// by the power heuristic against its next-event pdf where a BRDF sample of pdf `pdf_brdf` at
+/// a surface of normal `n` chose `d` (0: the camera's ray, which sees the sky whole).
+fn sky_seen(sky: &[[f32; 4]], lights: &[Light], (d, n): (Vec3, Vec3), pdf_brdf: f32) -> Vec3 {
+    let mut sum = Vec3::ZERO;
+    for l in lights.iter().filter(|l| l.kind == light_kind::ENVIRONMENT) {
+        let w = if pdf_brdf > 0.0 {
+            power_heuristic(pdf_brdf, sky_pdf(sky, l, n, d))
+        } else {
+            1.0
+        };
+        sum += sky_radiance(sky, l, d) * w;
+    }
+    sum
+}
+
 fn shown(show: u32, bits: u32) -> f32 {
     if show & bits != 0 { 1.0 } else { 0.0 }
 }
@@ -132,6 +150,8 @@ fn sample(
     let mut radiance = Vec3::ZERO;
     let mut skip = NO_SPLAT;
     let mut pdf_brdf = 0.0;
+    // The normal of the surface the ray left (the sky's next-event pdf there).
+    let mut from_normal = Vec3::ZERO;
     let mut hit_shown = shown(params.show, SHOW_DIRECT_DIFFUSE);
     let mut later_shown = 1.0;
     let lights = &lights[..params.light_count as usize];
@@ -161,6 +181,10 @@ fn sample(
                 break;
             }
         }
+        // A ray that leaves the scene sees the sky.
+        if hit.splat == NO_SPLAT && hit.aborted == 0 {
+            radiance += throughput * sky_seen(geo.sky, lights, (d, from_normal), pdf_brdf) * hit_shown;
+        }
         if hit.splat == NO_SPLAT || hit.aborted != 0 || depth == params.max_depth {
             break;
         }
@@ -181,7 +205,7 @@ fn sample(
                 rand(lkey, depth, RNG_LIGHT_U),
                 rand(lkey, depth, RNG_LIGHT_V),
             );
-            let ls = sample_light(l, p, u, v);
+            let ls = sample_light(geo.sky, l, p, n, u, v);
             let cos_i = n.dot(ls.wi);
             if !(cos_i > 0.0) || ls.e.cmple(Vec3::ZERO).all() {
                 continue;
@@ -194,11 +218,18 @@ fn sample(
             if blocked.splat != NO_SPLAT {
                 continue;
             }
-            let mut w = 1.0;
-            if l.kind == light_kind::AREA {
-                let pdf_light = ls.dist * ls.dist / (l.area * -ls.wi.dot(Vec3::from(l.direction)));
-                w = power_heuristic(pdf_light, brdf_pdf(n, wo, ls.wi, pd, ps, m.roughness));
-            }
+            let pdf_light = match l.kind {
+                light_kind::AREA => {
+                    ls.dist * ls.dist / (l.area * -ls.wi.dot(Vec3::from(l.direction)))
+                }
+                light_kind::ENVIRONMENT => sky_pdf(geo.sky, l, n, ls.wi),
+                _ => 0.0,
+            };
+            let w = if pdf_light > 0.0 {
+                power_heuristic(pdf_light, brdf_pdf(n, wo, ls.wi, pd, ps, m.roughness))
+            } else {
+                1.0
+            };
             let (wd, ws) = if depth == 0 {
                 (
                     shown(params.show, SHOW_DIRECT_DIFFUSE),
@@ -241,6 +272,7 @@ fn sample(
         o = p;
         d = wi;
         skip = hit.splat;
+        from_normal = n;
     }
     radiance
 }

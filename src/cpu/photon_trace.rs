@@ -11,7 +11,7 @@ use crate::error::Result;
 use glam::Vec3;
 use rayon::prelude::*;
 
-use crate::shared::lights::light_first;
+use crate::shared::lights::{light_first, sample_sky_map};
 use crate::shared::rng::*;
 use crate::shared::sampling::*;
 use crate::shared::trace::{FAR, Geometry, trace_ray};
@@ -40,7 +40,7 @@ struct Emission {
     power: Vec3,
 }
 
-fn emit(params: &TraceParams, emitters: &[Emitter], path: u32, key: u32) -> Emission {
+fn emit(params: &TraceParams, emitters: &[Emitter], sky: &[[f32; 4]], path: u32, key: u32) -> Emission {
     let em = &emitters[find_emitter(params, emitters, path) as usize];
     let l = &em.light;
     let p1 = rand(key, 0, RNG_EMIT_POS_U);
@@ -66,6 +66,17 @@ fn emit(params: &TraceParams, emitters: &[Emitter], path: u32, key: u32) -> Emis
             position + p1 * Vec3::from(l.edge_u) + p2 * Vec3::from(l.edge_v),
             to_world(&frame_of(axis), sample_cosine(d1, d2)),
         ),
+        light_kind::ENVIRONMENT => {
+            // A direction by the map's distribution; the photon comes from a disk across the
+            // scene's bounds, two of its radii out that way, and carries the disk's share of
+            // the light arriving from there: L / pdf times the disk's area over the photons.
+            let s = sample_sky_map(sky, l, d1, d2);
+            let f = frame_of(-s.wi);
+            let r = (l.area / PI).sqrt();
+            let q = sample_disk(p1, p2) * r;
+            power = s.e * (l.area / em.count as f32);
+            (position + s.wi * (2.0 * r) + f.t * q.x + f.b * q.y, -s.wi)
+        }
         _ => {
             let f = frame_of(axis);
             let q = sample_disk(p1, p2) * (l.area / PI).sqrt();
@@ -105,7 +116,7 @@ fn trace_path(
 ) -> End {
     let path = params.path_offset + i;
     let key = path_key(params.seed, path);
-    let e = emit(params, emitters, path, key);
+    let e = emit(params, emitters, geo.sky, path, key);
     let (mut o, mut d, mut power) = (e.origin, e.direction, e.power);
     let mut skip = NO_SPLAT;
     let mut budget = params.iteration_budget;

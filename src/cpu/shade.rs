@@ -11,6 +11,7 @@ use rayon::prelude::*;
 
 use crate::shared::lights::{
     LightSample, MIN_ALPHA, area_light_hit, area_point, light_first, sample_light, shadow_reach,
+    sky_pdf, sky_radiance, strata_side,
 };
 use crate::shared::rng::{pcg_hash, r2_point, r2_shift};
 use crate::shared::sampling::{PI, frame_of, power_heuristic};
@@ -22,7 +23,7 @@ use crate::shared::trace::{FAR, Geometry, trace_ray};
 use crate::shared::ward::{ward_pdf, ward_sample, ward_specular};
 use crate::types::{
     Camera, DIRECT_RAYS, Light, Material, NO_SPLAT, ShadeParams, SplatLight, light_flags,
-    light_kind,
+    light_kind, stratified,
 };
 
 use super::splat_attributes::Attributes;
@@ -69,7 +70,10 @@ fn shade_sample(
     f * ls.e * cos_i
 }
 
-fn area_pdf(l: &Light, wi: Vec3, dist: f32, count: f32) -> f32 {
+fn area_pdf(sky: &[[f32; 4]], l: &Light, (n, wi): (Vec3, Vec3), dist: f32, count: f32) -> f32 {
+    if l.kind == light_kind::ENVIRONMENT {
+        return count * sky_pdf(sky, l, n, wi);
+    }
     let cos_l = -wi.dot(Vec3::from(l.direction));
     if cos_l > 0.0 {
         count * dist * dist / (l.area * cos_l)
@@ -81,6 +85,10 @@ fn area_pdf(l: &Light, wi: Vec3, dist: f32, count: f32) -> f32 {
 fn narrow_lobe(sf: &Surface, l: &Light) -> bool {
     if !(sf.alpha >= MIN_ALPHA) || sf.rho_s.cmple(Vec3::ZERO).all() {
         return false;
+    }
+    // A sky surrounds every lobe.
+    if l.kind == light_kind::ENVIRONMENT {
+        return true;
     }
     let centre = Vec3::from(l.position) + 0.5 * (Vec3::from(l.edge_u) + Vec3::from(l.edge_v));
     let to = centre - sf.p;
@@ -104,7 +112,8 @@ fn specular_by_brdf(
         return Vec3::ZERO;
     }
     let o = sf.p + params.shadow_bias * sf.n;
-    let t = area_light_hit(l, o, wi);
+    let sky = l.kind == light_kind::ENVIRONMENT;
+    let t = if sky { FAR } else { area_light_hit(l, o, wi) };
     if !(t > 0.0) {
         return Vec3::ZERO;
     }
@@ -114,8 +123,12 @@ fn specular_by_brdf(
         return Vec3::ZERO;
     }
     let pdf_brdf = ward_pdf(sf.n, sf.wo, wi, sf.alpha);
-    let pdf_light = area_pdf(l, wi, t, count);
-    let radiance = Vec3::from(l.power) / (PI * l.area);
+    let pdf_light = area_pdf(geo.sky, l, (sf.n, wi), t, count);
+    let radiance = if sky {
+        sky_radiance(geo.sky, l, wi)
+    } else {
+        Vec3::from(l.power) / (PI * l.area)
+    };
     let scale = pdf_brdf / (pdf_brdf * pdf_brdf + pdf_light * pdf_light);
     sf.rho_s * ward_specular(sf.n, wi, sf.wo, sf.alpha) * radiance * (cos_i * scale)
 }
@@ -130,29 +143,33 @@ fn direct(
     let mut sum = Vec3::ZERO;
     let key = pcg_hash(pcg_hash(params.seed).wrapping_add(pixel));
     for (li, l) in lights.iter().enumerate().take(params.light_count as usize) {
-        if l.kind != light_kind::AREA {
-            sum += shade_sample(params, geo, sf, l, &sample_light(l, sf.p, 0.0, 0.0), 1.0);
+        if !stratified(l.kind) {
+            let ls = sample_light(geo.sky, l, sf.p, sf.n, 0.0, 0.0);
+            sum += shade_sample(params, geo, sf, l, &ls, 1.0);
             continue;
         }
         // This frame's strata of the n × n grid: all of them, or a refinement frame's share;
         // a lobe narrower than the light adds one sample of its own (multiple importance
         // sampling; see `wgsl/shade.wgsl`).
-        let n = params.area_samples;
-        let count = params.area_count as f32;
+        // A sky's grid is finer than an area light's: each frame takes as many more strata.
+        let n = strata_side(l.kind, params.area_samples);
+        let finer = (n * n) / (params.area_samples * params.area_samples);
+        let area_count = params.area_count * finer;
+        let count = area_count as f32;
         let glossy = narrow_lobe(sf, l);
         let mut area_sum = Vec3::ZERO;
         // The strata turned by a per-pixel offset, so that the point in the pixel and the
         // point on the light are not tied (`wgsl/shade.wgsl`).
         let turn = pcg_hash(key) % (n * n);
-        for k in 0..params.area_count {
-            let j = (params.area_first + k + turn) % (n * n);
+        for k in 0..area_count {
+            let j = (params.area_first * finer + k + turn) % (n * n);
             let r = key.wrapping_add((li as u32 * n * n + j).wrapping_mul(2));
             let uv = area_point(j, n, r, true);
-            let ls = sample_light(l, sf.p, uv.x, uv.y);
+            let ls = sample_light(geo.sky, l, sf.p, sf.n, uv.x, uv.y);
             let mut w = 1.0;
             if glossy {
                 let pdf_brdf = ward_pdf(sf.n, sf.wo, ls.wi, sf.alpha);
-                w = power_heuristic(area_pdf(l, ls.wi, ls.dist, count), pdf_brdf);
+                w = power_heuristic(area_pdf(geo.sky, l, (sf.n, ls.wi), ls.dist, count), pdf_brdf);
             }
             area_sum += shade_sample(params, geo, sf, l, &ls, w);
         }
@@ -225,11 +242,12 @@ fn glossy_indirect(
 pub const REFLECTING_LIGHT_SLACK: f32 = 0.01;
 
 /// The radiance of the nearest area light the view ray meets before `t_surface`, and whether
-/// it reflects (its own surface, just behind its face, then shows too).
+/// it reflects (its own surface, just behind its face, then shows too). A ray that meets
+/// nothing (`t_surface` FAR) sees the sky, if the scene has one, as a light that hides nothing.
 fn emitted(
     cam: &Camera,
     params: &ShadeParams,
-    lights: &[Light],
+    (lights, sky): (&[Light], &[[f32; 4]]),
     d: Vec3,
     t_surface: f32,
 ) -> Option<(Vec3, bool)> {
@@ -250,6 +268,9 @@ fn emitted(
         if t > 0.0 && t < limit {
             t_near = t;
             out = Some((Vec3::from(l.power) / (PI * l.area), reflects));
+        }
+        if l.kind == light_kind::ENVIRONMENT && t_surface >= FAR && out.is_none() {
+            out = Some((sky_radiance(sky, l, d), false));
         }
     }
     out
@@ -326,7 +347,7 @@ pub fn shade(
         // A light seen directly hides what lies behind it, or adds to its own surface where
         // it reflects; its radiance counts with the direct diffuse term, so that the parts a
         // frame can show add up to the whole.
-        let seen = emitted(cam, params, lights, d, t_surface);
+        let seen = emitted(cam, params, (lights, geo.sky), d, t_surface);
         let c = match seen {
             Some((light, false)) => shown(SHOW_DIRECT_DIFFUSE, light),
             Some((light, true)) => color + shown(SHOW_DIRECT_DIFFUSE, light),

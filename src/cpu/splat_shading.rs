@@ -6,16 +6,16 @@
 
 use glam::{Vec3, Vec4};
 
-use crate::shared::lights::{LightSample, MIN_ALPHA, area_point, sample_light};
+use crate::shared::lights::{LightSample, MIN_ALPHA, area_point, sample_light, sky_radiance};
 use crate::shared::lobe_brdf::{lobe_specular, norm_at, norm_lookup};
-use crate::shared::sampling::PI;
+use crate::shared::sampling::{PI, frame_of};
 use crate::shared::splat::{
     SHOW_DIRECT_DIFFUSE, SHOW_DIRECT_SPECULAR, SHOW_INDIRECT_DIFFUSE, SHOW_INDIRECT_SPECULAR,
     lobe_beta2,
 };
-use crate::shared::ward::ward_specular;
+use crate::shared::ward::{ward_sample, ward_specular};
 use crate::types::{
-    DIRECT_RAYS, Light, Lobe, Material, ShadeParams, Splat, SplatLight, light_kind,
+    DIRECT_RAYS, Light, Lobe, Material, ShadeParams, Splat, SplatLight, light_kind, stratified,
 };
 
 /// The direct bake's results (`DIRECT_BAKED`): bindings 7–9 of the WGSL.
@@ -24,6 +24,8 @@ pub struct BakedDirect<'a> {
     pub lights: &'a [Light],
     pub direct: &'a [[f32; 4]],
     pub visibility: &'a [f32],
+    /// The environment light's map (`scene::sky::SkyTable`).
+    pub sky: &'a [[f32; 4]],
 }
 
 /// Bindings 2–9 of the WGSL but the materials, which the callers index themselves.
@@ -92,8 +94,12 @@ impl Shading<'_> {
             if !(vis > 0.0) {
                 continue;
             }
-            if l.kind != light_kind::AREA {
-                let ls = sample_light(l, p, 0.0, 0.0);
+            if l.kind == light_kind::ENVIRONMENT {
+                spec += vis * sky_specular(params, baked.sky, l, (normal, wo), m.roughness);
+                continue;
+            }
+            if !stratified(l.kind) {
+                let ls = sample_light(baked.sky, l, p, normal, 0.0, 0.0);
                 spec += vis * specular_sample(normal, wo, m.roughness, &ls);
                 continue;
             }
@@ -101,13 +107,36 @@ impl Shading<'_> {
             let mut area_sum = Vec3::ZERO;
             for j in 0..n * n {
                 let uv = area_point(j, n, 0, false);
-                let ls = sample_light(l, p, uv.x, uv.y);
+                let ls = sample_light(baked.sky, l, p, normal, uv.x, uv.y);
                 area_sum += specular_sample(normal, wo, m.roughness, &ls);
             }
             spec += vis * area_sum * (1.0 / (n * n) as f32);
         }
         out + specular * spec
     }
+}
+
+/// The specular light environment light `l` reflects towards `wo` at a surface of normal `n`
+/// and roughness `alpha`, unshadowed (but for ρs): the sky along the Ward lobe's
+/// `area_samples²` strata centres (`sky_specular` in WGSL says why).
+fn sky_specular(
+    params: &ShadeParams,
+    sky: &[[f32; 4]],
+    l: &Light,
+    (n, wo): (Vec3, Vec3),
+    alpha: f32,
+) -> Vec3 {
+    let f = frame_of(n);
+    let k = params.area_samples;
+    let mut sum = Vec3::ZERO;
+    for j in 0..k * k {
+        let uv = area_point(j, k, 0, false);
+        let s = ward_sample(&f, wo, uv.x, uv.y, alpha);
+        if s.weight > 0.0 {
+            sum += s.weight * sky_radiance(sky, l, s.wo);
+        }
+    }
+    sum * (1.0 / (k * k) as f32)
 }
 
 /// Whether material `m` reflects by a glossy lobe: a specular part, rough enough for Ward's

@@ -9,7 +9,7 @@ use crate::sequence::Executor;
 use crate::shaders::{Pass, Stage};
 
 /// Buffers in bind group 1 of the tracing stages (`GpuScene::geometry`).
-pub const GEOMETRY_BINDINGS: usize = 6;
+pub const GEOMETRY_BINDINGS: usize = 7;
 
 /// Bind group 1 of the tracing stages, in binding order (see `wgsl/shared/trace.wgsl`).
 pub type GeometryBuffers<'a> = [&'a wgpu::Buffer; GEOMETRY_BINDINGS];

@@ -285,7 +285,8 @@ impl Gpu {
 
     /// `variant_paged` of one entry point of the stage. A stage of several entry points gets
     /// the layout of every binding it declares (`layout::declared`), so that each pass binds
-    /// the same buffers whichever of them it reads.
+    /// the same buffers whichever of them it reads; so does a stage that traces, which binds
+    /// the scene's whole geometry whichever parts of it (the sky) it reads.
     fn pass_pipeline(
         &self,
         pass: Pass,
@@ -307,9 +308,10 @@ impl Gpu {
         }
         let started = std::time::Instant::now();
         let source = crate::shaders::resolve_stage_paged(stage, defines, paging)?;
-        let layout = match crate::shaders::stage_entries(stage)?.len() {
-            0 | 1 => None,
-            _ => Some(layout::declared(&self.device, stage, &source)?),
+        let several = crate::shaders::stage_entries(stage)?.len() > 1;
+        let layout = match several || crate::shaders::traces(stage) {
+            false => None,
+            true => Some(layout::declared(&self.device, stage, &source)?),
         };
         let module = self.shader_module(stage.name(), source);
         let pipeline = self
@@ -372,12 +374,12 @@ impl Gpu {
         &self,
         encoder: &mut wgpu::CommandEncoder,
         stage: Stage,
-        buffers: &[&wgpu::Buffer],
+        bind_groups: &[&[&wgpu::Buffer]],
         (args, offset): (&wgpu::Buffer, u64),
     ) -> Result<()> {
-        let paging = self.paging(stage, &[buffers])?;
+        let paging = self.paging(stage, bind_groups)?;
         let pipeline = self.variant_paged(stage, &[], &[], &paging)?;
-        let mut pass = self.bound_pass(encoder, stage, &pipeline, &paging, &[buffers])?;
+        let mut pass = self.bound_pass(encoder, stage, &pipeline, &paging, bind_groups)?;
         pass.dispatch_workgroups_indirect(args, offset);
         Ok(())
     }

@@ -20,6 +20,8 @@ pub struct GpuScene {
     pub clips: wgpu::Buffer,
     /// The drawing passes' uniform of clips (`drawn_clips`).
     pub drawn_clips: wgpu::Buffer,
+    /// The environment light's map (`Scene::sky`).
+    pub sky: wgpu::Buffer,
     pub grid: GpuGrid,
     /// Time to upload the splats and build the grid.
     pub grid_ms: f64,
@@ -35,11 +37,13 @@ impl GpuScene {
         let clips = gpu.storage("surface clips", &device_clips(&scene.clips, &scene.splats))?;
         let drawn = drawn_clips(&scene.clips);
         let drawn_clips = gpu.uniform("drawn clips", &drawn);
+        let sky = gpu.storage("sky", scene.sky.entries())?;
         Ok(GpuScene {
             splats,
             materials,
             clips,
             drawn_clips,
+            sky,
             grid,
             grid_ms: ms_since(t),
         })
@@ -54,6 +58,7 @@ impl GpuScene {
             &self.grid.cell_splats,
             &self.grid.cell_dist,
             &self.clips,
+            &self.sky,
         ]
     }
 }

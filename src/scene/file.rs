@@ -263,6 +263,28 @@ pub enum LightDesc {
     },
     /// Parallel light travelling along `direction`, irradiance in W/m² across the beam.
     Directional { direction: Vec3, irradiance: Rgb },
+    /// Light from every direction, a sky: a latitude-longitude HDR image (`map`: OpenEXR, or
+    /// Radiance `.hdr`, relative to the scene file) or one `radiance` (W/m²/sr), times
+    /// `scale`. One a scene.
+    Environment {
+        map: Option<String>,
+        radiance: Option<Rgb>,
+        /// Multiplies the map's or the radiance's values (default 1).
+        scale: Option<f32>,
+        /// Degrees the map turns about the up axis (default 0).
+        rotation: Option<f32>,
+        /// The scene's up axis, which the map's top looks along: "y" (default) or "z".
+        up: Option<UpAxis>,
+    },
+}
+
+/// A scene's up axis.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Deserialize)]
+#[serde(rename_all = "lowercase")]
+pub enum UpAxis {
+    #[default]
+    Y,
+    Z,
 }
 
 /// What an object is made of.

@@ -6,6 +6,7 @@ pub mod model;
 mod settings;
 pub mod shapes;
 pub mod sides;
+pub mod sky;
 pub mod views;
 
 use std::path::{Path, PathBuf};
@@ -49,6 +50,8 @@ pub struct Scene {
     /// Where each surface's disks end, one per surface (`SurfaceClip`): a box's and a quad's
     /// at its edges; none for spheres and models. A surface past its end clips nothing.
     pub clips: Vec<SurfaceClip>,
+    /// The map of its environment light, if it has one (`lights` holds the light itself).
+    pub sky: sky::SkyTable,
     /// Where this scene's origin lies in the file's coordinates (`recentre`); zero for a
     /// scene near the origin.
     pub origin: Vec3,
@@ -118,6 +121,7 @@ impl Scene {
             grid,
             splats: &self.splats,
             clips: &self.clips,
+            sky: self.sky.entries(),
         }
     }
 
@@ -329,10 +333,25 @@ pub fn parse(path: &Path, text: &str) -> Result<Scene> {
     let bounds = crate::grid::splat_bounds(&splats).unwrap_or((Vec3::ZERO, Vec3::ZERO));
 
     let mut lights = Vec::new();
+    let mut sky = None;
     for (k, l) in file.lights.iter().enumerate() {
-        let light = light(l.get_ref(), bounds)
-            .map_err(|m| at_line(l.span(), format!("light #{}: {m}", k + 1)))?;
-        lights.push(light);
+        let at = |m: String| at_line(l.span(), format!("light #{}: {m}", k + 1));
+        let map = match l.get_ref() {
+            LightDesc::Environment {
+                map,
+                radiance,
+                scale,
+                ..
+            } => {
+                if sky.is_some() {
+                    return Err(at("a scene has at most one environment light".into()));
+                }
+                Some(environment_map(map.as_deref(), *radiance, *scale, base_dir).map_err(at)?)
+            }
+            _ => None,
+        };
+        lights.push(light(l.get_ref(), bounds, map.as_ref()).map_err(at)?);
+        sky = map.map(|m| m.table());
     }
     if lights.is_empty() {
         return Err(invalid(
@@ -392,6 +411,7 @@ pub fn parse(path: &Path, text: &str) -> Result<Scene> {
         objects,
         surfaces,
         clips,
+        sky: sky.unwrap_or_default(),
         origin: Vec3::ZERO,
         budget,
     };
@@ -555,7 +575,38 @@ fn one_of(
     }
 }
 
-fn light(l: &LightDesc, (lo, hi): (Vec3, Vec3)) -> std::result::Result<Light, String> {
+/// An environment light's map: the image at `map` (relative to `base_dir`) or the constant
+/// `radiance`, times `scale`.
+fn environment_map(
+    map: Option<&str>,
+    radiance: Option<file::Rgb>,
+    scale: Option<f32>,
+    base_dir: &Path,
+) -> std::result::Result<sky::Sky, String> {
+    let scale = scale.unwrap_or(1.0);
+    if !(scale > 0.0 && scale.is_finite()) {
+        return Err(format!("scale must be positive and finite, got {scale}"));
+    }
+    let sky = match (map, radiance) {
+        (Some(m), None) => sky::Sky::load(&base_dir.join(m), scale)?,
+        (None, Some(c)) => {
+            let c = nonneg_rgb(c.rgb(), "radiance")?.map(|x| x * scale);
+            let sky = sky::Sky::constant(c);
+            sky.check()?;
+            sky
+        }
+        _ => return Err("give exactly one of `map` (an EXR or .hdr image) or `radiance`".into()),
+    };
+    Ok(sky)
+}
+
+/// The scene's light of description `l`, its scene's splats within `(lo, hi)`; `sky` is an
+/// environment light's map.
+fn light(
+    l: &LightDesc,
+    (lo, hi): (Vec3, Vec3),
+    sky: Option<&sky::Sky>,
+) -> std::result::Result<Light, String> {
     let four_pi = 4.0 * std::f32::consts::PI;
     let mut out = Light::default();
     match l {
@@ -655,6 +706,29 @@ fn light(l: &LightDesc, (lo, hi): (Vec3, Vec3)) -> std::result::Result<Light, St
             out.direction = d.into();
             out.area = area;
             out.power = nonneg_rgb(irradiance.rgb(), "irradiance")?.map(|x| x * area);
+        }
+        LightDesc::Environment { rotation, up, .. } => {
+            let sky = sky.ok_or("an environment light needs its map")?;
+            let rotation = rotation.unwrap_or(0.0);
+            if !rotation.is_finite() {
+                return Err(format!("rotation must be finite, got {rotation}"));
+            }
+            let up = match up.unwrap_or_default() {
+                file::UpAxis::Y => Vec3::Y,
+                file::UpAxis::Z => Vec3::Z,
+            };
+            let [x, y, z] = sky::frame(up, rotation);
+            // Photons start on a disk across the scene's bounding sphere, as a directional
+            // light's do, from every direction.
+            let r = (0.5 * (hi - lo).length()).max(1e-6);
+            let area = std::f32::consts::PI * r * r;
+            out.kind = light_kind::ENVIRONMENT;
+            out.position = (0.5 * (lo + hi)).into();
+            out.edge_u = x.into();
+            out.direction = y.into();
+            out.edge_v = z.into();
+            out.area = area;
+            out.power = sky.integral().map(|x| x * area);
         }
     }
     // Each value finite, its power (times 4π, an area or the scene's cross-section) may not be.

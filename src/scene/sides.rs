@@ -174,6 +174,8 @@ fn back_sees_scene(scene: &Scene, geo: &crate::shared::trace::Geometry, i: usize
         let p = Vec3::from(l.position);
         let (to, dist) = match l.kind {
             light_kind::DIRECTIONAL => (-Vec3::from(l.direction), FAR),
+            // A sky lights a back from the way it faces.
+            light_kind::ENVIRONMENT => (-n, FAR),
             light_kind::AREA => {
                 let centre = p + 0.5 * (Vec3::from(l.edge_u) + Vec3::from(l.edge_v));
                 if (c - centre).dot(Vec3::from(l.direction)) <= 0.0 {

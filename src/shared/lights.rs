@@ -7,7 +7,7 @@
 use glam::{Vec2, Vec3};
 
 use crate::shared::rng::{pcg_hash, unit_float};
-use crate::shared::sampling::{PI, smoothstep};
+use crate::shared::sampling::{PI, frame_of, sample_cosine, smoothstep, to_world};
 use crate::shared::trace::FAR;
 use crate::types::{Light, light_flags, light_kind};
 
@@ -20,6 +20,158 @@ pub struct LightSample {
     pub e: Vec3,
 }
 
+/// An environment light's strata per side, in an area light's (`SKY_STRATA` in WGSL says why).
+pub const SKY_STRATA: u32 = 2;
+
+/// The side of the grid of strata a light of `kind` is sampled on, where an area light's has
+/// `n`: 1 for a light sampled at one point.
+pub fn strata_side(kind: u32, n: u32) -> u32 {
+    match kind {
+        light_kind::ENVIRONMENT => SKY_STRATA * n,
+        light_kind::AREA => n,
+        _ => 1,
+    }
+}
+
+/// Rec. 709 luminance, the sky's sampling weight (`scene::sky`).
+fn sky_luminance(c: Vec3) -> f32 {
+    c.dot(Vec3::new(0.2126, 0.7152, 0.0722))
+}
+
+/// The sky's width and height (`SkyTable`'s header; 0 × 0 where the scene has none).
+fn sky_size(sky: &[[f32; 4]]) -> (u32, u32) {
+    (sky[0][0] as u32, sky[0][1] as u32)
+}
+
+/// The first of `count` entries from `first` whose component `c` exceeds `x` (a cumulative
+/// distribution's pick), the last where none does.
+fn sky_pick(sky: &[[f32; 4]], first: u32, count: u32, c: usize, x: f32) -> u32 {
+    let (mut lo, mut hi) = (0u32, count - 1);
+    while lo < hi {
+        let mid = (lo + hi) / 2;
+        if sky[(first + mid) as usize][c] > x {
+            hi = mid;
+        } else {
+            lo = mid + 1;
+        }
+    }
+    lo
+}
+
+/// Where `x` lies between the cumulative shares before and at entry `k` (of the run from
+/// `first`), in [0, 1).
+fn sky_remap(sky: &[[f32; 4]], first: u32, k: u32, c: usize, x: f32) -> f32 {
+    let before = if k > 0 {
+        sky[(first + k - 1) as usize][c]
+    } else {
+        0.0
+    };
+    let span = sky[(first + k) as usize][c] - before;
+    if span > 0.0 {
+        ((x - before) / span).clamp(0.0, 0.999_999)
+    } else {
+        0.5
+    }
+}
+
+/// The solid-angle pdf of sampling texel (x, y) at sin θ, by the texel's radiance `c`.
+fn sky_texel_pdf(sky: &[[f32; 4]], c: Vec3, y: u32, sin_theta: f32) -> f32 {
+    let (w, h) = sky_size(sky);
+    let sin_row = (PI * (y as f32 + 0.5) / h as f32).sin();
+    let pdf_uv = sky_luminance(c) * sin_row * (w * h) as f32 / sky[0][2];
+    if sin_theta > 0.0 {
+        pdf_uv / (2.0 * PI * PI * sin_theta)
+    } else {
+        0.0
+    }
+}
+
+/// The texel of `sky` that direction `d` (world) looks at through environment light `l`'s
+/// frame: its entry, its row, and the sine of `d`'s angle to the map's up axis.
+fn sky_texel(sky: &[[f32; 4]], l: &Light, d: Vec3) -> (usize, u32, f32) {
+    let (w, h) = sky_size(sky);
+    let local = Vec3::new(
+        d.dot(Vec3::from(l.edge_u)),
+        d.dot(Vec3::from(l.direction)),
+        d.dot(Vec3::from(l.edge_v)),
+    );
+    let mut u = local.x.atan2(-local.z) / (2.0 * PI);
+    if u < 0.0 {
+        u += 1.0;
+    }
+    // sin θ from the two other components, θ by atan2: exact near the poles, where
+    // sqrt(1 − cos²) and acos lose their digits.
+    let sin_theta = Vec2::new(local.x, local.z).length();
+    let v = sin_theta.atan2(local.y) / PI;
+    let x = ((u * w as f32) as u32).min(w - 1);
+    let y = ((v * h as f32) as u32).min(h - 1);
+    ((1 + y * w + x) as usize, y, sin_theta)
+}
+
+/// The radiance environment light `l` sends along −d (arriving from direction `d`).
+pub fn sky_radiance(sky: &[[f32; 4]], l: &Light, d: Vec3) -> Vec3 {
+    Vec3::from_slice(&sky[sky_texel(sky, l, d).0][..3])
+}
+
+/// The solid-angle pdf with which `sample_sky_map` picks direction `d` of environment light `l`.
+pub fn sky_map_pdf(sky: &[[f32; 4]], l: &Light, d: Vec3) -> f32 {
+    let (entry, y, sin_theta) = sky_texel(sky, l, d);
+    sky_texel_pdf(sky, Vec3::from_slice(&sky[entry][..3]), y, sin_theta)
+}
+
+/// The solid-angle pdf with which `sample_light` picks direction `d` of environment light `l`
+/// for a surface of normal `n`: half by the map, half by the cosine about `n`.
+pub fn sky_pdf(sky: &[[f32; 4]], l: &Light, n: Vec3, d: Vec3) -> f32 {
+    0.5 * (sky_map_pdf(sky, l, d) + n.dot(d).max(0.0) / PI)
+}
+
+/// A direction of environment light `l` picked by the unit square's point (u, v) in
+/// proportion to its radiance's luminance times its solid angle: the row by the rows' shares,
+/// the texel by its row's, the point within the texel uniformly. `e` is its radiance over its
+/// pdf (zero where the pdf is). Photons leave the sky so; surfaces take `sample_sky`.
+pub fn sample_sky_map(sky: &[[f32; 4]], l: &Light, u: f32, v: f32) -> LightSample {
+    let (w, h) = sky_size(sky);
+    let rows = 1 + w * h;
+    let y = sky_pick(sky, rows, h, 0, v);
+    let fy = sky_remap(sky, rows, y, 0, v);
+    let x = sky_pick(sky, 1 + y * w, w, 3, u);
+    let fx = sky_remap(sky, 1 + y * w, x, 3, u);
+    let phi = 2.0 * PI * (x as f32 + fx) / w as f32;
+    let theta = PI * (y as f32 + fy) / h as f32;
+    let (sin_t, cos_t) = theta.sin_cos();
+    let (sin_p, cos_p) = phi.sin_cos();
+    let wi = (sin_t * sin_p) * Vec3::from(l.edge_u)
+        + cos_t * Vec3::from(l.direction)
+        + (-sin_t * cos_p) * Vec3::from(l.edge_v);
+    let c = Vec3::from_slice(&sky[(1 + y * w + x) as usize][..3]);
+    let pdf = sky_texel_pdf(sky, c, y, sin_t);
+    let e = if pdf > 0.0 { c / pdf } else { Vec3::ZERO };
+    LightSample { wi, dist: FAR, e }
+}
+
+/// A direction of environment light `l` towards a surface of normal `n`: the unit square's
+/// left half picks it by the map (`sample_sky_map`), its right half by the cosine about `n`,
+/// and `e` weighs the radiance by the power heuristic of the two, each taking half the
+/// samples (`e = 2 w L / p` of its own strategy; why in `wgsl/shared/lights.wgsl`).
+fn sample_sky(sky: &[[f32; 4]], l: &Light, n: Vec3, u: f32, v: f32) -> LightSample {
+    let by_map = u < 0.5;
+    let wi = if by_map {
+        sample_sky_map(sky, l, 2.0 * u, v).wi
+    } else {
+        to_world(&frame_of(n), sample_cosine(2.0 * u - 1.0, v))
+    };
+    let p_map = sky_map_pdf(sky, l, wi);
+    let p_cos = n.dot(wi).max(0.0) / PI;
+    let own = if by_map { p_map } else { p_cos };
+    let both = p_map * p_map + p_cos * p_cos;
+    let e = if own > 0.0 {
+        sky_radiance(sky, l, wi) * (2.0 * own / both)
+    } else {
+        Vec3::ZERO
+    };
+    LightSample { wi, dist: FAR, e }
+}
+
 pub fn spot_falloff_mean(l: &Light) -> f32 {
     if l.cos_inner <= l.cos_outer {
         return 1.0;
@@ -27,7 +179,12 @@ pub fn spot_falloff_mean(l: &Light) -> f32 {
     ((l.cos_inner - l.cos_outer) * 0.5 + (1.0 - l.cos_inner)) / (1.0 - l.cos_outer)
 }
 
-pub fn sample_light(l: &Light, p: Vec3, u: f32, v: f32) -> LightSample {
+/// A point of light `l` towards `p`, a surface of normal `n`: (u, v) picks the point of an
+/// area light or the direction of an environment light, whose map `sky` holds (`SkyTable`).
+pub fn sample_light(sky: &[[f32; 4]], l: &Light, p: Vec3, n: Vec3, u: f32, v: f32) -> LightSample {
+    if l.kind == light_kind::ENVIRONMENT {
+        return sample_sky(sky, l, n, u, v);
+    }
     let power = Vec3::from(l.power);
     let axis = Vec3::from(l.direction);
     if l.kind == light_kind::DIRECTIONAL {

@@ -19,6 +19,8 @@ pub struct Geometry<'a> {
     pub splats: &'a [Splat],
     /// Per surface (`Splat::object`), where its disks end; a surface past the end clips nothing.
     pub clips: &'a [SurfaceClip],
+    /// The environment light's map (`scene::sky::SkyTable`; its header alone where none).
+    pub sky: &'a [[f32; 4]],
 }
 
 impl Geometry<'_> {

@@ -22,6 +22,9 @@
 @group(0) @binding(8) var<storage, read> direct: array<vec4<f32>>;
 // #paged
 @group(0) @binding(9) var<storage, read> visibility: array<f32>;
+// The environment light's map (lights.wgsl), in a group of its own: only the direct bake's
+// shading reads it (splat_shade), so the other passes' derived layouts leave it out.
+@group(1) @binding(0) var<storage, read> sky: array<vec4<f32>>;
 
 // The hemispherical integral of a lobe of width beta2 about axis (lobe_norms).
 fn lobe_norm(n: vec3<f32>, axis: vec3<f32>, beta2: f32) -> f32 {
@@ -62,6 +65,24 @@ fn specular_sample(n: vec3<f32>, wo: vec3<f32>, alpha: f32, ls: LightSample) -> 
     return ward_specular(n, ls.wi, wo, alpha) * ls.e * cos_i;
 }
 
+// The specular light environment light l reflects towards wo at a surface of normal n and
+// roughness alpha, unshadowed (but for rho_s): the sky seen along params.area_samples^2 fixed
+// directions of the Ward lobe, the strata centres of its sampling. Points of the sky sampled
+// by its own distribution would show on a glossy surface as that many highlights.
+fn sky_specular(l: Light, n: vec3<f32>, wo: vec3<f32>, alpha: f32) -> vec3<f32> {
+    let f = frame_of(n);
+    let count = params.area_samples * params.area_samples;
+    var sum = vec3<f32>(0.0);
+    for (var j = 0u; j < count; j++) {
+        let uv = area_point(j, params.area_samples, 0u, false);
+        let s = ward_sample(f, wo, uv.x, uv.y, alpha);
+        if s.weight > 0.0 {
+            sum += s.weight * sky_radiance(l, s.wo);
+        }
+    }
+    return sum * (1.0 / f32(count));
+}
+
 // Whether material m reflects by a glossy lobe: a specular part, rough enough for Ward's BRDF
 // (the baked direct light's glossy part, and merged disks' normals in splat_shade).
 fn glossy_lobe(m: Material) -> bool {
@@ -70,7 +91,7 @@ fn glossy_lobe(m: Material) -> bool {
 
 // Radiance leaving splat i at p towards wo by the baked direct light: the diffuse part from
 // the shadowed irradiance, the glossy part from the BRDF towards each light (an area light's
-// n x n strata centres) times the light's visibility.
+// n x n strata centres; the sky along the lobe's, sky_specular) times the light's visibility.
 fn baked_direct(i: u32, s: Splat, m: Material, p: vec3<f32>, wo: vec3<f32>) -> vec3<f32> {
     var out = vec3<f32>(0.0);
     if (params.show & SHOW_DIRECT_DIFFUSE) != 0u {
@@ -86,15 +107,21 @@ fn baked_direct(i: u32, s: Splat, m: Material, p: vec3<f32>, wo: vec3<f32>) -> v
         if !(vis > 0.0) {
             continue;
         }
-        if l.kind != LIGHT_AREA {
-            spec += vis * specular_sample(s.normal, wo, m.roughness, sample_light(l, p, 0.0, 0.0));
+        if l.kind == LIGHT_ENVIRONMENT {
+            spec += vis * sky_specular(l, s.normal, wo, m.roughness);
+            continue;
+        }
+        if !stratified(l.kind) {
+            let ls = sample_light(l, p, s.normal, 0.0, 0.0);
+            spec += vis * specular_sample(s.normal, wo, m.roughness, ls);
             continue;
         }
         let n = params.area_samples;
         var area_sum = vec3<f32>(0.0);
         for (var j = 0u; j < n * n; j++) {
             let uv = area_point(j, n, 0u, false);
-            area_sum += specular_sample(s.normal, wo, m.roughness, sample_light(l, p, uv.x, uv.y));
+            let ls = sample_light(l, p, s.normal, uv.x, uv.y);
+            area_sum += specular_sample(s.normal, wo, m.roughness, ls);
         }
         spec += vis * area_sum * (1.0 / f32(n * n));
     }

@@ -37,6 +37,8 @@
 @group(1) @binding(4) var<storage, read> cell_dist: array<u32>;
 // Per surface (Splat.object); a surface past the end clips nothing.
 @group(1) @binding(5) var<storage, read> surface_clips: array<SurfaceClip>;
+// The environment light's map (lights.wgsl reads it; scene::sky::SkyTable).
+@group(1) @binding(6) var<storage, read> sky: array<vec4<f32>>;
 
 const PARALLEL_COS: f32 = 1e-6;
 

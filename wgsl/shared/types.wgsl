@@ -96,6 +96,7 @@ const LIGHT_POINT: u32 = 0u;
 const LIGHT_SPOT: u32 = 1u;
 const LIGHT_AREA: u32 = 2u;
 const LIGHT_DIRECTIONAL: u32 = 3u;
+const LIGHT_ENVIRONMENT: u32 = 4u;
 // Light.flags: an area light whose front reflects as a surface does (light_flags::REFLECTS).
 const LIGHT_REFLECTS: u32 = 1u;
 

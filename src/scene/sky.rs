@@ -1,0 +1,203 @@
+//! An environment light's map (docs/design.md §4, "Environment light"): the radiance arriving
+//! from every direction, a latitude-longitude image or one constant radiance, with the tables
+//! that sample it in proportion to its luminance times its texels' solid angle. The stages read
+//! it packed into one array (`SkyTable`), through `shared::lights` and its WGSL twin.
+//!
+//! The map's frame is Mitsuba's: in the map's own axes, y up, the texel at (u, v) of the unit
+//! square looks along `(sin θ sin φ, cos θ, −sin θ cos φ)`, `φ = 2π u`, `θ = π v`, so that an
+//! EXR lights a scene here as Mitsuba's `envmap` lights it.
+
+use std::path::Path;
+
+use glam::Vec3;
+
+/// Rows of the map a constant sky is made of: its texels' solid angles follow sin θ, which the
+/// sampling tables weigh by each row's centre, so finer rows sample the sphere more evenly.
+const CONSTANT_ROWS: u32 = 128;
+
+/// Texels a map may have (16k × 8k), and so the most the packed table holds: 2 GiB.
+pub const MAX_TEXELS: u64 = 1 << 27;
+
+/// An environment map in linear RGB radiance (W/m²/sr), row by row from the top (θ = 0).
+#[derive(Clone, Debug, PartialEq)]
+pub struct Sky {
+    pub width: u32,
+    pub height: u32,
+    pub radiance: Vec<[f32; 3]>,
+}
+
+/// A sky as the stages read it (`sky` in `wgsl/shared/trace.wgsl` and
+/// `wgsl/shared/splat_shading.wgsl`), one `[f32; 4]` an entry:
+/// - 0: the header: width and height (exact in f32: `MAX_TEXELS` keeps each below 2²⁴), the sum of the texels' sampling weights;
+/// - 1 + y W + x: texel (x, y): its radiance, and the share of its row's weight up to and
+///   including it (its row's cumulative distribution);
+/// - 1 + W H + y: row y: the share of the map's weight up to and including it.
+///
+/// A texel's weight is its luminance times the sine of its row's centre angle. A scene with no
+/// environment light has the header alone, all zero.
+#[derive(Clone, Debug, PartialEq)]
+pub struct SkyTable(pub Vec<[f32; 4]>);
+
+impl Default for SkyTable {
+    fn default() -> SkyTable {
+        SkyTable(vec![[0.0; 4]])
+    }
+}
+
+impl SkyTable {
+    pub fn entries(&self) -> &[[f32; 4]] {
+        &self.0
+    }
+}
+
+/// Rec. 709 luminance (docs/design.md §2).
+fn luminance(c: [f32; 3]) -> f32 {
+    0.2126 * c[0] + 0.7152 * c[1] + 0.0722 * c[2]
+}
+
+impl Sky {
+    /// One radiance from every direction.
+    pub fn constant(radiance: [f32; 3]) -> Sky {
+        Sky {
+            width: 1,
+            height: CONSTANT_ROWS,
+            radiance: vec![radiance; CONSTANT_ROWS as usize],
+        }
+    }
+
+    /// A latitude-longitude HDR image (OpenEXR or Radiance `.hdr`) times `scale`, checked:
+    /// finite, non-negative, not all zero. The error is one line naming the file.
+    pub fn load(path: &Path, scale: f32) -> Result<Sky, String> {
+        let shown = path.display();
+        let reader = image::ImageReader::open(path)
+            .map_err(|e| format!("{shown}: {e}"))?
+            .with_guessed_format()
+            .map_err(|e| format!("{shown}: {e}"))?;
+        let (width, height) = reader
+            .into_dimensions()
+            .map_err(|e| format!("{shown}: not an image this reads (EXR or .hdr): {e}"))?;
+        if u64::from(width) * u64::from(height) > MAX_TEXELS {
+            return Err(format!(
+                "{shown}: {width} × {height} texels, more than the {MAX_TEXELS} a map may have"
+            ));
+        }
+        let image = image::ImageReader::open(path)
+            .and_then(|r| r.with_guessed_format())
+            .map_err(|e| format!("{shown}: {e}"))?
+            .decode()
+            .map_err(|e| format!("{shown}: not an image this reads (EXR or .hdr): {e}"))?
+            .into_rgb32f();
+        let radiance = image
+            .pixels()
+            .map(|p| p.0.map(|c| c * scale))
+            .collect::<Vec<_>>();
+        let sky = Sky {
+            width,
+            height,
+            radiance,
+        };
+        sky.check().map_err(|m| format!("{shown}: {m}"))?;
+        Ok(sky)
+    }
+
+    /// Finite, non-negative texels, not all zero, at least one texel.
+    pub fn check(&self) -> Result<(), String> {
+        if self.width == 0 || self.height == 0 {
+            return Err("the map has no texels".into());
+        }
+        let width = self.width as usize;
+        if let Some(k) = (self.radiance.iter()).position(|c| !c.iter().all(|x| x.is_finite())) {
+            return Err(format!(
+                "texel ({}, {}) is not finite: {:?}",
+                k % width,
+                k / width,
+                self.radiance[k]
+            ));
+        }
+        if let Some(k) = self
+            .radiance
+            .iter()
+            .position(|c| c.iter().any(|&x| x < 0.0))
+        {
+            return Err(format!(
+                "texel ({}, {}) is negative: {:?}",
+                k % width,
+                k / width,
+                self.radiance[k]
+            ));
+        }
+        if self.radiance.iter().all(|c| luminance(*c) <= 0.0) {
+            return Err("the map is black (no texel has a positive luminance)".into());
+        }
+        Ok(())
+    }
+
+    /// `∫ L(ω) dω` over the sphere, per channel: what a surface facing every way would gather,
+    /// and, times the emitting disk's area, the power the light's photons share.
+    pub fn integral(&self) -> [f32; 3] {
+        let (w, h) = (self.width as usize, self.height as usize);
+        let mut sum = [0.0f64; 3];
+        for y in 0..h {
+            // The exact solid angle of a texel of row y.
+            let (t0, t1) = (
+                std::f64::consts::PI * y as f64 / h as f64,
+                std::f64::consts::PI * (y + 1) as f64 / h as f64,
+            );
+            let omega = 2.0 * std::f64::consts::PI / w as f64 * (t0.cos() - t1.cos());
+            for c in &self.radiance[y * w..(y + 1) * w] {
+                for (s, x) in sum.iter_mut().zip(c) {
+                    *s += omega * f64::from(*x);
+                }
+            }
+        }
+        sum.map(|x| x as f32)
+    }
+
+    /// The packed table the stages sample and look the map up in (`SkyTable`).
+    pub fn table(&self) -> SkyTable {
+        let (w, h) = (self.width as usize, self.height as usize);
+        let mut out = vec![[0.0f32; 4]; 1 + w * h + h];
+        let mut row_sums = vec![0.0f64; h];
+        for y in 0..h {
+            let sin = (std::f64::consts::PI * (y as f64 + 0.5) / h as f64).sin();
+            let row = &self.radiance[y * w..(y + 1) * w];
+            let weights: Vec<f64> = row.iter().map(|c| f64::from(luminance(*c)) * sin).collect();
+            let sum: f64 = weights.iter().sum();
+            row_sums[y] = sum;
+            let mut acc = 0.0;
+            for (x, (c, wt)) in row.iter().zip(&weights).enumerate() {
+                acc += wt;
+                // A row of no weight is never picked; its shares still rise to 1.
+                let share = if sum > 0.0 {
+                    acc / sum
+                } else {
+                    (x + 1) as f64 / w as f64
+                };
+                out[1 + y * w + x] = [c[0], c[1], c[2], share as f32];
+            }
+            out[1 + y * w + w - 1][3] = 1.0;
+        }
+        let total: f64 = row_sums.iter().sum();
+        let mut acc = 0.0;
+        for (y, s) in row_sums.iter().enumerate() {
+            acc += s;
+            out[1 + w * h + y][0] = (acc / total) as f32;
+        }
+        out[w * h + h][0] = 1.0;
+        out[0] = [self.width as f32, self.height as f32, total as f32, 0.0];
+        SkyTable(out)
+    }
+}
+
+/// The map's frame in the scene: its up axis (the map's y) and the axes its x and z point
+/// along, turned by `rotation` degrees about up (counter-clockwise seen from above).
+pub fn frame(up: Vec3, rotation_deg: f32) -> [Vec3; 3] {
+    // The map's x for a y-up scene is +x; for z up, the map's y is +z and its z is −y.
+    let (x, z) = if up.z.abs() > up.y.abs() {
+        (Vec3::X, -Vec3::Y * up.z.signum())
+    } else {
+        (Vec3::X, Vec3::Z * up.y.signum())
+    };
+    let (s, c) = rotation_deg.to_radians().sin_cos();
+    [c * x - s * z, up, s * x + c * z]
+}
