@@ -366,6 +366,7 @@ pub fn path_params(scene: &Scene, cam: &Camera, show: Terms, shadow_bias: f32) -
         light_count: scene.lights.len() as u32,
         show: show.bits(),
         shadow_bias,
+        background: scene.camera.background.uniform(),
     }
 }
 
@@ -478,5 +479,6 @@ pub fn shade_params_for(
         area_count: cfg.area_samples * cfg.area_samples,
         sample: 0,
         glossy_rays: cfg.glossy_rays,
+        background: scene.camera.background.uniform(),
     }
 }

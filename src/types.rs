@@ -200,12 +200,16 @@ pub mod light_kind {
     pub const AREA: u32 = 2;
     pub const DIRECTIONAL: u32 = 3;
     pub const ENVIRONMENT: u32 = 4;
+    pub const SUN: u32 = 5;
 }
 
 /// Whether a light of `kind` is sampled on a grid of strata (`n × n` points of an area light,
-/// or directions of an environment light) rather than at one point.
+/// directions of an environment light or of the sun's disk) rather than at one point.
 pub fn stratified(kind: u32) -> bool {
-    kind == light_kind::AREA || kind == light_kind::ENVIRONMENT
+    matches!(
+        kind,
+        light_kind::AREA | light_kind::ENVIRONMENT | light_kind::SUN
+    )
 }
 
 /// Bits of `Light::flags`.
@@ -224,7 +228,11 @@ pub mod light_flags {
 /// environment: the radiance of the scene's sky (`scene::sky::SkyTable`) from every direction,
 /// in the frame of `edge_u` (the map's x), `direction` (its y, up) and `edge_v` (its z);
 /// photons start on a disk of area `area` perpendicular to their direction, two of its radii
-/// out from `position`, the centre of the scene's bounds.
+/// out from `position`, the centre of the scene's bounds;
+/// sun: a directional light from a disk of the sky, the cone of cosine `cos_outer` about
+/// −`direction` (its angular radius), `cos_inner` holding `1 − cos_outer` exactly (f32 cannot
+/// get it back from a cosine that near 1); photons as a directional light's, their directions
+/// spread over the cone.
 /// `power` is total emitted RGB power (W) for every kind; emission sampling shares photons by it.
 /// `flags`: `light_flags`.
 #[repr(C)]
@@ -565,6 +573,9 @@ pub struct ShadeParams {
     /// Rays a pixel and frame that trace the glossy surfaces' indirect light (`shade.wgsl`,
     /// "Glossy rays"); the lobes then give only the diffuse part (0: the lobes give both).
     pub glossy_rays: u32,
+    /// What the camera sees where its ray meets nothing: with w = 1 the colour xyz, with
+    /// w = 0 the sky and the sun's disk (black without them; `Background::uniform`).
+    pub background: [f32; 4],
 }
 
 /// `ShadeParams::direct`: shadow rays per pixel.
@@ -656,6 +667,8 @@ pub struct PathParams {
     /// How far next events' shadow rays start off the surface, along the hit disk's normal:
     /// the renderer's `direct::shadow_bias`, so that both render one scene (design §10).
     pub shadow_bias: f32,
+    /// What a camera ray that meets nothing sees (`ShadeParams::background`).
+    pub background: [f32; 4],
 }
 
 /// Uniform of `final_gather`: rays from each fitted splat of the fit list over its hemisphere,

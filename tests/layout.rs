@@ -224,7 +224,8 @@ fn rust_layouts() -> Vec<RustLayout> {
             area_first,
             area_count,
             sample,
-            glossy_rays
+            glossy_rays,
+            background
         }),
         layout!(PresentParams {
             image_width,
@@ -260,7 +261,8 @@ fn rust_layouts() -> Vec<RustLayout> {
             max_depth,
             light_count,
             show,
-            shadow_bias
+            shadow_bias,
+            background
         }),
         layout!(DirectParams {
             splat_count,

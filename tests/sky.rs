@@ -284,6 +284,47 @@ fn write_exr(path: &Path, w: u32, h: u32, texel: impl Fn(u32, u32) -> [f32; 3]) 
     img.save(path).unwrap();
 }
 
+/// A sky keeps its map whatever lights follow it, and the sky model makes one: the Hosek–Wilkie
+/// sky of a sun 30° up is brightest towards the sun, bluer overhead than at the horizon, and
+/// below it a ground of the albedo the model was given, lit by the sky and the sun:
+/// `albedo E / π`.
+#[test]
+fn the_sky_model_makes_a_map_beside_other_lights() {
+    let sky = "type = \"sky\"\nsun_elevation = 30.0\nsun_azimuth = 90.0\nturbidity = 3.0\nground_albedo = 0.3";
+    let sun = "type = \"sun\"\ndirection = [-0.866, -0.5, 0.0]\nirradiance = 5.0";
+    let scene = sky_scene(&format!("{sky}\n\n[[light]]\n{sun}"), PLANE, 4);
+    let t = scene.sky.entries();
+    assert!(t.len() > 1, "the sky's map was lost");
+    let l = scene.lights[0];
+    let at = |d: Vec3| sky_radiance(t, &l, d.normalize());
+    let towards_sun = at(Vec3::new(0.866, 0.5, 0.0));
+    let away = at(Vec3::new(-0.866, 0.5, 0.0));
+    let (zenith, horizon) = (at(Vec3::Y), at(Vec3::new(0.0, 0.02, 1.0)));
+    eprintln!("sun side {towards_sun}, away {away}, zenith {zenith}, horizon {horizon}");
+    assert!(towards_sun.y > 2.0 * away.y);
+    assert!(
+        zenith.z / zenith.x > horizon.z / horizon.x,
+        "bluer overhead"
+    );
+    // The sky's irradiance on the ground, by the map's own quadrature.
+    let (w, h) = (t[0][0] as usize, t[0][1] as usize);
+    let mut e = Vec3::ZERO;
+    for y in 0..h / 2 {
+        let theta = std::f32::consts::PI * (y as f32 + 0.5) / h as f32;
+        let d_omega = 2.0 * std::f32::consts::PI / w as f32 * std::f32::consts::PI / h as f32;
+        for x in 0..w {
+            e += Vec3::from_slice(&t[1 + y * w + x][..3]) * theta.cos() * theta.sin() * d_omega;
+        }
+    }
+    // And the sun's, 30° up: 5 sin 30°.
+    let ground = at(Vec3::new(0.3, -0.5, 0.2));
+    let expected = 0.3 * (e + Vec3::splat(5.0 * 0.5)) / std::f32::consts::PI;
+    assert!(
+        ((ground - expected) / expected).abs().max_element() < 1e-3,
+        "ground {ground} against albedo E / π = {expected}"
+    );
+}
+
 /// Maps that cannot light a scene are refused with one line naming the light, the file and
 /// what is wrong: all black, a NaN or a negative texel, not an image, missing; and a second
 /// environment light, or neither a map nor a radiance.
@@ -323,6 +364,18 @@ fn maps_that_cannot_light_a_scene_are_refused() {
         ),
         ("type = \"environment\"".into(), "give exactly one of `map`"),
         (format!("{CONSTANT}\nscale = -1"), "scale must be positive"),
+        (
+            "type = \"sky\"\nsun_elevation = 95".into(),
+            "sun_elevation must be in [0, 90]",
+        ),
+        (
+            "type = \"sky\"\nsun_elevation = 30\nturbidity = 20".into(),
+            "urbidity",
+        ),
+        (
+            "type = \"sun\"\ndirection = [0, -1, 0]\nirradiance = 1\nangle = 0".into(),
+            "angle must be",
+        ),
     ] {
         let err = load(&light)
             .err()
@@ -334,4 +387,119 @@ fn maps_that_cannot_light_a_scene_are_refused() {
         assert_eq!(msg.lines().count(), 1, "{light}: {msg}");
     }
     std::fs::remove_dir_all(&dir).unwrap();
+}
+
+/// The sun over an open plane, 45° up: every splat's direct irradiance is E cos 45°, on the
+/// device and the mirror. The cosine varies by ±0.33 % over the sun's disk at 45°, which a
+/// splat's 16 strata average within 0.09 % (measured); asserted 0.2 %.
+#[test]
+fn the_sun_lights_an_open_plane_by_its_irradiance() {
+    let sun = "type = \"sun\"\ndirection = [0.0, -1.0, -1.0]\nirradiance = 2.0";
+    let scene = sky_scene(sun, PLANE, 4);
+    let grid = common::host_grid(&scene);
+    let on_cpu = cpu_direct(&scene, &grid).unwrap();
+    let gpu = common::gpu();
+    let mut renderer = FrameRenderer::new(&gpu, &scene).unwrap();
+    let on_gpu = renderer.read_direct(&gpu, &scene).unwrap();
+    let expected = 2.0 * std::f32::consts::FRAC_1_SQRT_2;
+    for (what, map) in [("mirror", &on_cpu), ("device", &on_gpu)] {
+        let worst = (map.direct.iter())
+            .map(|d| (d[1] / expected - 1.0).abs())
+            .fold(0.0, f32::max);
+        eprintln!("{what}: worst splat {worst:.2e} off E cos 45°");
+        assert!(worst < 2e-3, "{what}: a splat {worst} off");
+    }
+}
+
+/// The sun's shadows are soft as the sun's: under a sun 10° across straight above, the
+/// shadow of a ceiling's edge one unit up has a penumbra from x = −tan 5° to +tan 5°, where the
+/// plane's splats see from none of the sun to all of it, half at the edge; a directional light
+/// casts the same shadow hard. In full sun a splat gets E times the cosine's mean over the
+/// disk, (1 + cos 5°) / 2. The direct bake on the mirror and the device.
+#[test]
+fn the_sun_casts_soft_shadows() {
+    let ceiling = "[[object]]\nshape = \"quad\"\nsize = [4.0, 4.0]\nrotate = [90.0, 0.0, 0.0]\ntranslate = [-2.0, 1.0, 0.0]\nmaterial = \"grey\"\nspacing = 0.1";
+    let plane = "[[object]]\nshape = \"quad\"\nsize = [1.0, 0.2]\nrotate = [-90.0, 0.0, 0.0]\nmaterial = \"grey\"\nspacing = 0.01";
+    let sun = "type = \"sun\"\ndirection = [0.0, -1.0, 0.0]\nirradiance = 1.0\nangle = 10.0";
+    let hard = "type = \"directional\"\ndirection = [0.0, -1.0, 0.0]\nirradiance = 1.0";
+    let edge = 5f32.to_radians().tan();
+    let full_sun = (1.0 + 5f32.to_radians().cos()) / 2.0;
+    for (light, soft, full) in [(sun, true, full_sun), (hard, false, 1.0)] {
+        let scene = sky_scene(light, &format!("{plane}\n\n{ceiling}"), 4);
+        let grid = common::host_grid(&scene);
+        let gpu = common::gpu();
+        let mut renderer = FrameRenderer::new(&gpu, &scene).unwrap();
+        let maps = [
+            ("mirror", cpu_direct(&scene, &grid).unwrap()),
+            ("device", renderer.read_direct(&gpu, &scene).unwrap()),
+        ];
+        for (what, map) in maps {
+            let on_plane = scene
+                .splats
+                .iter()
+                .zip(&map.direct)
+                .filter(|(s, _)| s.object == 0);
+            let (mut middle, mut lit, mut dark) = (vec![], vec![], vec![]);
+            for (s, d) in on_plane {
+                let x = s.center[0] + scene.origin.x;
+                match x {
+                    x if x.abs() < 0.2 * edge => middle.push(d[1]),
+                    x if x > 1.5 * edge => lit.push(d[1]),
+                    x if x < -1.5 * edge => dark.push(d[1]),
+                    _ => {}
+                }
+            }
+            let mean = |v: &[f32]| v.iter().sum::<f32>() / v.len().max(1) as f32;
+            let (m, l, d) = (mean(&middle), mean(&lit), mean(&dark));
+            eprintln!("{what}, soft {soft}: edge {m:.3}, lit {l:.3}, dark {d:.3}");
+            assert!(
+                (l - full).abs() < 1e-3 && d < 1e-3,
+                "{what}: lit {l}, dark {d}"
+            );
+            if soft {
+                assert!(
+                    (m - 0.5 * full).abs() < 0.1,
+                    "{what}: the penumbra's middle reads {m}"
+                );
+            } else {
+                // Each splat all or nothing: the edge's mean is the share of them lit.
+                assert!(middle.iter().all(|&e| e < 1e-3 || (e - 1.0).abs() < 1e-3));
+            }
+        }
+    }
+}
+
+/// A grey plane under the sun, 45° up: it reflects ρ E cos 45° / π everywhere it is seen, in
+/// the path tracer (next events of the sun's disk, and bounces that meet it weighed against
+/// them) and in the renderer's still image, on either engine (1 %).
+#[test]
+fn a_plane_under_the_sun_reflects_its_irradiance() {
+    let sun = "type = \"sun\"\ndirection = [0.0, -1.0, -1.0]\nirradiance = 2.0";
+    let scene = Arc::new(sky_scene(sun, PLANE, 4));
+    let view = View::new(&scene.camera, 48, 48);
+    let cfg = FrameConfig::default();
+    let expected = 0.5 * 2.0 * std::f64::consts::FRAC_1_SQRT_2 / std::f64::consts::PI;
+    let device = common::device();
+    for (what, engine) in [("mirror", &Engine::Mirror), ("device", &device)] {
+        let mut r = Renderer::new(scene.clone(), engine).unwrap();
+        let ids = r.object_ids(&view, &cfg).unwrap();
+        r.draw_path(&view, &cfg, 8, |_| {}).unwrap();
+        let path = r.read_hdr().unwrap();
+        r.bake(&Progress::new(false)).unwrap();
+        r.draw(&view, &cfg, 16, |_| {}).unwrap();
+        let still = r.read_hdr().unwrap();
+        for (how, image) in [("path tracer", &path), ("renderer", &still)] {
+            let plane: Vec<f64> = (image.iter().zip(&ids))
+                .filter(|(_, id)| **id == 1)
+                .map(|(p, _)| p[1] as f64)
+                .collect();
+            let mean = plane.iter().sum::<f64>() / plane.len().max(1) as f64;
+            eprintln!(
+                "{what} {how}: {mean:.5} over {} pixels, ρ E cos / π = {expected:.5}",
+                plane.len()
+            );
+            assert!(plane.len() > 300, "{what} {how}: the plane shows");
+            assert!((mean / expected - 1.0).abs() < 0.01, "{what} {how}: {mean}");
+        }
+    }
 }

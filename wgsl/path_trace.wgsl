@@ -106,21 +106,22 @@ fn blended_normal(o: vec3<f32>, d: vec3<f32>, hit: Hit, skip: u32) -> vec3<f32> 
     return select(h.normal, normalize(sum), dot(sum, sum) > 0.0);
 }
 
-// The radiance of the environment lights along a ray d that left the scene, each weighted by
-// the power heuristic against its next-event pdf where a BRDF sample of pdf `pdf_brdf` at a
-// surface of normal n chose d (0: the camera's ray, which sees the sky whole).
-fn sky_seen(d: vec3<f32>, n: vec3<f32>, pdf_brdf: f32) -> vec3<f32> {
+// The radiance of the lights a ray d that left the scene sees (a sky, the sun's disk), each
+// weighted by the power heuristic against its next-event pdf where a BRDF sample of pdf
+// `pdf_brdf` at a surface of normal n chose d (0: the camera's ray, which sees them whole).
+fn escaped(d: vec3<f32>, n: vec3<f32>, pdf_brdf: f32) -> vec3<f32> {
     var sum = vec3<f32>(0.0);
     for (var li = 0u; li < params.light_count; li++) {
         let l = lights[li];
-        if l.kind != LIGHT_ENVIRONMENT {
+        let radiance = escaped_radiance(l, d);
+        if all(radiance <= vec3<f32>(0.0)) {
             continue;
         }
         var w = 1.0;
         if pdf_brdf > 0.0 {
-            w = power_heuristic(pdf_brdf, sky_pdf(l, n, d));
+            w = power_heuristic(pdf_brdf, light_pdf(l, n, d, FAR));
         }
-        sum += sky_radiance(l, d) * w;
+        sum += radiance * w;
     }
     return sum;
 }
@@ -182,9 +183,14 @@ fn main(@builtin(workgroup_id) wg: vec3<u32>, @builtin(num_workgroups) num_wg: v
                 break;
             }
         }
-        // A ray that leaves the scene sees the sky.
+        // A ray that leaves the scene sees the sky and the sun.
         if hit.splat == NO_SPLAT && hit.aborted == 0u {
-            radiance += throughput * sky_seen(d, from_normal, pdf_brdf) * hit_shown;
+            var seen = escaped(d, from_normal, pdf_brdf);
+            // The camera's own ray sees the background where it is a colour.
+            if depth == 0u && params.background.w > 0.0 {
+                seen = params.background.xyz;
+            }
+            radiance += throughput * seen * hit_shown;
         }
         if hit.splat == NO_SPLAT || hit.aborted != 0u || depth == params.max_depth {
             break;
@@ -219,12 +225,7 @@ fn main(@builtin(workgroup_id) wg: vec3<u32>, @builtin(num_workgroups) num_wg: v
             if blocked.splat != NO_SPLAT {
                 continue;
             }
-            var pdf_light = 0.0;
-            if l.kind == LIGHT_AREA {
-                pdf_light = ls.dist * ls.dist / (l.area * -dot(ls.wi, l.direction));
-            } else if l.kind == LIGHT_ENVIRONMENT {
-                pdf_light = sky_pdf(l, n, ls.wi);
-            }
+            let pdf_light = light_pdf(l, n, ls.wi, ls.dist);
             var w = 1.0;
             if pdf_light > 0.0 {
                 w = power_heuristic(pdf_light, brdf_pdf(n, wo, ls.wi, pd, ps, m.roughness));

@@ -87,11 +87,15 @@ fn emit(path: u32, key: u32) -> Emission {
             e.direction = -s.wi;
             e.power = s.e * (l.area / f32(em.count));
         }
-        default: {  // LIGHT_DIRECTIONAL: from a disk of area l.area across the scene
+        default: {  // LIGHT_DIRECTIONAL, LIGHT_SUN: from a disk of area l.area across the scene
             let f = frame_of(l.direction);
             let q = sample_disk(p1, p2) * sqrt(l.area / PI);
             e.origin = l.position + f.t * q.x + f.b * q.y;
             e.direction = l.direction;
+            if l.kind == LIGHT_SUN {
+                // Spread over the sun's cone (1 - cos exact in cos_inner).
+                e.direction = to_world(f, polar(1.0 - d1 * l.cos_inner, d2));
+            }
         }
     }
     return e;

@@ -77,15 +77,11 @@ fn shade_sample(sf: Surface, l: Light, ls: LightSample, spec_weight: f32) -> vec
     return f * ls.e * cos_i;
 }
 
-// The solid-angle pdf of a stratified light's sample along `wi` (an area light's uniform point
-// at distance `dist`, an environment light's direction towards a surface of normal n), times
-// `count` samples.
+// The solid-angle pdf of a stratified light's sample along `wi` (light_pdf: an area light's
+// point at distance `dist`, a direction of a sky or the sun's disk towards a surface of
+// normal n), times `count` samples.
 fn area_pdf(l: Light, n: vec3<f32>, wi: vec3<f32>, dist: f32, count: f32) -> f32 {
-    if l.kind == LIGHT_ENVIRONMENT {
-        return count * sky_pdf(l, n, wi);
-    }
-    let cos_l = -dot(wi, l.direction);
-    return select(0.0, count * dist * dist / (l.area * cos_l), cos_l > 0.0);
+    return count * light_pdf(l, n, wi, dist);
 }
 
 // Whether the Ward lobe at sf is narrower than area light l seen from it (4 pi alpha^2, about
@@ -96,9 +92,12 @@ fn narrow_lobe(sf: Surface, l: Light) -> bool {
     if !(sf.alpha >= MIN_ALPHA) || all(sf.rho_s <= vec3<f32>(0.0)) {
         return false;
     }
-    // A sky surrounds every lobe.
+    // A sky surrounds every lobe; the sun's disk is narrower than nearly all.
     if l.kind == LIGHT_ENVIRONMENT {
         return true;
+    }
+    if l.kind == LIGHT_SUN {
+        return 4.0 * PI * sf.alpha * sf.alpha < sun_solid_angle(l);
     }
     let to = l.position + 0.5 * (l.edge_u + l.edge_v) - sf.p;
     let d2 = dot(to, to);
@@ -117,9 +116,14 @@ fn specular_by_brdf(sf: Surface, l: Light, u: vec2<f32>, count: f32) -> vec3<f32
         return vec3<f32>(0.0);
     }
     let o = sf.p + params.shadow_bias * sf.n;
-    let sky = l.kind == LIGHT_ENVIRONMENT;
-    let t = select(area_light_hit(l, o, wi), FAR, sky);
-    if !(t > 0.0) {
+    // An area light where the ray meets its face; a sky or the sun past everything.
+    let far = l.kind != LIGHT_AREA;
+    let t = select(area_light_hit(l, o, wi), FAR, far);
+    var radiance = l.power / (PI * l.area);
+    if far {
+        radiance = escaped_radiance(l, wi);
+    }
+    if !(t > 0.0) || all(radiance <= vec3<f32>(0.0)) {
         return vec3<f32>(0.0);
     }
     var budget = SHADOW_RAY_BUDGET;
@@ -128,10 +132,6 @@ fn specular_by_brdf(sf: Surface, l: Light, u: vec2<f32>, count: f32) -> vec3<f32
     }
     let pdf_brdf = ward_pdf(sf.n, sf.wo, wi, sf.alpha);
     let pdf_light = area_pdf(l, sf.n, wi, t, count);
-    var radiance = l.power / (PI * l.area);
-    if sky {
-        radiance = sky_radiance(l, wi);
-    }
     // f L cos / pdf_brdf times the heuristic's pdf_brdf^2 / (pdf_brdf^2 + pdf_light^2).
     let scale = pdf_brdf / (pdf_brdf * pdf_brdf + pdf_light * pdf_light);
     return sf.rho_s * ward_specular(sf.n, wi, sf.wo, sf.alpha) * radiance * (cos_i * scale);
@@ -222,7 +222,7 @@ const REFLECTING_LIGHT_SLACK: f32 = 0.01;
 // The radiance of the nearest area light the view ray meets before t_surface, in xyz; w is 1
 // where the light reflects (its own surface, just behind its face, shows too), 0 where it hides
 // what lies behind it, and -1 where the ray meets no light. A ray that meets nothing (t_surface
-// FAR) sees the sky, if the scene has one, as a light that hides nothing.
+// FAR) sees the sky and the sun's disk, if the scene has them, as a light that hides nothing.
 fn emitted(d: vec3<f32>, t_surface: f32) -> vec4<f32> {
     var out = vec4<f32>(0.0, 0.0, 0.0, -1.0);
     var t_near = t_surface;
@@ -238,8 +238,21 @@ fn emitted(d: vec3<f32>, t_surface: f32) -> vec4<f32> {
             t_near = t;
             out = vec4<f32>(l.power / (PI * l.area), select(0.0, 1.0, reflects));
         }
-        if l.kind == LIGHT_ENVIRONMENT && t_surface >= FAR && out.w < 0.0 {
-            out = vec4<f32>(sky_radiance(l, d), 0.0);
+    }
+    // Past every surface, the background: a colour, or the sky and the sun's disk.
+    if t_surface >= FAR && out.w < 0.0 && params.background.w > 0.0 {
+        return vec4<f32>(params.background.xyz, 0.0);
+    }
+    if t_surface >= FAR && out.w < 0.0 {
+        var seen = vec3<f32>(0.0);
+        var any_light = false;
+        for (var li = 0u; li < params.light_count; li++) {
+            let l = lights[li];
+            seen += escaped_radiance(l, d);
+            any_light = any_light || l.kind == LIGHT_ENVIRONMENT || l.kind == LIGHT_SUN;
+        }
+        if any_light {
+            out = vec4<f32>(seen, 0.0);
         }
     }
     return out;

@@ -28,6 +28,9 @@
 @group(0) @binding(14) var<storage, read> selected: array<u32>;
 // Where each surface's disks end (drawn_clip.wgsl).
 @group(0) @binding(15) var<uniform> drawn_clips: array<SurfaceClip, DRAWN_CLIPS>;
+// The environment light's map (lights.wgsl), which these passes do not read: their derived
+// layouts leave it out.
+@group(0) @binding(16) var<storage, read> sky: array<vec4<f32>>;
 
 // Whether splat s is of the surface the pixel sees (same_surface).
 fn in_front(v: SplatVertex, s: Splat) -> bool {

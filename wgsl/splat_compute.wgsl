@@ -27,6 +27,9 @@
 @group(0) @binding(17) var specular_sum: texture_storage_2d<rgba32float, write>;
 // Where each surface's disks end (drawn_clip.wgsl).
 @group(0) @binding(18) var<uniform> drawn_clips: array<SurfaceClip, DRAWN_CLIPS>;
+// The environment light's map (lights.wgsl), which this pass does not read: its derived
+// layout leaves it out.
+@group(0) @binding(19) var<storage, read> sky: array<vec4<f32>>;
 
 const WG: u32 = 64u;
 

@@ -28,6 +28,8 @@
 // stand-in where the scene has nothing glossy.
 // #paged
 @group(0) @binding(13) var<storage, read> drawn_normals: array<u32>;
+// The environment light's map (lights.wgsl), after the stage's own bindings.
+@group(0) @binding(14) var<storage, read> sky: array<vec4<f32>>;
 
 const WG: u32 = 64u;
 

@@ -312,9 +312,20 @@ struct LookArgs {
     /// docs/measurements.md, "Moving frames that remember").
     #[arg(long)]
     taa: bool,
+    /// What the camera sees where it sees nothing: `sky` (the sky and the sun's disk; black
+    /// without them), `black`, or a linear colour `r,g,b`. Default: the scene's `background`.
+    #[arg(long, value_parser = scene::file::Background::parse)]
+    background: Option<scene::file::Background>,
 }
 
 impl LookArgs {
+    /// The scene's background as the command line sets it.
+    fn apply_background(&self, scene: &mut scene::Scene) {
+        if let Some(b) = self.background {
+            scene.camera.background = b;
+        }
+    }
+
     fn frame(&self) -> FrameConfig {
         FrameConfig {
             area_samples: self.area_samples,
@@ -684,6 +695,7 @@ fn render_command(args: RenderArgs) -> Result<()> {
     }
     let mut scene = load_scene(&scene)?;
     bake.apply(&mut scene)?;
+    look.apply_background(&mut scene);
     let views = match &views {
         Some(path) => scene::views::load(path, &scene.camera)?,
         None => Vec::new(),
@@ -761,6 +773,7 @@ fn view_command(args: ViewArgs) -> Result<()> {
     }
     let mut scene = load_scene(&scene)?;
     bake.apply(&mut scene)?;
+    look.apply_background(&mut scene);
     let [w0, h0] = scene.camera.resolution;
     let (width, height) = (width.unwrap_or(w0), height.unwrap_or(h0));
     scene::check_resolution(width, height).map_err(Error::Invalid)?;

@@ -12,7 +12,7 @@ use rayon::prelude::*;
 
 use crate::grid::{cell_index, point_cell};
 use crate::shared::lights::{
-    MIN_ALPHA, area_light_hit, sample_light, shadow_reach, sky_pdf, sky_radiance,
+    MIN_ALPHA, area_light_hit, escaped_radiance, light_pdf, sample_light, shadow_reach,
 };
 use crate::shared::rng::{
     RNG_BOUNCE_U, RNG_BOUNCE_V, RNG_EMIT_POS_U, RNG_EMIT_POS_V, RNG_ROULETTE, path_key, pcg_hash,
@@ -26,7 +26,7 @@ use crate::shared::splat::{
 };
 use crate::shared::trace::{FAR, Geometry, trace_ray};
 use crate::shared::ward::{mean3, sample_bounce, ward_pdf, ward_specular};
-use crate::types::{Camera, Hit, Light, Material, NO_SPLAT, PathParams, light_flags, light_kind};
+use crate::types::{Camera, Hit, Light, Material, NO_SPLAT, PathParams, light_flags};
 
 pub const WG: u32 = 64;
 pub const RNG_LIGHT_U: u32 = 7;
@@ -108,18 +108,22 @@ fn blended_normal(geo: &Geometry, o: Vec3, d: Vec3, hit: &Hit, skip: u32) -> Vec
     }
 }
 
-/// The radiance of the environment lights along a ray `d` that left the scene, each weighted
-/// by the power heuristic against its next-event pdf where a BRDF sample of pdf `pdf_brdf` at
-/// a surface of normal `n` chose `d` (0: the camera's ray, which sees the sky whole).
-fn sky_seen(sky: &[[f32; 4]], lights: &[Light], (d, n): (Vec3, Vec3), pdf_brdf: f32) -> Vec3 {
+/// The radiance of the lights a ray `d` that left the scene sees (a sky, the sun's disk), each
+/// weighted by the power heuristic against its next-event pdf where a BRDF sample of pdf
+/// `pdf_brdf` at a surface of normal `n` chose `d` (0: the camera's ray, which sees them whole).
+fn escaped(sky: &[[f32; 4]], lights: &[Light], (d, n): (Vec3, Vec3), pdf_brdf: f32) -> Vec3 {
     let mut sum = Vec3::ZERO;
-    for l in lights.iter().filter(|l| l.kind == light_kind::ENVIRONMENT) {
+    for l in lights {
+        let radiance = escaped_radiance(sky, l, d);
+        if radiance.cmple(Vec3::ZERO).all() {
+            continue;
+        }
         let w = if pdf_brdf > 0.0 {
-            power_heuristic(pdf_brdf, sky_pdf(sky, l, n, d))
+            power_heuristic(pdf_brdf, light_pdf(sky, l, (n, d), FAR))
         } else {
             1.0
         };
-        sum += sky_radiance(sky, l, d) * w;
+        sum += radiance * w;
     }
     sum
 }
@@ -181,9 +185,16 @@ fn sample(
                 break;
             }
         }
-        // A ray that leaves the scene sees the sky.
+        // A ray that leaves the scene sees the sky and the sun.
         if hit.splat == NO_SPLAT && hit.aborted == 0 {
-            radiance += throughput * sky_seen(geo.sky, lights, (d, from_normal), pdf_brdf) * hit_shown;
+            let background = Vec4::from(params.background);
+            // The camera's own ray sees the background where it is a colour.
+            let seen = if depth == 0 && background.w > 0.0 {
+                background.truncate()
+            } else {
+                escaped(geo.sky, lights, (d, from_normal), pdf_brdf)
+            };
+            radiance += throughput * seen * hit_shown;
         }
         if hit.splat == NO_SPLAT || hit.aborted != 0 || depth == params.max_depth {
             break;
@@ -218,13 +229,7 @@ fn sample(
             if blocked.splat != NO_SPLAT {
                 continue;
             }
-            let pdf_light = match l.kind {
-                light_kind::AREA => {
-                    ls.dist * ls.dist / (l.area * -ls.wi.dot(Vec3::from(l.direction)))
-                }
-                light_kind::ENVIRONMENT => sky_pdf(geo.sky, l, n, ls.wi),
-                _ => 0.0,
-            };
+            let pdf_light = light_pdf(geo.sky, l, (n, ls.wi), ls.dist);
             let w = if pdf_light > 0.0 {
                 power_heuristic(pdf_light, brdf_pdf(n, wo, ls.wi, pd, ps, m.roughness))
             } else {

@@ -77,10 +77,17 @@ fn emit(params: &TraceParams, emitters: &[Emitter], sky: &[[f32; 4]], path: u32,
             power = s.e * (l.area / em.count as f32);
             (position + s.wi * (2.0 * r) + f.t * q.x + f.b * q.y, -s.wi)
         }
+        // Directional and sun lights, from a disk of area `l.area` across the scene.
         _ => {
             let f = frame_of(axis);
             let q = sample_disk(p1, p2) * (l.area / PI).sqrt();
-            (position + f.t * q.x + f.b * q.y, axis)
+            let direction = if l.kind == light_kind::SUN {
+                // Spread over the sun's cone (1 − cos exact in `cos_inner`).
+                to_world(&f, polar(1.0 - d1 * l.cos_inner, d2))
+            } else {
+                axis
+            };
+            (position + f.t * q.x + f.b * q.y, direction)
         }
     };
     Emission {

@@ -10,8 +10,8 @@ use glam::{Vec2, Vec3, Vec4};
 use rayon::prelude::*;
 
 use crate::shared::lights::{
-    LightSample, MIN_ALPHA, area_light_hit, area_point, light_first, sample_light, shadow_reach,
-    sky_pdf, sky_radiance, strata_side,
+    LightSample, MIN_ALPHA, area_light_hit, area_point, escaped_radiance, light_first, light_pdf,
+    sample_light, shadow_reach, strata_side, sun_solid_angle,
 };
 use crate::shared::rng::{pcg_hash, r2_point, r2_shift};
 use crate::shared::sampling::{PI, frame_of, power_heuristic};
@@ -71,24 +71,19 @@ fn shade_sample(
 }
 
 fn area_pdf(sky: &[[f32; 4]], l: &Light, (n, wi): (Vec3, Vec3), dist: f32, count: f32) -> f32 {
-    if l.kind == light_kind::ENVIRONMENT {
-        return count * sky_pdf(sky, l, n, wi);
-    }
-    let cos_l = -wi.dot(Vec3::from(l.direction));
-    if cos_l > 0.0 {
-        count * dist * dist / (l.area * cos_l)
-    } else {
-        0.0
-    }
+    count * light_pdf(sky, l, (n, wi), dist)
 }
 
 fn narrow_lobe(sf: &Surface, l: &Light) -> bool {
     if !(sf.alpha >= MIN_ALPHA) || sf.rho_s.cmple(Vec3::ZERO).all() {
         return false;
     }
-    // A sky surrounds every lobe.
+    // A sky surrounds every lobe; the sun's disk is narrower than nearly all.
     if l.kind == light_kind::ENVIRONMENT {
         return true;
+    }
+    if l.kind == light_kind::SUN {
+        return 4.0 * PI * sf.alpha * sf.alpha < sun_solid_angle(l);
     }
     let centre = Vec3::from(l.position) + 0.5 * (Vec3::from(l.edge_u) + Vec3::from(l.edge_v));
     let to = centre - sf.p;
@@ -112,9 +107,14 @@ fn specular_by_brdf(
         return Vec3::ZERO;
     }
     let o = sf.p + params.shadow_bias * sf.n;
-    let sky = l.kind == light_kind::ENVIRONMENT;
-    let t = if sky { FAR } else { area_light_hit(l, o, wi) };
-    if !(t > 0.0) {
+    // An area light where the ray meets its face; a sky or the sun past everything.
+    let (t, radiance) = if l.kind == light_kind::AREA {
+        let area_radiance = Vec3::from(l.power) / (PI * l.area);
+        (area_light_hit(l, o, wi), area_radiance)
+    } else {
+        (FAR, escaped_radiance(geo.sky, l, wi))
+    };
+    if !(t > 0.0) || radiance.cmple(Vec3::ZERO).all() {
         return Vec3::ZERO;
     }
     let mut budget = SHADOW_RAY_BUDGET;
@@ -124,11 +124,6 @@ fn specular_by_brdf(
     }
     let pdf_brdf = ward_pdf(sf.n, sf.wo, wi, sf.alpha);
     let pdf_light = area_pdf(geo.sky, l, (sf.n, wi), t, count);
-    let radiance = if sky {
-        sky_radiance(geo.sky, l, wi)
-    } else {
-        Vec3::from(l.power) / (PI * l.area)
-    };
     let scale = pdf_brdf / (pdf_brdf * pdf_brdf + pdf_light * pdf_light);
     sf.rho_s * ward_specular(sf.n, wi, sf.wo, sf.alpha) * radiance * (cos_i * scale)
 }
@@ -243,7 +238,8 @@ pub const REFLECTING_LIGHT_SLACK: f32 = 0.01;
 
 /// The radiance of the nearest area light the view ray meets before `t_surface`, and whether
 /// it reflects (its own surface, just behind its face, then shows too). A ray that meets
-/// nothing (`t_surface` FAR) sees the sky, if the scene has one, as a light that hides nothing.
+/// nothing (`t_surface` FAR) sees the sky and the sun's disk, if the scene has them, as a
+/// light that hides nothing.
 fn emitted(
     cam: &Camera,
     params: &ShadeParams,
@@ -269,9 +265,17 @@ fn emitted(
             t_near = t;
             out = Some((Vec3::from(l.power) / (PI * l.area), reflects));
         }
-        if l.kind == light_kind::ENVIRONMENT && t_surface >= FAR && out.is_none() {
-            out = Some((sky_radiance(sky, l, d), false));
-        }
+    }
+    // Past every surface, the background: a colour, or the sky and the sun's disk.
+    let background = Vec4::from(params.background);
+    if t_surface >= FAR && out.is_none() && background.w > 0.0 {
+        return Some((background.truncate(), false));
+    }
+    let lights = &lights[..params.light_count as usize];
+    let open_sky = (lights.iter()).any(|l| matches!(l.kind, light_kind::ENVIRONMENT | light_kind::SUN));
+    if t_surface >= FAR && out.is_none() && open_sky {
+        let seen = lights.iter().map(|l| escaped_radiance(sky, l, d)).sum();
+        out = Some((seen, false));
     }
     out
 }

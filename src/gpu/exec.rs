@@ -10,6 +10,9 @@ use crate::shaders::{Pass, Stage};
 
 /// Buffers in bind group 1 of the tracing stages (`GpuScene::geometry`).
 pub const GEOMETRY_BINDINGS: usize = 7;
+/// The sky's binding in that group, the last (`Scene::sky`): a raster stage that reads no
+/// light (the photon-map reference's gather) binds the ones before it.
+pub const SKY_BINDING: usize = 6;
 
 /// Bind group 1 of the tracing stages, in binding order (see `wgsl/shared/trace.wgsl`).
 pub type GeometryBuffers<'a> = [&'a wgpu::Buffer; GEOMETRY_BINDINGS];

@@ -4,7 +4,7 @@
 //! viewer or a benchmark draws frame after frame with nothing but a new camera uniform.
 
 use super::exec::GpuExecutor;
-use super::exec::{GEOMETRY_BINDINGS, GeometryBuffers};
+use super::exec::{GEOMETRY_BINDINGS, GeometryBuffers, SKY_BINDING};
 use super::scene::GpuScene;
 use std::collections::HashMap;
 use std::sync::{Mutex, OnceLock};
@@ -53,8 +53,6 @@ const COMPUTE_CLIP_BINDING: u32 = 18;
 /// shading of the other passes does not, so their derived layouts lack them.
 const DIRECT_BAKE_BINDINGS: std::ops::Range<u32> = 7..10;
 const TARGETS: usize = 4;
-/// The sky's place in the tracing stages' geometry (`wgsl/shared/trace.wgsl`).
-const SKY_BINDING: usize = 6;
 /// The vertices of one instance of the raster passes' draw (a triangle list).
 const SPLAT_VERTICES: std::ops::Range<u32> = 0..SPLAT_CORNERS * SPLATS_PER_INSTANCE;
 
@@ -962,15 +960,15 @@ impl SplatPipelines {
             scene.selected_count,
             scene.selected,
             scene.drawn_normals,
+            // The sky, which an environment light's glossy part reads.
+            scene.geometry[SKY_BINDING],
         ]);
-        // Group 1: the sky, which the environment light's strata read.
-        let bind_groups: [&[&wgpu::Buffer]; 2] = [&buffers, &[scene.geometry[SKY_BINDING]]];
         if self.indirect {
             // As many workgroups as the list needs (`splat_list` wrote them), not the scene.
-            return gpu.dispatch_indirect(encoder, stage, &bind_groups, (scene.draw_args, 16));
+            return gpu.dispatch_indirect(encoder, stage, &[&buffers], (scene.draw_args, 16));
         }
         let groups = crate::sequence::groups(stage, scene.splat_count)?;
-        gpu.dispatch_groups(encoder, stage, &bind_groups, groups)
+        gpu.dispatch(encoder, stage, &buffers, groups)
     }
 
     /// The compute splatter in place of the raster passes: the tile binning for

@@ -4,6 +4,7 @@
 //! for a reference never compile it.
 
 use super::bins::GpuBins;
+use super::exec::SKY_BINDING;
 use super::passes::{FrameTargets, PassBuffers, SplatPipelines, raster_pipeline};
 use super::{Gpu, buffer_entries};
 use crate::error::Result;
@@ -53,8 +54,10 @@ impl ReferencePipeline {
             &bins.geom,
             &bins.power,
         ];
+        // The gather reads no light: its derived layout has the geometry but the sky.
+        let geometry = &scene.geometry[..SKY_BINDING];
         if !gpu
-            .paging(Stage::ReferenceGather, &[&own, &scene.geometry])?
+            .paging(Stage::ReferenceGather, &[&own, geometry])?
             .arrays
             .is_empty()
         {
@@ -64,7 +67,7 @@ impl ReferencePipeline {
                     .into(),
             ));
         }
-        let groups: Vec<wgpu::BindGroup> = [buffer_entries(&own), buffer_entries(&scene.geometry)]
+        let groups: Vec<wgpu::BindGroup> = [buffer_entries(&own), buffer_entries(geometry)]
             .iter()
             .enumerate()
             .map(|(g, entries)| {

@@ -109,6 +109,77 @@ pub struct CameraDesc {
     pub fov_axis: FovAxis,
     /// Image size in pixels, [width, height].
     pub resolution: [u32; 2],
+    /// What the camera sees where it sees nothing: `"sky"` (the sky and the sun's disk, black
+    /// without them), `"black"`, or a colour.
+    pub background: Background,
+}
+
+/// What the camera sees where its ray meets nothing.
+#[derive(Clone, Copy, Debug, Default, PartialEq)]
+pub enum Background {
+    #[default]
+    Sky,
+    Colour([f32; 3]),
+}
+
+impl Background {
+    /// `ShadeParams::background` and `PathParams::background`.
+    pub fn uniform(self) -> [f32; 4] {
+        match self {
+            Background::Sky => [0.0; 4],
+            Background::Colour([r, g, b]) => [r, g, b, 1.0],
+        }
+    }
+
+    /// `"sky"`, `"black"`, or a colour `r,g,b` (linear, non-negative).
+    pub fn parse(text: &str) -> Result<Background, String> {
+        match text.trim() {
+            "sky" => Ok(Background::Sky),
+            "black" => Ok(Background::Colour([0.0; 3])),
+            rgb => {
+                let parts: Vec<f32> = (rgb.split(','))
+                    .map(|p| p.trim().parse::<f32>())
+                    .collect::<Result<_, _>>()
+                    .map_err(|_| {
+                        format!("a background is `sky`, `black` or `r,g,b`, got {text:?}")
+                    })?;
+                match parts[..] {
+                    [r, g, b] if parts.iter().all(|x| x.is_finite() && *x >= 0.0) => {
+                        Ok(Background::Colour([r, g, b]))
+                    }
+                    _ => Err(format!(
+                        "a background colour is three finite, non-negative numbers, got {text:?}"
+                    )),
+                }
+            }
+        }
+    }
+}
+
+impl<'de> Deserialize<'de> for Background {
+    fn deserialize<D: serde::Deserializer<'de>>(d: D) -> std::result::Result<Background, D::Error> {
+        #[derive(Deserialize)]
+        #[serde(untagged)]
+        enum Form {
+            Word(String),
+            Colour(Rgb),
+        }
+        match Form::deserialize(d).map_err(|_| {
+            serde::de::Error::custom("a background is \"sky\", \"black\" or a colour")
+        })? {
+            Form::Word(w) => Background::parse(&w).map_err(serde::de::Error::custom),
+            Form::Colour(c) => {
+                let c = c.rgb();
+                if c.iter().all(|x| x.is_finite() && *x >= 0.0) {
+                    Ok(Background::Colour(c))
+                } else {
+                    Err(serde::de::Error::custom(format!(
+                        "a background colour is finite and non-negative, got {c:?}"
+                    )))
+                }
+            }
+        }
+    }
 }
 
 #[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Deserialize)]
@@ -129,6 +200,7 @@ impl Default for CameraDesc {
             fov: 39.3077,
             fov_axis: FovAxis::X,
             resolution: [512, 512],
+            background: Background::Sky,
         }
     }
 }
@@ -263,6 +335,27 @@ pub enum LightDesc {
     },
     /// Parallel light travelling along `direction`, irradiance in W/m² across the beam.
     Directional { direction: Vec3, irradiance: Rgb },
+    /// The sun: a directional light from a disk of the sky `angle` degrees across (0.53, the
+    /// sun's), whose shadows are as soft as the sun's; `irradiance` (W/m²) on a surface facing
+    /// it.
+    Sun {
+        direction: Vec3,
+        irradiance: Rgb,
+        angle: Option<f32>,
+    },
+    /// A clear sky by the Hosek–Wilkie model for a sun at `sun_elevation` and `sun_azimuth`
+    /// (degrees; the azimuth in the map's frame, 0 along −z and 90 along +x for `up = "y"`),
+    /// `turbidity` (3; 1–10) and `ground_albedo` (0.3), times `scale`: an environment light
+    /// whose map is made at load. The sun's disk is a `sun` light of its own.
+    Sky {
+        sun_elevation: f32,
+        sun_azimuth: Option<f32>,
+        turbidity: Option<f32>,
+        ground_albedo: Option<f32>,
+        scale: Option<f32>,
+        rotation: Option<f32>,
+        up: Option<UpAxis>,
+    },
     /// Light from every direction, a sky: a latitude-longitude HDR image (`map`: OpenEXR, or
     /// Radiance `.hdr`, relative to the scene file) or one `radiance` (W/m²/sr), times
     /// `scale`. One a scene.

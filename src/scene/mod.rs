@@ -346,13 +346,43 @@ pub fn parse(path: &Path, text: &str) -> Result<Scene> {
                 if sky.is_some() {
                     return Err(at("a scene has at most one environment light".into()));
                 }
-                Some(environment_map(map.as_deref(), *radiance, *scale, base_dir).map_err(at)?)
+                let map = environment_map(map.as_deref(), *radiance, *scale, base_dir);
+                Some((map.map_err(at)?, None))
+            }
+            LightDesc::Sky {
+                sun_elevation,
+                sun_azimuth,
+                turbidity,
+                ground_albedo,
+                scale,
+                ..
+            } => {
+                if sky.is_some() {
+                    return Err(at("a scene has at most one environment light".into()));
+                }
+                let scale = positive(scale.unwrap_or(1.0), "scale").map_err(at)?;
+                let sun = (*sun_elevation, sun_azimuth.unwrap_or(0.0));
+                let (turbidity, albedo) = (turbidity.unwrap_or(3.0), ground_albedo.unwrap_or(0.3));
+                let map = sky::hosek_wilkie(sun, turbidity, albedo, scale).map_err(at)?;
+                Some((map, Some(albedo)))
             }
             _ => None,
         };
-        lights.push(light(l.get_ref(), bounds, map.as_ref()).map_err(at)?);
-        sky = map.map(|m| m.table());
+        lights.push(light(l.get_ref(), bounds, map.as_ref().map(|m| &m.0)).map_err(at)?);
+        if let Some((map, albedo)) = map {
+            sky = Some((map, albedo, lights.len() - 1));
+        }
     }
+    // A sky model's ground, below its horizon, is lit by the scene's suns too.
+    if let Some((map, Some(albedo), at)) = &mut sky {
+        let up = Vec3::from(lights[*at].direction);
+        for sun in lights.iter().filter(|l| l.kind == light_kind::SUN) {
+            let cos = (-Vec3::from(sun.direction).dot(up)).max(0.0);
+            let e = Vec3::from(sun.power) / sun.area * cos;
+            map.light_ground((e * (*albedo / std::f32::consts::PI)).into());
+        }
+    }
+    let sky = sky.map(|(map, ..)| map.table());
     if lights.is_empty() {
         return Err(invalid(
             "the scene has no lights: add at least one [[light]]".into(),
@@ -575,6 +605,9 @@ fn one_of(
     }
 }
 
+/// The sun's angular diameter (degrees) where a `sun` light gives none.
+const SUN_ANGLE: f32 = 0.53;
+
 /// An environment light's map: the image at `map` (relative to `base_dir`) or the constant
 /// `radiance`, times `scale`.
 fn environment_map(
@@ -707,7 +740,30 @@ fn light(
             out.area = area;
             out.power = nonneg_rgb(irradiance.rgb(), "irradiance")?.map(|x| x * area);
         }
-        LightDesc::Environment { rotation, up, .. } => {
+        LightDesc::Sun {
+            direction,
+            irradiance,
+            angle,
+        } => {
+            let d = unit(*direction, "direction")?;
+            let angle = angle.unwrap_or(SUN_ANGLE);
+            if !(angle > 0.0 && angle < 90.0) {
+                return Err(format!("angle must be in (0, 90) degrees, got {angle}"));
+            }
+            let center = 0.5 * (lo + hi);
+            let r = (0.5 * (hi - lo).length()).max(1e-6);
+            let area = std::f32::consts::PI * r * r;
+            let half = f64::from(angle).to_radians() / 2.0;
+            out.kind = light_kind::SUN;
+            out.position = (center - d * (2.0 * r)).into();
+            out.direction = d.into();
+            out.area = area;
+            out.cos_outer = half.cos() as f32;
+            // 1 − cos, from the half-angle's sine: exact where the cosine rounds to 1.
+            out.cos_inner = (2.0 * (half / 2.0).sin().powi(2)) as f32;
+            out.power = nonneg_rgb(irradiance.rgb(), "irradiance")?.map(|x| x * area);
+        }
+        LightDesc::Environment { rotation, up, .. } | LightDesc::Sky { rotation, up, .. } => {
             let sky = sky.ok_or("an environment light needs its map")?;
             let rotation = rotation.unwrap_or(0.0);
             if !rotation.is_finite() {

@@ -173,7 +173,7 @@ fn back_sees_scene(scene: &Scene, geo: &crate::shared::trace::Geometry, i: usize
     scene.lights.iter().take(LIGHT_RAYS).any(|l| {
         let p = Vec3::from(l.position);
         let (to, dist) = match l.kind {
-            light_kind::DIRECTIONAL => (-Vec3::from(l.direction), FAR),
+            light_kind::DIRECTIONAL | light_kind::SUN => (-Vec3::from(l.direction), FAR),
             // A sky lights a back from the way it faces.
             light_kind::ENVIRONMENT => (-n, FAR),
             light_kind::AREA => {

@@ -189,6 +189,97 @@ impl Sky {
     }
 }
 
+/// Texels of a sky model's map: 512 × 256, a texel 0.7° across, finer than the sky's
+/// gradients (its brightest, round the sun, spans tens of degrees).
+const MODEL_SIZE: (u32, u32) = (512, 256);
+
+/// The clear sky of the Hosek–Wilkie model (Hosek & Wilkie 2012, "An Analytic Model for Full
+/// Spectral Sky-Dome Radiance"; its RGB coefficients, from the `hw-skymodel` crate) for a sun
+/// at `elevation` and `azimuth` (degrees; the azimuth in the map's frame: 0 along −z, 90 along
+/// +x), `turbidity` (1–10) and the ground's `albedo` (0–1), times `scale`, as a map: the sky
+/// above the horizon, and below it the ground the model assumes, a plane of that albedo lit by
+/// the sky (`albedo E / π`, E the sky's irradiance on it; `scene::load` adds the scene's suns'
+/// with `light_ground`), so that a scene's own ground meets a horizon. The sun's disk is not in
+/// it: a `sun` light is the sun.
+pub fn hosek_wilkie(
+    (elevation, azimuth): (f32, f32),
+    turbidity: f32,
+    albedo: f32,
+    scale: f32,
+) -> Result<Sky, String> {
+    use hw_skymodel::rgb::{Channel, SkyParams, SkyState};
+    if !(0.0..=90.0).contains(&elevation) {
+        return Err(format!(
+            "sun_elevation must be in [0, 90] degrees, got {elevation}"
+        ));
+    }
+    if !azimuth.is_finite() {
+        return Err(format!("sun_azimuth must be finite, got {azimuth}"));
+    }
+    let state = SkyState::new(&SkyParams {
+        elevation: elevation.to_radians(),
+        turbidity,
+        albedo: [albedo; 3],
+    })
+    .map_err(|e| e.to_string())?;
+    let (e, a) = (elevation.to_radians(), azimuth.to_radians());
+    let sun = Vec3::new(e.cos() * a.sin(), e.sin(), -e.cos() * a.cos());
+    let (w, h) = MODEL_SIZE;
+    let mut radiance = Vec::with_capacity((w * h) as usize);
+    // The sky's irradiance on the ground, to light the ground below the horizon.
+    let mut ground = [0.0f64; 3];
+    for y in 0..h {
+        let theta = std::f32::consts::PI * (y as f32 + 0.5) / h as f32;
+        let below = theta >= std::f32::consts::FRAC_PI_2;
+        let solid_angle = 2.0 * std::f64::consts::PI / f64::from(w)
+            * (std::f64::consts::PI / f64::from(h))
+            * f64::from(theta.sin());
+        for x in 0..w {
+            if below {
+                radiance.push([0.0; 3]);
+                continue;
+            }
+            let phi = 2.0 * std::f32::consts::PI * (x as f32 + 0.5) / w as f32;
+            let d = Vec3::new(
+                theta.sin() * phi.sin(),
+                theta.cos(),
+                -theta.sin() * phi.cos(),
+            );
+            let gamma = d.dot(sun).clamp(-1.0, 1.0).acos();
+            let c = [Channel::R, Channel::G, Channel::B]
+                .map(|c| (state.radiance(theta, gamma, c) * scale).max(0.0));
+            for (e, l) in ground.iter_mut().zip(c) {
+                *e += f64::from(l) * f64::from(theta.cos()) * solid_angle;
+            }
+            radiance.push(c);
+        }
+    }
+    let below = ground.map(|e| (f64::from(albedo) * e / std::f64::consts::PI) as f32);
+    for c in radiance[(w * h / 2) as usize..].iter_mut() {
+        *c = below;
+    }
+    let sky = Sky {
+        width: w,
+        height: h,
+        radiance,
+    };
+    sky.check()?;
+    Ok(sky)
+}
+
+impl Sky {
+    /// Adds `radiance` below the horizon (the lower half of the rows): a sky model's ground,
+    /// lit by a sun of the scene.
+    pub fn light_ground(&mut self, radiance: [f32; 3]) {
+        let half = (self.width * self.height / 2) as usize;
+        for c in self.radiance[half..].iter_mut() {
+            for (x, r) in c.iter_mut().zip(radiance) {
+                *x += r;
+            }
+        }
+    }
+}
+
 /// The map's frame in the scene: its up axis (the map's y) and the axes its x and z point
 /// along, turned by `rotation` degrees about up (counter-clockwise seen from above).
 pub fn frame(up: Vec3, rotation_deg: f32) -> [Vec3; 3] {

@@ -75,6 +75,7 @@ pub fn parse(path: &Path, text: &str, base: &CameraDesc) -> Result<Vec<CameraDes
             fov: v.fov.unwrap_or(base.fov),
             fov_axis: v.fov_axis.unwrap_or(base.fov_axis),
             resolution: base.resolution,
+            background: base.background,
         };
         super::validate_camera(&cam)
             .map_err(|m| Error::parse(path, format!("view #{}", k + 1), m))?;

@@ -7,9 +7,9 @@
 use glam::{Vec2, Vec3};
 
 use crate::shared::rng::{pcg_hash, unit_float};
-use crate::shared::sampling::{PI, frame_of, sample_cosine, smoothstep, to_world};
+use crate::shared::sampling::{PI, frame_of, polar, sample_cosine, smoothstep, to_world};
 use crate::shared::trace::FAR;
-use crate::types::{Light, light_flags, light_kind};
+use crate::types::{Light, light_flags, light_kind, stratified};
 
 /// Roughness below this gives no direct highlight (a mirror needs the lobes, not a sample).
 pub const MIN_ALPHA: f32 = 1e-3;
@@ -28,8 +28,43 @@ pub const SKY_STRATA: u32 = 2;
 pub fn strata_side(kind: u32, n: u32) -> u32 {
     match kind {
         light_kind::ENVIRONMENT => SKY_STRATA * n,
-        light_kind::AREA => n,
+        k if stratified(k) => n,
         _ => 1,
+    }
+}
+
+/// The solid angle of the sun's disk: 2π (1 − cos), `cos_inner` holding 1 − cos.
+pub fn sun_solid_angle(l: &Light) -> f32 {
+    2.0 * PI * l.cos_inner
+}
+
+/// The solid-angle pdf of light `l`'s sample along `wi` towards a surface of normal `n` (an
+/// area light's point at distance `dist`): 0 for a light sampled at one point.
+pub fn light_pdf(sky: &[[f32; 4]], l: &Light, (n, wi): (Vec3, Vec3), dist: f32) -> f32 {
+    match l.kind {
+        light_kind::AREA => {
+            let cos_l = -wi.dot(Vec3::from(l.direction));
+            if cos_l > 0.0 {
+                dist * dist / (l.area * cos_l)
+            } else {
+                0.0
+            }
+        }
+        light_kind::ENVIRONMENT => sky_pdf(sky, l, n, wi),
+        light_kind::SUN => 1.0 / sun_solid_angle(l),
+        _ => 0.0,
+    }
+}
+
+/// The radiance light `l` sends along −d to a ray `d` that leaves the scene: a sky's, or the
+/// sun's where `d` lies in its disk.
+pub fn escaped_radiance(sky: &[[f32; 4]], l: &Light, d: Vec3) -> Vec3 {
+    match l.kind {
+        light_kind::ENVIRONMENT => sky_radiance(sky, l, d),
+        light_kind::SUN if -d.dot(Vec3::from(l.direction)) >= l.cos_outer => {
+            Vec3::from(l.power) / (l.area * sun_solid_angle(l))
+        }
+        _ => Vec3::ZERO,
     }
 }
 
@@ -180,16 +215,23 @@ pub fn spot_falloff_mean(l: &Light) -> f32 {
 }
 
 /// A point of light `l` towards `p`, a surface of normal `n`: (u, v) picks the point of an
-/// area light or the direction of an environment light, whose map `sky` holds (`SkyTable`).
+/// area light, the direction of an environment light (whose map `sky` holds, `SkyTable`) or
+/// of the sun's disk.
 pub fn sample_light(sky: &[[f32; 4]], l: &Light, p: Vec3, n: Vec3, u: f32, v: f32) -> LightSample {
     if l.kind == light_kind::ENVIRONMENT {
         return sample_sky(sky, l, n, u, v);
     }
     let power = Vec3::from(l.power);
     let axis = Vec3::from(l.direction);
-    if l.kind == light_kind::DIRECTIONAL {
+    if l.kind == light_kind::DIRECTIONAL || l.kind == light_kind::SUN {
+        let wi = if l.kind == light_kind::SUN {
+            // Uniform over the disk's cone (`sample_cone`, with 1 − cos exact).
+            to_world(&frame_of(-axis), polar(1.0 - u * l.cos_inner, v))
+        } else {
+            -axis
+        };
         return LightSample {
-            wi: -axis,
+            wi,
             dist: FAR,
             e: power / l.area,
         };

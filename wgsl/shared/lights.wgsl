@@ -21,7 +21,8 @@ struct LightSample {
 // The environment light's map, as scene::sky::SkyTable packs it: [0] the header (width,
 // height, the sum of the texels' sampling weights); [1 + y W + x] texel (x, y): radiance, and
 // its row's cumulative share up to it; [1 + W H + y] the rows' cumulative share up to row y.
-// A stage that imports this module declares `sky` (trace.wgsl, splat_shading.wgsl).
+// A stage that imports this module declares `sky`: the tracing stages in the geometry group
+// (trace.wgsl), the splat stages in their group 0 (splat_shade.wgsl and its siblings).
 
 // Rec. 709 luminance, the sky's sampling weight.
 fn sky_luminance(c: vec3<f32>) -> f32 {
@@ -158,7 +159,7 @@ fn sample_sky(l: Light, n: vec3<f32>, u: f32, v: f32) -> LightSample {
 // Whether a light of this kind is sampled on a grid of strata (an area light's points, an
 // environment light's directions) rather than at one point.
 fn stratified(kind: u32) -> bool {
-    return kind == LIGHT_AREA || kind == LIGHT_ENVIRONMENT;
+    return kind == LIGHT_AREA || kind == LIGHT_ENVIRONMENT || kind == LIGHT_SUN;
 }
 
 // An environment light's strata per side, in an area light's: a sky fills the hemisphere, and
@@ -172,7 +173,40 @@ fn strata_side(kind: u32, n: u32) -> u32 {
     if kind == LIGHT_ENVIRONMENT {
         return SKY_STRATA * n;
     }
-    return select(1u, n, kind == LIGHT_AREA);
+    return select(1u, n, stratified(kind));
+}
+
+// The solid angle of the sun's disk: 2 pi (1 - cos), cos_inner holding 1 - cos.
+fn sun_solid_angle(l: Light) -> f32 {
+    return 2.0 * PI * l.cos_inner;
+}
+
+// The solid-angle pdf of light l's sample along wi towards a surface of normal n (an area
+// light's point at distance dist): 0 for a light sampled at one point, which no ray meets.
+fn light_pdf(l: Light, n: vec3<f32>, wi: vec3<f32>, dist: f32) -> f32 {
+    if l.kind == LIGHT_AREA {
+        let cos_l = -dot(wi, l.direction);
+        return select(0.0, dist * dist / (l.area * cos_l), cos_l > 0.0);
+    }
+    if l.kind == LIGHT_ENVIRONMENT {
+        return sky_pdf(l, n, wi);
+    }
+    if l.kind == LIGHT_SUN {
+        return 1.0 / sun_solid_angle(l);
+    }
+    return 0.0;
+}
+
+// The radiance light l sends along -d to a ray d that leaves the scene: a sky's, or the
+// sun's where d lies in its disk.
+fn escaped_radiance(l: Light, d: vec3<f32>) -> vec3<f32> {
+    if l.kind == LIGHT_ENVIRONMENT {
+        return sky_radiance(l, d);
+    }
+    if l.kind == LIGHT_SUN && -dot(d, l.direction) >= l.cos_outer {
+        return l.power / (l.area * sun_solid_angle(l));
+    }
+    return vec3<f32>(0.0);
 }
 
 // The mean of a spot's smooth falloff over its cone, uniform in cos (see photons.rs).
@@ -184,14 +218,18 @@ fn spot_falloff_mean(l: Light) -> f32 {
 }
 
 // A point on a light towards p, a surface of normal n: (u, v) picks the point of an area light
-// or the direction of an environment light.
+// or the direction of an environment light or the sun's disk.
 fn sample_light(l: Light, p: vec3<f32>, n: vec3<f32>, u: f32, v: f32) -> LightSample {
     if l.kind == LIGHT_ENVIRONMENT {
         return sample_sky(l, n, u, v);
     }
     var s: LightSample;
-    if l.kind == LIGHT_DIRECTIONAL {
+    if l.kind == LIGHT_DIRECTIONAL || l.kind == LIGHT_SUN {
         s.wi = -l.direction;
+        if l.kind == LIGHT_SUN {
+            // Uniform over the disk's cone (sample_cone, with 1 - cos exact).
+            s.wi = to_world(frame_of(-l.direction), polar(1.0 - u * l.cos_inner, v));
+        }
         s.dist = FAR;
         s.e = l.power / l.area;
         return s;

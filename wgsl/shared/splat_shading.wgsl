@@ -2,7 +2,8 @@
 // compute splatter and splat_shade alike: the indirect light from the splat's lobes and
 // irradiance, and the baked direct light. The bindings 2-9 of group 0 are declared here, so
 // that all three stages bind them at the same numbers; bindings 0 (the camera) and 1 (the
-// splats) are the stage's. Twin: src/cpu/splat_shading.rs.
+// splats) are the stage's, and so is `sky`, the environment light's map that lights.wgsl
+// reads, after the stage's own bindings: only splat_shade reads it (baked_direct). Twin: src/cpu/splat_shading.rs.
 
 // #import splat
 // #import lobe_brdf
@@ -22,9 +23,6 @@
 @group(0) @binding(8) var<storage, read> direct: array<vec4<f32>>;
 // #paged
 @group(0) @binding(9) var<storage, read> visibility: array<f32>;
-// The environment light's map (lights.wgsl), in a group of its own: only the direct bake's
-// shading reads it (splat_shade), so the other passes' derived layouts leave it out.
-@group(1) @binding(0) var<storage, read> sky: array<vec4<f32>>;
 
 // The hemispherical integral of a lobe of width beta2 about axis (lobe_norms).
 fn lobe_norm(n: vec3<f32>, axis: vec3<f32>, beta2: f32) -> f32 {

@@ -97,6 +97,7 @@ const LIGHT_SPOT: u32 = 1u;
 const LIGHT_AREA: u32 = 2u;
 const LIGHT_DIRECTIONAL: u32 = 3u;
 const LIGHT_ENVIRONMENT: u32 = 4u;
+const LIGHT_SUN: u32 = 5u;
 // Light.flags: an area light whose front reflects as a surface does (light_flags::REFLECTS).
 const LIGHT_REFLECTS: u32 = 1u;
 
@@ -306,6 +307,8 @@ struct ShadeParams {
     area_count: u32,
     sample: u32,
     glossy_rays: u32,
+    // What the camera sees where its ray meets nothing: w = 1 the colour xyz, w = 0 the sky.
+    background: vec4<f32>,
 }
 
 const DIRECT_RAYS: u32 = 0u;
@@ -327,6 +330,7 @@ struct PathParams {
     light_count: u32,
     show: u32,
     shadow_bias: f32,
+    background: vec4<f32>,
 }
 
 struct GatherParams {
