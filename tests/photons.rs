@@ -445,6 +445,19 @@ fn photons_land_on_a_light_that_reflects() {
     }
 }
 
+/// Replaces the scene's splats by one disk at the origin facing up, its light's target: its
+/// area is exact where a quad of splats overhangs its edges by about a splat radius. Its radius.
+fn one_disk(scene: &mut Scene) -> f32 {
+    let radius = 0.9f32;
+    scene.splats = vec![lobelight::types::Splat {
+        center: [0.0; 3],
+        radius,
+        normal: [0.0, 1.0, 0.0],
+        ..scene.splats[0]
+    }];
+    radius
+}
+
 /// A directional light emits from a disk covering the scene: a target of area A receives
 /// E·A, up to the binomial error of how many photons hit it. The target is one disk, whose
 /// area is exact (a quad of splats overhangs its edges by about a splat radius).
@@ -466,13 +479,7 @@ spacing = 0.5
 "#,
     );
     // The light's disk covers the quad's bounds, so also this disk inside them.
-    let radius = 0.9f32;
-    scene.splats = vec![lobelight::types::Splat {
-        center: [0.0; 3],
-        radius,
-        normal: [0.0, 1.0, 0.0],
-        ..scene.splats[0]
-    }];
+    let radius = one_disk(&mut scene);
     let n = 30_000u64;
     let cfg = config(&scene, n, StoreRange::All);
     let disk_area = scene.lights[0].area as f64;
@@ -518,13 +525,7 @@ rotate = [-90.0, 0.0, 0.0]
 spacing = 0.5
 "#
     ));
-    let radius = 0.9f32;
-    scene.splats = vec![lobelight::types::Splat {
-        center: [0.0; 3],
-        radius,
-        normal: [0.0, 1.0, 0.0],
-        ..scene.splats[0]
-    }];
+    let radius = one_disk(&mut scene);
     let n = 40_000u64;
     let cfg = config(&scene, n, StoreRange::All);
     let target = std::f64::consts::PI * (radius as f64).powi(2);

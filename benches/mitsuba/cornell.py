@@ -62,6 +62,25 @@ def find_llvm():
     return max(found)[1] if found else None
 
 
+def start(variant):
+    """Mitsuba in `variant`, once lobelight's binary is there and an LLVM for the JIT variants
+    is found; a clear exit where either is missing."""
+    if not LOBELIGHT.exists():
+        sys.exit(f"{LOBELIGHT} is missing: run `cargo build --release` first")
+    if variant.startswith("llvm") and "DRJIT_LIBLLVM_PATH" not in os.environ:
+        llvm = find_llvm()
+        if llvm is None:
+            sys.exit("the llvm variants need LLVM 16 or newer (Debian 12: `apt-get install "
+                     "libllvm19`), or pass --variant scalar_rgb")
+        os.environ["DRJIT_LIBLLVM_PATH"] = llvm
+    try:
+        import mitsuba as mi
+    except ImportError:
+        sys.exit("Mitsuba 3 is missing: `pip install mitsuba`")
+    mi.set_variant(variant)
+    return mi
+
+
 def mitsuba_scene(mi, name, size, spp, max_depth):
     """Mitsuba's Cornell box as scene `name` gives it, at `size`², box filter, paths of at most
     `max_depth` vertices."""
@@ -260,19 +279,7 @@ def main():
     unknown = [n for n in names if n not in SCENES and n != "sheet"]
     if unknown:
         sys.exit(f"unknown scene {unknown[0]!r}: the check knows {', '.join(SCENES)}")
-    if not LOBELIGHT.exists():
-        sys.exit(f"{LOBELIGHT} is missing: run `cargo build --release` first")
-    if args.variant.startswith("llvm") and "DRJIT_LIBLLVM_PATH" not in os.environ:
-        llvm = find_llvm()
-        if llvm is None:
-            sys.exit("the llvm variants need LLVM 16 or newer (Debian 12: `apt-get install "
-                     "libllvm19`), or pass --variant scalar_rgb")
-        os.environ["DRJIT_LIBLLVM_PATH"] = llvm
-    try:
-        import mitsuba as mi
-    except ImportError:
-        sys.exit("Mitsuba 3 is missing: `pip install mitsuba`")
-    mi.set_variant(args.variant)
+    mi = start(args.variant)
     sys.path.insert(0, str(Path(__file__).resolve().parent))
     out = args.output
     out.mkdir(parents=True, exist_ok=True)

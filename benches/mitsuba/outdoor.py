@@ -26,13 +26,12 @@ It prints one JSON object on stdout; images, the map and objects.md go to the ou
 import argparse
 import json
 import math
-import os
 import sys
 import time
 from pathlib import Path
 
 sys.path.insert(0, str(Path(__file__).resolve().parent))
-from cornell import LOBELIGHT, BOUND_PATH, BOUND_RENDERER, find_llvm, lobelight, objects, table  # noqa: E402
+from cornell import BOUND_PATH, BOUND_RENDERER, lobelight, objects, start, table  # noqa: E402
 
 # The sky's map: its size, the sun's elevation and azimuth (degrees, in the map's frame), its
 # angular width (σ of a Gaussian, degrees) and peak radiance, and the turn about y.
@@ -132,7 +131,7 @@ def mitsuba_scene(mi, glossy, sky, size, spp, max_depth):
     if glossy:
         import ward
         g = GLOSSY
-        ball_bsdf = {"type": ward.register(g["diffuse"], [g["specular"]] * 3, g["roughness"])}
+        ball_bsdf = {"type": ward.register([g["diffuse"]] * 3, [g["specular"]] * 3, g["roughness"])}
     return mi.load_dict({
         "type": "scene",
         "integrator": {"type": "path", "max_depth": max_depth},
@@ -197,20 +196,11 @@ def main():
                         "alone again")
     p.add_argument("-o", "--output", type=Path, default=Path("outdoor-out"))
     args = p.parse_args()
-    if not LOBELIGHT.exists():
-        sys.exit(f"{LOBELIGHT} is missing: run `cargo build --release` first")
-    if args.variant.startswith("llvm") and "DRJIT_LIBLLVM_PATH" not in os.environ:
-        llvm = find_llvm()
-        if llvm is None:
-            sys.exit("the llvm variants need LLVM 16 or newer (Debian 12: `apt-get install "
-                     "libllvm19`), or pass --variant scalar_rgb")
-        os.environ["DRJIT_LIBLLVM_PATH"] = llvm
+    mi = start(args.variant)
     try:
-        import mitsuba as mi
         import numpy as np
     except ImportError:
-        sys.exit("Mitsuba 3 and numpy are missing: `pip install mitsuba numpy`")
-    mi.set_variant(args.variant)
+        sys.exit("numpy is missing: `pip install numpy`")
     out = args.output
     out.mkdir(parents=True, exist_ok=True)
     sky = out / "sky.exr"

@@ -6,7 +6,7 @@
 
 use glam::{Vec3, Vec4};
 
-use crate::shared::lights::{LightSample, MIN_ALPHA, area_point, sample_light, sky_radiance};
+use crate::shared::lights::{LightSample, MIN_ALPHA, area_point, sample_emitter, sky_radiance};
 use crate::shared::lobe_brdf::{lobe_specular, norm_at, norm_lookup};
 use crate::shared::sampling::{PI, frame_of};
 use crate::shared::splat::{
@@ -99,7 +99,7 @@ impl Shading<'_> {
                 continue;
             }
             if !stratified(l.kind) {
-                let ls = sample_light(baked.sky, l, p, normal, 0.0, 0.0);
+                let ls = sample_emitter(l, p, 0.0, 0.0);
                 spec += vis * specular_sample(normal, wo, m.roughness, &ls);
                 continue;
             }
@@ -107,7 +107,7 @@ impl Shading<'_> {
             let mut area_sum = Vec3::ZERO;
             for j in 0..n * n {
                 let uv = area_point(j, n, 0, false);
-                let ls = sample_light(baked.sky, l, p, normal, uv.x, uv.y);
+                let ls = sample_emitter(l, p, uv.x, uv.y);
                 area_sum += specular_sample(normal, wo, m.roughness, &ls);
             }
             spec += vis * area_sum * (1.0 / (n * n) as f32);

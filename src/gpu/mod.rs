@@ -368,17 +368,18 @@ impl Gpu {
         self.dispatch_pipeline(encoder, pass.stage, &pipeline, &paging, bind_groups, groups)
     }
 
-    /// Like `dispatch`, with the workgroup counts read on the device from `args` at `offset`
-    /// (three u32s, as a stage before wrote them): a dispatch sized by what that stage found.
+    /// Like `dispatch` (of the stage's variant of `defines`), with the workgroup counts read on
+    /// the device from `args` at `offset` (three u32s, as a stage before wrote them): a
+    /// dispatch sized by what that stage found.
     pub fn dispatch_indirect(
         &self,
         encoder: &mut wgpu::CommandEncoder,
-        stage: Stage,
+        (stage, defines): (Stage, &[&str]),
         bind_groups: &[&[&wgpu::Buffer]],
         (args, offset): (&wgpu::Buffer, u64),
     ) -> Result<()> {
         let paging = self.paging(stage, bind_groups)?;
-        let pipeline = self.variant_paged(stage, &[], &[], &paging)?;
+        let pipeline = self.variant_paged(stage, defines, &[], &paging)?;
         let mut pass = self.bound_pass(encoder, stage, &pipeline, &paging, bind_groups)?;
         pass.dispatch_workgroups_indirect(args, offset);
         Ok(())

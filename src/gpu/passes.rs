@@ -4,7 +4,7 @@
 //! viewer or a benchmark draws frame after frame with nothing but a new camera uniform.
 
 use super::exec::GpuExecutor;
-use super::exec::{GEOMETRY_BINDINGS, GeometryBuffers, SKY_BINDING};
+use super::exec::{GEOMETRY_BINDINGS, GeometryBuffers};
 use super::scene::GpuScene;
 use std::collections::HashMap;
 use std::sync::{Mutex, OnceLock};
@@ -73,6 +73,8 @@ pub struct PassBuffers<'a> {
     pub geometry: GeometryBuffers<'a>,
     /// Where each surface's disks end, as the drawing passes read it (`GpuScene::drawn_clips`).
     pub clips: &'a wgpu::Buffer,
+    /// The sky's map where the scene has one: `splat_shade` binds it then (the define `sky`).
+    pub sky: Option<&'a wgpu::Buffer>,
     /// What `splat_shade` writes for frames of baked direct light: per splat, the radiance
     /// it sends towards the eye.
     pub shaded: &'a wgpu::Buffer,
@@ -292,6 +294,7 @@ impl FrameScene {
             visibility: &self.direct.visibility,
             geometry: on_gpu.geometry(),
             clips: &on_gpu.drawn_clips,
+            sky: on_gpu.has_sky.then_some(&on_gpu.sky),
             shaded: &self.shaded,
             selected_count: &self.selected_count,
             selected: &self.selected,
@@ -960,15 +963,19 @@ impl SplatPipelines {
             scene.selected_count,
             scene.selected,
             scene.drawn_normals,
-            // The sky, which an environment light's glossy part reads.
-            scene.geometry[SKY_BINDING],
         ]);
+        // The sky, which an environment light's glossy part reads, where there is one.
+        buffers.extend(scene.sky);
+        let defines: &[&str] = if scene.sky.is_some() { &["sky"] } else { &[] };
         if self.indirect {
             // As many workgroups as the list needs (`splat_list` wrote them), not the scene.
-            return gpu.dispatch_indirect(encoder, stage, &[&buffers], (scene.draw_args, 16));
+            let args = (scene.draw_args, 16);
+            return gpu.dispatch_indirect(encoder, (stage, defines), &[&buffers], args);
         }
         let groups = crate::sequence::groups(stage, scene.splat_count)?;
-        gpu.dispatch(encoder, stage, &buffers, groups)
+        let paging = gpu.paging(stage, &[&buffers])?;
+        let pipeline = gpu.variant_paged(stage, defines, &[], &paging)?;
+        gpu.dispatch_pipeline(encoder, stage, &pipeline, &paging, &[&buffers], groups)
     }
 
     /// The compute splatter in place of the raster passes: the tile binning for

@@ -20,8 +20,9 @@ pub struct GpuScene {
     pub clips: wgpu::Buffer,
     /// The drawing passes' uniform of clips (`drawn_clips`).
     pub drawn_clips: wgpu::Buffer,
-    /// The environment light's map (`Scene::sky`).
+    /// The environment light's map (`Scene::sky`), and whether the scene has one.
     pub sky: wgpu::Buffer,
+    pub has_sky: bool,
     pub grid: GpuGrid,
     /// Time to upload the splats and build the grid.
     pub grid_ms: f64,
@@ -44,6 +45,7 @@ impl GpuScene {
             clips,
             drawn_clips,
             sky,
+            has_sky: scene.sky.entries().len() > 1,
             grid,
             grid_ms: ms_since(t),
         })

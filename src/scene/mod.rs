@@ -336,6 +336,13 @@ pub fn parse(path: &Path, text: &str) -> Result<Scene> {
     let mut sky = None;
     for (k, l) in file.lights.iter().enumerate() {
         let at = |m: String| at_line(l.span(), format!("light #{}: {m}", k + 1));
+        let is_sky = matches!(
+            l.get_ref(),
+            LightDesc::Environment { .. } | LightDesc::Sky { .. }
+        );
+        if is_sky && sky.is_some() {
+            return Err(at("a scene has at most one environment light".into()));
+        }
         let map = match l.get_ref() {
             LightDesc::Environment {
                 map,
@@ -343,9 +350,6 @@ pub fn parse(path: &Path, text: &str) -> Result<Scene> {
                 scale,
                 ..
             } => {
-                if sky.is_some() {
-                    return Err(at("a scene has at most one environment light".into()));
-                }
                 let map = environment_map(map.as_deref(), *radiance, *scale, base_dir);
                 Some((map.map_err(at)?, None))
             }
@@ -357,9 +361,6 @@ pub fn parse(path: &Path, text: &str) -> Result<Scene> {
                 scale,
                 ..
             } => {
-                if sky.is_some() {
-                    return Err(at("a scene has at most one environment light".into()));
-                }
                 let scale = positive(scale.unwrap_or(1.0), "scale").map_err(at)?;
                 let sun = (*sun_elevation, sun_azimuth.unwrap_or(0.0));
                 let (turbidity, albedo) = (turbidity.unwrap_or(3.0), ground_albedo.unwrap_or(0.3));

@@ -221,6 +221,11 @@ pub fn sample_light(sky: &[[f32; 4]], l: &Light, p: Vec3, n: Vec3, u: f32, v: f3
     if l.kind == light_kind::ENVIRONMENT {
         return sample_sky(sky, l, n, u, v);
     }
+    sample_emitter(l, p, u, v)
+}
+
+/// `sample_light` of any light but the sky, which reads no map (`sample_emitter` in WGSL).
+pub fn sample_emitter(l: &Light, p: Vec3, u: f32, v: f32) -> LightSample {
     let power = Vec3::from(l.power);
     let axis = Vec3::from(l.direction);
     if l.kind == light_kind::DIRECTIONAL || l.kind == light_kind::SUN {

@@ -223,6 +223,11 @@ fn sample_light(l: Light, p: vec3<f32>, n: vec3<f32>, u: f32, v: f32) -> LightSa
     if l.kind == LIGHT_ENVIRONMENT {
         return sample_sky(l, n, u, v);
     }
+    return sample_emitter(l, p, u, v);
+}
+
+// sample_light of any light but the sky, which reads no map: what a pass that binds none calls.
+fn sample_emitter(l: Light, p: vec3<f32>, u: f32, v: f32) -> LightSample {
     var s: LightSample;
     if l.kind == LIGHT_DIRECTIONAL || l.kind == LIGHT_SUN {
         s.wi = -l.direction;

@@ -3,7 +3,8 @@
 // irradiance, and the baked direct light. The bindings 2-9 of group 0 are declared here, so
 // that all three stages bind them at the same numbers; bindings 0 (the camera) and 1 (the
 // splats) are the stage's, and so is `sky`, the environment light's map that lights.wgsl
-// reads, after the stage's own bindings: only splat_shade reads it (baked_direct). Twin: src/cpu/splat_shading.rs.
+// reads, after the stage's own bindings: only splat_shade reads it (baked_direct, where the
+// scene has a sky). Twin: src/cpu/splat_shading.rs.
 
 // #import splat
 // #import lobe_brdf
@@ -106,11 +107,15 @@ fn baked_direct(i: u32, s: Splat, m: Material, p: vec3<f32>, wo: vec3<f32>) -> v
             continue;
         }
         if l.kind == LIGHT_ENVIRONMENT {
+            // Only where the scene has a sky does the pass bind its map (the define `sky`):
+            // one binding more took a paged frame past a device's storage buffers.
+            // #ifdef sky
             spec += vis * sky_specular(l, s.normal, wo, m.roughness);
+            // #endif
             continue;
         }
         if !stratified(l.kind) {
-            let ls = sample_light(l, p, s.normal, 0.0, 0.0);
+            let ls = sample_emitter(l, p, 0.0, 0.0);
             spec += vis * specular_sample(s.normal, wo, m.roughness, ls);
             continue;
         }
@@ -118,7 +123,7 @@ fn baked_direct(i: u32, s: Splat, m: Material, p: vec3<f32>, wo: vec3<f32>) -> v
         var area_sum = vec3<f32>(0.0);
         for (var j = 0u; j < n * n; j++) {
             let uv = area_point(j, n, 0u, false);
-            let ls = sample_light(l, p, s.normal, uv.x, uv.y);
+            let ls = sample_emitter(l, p, uv.x, uv.y);
             area_sum += specular_sample(s.normal, wo, m.roughness, ls);
         }
         spec += vis * area_sum * (1.0 / f32(n * n));
