@@ -119,3 +119,34 @@ fn sides_decides_where_set() {
     assert!(e.contains("sides"), "{e}");
     std::fs::remove_dir_all(&dir).ok();
 }
+
+/// A quad is a sheet: a ground under a sky gets a back side (its back sees the sky below the
+/// horizon, which would otherwise pass up through it), a floor lit from above keeps one.
+#[test]
+fn a_quad_ground_under_a_sky_gets_a_back_side() {
+    let ground = "[[object]]\nshape = \"quad\"\nsize = [2.0, 2.0]\nrotate = [-90.0, 0.0, 0.0]\nspacing = 0.1\n";
+    for (light, back) in [
+        ("type = \"environment\"\nradiance = 1.0", true),
+        (
+            "type = \"point\"\nposition = [0.0, 1.0, 0.0]\npower = 10",
+            false,
+        ),
+        (
+            "type = \"sun\"\ndirection = [0.0, -1.0, 0.2]\nirradiance = 3",
+            false,
+        ),
+    ] {
+        let text = format!("[[light]]\n{light}\n\n{ground}");
+        let scene = scene::parse(std::path::Path::new("ground.toml"), &text).unwrap();
+        let o = &scene.objects[0];
+        assert_eq!(
+            o.back_sides > 0,
+            back,
+            "{light}: {} back sides",
+            o.back_sides
+        );
+        if back {
+            assert_eq!(2 * o.back_sides, o.splats, "{light}");
+        }
+    }
+}

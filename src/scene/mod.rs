@@ -296,7 +296,9 @@ pub fn parse(path: &Path, text: &str) -> Result<Scene> {
             },
             &at,
         )?;
-        if obj.shape == ShapeKind::Model {
+        // A model, and a quad (a sheet too: a ground under a sky sees the sky below it), may
+        // get back sides; closed shapes keep one.
+        if matches!(obj.shape, ShapeKind::Model | ShapeKind::Quad) {
             models.push(sides::ModelSplats {
                 object: objects.len(),
                 range: splats.len() - summary.splats..splats.len(),

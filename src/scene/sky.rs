@@ -18,6 +18,9 @@ const CONSTANT_ROWS: u32 = 128;
 /// Texels a map may have (16k × 8k), and so the most the packed table holds: 2 GiB.
 pub const MAX_TEXELS: u64 = 1 << 27;
 
+/// Texels along a map's side: the table's header holds both sides as f32, exact below 2²⁴.
+pub const MAX_SIDE: u32 = 1 << 16;
+
 /// An environment map in linear RGB radiance (W/m²/sr), row by row from the top (θ = 0).
 #[derive(Clone, Debug, PartialEq)]
 pub struct Sky {
@@ -28,7 +31,8 @@ pub struct Sky {
 
 /// A sky as the stages read it (`sky` in `wgsl/shared/trace.wgsl` and
 /// `wgsl/shared/splat_shading.wgsl`), one `[f32; 4]` an entry:
-/// - 0: the header: width and height (exact in f32: `MAX_TEXELS` keeps each below 2²⁴), the sum of the texels' sampling weights;
+/// - 0: the header: width and height (exact in f32: `MAX_SIDE` keeps each below 2²⁴), the sum
+///   of the texels' sampling weights;
 /// - 1 + y W + x: texel (x, y): its radiance, and the share of its row's weight up to and
 ///   including it (its row's cumulative distribution);
 /// - 1 + W H + y: row y: the share of the map's weight up to and including it.
@@ -76,9 +80,10 @@ impl Sky {
         let (width, height) = reader
             .into_dimensions()
             .map_err(|e| format!("{shown}: not an image this reads (EXR or .hdr): {e}"))?;
-        if u64::from(width) * u64::from(height) > MAX_TEXELS {
+        if u64::from(width) * u64::from(height) > MAX_TEXELS || width.max(height) > MAX_SIDE {
             return Err(format!(
-                "{shown}: {width} × {height} texels, more than the {MAX_TEXELS} a map may have"
+                "{shown}: {width} × {height} texels, more than a map may have ({MAX_TEXELS} in \
+                 all, {MAX_SIDE} a side)"
             ));
         }
         let image = image::ImageReader::open(path)
