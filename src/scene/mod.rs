@@ -619,10 +619,7 @@ fn environment_map(
     scale: Option<f32>,
     base_dir: &Path,
 ) -> std::result::Result<sky::Sky, String> {
-    let scale = scale.unwrap_or(1.0);
-    if !(scale > 0.0 && scale.is_finite()) {
-        return Err(format!("scale must be positive and finite, got {scale}"));
-    }
+    let scale = positive(scale.unwrap_or(1.0), "scale")?;
     let sky = match (map, radiance) {
         (Some(m), None) => sky::Sky::load(&base_dir.join(m), scale)?,
         (None, Some(c)) => {
@@ -634,6 +631,13 @@ fn environment_map(
         _ => return Err("give exactly one of `map` (an EXR or .hdr image) or `radiance`".into()),
     };
     Ok(sky)
+}
+
+/// The disk a light far away (directional, the sun, a sky) sends its photons from: across the
+/// bounding sphere of the splats within `(lo, hi)`, its centre, radius and area.
+fn covering_disk((lo, hi): (Vec3, Vec3)) -> (Vec3, f32, f32) {
+    let r = (0.5 * (hi - lo).length()).max(1e-6);
+    (0.5 * (lo + hi), r, std::f32::consts::PI * r * r)
 }
 
 /// The scene's light of description `l`, its scene's splats within `(lo, hi)`; `sky` is an
@@ -734,9 +738,7 @@ fn light(
         } => {
             let d = unit(*direction, "direction")?;
             // Emit from a disk that covers the scene's bounding sphere, outside it.
-            let center = 0.5 * (lo + hi);
-            let r = (0.5 * (hi - lo).length()).max(1e-6);
-            let area = std::f32::consts::PI * r * r;
+            let (center, r, area) = covering_disk((lo, hi));
             out.kind = light_kind::DIRECTIONAL;
             out.position = (center - d * (2.0 * r)).into();
             out.direction = d.into();
@@ -753,9 +755,7 @@ fn light(
             if !(angle > 0.0 && angle < 90.0) {
                 return Err(format!("angle must be in (0, 90) degrees, got {angle}"));
             }
-            let center = 0.5 * (lo + hi);
-            let r = (0.5 * (hi - lo).length()).max(1e-6);
-            let area = std::f32::consts::PI * r * r;
+            let (center, r, area) = covering_disk((lo, hi));
             let half = f64::from(angle).to_radians() / 2.0;
             out.kind = light_kind::SUN;
             out.position = (center - d * (2.0 * r)).into();
@@ -779,10 +779,9 @@ fn light(
             let [x, y, z] = sky::frame(up, rotation);
             // Photons start on a disk across the scene's bounding sphere, as a directional
             // light's do, from every direction.
-            let r = (0.5 * (hi - lo).length()).max(1e-6);
-            let area = std::f32::consts::PI * r * r;
+            let (center, _, area) = covering_disk((lo, hi));
             out.kind = light_kind::ENVIRONMENT;
-            out.position = (0.5 * (lo + hi)).into();
+            out.position = center.into();
             out.edge_u = x.into();
             out.direction = y.into();
             out.edge_v = z.into();
