@@ -133,6 +133,11 @@ impl Progress {
         Progress { show, traced: None }
     }
 
+    /// Whether it writes to stderr.
+    pub fn shows(&self) -> bool {
+        self.show
+    }
+
     /// Quiet, but counting the photons traced into `traced`.
     pub fn counting(traced: Arc<AtomicU64>) -> Progress {
         Progress {

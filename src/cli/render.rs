@@ -8,12 +8,11 @@ use std::time::Instant;
 use serde::Serialize;
 
 use crate::bake::{Progress, StageReport};
-use crate::cache::{self, Miss};
 use crate::camera::View;
 use crate::error::{Error, Result};
 use crate::frame::FrameConfig;
 use crate::renderer::Compiled;
-use crate::renderer::{BakeReport, Engine, Renderer};
+use crate::renderer::{Engine, Renderer};
 use crate::scene::Scene;
 use crate::scene::file::CameraDesc;
 use crate::shared::tone::srgb_byte;
@@ -340,44 +339,6 @@ fn shots(
         .collect())
 }
 
-/// The bake from the cache file when it matches, else baked (and saved when asked).
-fn bake_or_load(
-    renderer: &mut Renderer,
-    opts: &Options,
-    progress: &Progress,
-) -> Result<(BakeReport, bool)> {
-    let scene = renderer.scene();
-    let key = cache::bake_key(scene);
-    if let Some(path) = &opts.cache {
-        match cache::load(path, key, scene.splats.len())? {
-            Ok(lobes) => {
-                let why = format!("bake loaded from {}", path.display());
-                if opts.progress {
-                    eprintln!("{why}");
-                }
-                let skipped = StageReport::skipped(&why);
-                renderer.set_lobes(lobes);
-                let report = BakeReport {
-                    photons: skipped.clone(),
-                    binning: skipped.clone(),
-                    em: skipped,
-                };
-                return Ok((report, true));
-            }
-            Err(Miss::Stale) if opts.progress => eprintln!(
-                "{}: the scene or a bake setting changed since it was written; baking again",
-                path.display()
-            ),
-            Err(_) => {}
-        }
-    }
-    let report = renderer.bake(progress)?;
-    if let Some(path) = &opts.cache {
-        cache::save(path, key, renderer.lobes())?;
-    }
-    Ok((report, false))
-}
-
 /// The pixels a frame ends in: tone-mapped for PNG, linear for EXR.
 enum Pixels {
     Rgba8(Vec<u32>),
@@ -471,7 +432,7 @@ fn render_lobes(
         log_average: 0.0,
         each: Vec::with_capacity(shots.len()),
     };
-    let (baked, hit) = bake_or_load(renderer, opts, &progress)?;
+    let (baked, hit) = renderer.bake_cached(opts.cache.as_deref(), &progress)?;
     for shot in shots {
         let (t, view) = (Instant::now(), &shot.view);
         let bar = (opts.spp > 0).then(|| progress.bar(opts.spp as u64));

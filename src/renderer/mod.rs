@@ -432,6 +432,46 @@ impl Renderer {
         Ok(report)
     }
 
+    /// The bake from the cache file `cache` when it was made for this scene and these bake
+    /// settings, else baked (and saved there where a file is named); whether it was loaded.
+    pub fn bake_cached(
+        &mut self,
+        cache: Option<&std::path::Path>,
+        progress: &Progress,
+    ) -> Result<(BakeReport, bool)> {
+        use crate::cache::{self, Miss};
+        let scene = self.scene();
+        let key = cache::bake_key(scene);
+        if let Some(path) = cache {
+            match cache::load(path, key, scene.splats.len())? {
+                Ok(lobes) => {
+                    let why = format!("bake loaded from {}", path.display());
+                    if progress.shows() {
+                        eprintln!("{why}");
+                    }
+                    let skipped = StageReport::skipped(&why);
+                    self.set_lobes(lobes);
+                    let report = BakeReport {
+                        photons: skipped.clone(),
+                        binning: skipped.clone(),
+                        em: skipped,
+                    };
+                    return Ok((report, true));
+                }
+                Err(Miss::Stale) if progress.shows() => eprintln!(
+                    "{}: the scene or a bake setting changed since it was written; baking again",
+                    path.display()
+                ),
+                Err(_) => {}
+            }
+        }
+        let report = self.bake(progress)?;
+        if let Some(path) = cache {
+            cache::save(path, key, self.lobes())?;
+        }
+        Ok((report, false))
+    }
+
     /// Bakes the scene's light on `engine` — the renderer's own, or another (the mirror beside
     /// a software rasterizer that draws, which it outruns at baking) — and its direct light
     /// where the bake made none, there too; draws with both from now on.

@@ -451,6 +451,9 @@ pub struct ObjectDesc {
     pub size: Option<[f32; 2]>,
     /// model: file path, relative to the scene file.
     pub path: Option<String>,
+    /// model: points or a mesh handed over in memory by name (`scene::Arrays`: the Python
+    /// package's arrays), instead of `path`.
+    pub array: Option<String>,
     /// model: uniformly rescale so the largest bounding-box side is this long.
     pub fit: Option<f32>,
     /// model: where the fitted bounding box sits (with `fit`).

@@ -221,8 +221,16 @@ fn line_of(text: &str, offset: usize) -> usize {
     text[..offset.min(text.len())].matches('\n').count() + 1
 }
 
+/// Points and meshes handed over in memory, by the names scene objects give as `array`.
+pub type Arrays = std::collections::HashMap<String, model::Mesh>;
+
 /// Builds a scene from TOML text; `path` names it in errors and anchors model paths.
 pub fn parse(path: &Path, text: &str) -> Result<Scene> {
+    parse_with(path, text, &Arrays::new())
+}
+
+/// `parse`, with the models that name an `array` taken from `arrays`.
+pub fn parse_with(path: &Path, text: &str, arrays: &Arrays) -> Result<Scene> {
     let file: SceneFile = toml::from_str(text).map_err(|e| toml_error(path, text, e))?;
     let at_line = |span: std::ops::Range<usize>, msg: String| {
         Error::at_line(path, line_of(text, span.start), msg)
@@ -293,6 +301,7 @@ pub fn parse(path: &Path, text: &str) -> Result<Scene> {
                 extra_materials: &mut extra_materials,
                 first_extra: material_names.len() as u32,
                 budget,
+                arrays,
             },
             &at,
         )?;
@@ -847,7 +856,15 @@ fn allowed_keys(shape: ShapeKind) -> &'static [&'static str] {
         ShapeKind::Box => &["spacing"],
         ShapeKind::Sphere => &["radius", "spacing"],
         ShapeKind::Quad => &["size", "spacing"],
-        ShapeKind::Model => &["path", "fit", "anchor", "vertex_colors", "sides", "spacing"],
+        ShapeKind::Model => &[
+            "path",
+            "array",
+            "fit",
+            "anchor",
+            "vertex_colors",
+            "sides",
+            "spacing",
+        ],
     }
 }
 
@@ -864,6 +881,7 @@ fn set_keys(o: &ObjectDesc) -> Vec<&'static str> {
     add(o.radius.is_some(), "radius");
     add(o.size.is_some(), "size");
     add(o.path.is_some(), "path");
+    add(o.array.is_some(), "array");
     add(o.fit.is_some(), "fit");
     add(o.anchor.is_some(), "anchor");
     add(o.vertex_colors.is_some(), "vertex_colors");
@@ -883,6 +901,8 @@ struct Built<'a> {
     first_extra: u32,
     /// What the scene's splats may take, this object's with those before it.
     budget: Budget,
+    /// Models handed over in memory.
+    arrays: &'a Arrays,
 }
 
 /// An object's name in object-ID images: its place in the file and its shape, and its
@@ -956,6 +976,7 @@ fn build_object(
         extra_materials,
         first_extra,
         budget,
+        arrays,
     } = out;
     // Splats this object and the ones before it make, against the memory budget.
     let made = splats.len() as f64;
@@ -1060,27 +1081,44 @@ fn build_object(
             );
         }
         ShapeKind::Model => {
-            let rel = o
-                .path
-                .as_ref()
-                .ok_or_else(|| at("a model needs `path`".into()))?;
-            let file = base_dir.join(rel);
-            let mesh = model::load_with(&file, &model::Reading::within(budget))?;
+            let (file, loaded);
+            let mesh = match (&o.path, &o.array) {
+                (Some(rel), None) => {
+                    file = base_dir.join(rel);
+                    loaded = model::load_with(&file, &model::Reading::within(budget))?;
+                    &loaded
+                }
+                (None, Some(name)) => {
+                    file = PathBuf::from(format!("array '{name}'"));
+                    let mesh = arrays.get(name).ok_or_else(|| {
+                        at(format!(
+                            "no array named '{name}' was handed over (a scene file names its \
+                             model by `path`)"
+                        ))
+                    })?;
+                    model::check_array(&file, mesh)?;
+                    mesh
+                }
+                (Some(_), Some(_)) => {
+                    return Err(at("a model takes `path` or `array`, not both".into()));
+                }
+                (None, None) => return Err(at("a model needs `path`".into())),
+            };
             let fit = o.fit.map(|f| positive(f, "fit")).transpose().map_err(at)?;
-            let splat_set = match model_spacing(&mesh, o, fit, &m) {
+            let splat_set = match model_spacing(mesh, o, fit, &m) {
                 Some(step) => {
                     // The sampled surface's splats, counted before any is made.
                     // In the file's units: `spacing` over the scene's scale of them.
                     let per = step / spacing;
-                    let count_at = |s: f32| model::surface::planned(&mesh, s * per);
+                    let count_at = |s: f32| model::surface::planned(mesh, s * per);
                     within(spacing, &count_at).map_err(at)?;
-                    model::surface::sample_surface(&mesh, step)
+                    model::surface::sample_surface(mesh, step)
                 }
                 None => {
                     let points = made + mesh.positions.len() as f64;
                     let what = "the scene up to this object";
                     budget.check_points(what, points).map_err(at)?;
-                    model::to_splats(&mesh, &file)?
+                    model::to_splats(mesh, &file)?
                 }
             };
             dropped = splat_set.dropped;
@@ -1144,7 +1182,7 @@ fn build_object(
                 }
                 None => push(&placed, material, colors, "", SurfaceClip::default()),
             }
-            source = Some(rel.clone());
+            source = Some(o.path.clone().unwrap_or_else(|| file.display().to_string()));
         }
     }
     // Sizes near the limits of f32 make disks of radius 0 or infinite ones: refused here, so

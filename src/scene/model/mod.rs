@@ -143,6 +143,37 @@ pub fn load_with(path: &Path, reading: &Reading) -> Result<Mesh> {
     Ok(mesh)
 }
 
+/// Checks a mesh handed over in memory (`scene::Arrays`) as a loader checks its file, and
+/// what a loader skips instead: a point, normal or radius that is not finite, a radius not
+/// above 0. `name` names it in errors.
+pub fn check_array(name: &Path, m: &Mesh) -> Result<()> {
+    validate(name, m)?;
+    let bad = |what: &str, k: usize, v: String| Err(Error::parse(name, format!("{what} #{k}"), v));
+    if let Some(k) = m.positions.iter().position(|p| !p.is_finite()) {
+        return bad("point", k, format!("not finite: {}", m.positions[k]));
+    }
+    if let Some(n) = &m.normals
+        && let Some(k) = n.iter().position(|v| !v.is_finite())
+    {
+        return bad("normal", k, format!("not finite: {}", n[k]));
+    }
+    if let Some(c) = &m.colors
+        && let Some(k) = c.iter().position(|v| !v.iter().all(|x| x.is_finite()))
+    {
+        return bad("colour", k, format!("not finite: {:?}", c[k]));
+    }
+    if let Some(r) = &m.radii
+        && let Some(k) = r.iter().position(|&v| !(v.is_finite() && v > 0.0))
+    {
+        return bad(
+            "radius",
+            k,
+            format!("must be finite and above 0, got {}", r[k]),
+        );
+    }
+    Ok(())
+}
+
 fn validate(path: &Path, m: &Mesh) -> Result<()> {
     if m.positions.is_empty() {
         let why = match m.left_out.skipped + m.left_out.dropped() {
