@@ -155,20 +155,26 @@ impl Progress {
 
     /// A bar over `total` photons.
     pub fn bar(&self, total: u64) -> Bar {
+        self.bar_of(total, "photons")
+    }
+
+    /// A bar over `total` things of `unit` ("frames"), with their rate and the time left.
+    pub fn bar_of(&self, total: u64, unit: &str) -> Bar {
         #[cfg(feature = "progress")]
         if self.show {
             let bar = indicatif::ProgressBar::new(total);
-            bar.set_style(
-                indicatif::ProgressStyle::with_template(
-                    "{msg:>8} [{bar:30}] {human_pos}/{human_len} photons, {per_sec}, eta {eta}",
-                )
-                .unwrap_or_else(|_| indicatif::ProgressStyle::default_bar())
-                .progress_chars("=> "),
+            let template = format!(
+                "{{msg:>8}} [{{bar:30}}] {{human_pos}}/{{human_len}} {unit}, {{per_sec}}, eta {{eta}}"
             );
-            bar.set_message("photons");
+            bar.set_style(
+                indicatif::ProgressStyle::with_template(&template)
+                    .unwrap_or_else(|_| indicatif::ProgressStyle::default_bar())
+                    .progress_chars("=> "),
+            );
+            bar.set_message(unit.to_string());
             return Bar(Some(bar));
         }
-        let _ = total;
+        let _ = (total, unit);
         Bar::hidden()
     }
 

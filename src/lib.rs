@@ -67,6 +67,8 @@ pub mod shared;
 pub mod timing;
 pub mod tone;
 pub mod types;
+#[cfg(feature = "video")]
+pub mod video;
 
 #[cfg(feature = "app")]
 pub mod cli;

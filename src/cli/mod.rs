@@ -416,10 +416,15 @@ struct RenderArgs {
     /// beside it), for `compare --objects`.
     #[arg(long, value_name = "FILE.png")]
     object_ids: Option<PathBuf>,
-    /// An image sequence from one bake: the cameras FILE lists ([[view]] tables and/or an
-    /// [orbit]), each written to OUT numbered (a run of # in its name, else _NNNN).
+    /// An image sequence from one bake: the cameras FILE lists ([[view]] tables, an [orbit],
+    /// a [path] of keyframes, or a nerfstudio camera-path .json), each written to OUT
+    /// numbered (a run of # in its name, else _NNNN), or as one video where OUT ends in .mp4.
     #[arg(long, value_name = "FILE")]
     views: Option<PathBuf>,
+    /// Frames a second of an .mp4 video. Default: the views file's (its [path]'s or the
+    /// camera path's `fps`), else 30.
+    #[arg(long, requires = "views")]
+    fps: Option<f32>,
     /// With --views: draw only the views whose index is K modulo N (K in 0..N), so N
     /// machines that share the bake cache split the sequence; `auto`: K and N from a SLURM
     /// job array or a Kubernetes Indexed Job (with LOBELIGHT_SHARDS, its completions).
@@ -682,6 +687,7 @@ fn render_command(args: RenderArgs) -> Result<()> {
         json,
         object_ids,
         views,
+        fps,
         shard,
     } = args;
     if let Some(path) = &object_ids {
@@ -696,14 +702,18 @@ fn render_command(args: RenderArgs) -> Result<()> {
     let mut scene = load_scene(&scene)?;
     bake.apply(&mut scene)?;
     look.apply_background(&mut scene);
-    let views = match &views {
-        Some(path) => scene::views::load(path, &scene.camera)?,
-        None => Vec::new(),
+    let list = match &views {
+        Some(path) => scene::views::load_list(path, &scene.camera)?,
+        None => scene::views::ViewList::default(),
     };
+    let fps = fps.or(list.fps).unwrap_or(scene::views::DEFAULT_FPS);
+    scene::path::check_fps(fps).map_err(|m| Error::Invalid(format!("--fps: {m}")))?;
+    let views = list.cameras;
     let scene = std::sync::Arc::new(scene);
     let engine = device.engine(EngineChoice::Auto)?;
     let opts = render::Options {
         views,
+        fps,
         shard,
         method,
         width,
@@ -722,6 +732,11 @@ fn render_command(args: RenderArgs) -> Result<()> {
         print_json(&report)?;
     } else if stats {
         eprintln!("{report}");
+    } else if let Some(v) = &report.video {
+        eprintln!(
+            "wrote {} ({} frames at {} fps, {}×{})",
+            report.output, v.frames, v.fps, report.width, report.height
+        );
     } else if let (Some(first), Some(last)) = (report.views.first(), report.views.last()) {
         eprintln!(
             "wrote {} views ({} … {}, {}×{})",

@@ -18,6 +18,7 @@ use crate::scene::file::CameraDesc;
 use crate::shared::tone::srgb_byte;
 use crate::timing::ms_since;
 use crate::tone::ToneConfig;
+use crate::video::VideoWriter;
 
 #[derive(Clone, Copy, Debug, Default, PartialEq, Eq, clap::ValueEnum, Serialize)]
 #[serde(rename_all = "lowercase")]
@@ -65,6 +66,8 @@ pub struct Options {
     /// An image sequence from one bake (`--views`): these cameras instead of the scene's, each
     /// written to the output's name numbered (`scene::views::numbered`).
     pub views: Vec<CameraDesc>,
+    /// Frames a second of a video of the views (`.mp4` output).
+    pub fps: f32,
     /// Draw only the views whose index is K modulo N (`--shard K/N`), so that N machines
     /// sharing a bake cache split a sequence.
     pub shard: Option<(u32, u32)>,
@@ -122,6 +125,9 @@ pub struct RenderReport {
     /// With `--views`: each image drawn (this shard's), with its time from the bake in memory.
     #[serde(skip_serializing_if = "Vec::is_empty")]
     pub views: Vec<ShotReport>,
+    /// With `.mp4` output: the video's frames and rate.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub video: Option<VideoReport>,
     /// On a device: the compute pipelines it compiled, whose time the stages above include.
     #[serde(skip_serializing_if = "Option::is_none")]
     pub pipelines: Option<Compiled>,
@@ -179,6 +185,15 @@ fn refined(ms: f64, spp: u32) -> StageReport {
     }
 }
 
+/// What a video of the views holds (`RenderReport::video`).
+#[derive(Clone, Debug, Serialize)]
+pub struct VideoReport {
+    pub frames: u64,
+    pub fps: f32,
+    /// Encoding the frames, from the tone-mapped pixels to the file.
+    pub encode_ms: f64,
+}
+
 /// The image formats `render` writes, by file extension.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub enum ImageFormat {
@@ -186,6 +201,8 @@ pub enum ImageFormat {
     Png,
     /// Linear HDR radiance, 32-bit float RGBA.
     Exr,
+    /// The views as one H.264 video, tone-mapped.
+    Mp4,
 }
 
 impl ImageFormat {
@@ -197,8 +214,10 @@ impl ImageFormat {
         match ext.as_deref() {
             Some("png") => Ok(ImageFormat::Png),
             Some("exr") => Ok(ImageFormat::Exr),
+            Some("mp4") => Ok(ImageFormat::Mp4),
             _ => Err(Error::Invalid(format!(
-                "{}: the output must end in .png (tone-mapped) or .exr (linear HDR)",
+                "{}: the output must end in .png (tone-mapped), .exr (linear HDR) or .mp4 (a \
+                 video of --views)",
                 path.display()
             ))),
         }
@@ -233,6 +252,24 @@ pub fn render(
             opts.method.name()
         )));
     }
+    if format == ImageFormat::Mp4 && opts.views.is_empty() {
+        return Err(Error::Invalid(
+            "a video is a sequence: give its cameras with --views FILE (a [path] of keyframes, \
+             an [orbit], [[view]]s, or a camera-path .json)"
+                .into(),
+        ));
+    }
+    if format == ImageFormat::Mp4 && !(width.is_multiple_of(2) && height.is_multiple_of(2)) {
+        return Err(Error::Invalid(format!(
+            "{}: H.264 needs an even width and height, got {width}×{height}",
+            output.display()
+        )));
+    }
+    if format == ImageFormat::Mp4 && opts.shard.is_some() {
+        return Err(Error::Invalid(
+            "--shard draws part of a sequence: write a shard's frames as numbered .png".into(),
+        ));
+    }
     if opts.method == Method::Photons && format != ImageFormat::Png {
         return Err(Error::Invalid(
             "--method photons writes PNG only (it shows where photons landed, not radiance)".into(),
@@ -245,10 +282,12 @@ pub fn render(
     };
     let mut renderer = Renderer::new(scene.clone(), engine)?;
     let mut views = Vec::new();
+    let mut video = None;
     let (stages, cache_hit, log_average) = match opts.method {
         Method::Lobes => {
             let shots: Vec<Shot> = numbered.iter().map(|(_, s)| s.clone()).collect();
-            let (stages, hit, done) = render_lobes(&mut renderer, opts, &shots, format)?;
+            let (stages, hit, done) = render_lobes(&mut renderer, opts, &shots, (format, output))?;
+            video = done.video.clone();
             if !opts.views.is_empty() {
                 views = numbered
                     .iter()
@@ -292,6 +331,7 @@ pub fn render(
         skipped_points,
         first_skipped: first_skipped.map(str::to_string),
         views,
+        video,
         pipelines: engine.compiled(),
     })
 }
@@ -366,7 +406,7 @@ fn drawn(
     shade: StageReport,
 ) -> Result<Drawn> {
     Ok(match format {
-        ImageFormat::Png => {
+        ImageFormat::Png | ImageFormat::Mp4 => {
             let t = Instant::now();
             let toned = renderer.tone_map(tone)?;
             Drawn {
@@ -416,6 +456,8 @@ struct Shots {
     tonemap: StageReport,
     log_average: f32,
     each: Vec<f64>,
+    /// The video the shots went into, where they went into one.
+    video: Option<VideoReport>,
 }
 
 /// The renderer: bake (or load) once, then for each shot the splat passes, tone map, write.
@@ -423,7 +465,7 @@ fn render_lobes(
     renderer: &mut Renderer,
     opts: &Options,
     shots: &[Shot],
-    format: ImageFormat,
+    (format, output): (ImageFormat, &Path),
 ) -> Result<(Stages, bool, Shots)> {
     let progress = Progress::new(opts.progress);
     let mut done = Shots {
@@ -431,21 +473,54 @@ fn render_lobes(
         tonemap: StageReport::skipped("no view to draw"),
         log_average: 0.0,
         each: Vec::with_capacity(shots.len()),
+        video: None,
     };
+    let mut video = match (format, shots.first()) {
+        (ImageFormat::Mp4, Some(first)) => {
+            let (w, h) = (first.view.width, first.view.height);
+            Some(VideoWriter::create(output, w, h, opts.fps)?)
+        }
+        _ => None,
+    };
+    let mut encode_ms = 0.0;
     let (baked, hit) = renderer.bake_cached(opts.cache.as_deref(), &progress)?;
-    for shot in shots {
+    // A sequence shows one bar over its frames; a still, one over its refinement frames.
+    let frames = (shots.len() > 1).then(|| progress.bar_of(shots.len() as u64, "frames"));
+    for (k, shot) in shots.iter().enumerate() {
         let (t, view) = (Instant::now(), &shot.view);
-        let bar = (opts.spp > 0).then(|| progress.bar(opts.spp as u64));
+        let bar = (opts.spp > 0 && frames.is_none()).then(|| progress.bar(opts.spp as u64));
         let each = |k: u32| bar.iter().for_each(|b| b.set_position(k as u64 + 1));
         let drawn_now = renderer.draw(view, &opts.frame, opts.spp, each);
         bar.iter().for_each(|b| b.finish_and_clear());
         drawn_now?;
         let shade = refined(ms_since(t), opts.spp);
         let drawn = drawn(renderer, format, &opts.tone, shade)?;
-        write_drawn(&drawn, &progress, &shot.view, &shot.output)?;
+        match (&mut video, &drawn.pixels) {
+            (Some(v), Pixels::Rgba8(rgba)) => {
+                let e = Instant::now();
+                v.push(rgba)?;
+                encode_ms += ms_since(e);
+            }
+            _ if frames.is_some() => {
+                write_drawn(&drawn, &Progress::new(false), view, &shot.output)?
+            }
+            _ => write_drawn(&drawn, &progress, view, &shot.output)?,
+        }
+        frames.iter().for_each(|b| b.set_position(k as u64 + 1));
         done.each.push(ms_since(t));
         done.log_average = drawn.log_sum.map_or(0.0, crate::tone::log_average);
         (done.shade, done.tonemap) = (drawn.shade, drawn.tonemap);
+    }
+    frames.iter().for_each(|b| b.finish_and_clear());
+    if let Some(v) = video {
+        let e = Instant::now();
+        let frames = v.finish()?;
+        encode_ms += ms_since(e);
+        done.video = Some(VideoReport {
+            frames,
+            fps: opts.fps,
+            encode_ms,
+        });
     }
     let stages = Stages {
         grid: StageReport::ran(renderer.grid_ms()),

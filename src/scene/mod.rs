@@ -3,6 +3,7 @@
 
 pub mod file;
 pub mod model;
+pub mod path;
 mod settings;
 pub mod shapes;
 pub mod sides;
