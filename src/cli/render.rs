@@ -294,7 +294,11 @@ pub fn render(
                     .zip(&done.each)
                     .map(|((index, s), &ms)| ShotReport {
                         index: *index,
-                        output: s.output.display().to_string(),
+                        // A video's frames are in the video.
+                        output: match format {
+                            ImageFormat::Mp4 => output.display().to_string(),
+                            _ => s.output.display().to_string(),
+                        },
                         ms,
                     })
                     .collect();
