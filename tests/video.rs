@@ -270,3 +270,93 @@ fn what_a_video_cannot_be_is_one_line() {
     }
     std::fs::remove_dir_all(&d).ok();
 }
+
+/// The decoded frames' checksums (ffmpeg's framemd5), one line a frame.
+fn frame_md5s(video: &Path) -> Vec<String> {
+    let out = tool(
+        "ffmpeg",
+        &["-v", "error", "-i", s(video), "-f", "framemd5", "-"],
+    );
+    let text = String::from_utf8(ok(out, "ffmpeg framemd5").stdout).unwrap();
+    text.lines()
+        .filter(|l| !l.starts_with('#'))
+        .map(|l| l.rsplit(',').next().unwrap_or("").trim().to_string())
+        .collect()
+}
+
+#[test]
+fn shards_started_by_a_scheduler_join_into_one_process_s_video() {
+    let d = dir("shards");
+    std::fs::write(d.join("path.toml"), PATH).unwrap();
+    let (scene, path) = (d.join("scene.toml"), d.join("path.toml"));
+    let cache = d.join("scene.bake");
+    let common = [
+        "--cpu",
+        "--spp",
+        "1",
+        "--cache",
+        s(&cache),
+        "--views",
+        s(&path),
+    ];
+    // One process: the whole path as a video (and the bake the shards share).
+    let one = d.join("one.mp4");
+    ok(
+        lobelight(&[&["render", s(&scene), "-o", s(&one)][..], &common].concat()),
+        "one",
+    );
+    // Three SLURM array tasks, then three Kubernetes Indexed Job pods, each its share.
+    // A scheduler's environment of task k.
+    type Env = fn(u32) -> Vec<(String, String)>;
+    let schedulers: [(&str, Env); 2] = [
+        ("slurm", |k| {
+            vec![
+                ("SLURM_ARRAY_TASK_ID".into(), k.to_string()),
+                ("SLURM_ARRAY_TASK_COUNT".into(), "3".into()),
+                ("SLURM_ARRAY_TASK_MIN".into(), "0".into()),
+                ("SLURM_ARRAY_TASK_STEP".into(), "1".into()),
+            ]
+        }),
+        ("k8s", |k| {
+            vec![
+                ("JOB_COMPLETION_INDEX".into(), k.to_string()),
+                ("LOBELIGHT_SHARDS".into(), "3".into()),
+            ]
+        }),
+    ];
+    for (name, env) in schedulers {
+        let frames = d.join(format!("{name}_####.png"));
+        for k in 0..3 {
+            let args = [
+                &["render", s(&scene), "-o", s(&frames), "--shard", "auto"][..],
+                &common,
+            ];
+            let out = Command::new(env!("CARGO_BIN_EXE_lobelight"))
+                .args(args.concat())
+                .envs(env(k))
+                .output()
+                .unwrap();
+            ok(out, &format!("{name} shard {k}"));
+        }
+        let joined = d.join(format!("{name}.mp4"));
+        let out = lobelight(&["join", s(&frames), "-o", s(&joined), "--fps", "8"]);
+        ok(out, "join");
+        let (theirs, ours) = (frame_md5s(&joined), frame_md5s(&one));
+        assert_eq!(ours.len(), 13);
+        assert_eq!(
+            theirs, ours,
+            "{name}: the joined video's frames differ from one process's"
+        );
+    }
+    // A missing frame is named.
+    std::fs::remove_file(d.join("slurm_0005.png")).unwrap();
+    let out = lobelight(&[
+        "join",
+        s(&d.join("slurm_####.png")),
+        "-o",
+        s(&d.join("x.mp4")),
+    ]);
+    let err = String::from_utf8_lossy(&out.stderr);
+    assert!(!out.status.success() && err.contains("frame 5"), "{err}");
+    std::fs::remove_dir_all(&d).ok();
+}

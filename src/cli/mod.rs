@@ -7,6 +7,7 @@ pub mod cluster;
 pub mod compare;
 pub mod convolution;
 pub mod info;
+pub mod join;
 pub mod measure;
 mod output;
 pub mod plot;
@@ -364,6 +365,23 @@ enum Command {
     View(ViewArgs),
     /// Measure a stage: throughput and the figures that show it did the right work.
     Bench(BenchArgs),
+    /// The numbered frames a sequence's shards wrote (`render --views FILE --shard K/N -o
+    /// NAME_####.png`), joined in order into one MP4 video.
+    Join(JoinArgs),
+}
+
+/// The arguments of `lobelight join`.
+#[derive(Args)]
+struct JoinArgs {
+    /// The frames' numbered name, as the shards were given it: NAME_####.png (a run of #), or
+    /// NAME.png for NAME_NNNN.png.
+    frames: PathBuf,
+    /// The video, .mp4.
+    #[arg(short, long)]
+    output: PathBuf,
+    /// Frames a second.
+    #[arg(long, default_value_t = scene::views::DEFAULT_FPS)]
+    fps: f32,
 }
 
 /// The arguments of `lobelight info`.
@@ -641,7 +659,27 @@ fn run(cli: Cli) -> Result<()> {
         Command::View(args) => view_command(args),
         Command::Compare(args) => compare_command(args),
         Command::Bench(args) => bench_command(args),
+        Command::Join(args) => join_command(args),
     }
+}
+
+/// `lobelight join`.
+fn join_command(args: JoinArgs) -> Result<()> {
+    if render::ImageFormat::of(&args.output)? != render::ImageFormat::Mp4 {
+        return Err(Error::Invalid(format!(
+            "{}: join writes a video: its name must end in .mp4",
+            args.output.display()
+        )));
+    }
+    scene::path::check_fps(args.fps).map_err(|m| Error::Invalid(format!("--fps: {m}")))?;
+    output::check_writable(&args.output, "video")?;
+    let frames = join::join(&args.frames, &args.output, args.fps, true)?;
+    eprintln!(
+        "wrote {} ({frames} frames at {} fps)",
+        args.output.display(),
+        args.fps
+    );
+    Ok(())
 }
 
 /// `lobelight bench`: the kinds with inputs of their own one function each, the kinds run over
