@@ -360,3 +360,40 @@ fn shards_started_by_a_scheduler_join_into_one_process_s_video() {
     assert!(!out.status.success() && err.contains("frame 5"), "{err}");
     std::fs::remove_dir_all(&d).ok();
 }
+
+#[test]
+fn the_video_example_runs() {
+    let d = dir("example");
+    let video = d.join("fly.mp4");
+    let out = Command::new("sh")
+        .args(["examples/video.sh", "64", s(&video)])
+        .env("LOBELIGHT", env!("CARGO_BIN_EXE_lobelight"))
+        .output()
+        .unwrap();
+    ok(out, "examples/video.sh");
+    let probe = tool(
+        "ffprobe",
+        &[
+            "-v",
+            "error",
+            "-select_streams",
+            "v:0",
+            "-count_frames",
+            "-show_entries",
+            "stream=width,height,r_frame_rate,nb_read_frames",
+            "-of",
+            "json",
+            s(&video),
+        ],
+    );
+    let probe: serde_json::Value = serde_json::from_slice(&ok(probe, "ffprobe").stdout).unwrap();
+    let stream = &probe["streams"][0];
+    assert_eq!(
+        (stream["width"].as_u64(), stream["height"].as_u64()),
+        (Some(64), Some(64))
+    );
+    assert_eq!(stream["r_frame_rate"], "30/1");
+    // 0 s to 4 s at 30 a second, both ends in.
+    assert_eq!(stream["nb_read_frames"], "121");
+    std::fs::remove_dir_all(&d).ok();
+}

@@ -5,6 +5,7 @@
     renderer = lobelight.Renderer(scene)              # the engine, chosen once
     image = renderer.render()                         # linear HDR, height × width × 3, float32
     png = lobelight.tone_map(image)                   # uint8, as the command's PNG
+    lobelight.save("out.png", png)                    # or the float32 image as .exr
 
 A scene built here is the scene file's tables as dicts (docs/scenes.md): `camera`, `lights`
 (the file's `[[light]]`), `materials`, `objects` (its `[[object]]`) and `bake`. An object that
@@ -18,9 +19,9 @@ from pathlib import Path
 
 import numpy as np
 
-from ._lobelight import LobelightError, Renderer, Scene, __version__, tone_map
+from ._lobelight import LobelightError, Renderer, Scene, __version__, save, tone_map
 
-__all__ = ["LobelightError", "Renderer", "Scene", "build", "from_toml", "load", "points",
+__all__ = ["LobelightError", "Renderer", "Scene", "build", "from_toml", "load", "points", "save",
            "tone_map", "__version__"]
 
 # The keys of an object that hold arrays, and the dtype and columns each is handed over in.

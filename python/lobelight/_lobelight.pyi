@@ -53,3 +53,6 @@ class Renderer:
 
 def tone_map(hdr: npt.NDArray[np.float32], key: float = 0.18,
              exposure: float = 0.0) -> npt.NDArray[np.uint8]: ...
+
+def save(path: Union[str, PathLike[str]],
+         image: Union[npt.NDArray[np.uint8], npt.NDArray[np.float32]]) -> None: ...

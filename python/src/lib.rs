@@ -530,11 +530,67 @@ fn tone_map<'py>(
     rgba8_array(py, &toned, shape[1], shape[0])
 }
 
+/// Writes an image: uint8 height × width × 3 (a tone-mapped image) as PNG, or float32 height ×
+/// width × 3 (linear radiance) as EXR, by the file's extension.
+#[pyfunction]
+fn save(py: Python<'_>, path: PathBuf, image: &Bound<'_, PyAny>) -> PyResult<()> {
+    let ext = path
+        .extension()
+        .and_then(|e| e.to_str())
+        .map(str::to_ascii_lowercase);
+    let bad_shape =
+        |shape: &[usize]| invalid(format!("an image is height × width × 3, got {shape:?}"));
+    let written = match ext.as_deref() {
+        Some("png") => {
+            let a: PyReadonlyArray3<'_, u8> = image
+                .extract()
+                .map_err(|_| invalid("a PNG is written from uint8 pixels (tone_map's)".into()))?;
+            let shape = a.shape().to_vec();
+            if shape[2] != 3 {
+                return Err(bad_shape(&shape));
+            }
+            let bytes = a
+                .as_slice()
+                .map_err(|_| invalid("the image is not contiguous".into()))?
+                .to_vec();
+            let (w, h) = (shape[1] as u32, shape[0] as u32);
+            py.detach(|| image::RgbImage::from_raw(w, h, bytes).map(|i| i.save(&path)))
+        }
+        Some("exr") => {
+            let a: PyReadonlyArray3<'_, f32> = image.extract().map_err(|_| {
+                invalid("an EXR is written from float32 radiance (render's)".into())
+            })?;
+            let shape = a.shape().to_vec();
+            if shape[2] != 3 {
+                return Err(bad_shape(&shape));
+            }
+            let floats = a
+                .as_slice()
+                .map_err(|_| invalid("the image is not contiguous".into()))?
+                .to_vec();
+            let (w, h) = (shape[1] as u32, shape[0] as u32);
+            py.detach(|| image::Rgb32FImage::from_raw(w, h, floats).map(|i| i.save(&path)))
+        }
+        _ => {
+            return Err(invalid(format!(
+                "{}: the image must end in .png (uint8) or .exr (float32)",
+                path.display()
+            )));
+        }
+    };
+    match written {
+        Some(Ok(())) => Ok(()),
+        Some(Err(e)) => Err(invalid(format!("{}: {e}", path.display()))),
+        None => Err(invalid("the image's size does not match its pixels".into())),
+    }
+}
+
 #[pymodule]
 fn _lobelight(m: &Bound<'_, PyModule>) -> PyResult<()> {
     m.add_class::<PyScene>()?;
     m.add_class::<PyRenderer>()?;
     m.add_function(wrap_pyfunction!(tone_map, m)?)?;
+    m.add_function(wrap_pyfunction!(save, m)?)?;
     m.add("LobelightError", m.py().get_type::<LobelightError>())?;
     m.add("__version__", env!("CARGO_PKG_VERSION"))?;
     Ok(())

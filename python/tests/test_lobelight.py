@@ -8,6 +8,7 @@ Run by python/test.sh after `cargo test --release`, which builds the command the
 import os
 import struct
 import subprocess
+import sys
 import tempfile
 import threading
 import unittest
@@ -172,6 +173,13 @@ class SceneFromFile(unittest.TestCase):
         np.testing.assert_array_equal(ours, theirs)
         # The module's tone map of the array is the renderer's of its last image.
         np.testing.assert_array_equal(lobelight.tone_map(image), ours)
+        # Saved, it reads back as it was.
+        saved = Path(self.dir.name) / "saved.png"
+        lobelight.save(saved, ours)
+        np.testing.assert_array_equal(read_png(saved)[..., :3], ours)
+        lobelight.save(Path(self.dir.name) / "saved.exr", image)
+        with self.assertRaises(lobelight.LobelightError):
+            lobelight.save(Path(self.dir.name) / "saved.png", image)
 
     def test_another_view_from_the_same_bake(self):
         side = self.renderer.render(eye=[1.5, 0.2, 3.5], width=24, height=16, spp=4)
@@ -312,6 +320,20 @@ class BadInput(unittest.TestCase):
                     renderer.render(**kwargs)
         with self.assertRaises(lobelight.LobelightError):
             renderer.tone_map()
+
+
+class Examples(unittest.TestCase):
+    def test_the_points_example_writes_its_images(self):
+        with tempfile.TemporaryDirectory() as d:
+            out = Path(d) / "points"
+            done = subprocess.run([sys.executable, str(ROOT / "examples" / "points.py"),
+                                   "--size", "48", "-o", str(out)],
+                                  capture_output=True, text=True)
+            self.assertEqual(done.returncode, 0, done.stderr)
+            png = read_png(out.with_suffix(".png"))
+            self.assertEqual(png.shape[:2], (48, 48))
+            self.assertGreater(float(png.mean()), 10.0)
+            self.assertGreater(out.with_suffix(".exr").stat().st_size, 48 * 48 * 4)
 
 
 if __name__ == "__main__":
