@@ -270,6 +270,8 @@ const ORDER: &[&str] = &[
     "bake",
     "cache",
     "renderer",
+    // A sequence's frames as a video.
+    "video",
     // The application.
     "cli",
 ];
