@@ -93,6 +93,25 @@ fn tool(name: &str, args: &[&str]) -> Output {
     }
 }
 
+/// What ffprobe reads of a video's first stream: its codec, size, rate and frames decoded.
+fn video_stream(video: &Path) -> serde_json::Value {
+    let fields = "stream=codec_name,width,height,r_frame_rate,nb_read_frames";
+    let args = [
+        "-v",
+        "error",
+        "-select_streams",
+        "v:0",
+        "-count_frames",
+        "-show_entries",
+    ];
+    let probe = tool(
+        "ffprobe",
+        &[&args[..], &[fields, "-of", "json", s(video)]].concat(),
+    );
+    let probe: serde_json::Value = serde_json::from_slice(&ok(probe, "ffprobe").stdout).unwrap();
+    probe["streams"][0].clone()
+}
+
 fn dir(name: &str) -> PathBuf {
     let d = std::env::temp_dir().join(format!("lobelight-video-{name}-{}", std::process::id()));
     std::fs::create_dir_all(&d).unwrap();
@@ -153,23 +172,7 @@ fn a_camera_path_becomes_a_video_whose_frames_are_its_views() {
     assert_eq!(report["video"]["frames"], 13);
     assert_eq!(report["video"]["fps"], 8.0);
 
-    let probe = tool(
-        "ffprobe",
-        &[
-            "-v",
-            "error",
-            "-select_streams",
-            "v:0",
-            "-count_frames",
-            "-show_entries",
-            "stream=codec_name,width,height,r_frame_rate,nb_read_frames",
-            "-of",
-            "json",
-            s(&video),
-        ],
-    );
-    let probe: serde_json::Value = serde_json::from_slice(&ok(probe, "ffprobe").stdout).unwrap();
-    let stream = &probe["streams"][0];
+    let stream = video_stream(&video);
     assert_eq!(stream["codec_name"], "h264");
     assert_eq!(
         (stream["width"].as_u64(), stream["height"].as_u64()),
@@ -371,23 +374,7 @@ fn the_video_example_runs() {
         .output()
         .unwrap();
     ok(out, "examples/video.sh");
-    let probe = tool(
-        "ffprobe",
-        &[
-            "-v",
-            "error",
-            "-select_streams",
-            "v:0",
-            "-count_frames",
-            "-show_entries",
-            "stream=width,height,r_frame_rate,nb_read_frames",
-            "-of",
-            "json",
-            s(&video),
-        ],
-    );
-    let probe: serde_json::Value = serde_json::from_slice(&ok(probe, "ffprobe").stdout).unwrap();
-    let stream = &probe["streams"][0];
+    let stream = video_stream(&video);
     assert_eq!(
         (stream["width"].as_u64(), stream["height"].as_u64()),
         (Some(64), Some(64))

@@ -480,12 +480,7 @@ impl PyRenderer {
         key: f32,
         exposure: f32,
     ) -> PyResult<Bound<'py, PyArray3<u8>>> {
-        let tone = ToneConfig {
-            key,
-            exposure,
-            ..ToneConfig::default()
-        };
-        tone.validate().map_err(raise)?;
+        let tone = tone_config(key, exposure)?;
         let (w, h) = self
             .last_size
             .ok_or_else(|| invalid("nothing drawn yet: call render first".into()))?;
@@ -505,21 +500,8 @@ fn tone_map<'py>(
     key: f32,
     exposure: f32,
 ) -> PyResult<Bound<'py, PyArray3<u8>>> {
-    let shape = hdr.shape().to_vec();
-    if shape[2] != 3 {
-        return Err(invalid(format!(
-            "the image must be height × width × 3, got {shape:?}"
-        )));
-    }
-    let tone = ToneConfig {
-        key,
-        exposure,
-        ..ToneConfig::default()
-    };
-    tone.validate().map_err(raise)?;
-    let flat = hdr
-        .as_slice()
-        .map_err(|_| invalid("the image is not contiguous".into()))?;
+    let (flat, w, h) = image_rows(&hdr)?;
+    let tone = tone_config(key, exposure)?;
     let rgba: Vec<[f32; 4]> = flat
         .chunks_exact(3)
         .map(|c| [c[0], c[1], c[2], 1.0])
@@ -527,7 +509,35 @@ fn tone_map<'py>(
     let (toned, _) = py
         .detach(|| lobelight::cpu::host::tone_map(&tone, &rgba))
         .map_err(raise)?;
-    rgba8_array(py, &toned, shape[1], shape[0])
+    rgba8_array(py, &toned, w as usize, h as usize)
+}
+
+/// The tone map the command's `--key` and `--exposure` give, checked as it checks them.
+fn tone_config(key: f32, exposure: f32) -> PyResult<ToneConfig> {
+    let tone = ToneConfig {
+        key,
+        exposure,
+        ..ToneConfig::default()
+    };
+    tone.validate().map_err(raise)?;
+    Ok(tone)
+}
+
+/// An image array's pixels, rows from the top, and its (width, height): height × width × 3,
+/// contiguous.
+fn image_rows<'a, T: numpy::Element>(
+    a: &'a PyReadonlyArray3<'_, T>,
+) -> PyResult<(&'a [T], u32, u32)> {
+    let shape = a.shape();
+    if shape[2] != 3 {
+        return Err(invalid(format!(
+            "an image must be height × width × 3, got {shape:?}"
+        )));
+    }
+    let pixels = a
+        .as_slice()
+        .map_err(|_| invalid("the image is not contiguous".into()))?;
+    Ok((pixels, shape[1] as u32, shape[0] as u32))
 }
 
 /// Writes an image: uint8 height × width × 3 (a tone-mapped image) as PNG, or float32 height ×
@@ -538,37 +548,21 @@ fn save(py: Python<'_>, path: PathBuf, image: &Bound<'_, PyAny>) -> PyResult<()>
         .extension()
         .and_then(|e| e.to_str())
         .map(str::to_ascii_lowercase);
-    let bad_shape =
-        |shape: &[usize]| invalid(format!("an image is height × width × 3, got {shape:?}"));
     let written = match ext.as_deref() {
         Some("png") => {
             let a: PyReadonlyArray3<'_, u8> = image
                 .extract()
                 .map_err(|_| invalid("a PNG is written from uint8 pixels (tone_map's)".into()))?;
-            let shape = a.shape().to_vec();
-            if shape[2] != 3 {
-                return Err(bad_shape(&shape));
-            }
-            let bytes = a
-                .as_slice()
-                .map_err(|_| invalid("the image is not contiguous".into()))?
-                .to_vec();
-            let (w, h) = (shape[1] as u32, shape[0] as u32);
+            let (bytes, w, h) = image_rows(&a)?;
+            let bytes = bytes.to_vec();
             py.detach(|| image::RgbImage::from_raw(w, h, bytes).map(|i| i.save(&path)))
         }
         Some("exr") => {
             let a: PyReadonlyArray3<'_, f32> = image.extract().map_err(|_| {
                 invalid("an EXR is written from float32 radiance (render's)".into())
             })?;
-            let shape = a.shape().to_vec();
-            if shape[2] != 3 {
-                return Err(bad_shape(&shape));
-            }
-            let floats = a
-                .as_slice()
-                .map_err(|_| invalid("the image is not contiguous".into()))?
-                .to_vec();
-            let (w, h) = (shape[1] as u32, shape[0] as u32);
+            let (floats, w, h) = image_rows(&a)?;
+            let floats = floats.to_vec();
             py.detach(|| image::Rgb32FImage::from_raw(w, h, floats).map(|i| i.save(&path)))
         }
         _ => {
