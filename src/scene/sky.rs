@@ -10,6 +10,9 @@
 use std::path::Path;
 
 use glam::Vec3;
+use rayon::prelude::*;
+
+use crate::shared::lights::{IRRADIANCE_H, IRRADIANCE_W};
 
 /// Rows of the map a constant sky is made of: its texels' solid angles follow sin θ, which the
 /// sampling tables weigh by each row's centre, so finer rows sample the sphere more evenly.
@@ -35,7 +38,11 @@ pub struct Sky {
 ///   of the texels' sampling weights;
 /// - 1 + y W + x: texel (x, y): its radiance, and the share of its row's weight up to and
 ///   including it (its row's cumulative distribution);
-/// - 1 + W H + y: row y: the share of the map's weight up to and including it.
+/// - 1 + W H + y: row y: the share of the map's weight up to and including it;
+/// - 1 + W H + H + j W_E + i: the irradiance the whole map gives a surface whose normal looks
+///   along φ = 2π i / W_E, θ = π j / (H_E − 1) (in the map's frame: a latitude-longitude grid
+///   of `IRRADIANCE_SIZE` from pole to pole), which `shared::lights::sky_irradiance` reads
+///   bilinearly.
 ///
 /// A texel's weight is its luminance times the sine of its row's centre angle. A scene with no
 /// environment light has the header alone, all zero.
@@ -190,9 +197,91 @@ impl Sky {
         }
         out[w * h + h][0] = 1.0;
         out[0] = [self.width as f32, self.height as f32, total as f32, 0.0];
+        out.extend(self.irradiance());
         SkyTable(out)
     }
+
+    /// The unshadowed irradiance `∫ L(ω) max(0, n·ω) dω` on the normals of a latitude-
+    /// longitude grid of `IRRADIANCE_SIZE` (its rows from pole to pole), in the map's frame: what the direct
+    /// bake takes the sky's shadow rays away from (design §8). The map is first averaged into
+    /// `IRRADIANCE_MAP` texels (the cosine varies across one by under 3°; a finer map costs its
+    /// texels times the grid's), each a direction and its radiance times its solid angle.
+    pub fn irradiance(&self) -> Vec<[f32; 4]> {
+        let (w, h) = (self.width as usize, self.height as usize);
+        let (cw, ch) = IRRADIANCE_MAP;
+        // Each coarse texel: the mean of the texels whose centres fall in it, weighed by their
+        // solid angles (sin θ), or, where the map is coarser along an axis, the texel its
+        // centre lies in.
+        let mut sum = vec![[0.0f64; 4]; cw * ch];
+        for y in 0..h {
+            let sin = (std::f64::consts::PI * (y as f64 + 0.5) / h as f64).sin();
+            let sy = (2 * y + 1) * ch / (2 * h);
+            for x in 0..w {
+                let cell = &mut sum[sy * cw + (2 * x + 1) * cw / (2 * w)];
+                for (k, c) in self.radiance[y * w + x].iter().enumerate() {
+                    cell[k] += f64::from(*c) * sin;
+                }
+                cell[3] += sin;
+            }
+        }
+        let texel = |x: usize, y: usize| -> [f64; 3] {
+            let c = sum[y * cw + x];
+            if c[3] > 0.0 {
+                [c[0] / c[3], c[1] / c[3], c[2] / c[3]]
+            } else {
+                let (fx, fy) = ((2 * x + 1) * w / (2 * cw), (2 * y + 1) * h / (2 * ch));
+                self.radiance[fy * w + fx].map(f64::from)
+            }
+        };
+        let dir = |u: f64, v: f64| {
+            let (phi, theta) = (2.0 * std::f64::consts::PI * u, std::f64::consts::PI * v);
+            [
+                theta.sin() * phi.sin(),
+                theta.cos(),
+                -theta.sin() * phi.cos(),
+            ]
+        };
+        let mut sources = Vec::with_capacity(cw * ch);
+        for y in 0..ch {
+            let (t0, t1) = (
+                std::f64::consts::PI * y as f64 / ch as f64,
+                std::f64::consts::PI * (y + 1) as f64 / ch as f64,
+            );
+            let omega = 2.0 * std::f64::consts::PI / cw as f64 * (t0.cos() - t1.cos());
+            for x in 0..cw {
+                let d = dir((x as f64 + 0.5) / cw as f64, (y as f64 + 0.5) / ch as f64);
+                sources.push((d, texel(x, y).map(|c| c * omega)));
+            }
+        }
+        let (ew, eh) = IRRADIANCE_SIZE;
+        (0..ew * eh)
+            .into_par_iter()
+            .map(|k| {
+                let n = dir(
+                    (k % ew) as f64 / ew as f64,
+                    (k / ew) as f64 / (eh - 1) as f64,
+                );
+                let mut e = [0.0f64; 3];
+                for (d, c) in &sources {
+                    let cos = n[0] * d[0] + n[1] * d[1] + n[2] * d[2];
+                    if cos > 0.0 {
+                        for i in 0..3 {
+                            e[i] += c[i] * cos;
+                        }
+                    }
+                }
+                [e[0] as f32, e[1] as f32, e[2] as f32, 0.0]
+            })
+            .collect()
+    }
 }
+
+/// The grid of normals the sky's irradiance is tabled on (`Sky::irradiance`;
+/// `shared::lights::IRRADIANCE_W` × `IRRADIANCE_H`): 2.8° a step.
+pub const IRRADIANCE_SIZE: (usize, usize) = (IRRADIANCE_W as usize, IRRADIANCE_H as usize);
+
+/// The texels a map is averaged into before its irradiance is tabled.
+const IRRADIANCE_MAP: (usize, usize) = (128, 64);
 
 /// Texels of a sky model's map: 512 × 256, a texel 0.7° across, finer than the sky's
 /// gradients (its brightest, round the sun, spans tens of degrees).

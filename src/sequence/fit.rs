@@ -549,8 +549,8 @@ pub struct DirectMap {
 }
 
 /// Bakes the direct light of `lights` (`params.light_count` of them) into every splat of the
-/// executor's geometry: one `direct_bake` dispatch over the splats, taken in `order`
-/// (`grid::splat_order`).
+/// executor's geometry: `direct_bake` over the splats, taken in `order` (`grid::splat_order`),
+/// then its `share`, which adds an environment light from the neighbours' blocked shares.
 pub fn bake_direct<E: Executor>(
     ex: &mut E,
     lights: &E::Buffer,
@@ -563,10 +563,12 @@ pub fn bake_direct<E: Executor>(
         "light visibility",
         (n * params.light_count as u64).max(1) * 4,
     )?;
+    let blocked = ex.zeroed("sky blocked shares", n.max(1) * 4)?;
     let uniform = ex.uniform("direct params", params)?;
-    let bindings = [&uniform, lights, &direct, &visibility, order];
+    let bindings = [&uniform, lights, &direct, &visibility, order, &blocked];
     let groups = groups(Stage::DirectBake, params.splat_count)?;
     ex.dispatch_traced(Stage::DirectBake, &bindings, groups)?;
+    ex.dispatch_traced(Stage::DirectBake.entry("share"), &bindings, groups)?;
     Ok(DirectBake { direct, visibility })
 }
 

@@ -143,6 +143,39 @@ fn sky_texel(sky: &[[f32; 4]], l: &Light, d: Vec3) -> (usize, u32, f32) {
     ((1 + y * w + x) as usize, y, sin_theta)
 }
 
+/// `Sky::irradiance`'s grid of normals: 128 × 65, 2.8° a step, where reading it bilinearly is
+/// within about 0.1 % of the irradiance round a sun-like peak.
+pub const IRRADIANCE_W: u32 = 128;
+pub const IRRADIANCE_H: u32 = 65;
+
+/// The unshadowed irradiance environment light `l` gives a surface of normal `n`: its table
+/// (`Sky::irradiance`, after the map's rows; its first and last rows the poles) read
+/// bilinearly, across the seam at φ = 0.
+pub fn sky_irradiance(sky: &[[f32; 4]], l: &Light, n: Vec3) -> Vec3 {
+    let (w, h) = sky_size(sky);
+    let first = 1 + w * h + h;
+    let local = Vec3::new(
+        n.dot(Vec3::from(l.edge_u)),
+        n.dot(Vec3::from(l.direction)),
+        n.dot(Vec3::from(l.edge_v)),
+    );
+    let u = local.x.atan2(-local.z) / (2.0 * PI);
+    let v = Vec2::new(local.x, local.z).length().atan2(local.y) / PI;
+    let (ew, eh) = (IRRADIANCE_W as f32, IRRADIANCE_H as f32);
+    let fx = u * ew;
+    let fy = (v * (eh - 1.0)).clamp(0.0, eh - 1.0);
+    let (x0, y0) = (fx.floor(), fy.floor());
+    let (tx, ty) = (fx - x0, fy - y0);
+    let wrap = |x: f32| (x.rem_euclid(ew) as u32).min(IRRADIANCE_W - 1);
+    let (xa, xb) = (wrap(x0), wrap(x0 + 1.0));
+    let ya = y0 as u32;
+    let yb = (ya + 1).min(IRRADIANCE_H - 1);
+    let at = |x: u32, y: u32| Vec3::from_slice(&sky[(first + y * IRRADIANCE_W + x) as usize][..3]);
+    let top = at(xa, ya).lerp(at(xb, ya), tx);
+    let bottom = at(xa, yb).lerp(at(xb, yb), tx);
+    top.lerp(bottom, ty)
+}
+
 /// The radiance environment light `l` sends along −d (arriving from direction `d`).
 pub fn sky_radiance(sky: &[[f32; 4]], l: &Light, d: Vec3) -> Vec3 {
     Vec3::from_slice(&sky[sky_texel(sky, l, d).0][..3])

@@ -93,6 +93,35 @@ fn sky_texel(l: Light, d: vec3<f32>) -> SkyTexel {
     return SkyTexel(1u + y * size.x + x, y, sin_theta);
 }
 
+// The side of the sky's grid of irradiance normals (scene::sky::IRRADIANCE_SIZE).
+const IRRADIANCE_W: u32 = 128u;
+const IRRADIANCE_H: u32 = 65u;
+
+// The unshadowed irradiance environment light l gives a surface of normal n: its table (after
+// the map's rows; its first and last rows the poles) read bilinearly, across the seam at
+// phi = 0.
+fn sky_irradiance(l: Light, n: vec3<f32>) -> vec3<f32> {
+    let size = sky_size();
+    let first = 1u + size.x * size.y + size.y;
+    let local = vec3<f32>(dot(n, l.edge_u), dot(n, l.direction), dot(n, l.edge_v));
+    let u = atan2(local.x, -local.z) / (2.0 * PI);
+    let v = atan2(length(local.xz), local.y) / PI;
+    let ew = f32(IRRADIANCE_W);
+    let eh = f32(IRRADIANCE_H);
+    let fx = u * ew;
+    let fy = clamp(v * (eh - 1.0), 0.0, eh - 1.0);
+    let x0 = floor(fx);
+    let y0 = floor(fy);
+    let t = vec2<f32>(fx - x0, fy - y0);
+    let xa = min(u32(x0 - floor(x0 / ew) * ew), IRRADIANCE_W - 1u);
+    let xb = min(u32((x0 + 1.0) - floor((x0 + 1.0) / ew) * ew), IRRADIANCE_W - 1u);
+    let ya = u32(y0);
+    let yb = min(ya + 1u, IRRADIANCE_H - 1u);
+    let top = mix(sky[first + ya * IRRADIANCE_W + xa].xyz, sky[first + ya * IRRADIANCE_W + xb].xyz, t.x);
+    let bottom = mix(sky[first + yb * IRRADIANCE_W + xa].xyz, sky[first + yb * IRRADIANCE_W + xb].xyz, t.x);
+    return mix(top, bottom, t.y);
+}
+
 // The radiance environment light l sends along -d (arriving from direction d).
 fn sky_radiance(l: Light, d: vec3<f32>) -> vec3<f32> {
     return sky[sky_texel(l, d).entry].xyz;
