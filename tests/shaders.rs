@@ -186,8 +186,9 @@ fn mirror_workgroup_shapes_match_the_wgsl() {
         }
     }
     assert_eq!(mirror_rows().count(), passes);
-    // Three stages run a second pass over coverage groups' members.
-    assert_eq!(passes, Stage::ALL.len() + 3);
+    // Three stages run a second pass over coverage groups' members, and the direct bake one
+    // over a sky's neighbours (`share`).
+    assert_eq!(passes, Stage::ALL.len() + 4);
     assert_eq!(
         tonemap_reduce::BLOCK,
         tonemap_reduce::WG * tonemap_reduce::ITEMS
