@@ -278,9 +278,8 @@ fn open_beside_the_wall(p: Vec3) -> f32 {
 /// (`open_beside_the_wall`), from 0.64 at 0.3 from the wall to 0.92 at 1.5. The bake traces 4
 /// rays a splat and averages the blocked shares of neighbours within 3 radii, so it is checked
 /// in strips 0.2 wide: measured 0.9–3.4 % bright, 2.2 % over the five (64 rays a splat and
-/// no sharing gave 1.1–1.8 %: the rays start half a radius off the plane); asserted 5 % a
-/// strip and 3 % over all. A bake blind to the wall reads 9–55 % bright. The device splat by
-/// splat within 1e-3 of the mirror.
+/// no sharing gave −1.8 to +1.4 %); asserted 5 % a strip and 3 % over all. A bake blind to
+/// the wall reads 9–55 % bright. The device splat by splat within 1e-3 of the mirror.
 #[test]
 fn a_wall_shades_the_sky_by_what_it_hides() {
     let wall = "[[object]]\nshape = \"quad\"\nsize = [8.0, 1.0]\nrotate = [0.0, 90.0, 0.0]\ntranslate = [0.0, 0.5, 0.0]\nmaterial = \"grey\"\nspacing = 0.1";

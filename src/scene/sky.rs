@@ -202,10 +202,11 @@ impl Sky {
     }
 
     /// The unshadowed irradiance `∫ L(ω) max(0, n·ω) dω` on the normals of a latitude-
-    /// longitude grid of `IRRADIANCE_SIZE` (its rows from pole to pole), in the map's frame: what the direct
-    /// bake takes the sky's shadow rays away from (design §8). The map is first averaged into
-    /// `IRRADIANCE_MAP` texels (the cosine varies across one by under 3°; a finer map costs its
-    /// texels times the grid's), each a direction and its radiance times its solid angle.
+    /// longitude grid of `IRRADIANCE_SIZE` (its rows from pole to pole), in the map's frame:
+    /// what the direct bake takes the blocked share of (design §8). The map is first averaged
+    /// into `IRRADIANCE_MAP` texels, 2.8° across, over which the cosine is nearly linear (a
+    /// finer map would cost its texels times the grid's), each a direction and its radiance
+    /// times its solid angle.
     pub fn irradiance(&self) -> Vec<[f32; 4]> {
         let (w, h) = (self.width as usize, self.height as usize);
         let (cw, ch) = IRRADIANCE_MAP;
