@@ -60,6 +60,24 @@ struct Seen {
     open: f32,
 }
 
+// Stratum j of light l's n x n seen from splat i: its irradiance e cos(theta) (zero where the
+// light lies behind the splat or gives nothing, and then no ray is traced) and, in w, 1 where
+// the shadow ray from o reaches the light.
+fn stratum_ray(l: Light, li: u32, i: u32, s: Splat, o: vec3<f32>, key: u32, j: u32,
+               n: u32) -> vec4<f32> {
+    let uv = area_point(j, n, key + (li * n * n + j) * 2u, true);
+    let ls = sample_light(l, s.center, s.normal, uv.x, uv.y);
+    let cos_i = dot(s.normal, ls.wi);
+    if !(cos_i > 0.0) || all(ls.e <= vec3<f32>(0.0)) {
+        return vec4<f32>(0.0);
+    }
+    var budget = SHADOW_RAY_BUDGET;
+    let reach = shadow_reach(l, o, ls.wi, ls.dist, params.shadow_bias);
+    let open = trace_ray(o, ls.wi, i, reach, &budget).splat == NO_SPLAT;
+    return vec4<f32>(ls.e * cos_i, select(0.0, 1.0, open));
+}
+
+// Light l's Seen on splat i, the sun's disk first through two of its strata.
 fn seen_by_rays(l: Light, li: u32, i: u32, s: Splat, o: vec3<f32>, key: u32) -> Seen {
     let n = strata_side(l.kind, params.samples);
     let first_look = l.kind == LIGHT_SUN && n >= 2u;
@@ -83,20 +101,14 @@ fn seen_by_rays(l: Light, li: u32, i: u32, s: Splat, o: vec3<f32>, key: u32) -> 
                 continue;
             }
             taken += 1u;
-            let uv = area_point(j, n, key + (li * n * n + j) * 2u, true);
-            let ls = sample_light(l, s.center, s.normal, uv.x, uv.y);
-            let cos_i = dot(s.normal, ls.wi);
-            if !(cos_i > 0.0) || all(ls.e <= vec3<f32>(0.0)) {
+            let ray = stratum_ray(l, li, i, s, o, key, j, n);
+            if all(ray.xyz <= vec3<f32>(0.0)) {
                 continue;
             }
-            let e = ls.e * cos_i;
-            unshadowed += e;
+            unshadowed += ray.xyz;
             rays += 1u;
-            var budget = SHADOW_RAY_BUDGET;
-            let reach = shadow_reach(l, o, ls.wi, ls.dist, params.shadow_bias);
-            let hit = trace_ray(o, ls.wi, i, reach, &budget);
-            if hit.splat == NO_SPLAT {
-                open += e;
+            if ray.w > 0.0 {
+                open += ray.xyz;
                 rays_open += 1u;
             }
         }
@@ -113,17 +125,8 @@ fn sky_blocked(l: Light, li: u32, i: u32, s: Splat, o: vec3<f32>, key: u32, e0: 
     let n = SKY_SIDE;
     var lost = vec3<f32>(0.0);
     for (var j = 0u; j < n * n; j++) {
-        let uv = area_point(j, n, key + (li * n * n + j) * 2u, true);
-        let ls = sample_light(l, s.center, s.normal, uv.x, uv.y);
-        let cos_i = dot(s.normal, ls.wi);
-        if !(cos_i > 0.0) || all(ls.e <= vec3<f32>(0.0)) {
-            continue;
-        }
-        var budget = SHADOW_RAY_BUDGET;
-        let reach = shadow_reach(l, o, ls.wi, ls.dist, params.shadow_bias);
-        if trace_ray(o, ls.wi, i, reach, &budget).splat != NO_SPLAT {
-            lost += ls.e * cos_i;
-        }
+        let ray = stratum_ray(l, li, i, s, o, key, j, n);
+        lost += ray.xyz * (1.0 - ray.w);
     }
     let all_e = e0.x + e0.y + e0.z;
     return select(0.0, (lost.x + lost.y + lost.z) / (f32(n * n) * all_e), all_e > 0.0);

@@ -30,15 +30,39 @@ pub const SHARE_REACH: f32 = 3.0;
 pub const SHARE_CELLS: f32 = 1.5;
 pub const SHARE_COS: f32 = 0.95;
 
-/// Light `l`'s irradiance on splat `i` and the open share of its unshadowed irradiance, by
-/// shadow rays from `o`; the sun's disk first through an eighth of its strata.
-fn seen_by_rays(
+/// Stratum `j` of light `l`'s `n`² seen from splat `i`: its irradiance `e cos θ` (zero where
+/// the light lies behind the splat or gives nothing, and then no ray is traced) and whether the
+/// shadow ray from `o` reaches the light (`stratum_ray` in WGSL).
+fn stratum_ray(
     (params, geo): (&DirectParams, &Geometry),
     (l, li): (&Light, u32),
     (i, s, o): (u32, &Splat, Vec3),
     key: u32,
-) -> (Vec3, f32) {
+    (j, n): (u32, u32),
+) -> (Vec3, bool) {
     let (centre, normal) = (Vec3::from(s.center), Vec3::from(s.normal));
+    let r = key.wrapping_add((li * n * n + j).wrapping_mul(2));
+    let uv = area_point(j, n, r, true);
+    let ls = sample_light(geo.sky, l, centre, normal, uv.x, uv.y);
+    let cos_i = normal.dot(ls.wi);
+    if !(cos_i > 0.0) || ls.e.cmple(Vec3::ZERO).all() {
+        return (Vec3::ZERO, false);
+    }
+    let mut budget = SHADOW_RAY_BUDGET;
+    let t_max = shadow_reach(l, o, ls.wi, ls.dist, params.shadow_bias);
+    let open = trace_ray(geo, o, ls.wi, i, t_max, &mut budget).splat == NO_SPLAT;
+    (ls.e * cos_i, open)
+}
+
+/// Light `l`'s irradiance on splat `i` and the open share of its unshadowed irradiance, by
+/// shadow rays from `o`; the sun's disk first through two of its strata.
+fn seen_by_rays(
+    (params, geo): (&DirectParams, &Geometry),
+    light: (&Light, u32),
+    splat: (u32, &Splat, Vec3),
+    key: u32,
+) -> (Vec3, f32) {
+    let l = light.0;
     let n = strata_side(l.kind, params.samples);
     let first_look = l.kind == light_kind::SUN && n >= 2;
     let (mut open, mut unshadowed) = (Vec3::ZERO, Vec3::ZERO);
@@ -54,19 +78,13 @@ fn seen_by_rays(
                 continue;
             }
             taken += 1;
-            let r = key.wrapping_add((li * n * n + j).wrapping_mul(2));
-            let uv = area_point(j, n, r, true);
-            let ls = sample_light(geo.sky, l, centre, normal, uv.x, uv.y);
-            let cos_i = normal.dot(ls.wi);
-            if !(cos_i > 0.0) || ls.e.cmple(Vec3::ZERO).all() {
+            let (e, reached) = stratum_ray((params, geo), light, splat, key, (j, n));
+            if e.cmple(Vec3::ZERO).all() {
                 continue;
             }
-            let e = ls.e * cos_i;
             unshadowed += e;
             rays += 1;
-            let mut budget = SHADOW_RAY_BUDGET;
-            let t_max = shadow_reach(l, o, ls.wi, ls.dist, params.shadow_bias);
-            if trace_ray(geo, o, ls.wi, i, t_max, &mut budget).splat == NO_SPLAT {
+            if reached {
                 open += e;
                 rays_open += 1;
             }
@@ -84,27 +102,18 @@ fn seen_by_rays(
 /// The share of environment light `l`'s unshadowed irradiance `e0` on splat `i` that its
 /// `SKY_SIDE`² shadow rays find blocked.
 fn sky_blocked(
-    (params, geo): (&DirectParams, &Geometry),
-    (l, li): (&Light, u32),
-    (i, s, o): (u32, &Splat, Vec3),
+    at: (&DirectParams, &Geometry),
+    light: (&Light, u32),
+    splat: (u32, &Splat, Vec3),
     key: u32,
     e0: Vec3,
 ) -> f32 {
-    let (centre, normal) = (Vec3::from(s.center), Vec3::from(s.normal));
     let n = SKY_SIDE;
     let mut lost = Vec3::ZERO;
     for j in 0..n * n {
-        let r = key.wrapping_add((li * n * n + j).wrapping_mul(2));
-        let uv = area_point(j, n, r, true);
-        let ls = sample_light(geo.sky, l, centre, normal, uv.x, uv.y);
-        let cos_i = normal.dot(ls.wi);
-        if !(cos_i > 0.0) || ls.e.cmple(Vec3::ZERO).all() {
-            continue;
-        }
-        let mut budget = SHADOW_RAY_BUDGET;
-        let t_max = shadow_reach(l, o, ls.wi, ls.dist, params.shadow_bias);
-        if trace_ray(geo, o, ls.wi, i, t_max, &mut budget).splat != NO_SPLAT {
-            lost += ls.e * cos_i;
+        let (e, reached) = stratum_ray(at, light, splat, key, (j, n));
+        if !reached {
+            lost += e;
         }
     }
     let all_e = e0.x + e0.y + e0.z;

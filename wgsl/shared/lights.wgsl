@@ -117,8 +117,10 @@ fn sky_irradiance(l: Light, n: vec3<f32>) -> vec3<f32> {
     let xb = min(u32((x0 + 1.0) - floor((x0 + 1.0) / ew) * ew), IRRADIANCE_W - 1u);
     let ya = u32(y0);
     let yb = min(ya + 1u, IRRADIANCE_H - 1u);
-    let top = mix(sky[first + ya * IRRADIANCE_W + xa].xyz, sky[first + ya * IRRADIANCE_W + xb].xyz, t.x);
-    let bottom = mix(sky[first + yb * IRRADIANCE_W + xa].xyz, sky[first + yb * IRRADIANCE_W + xb].xyz, t.x);
+    let top = mix(sky[first + ya * IRRADIANCE_W + xa].xyz,
+                  sky[first + ya * IRRADIANCE_W + xb].xyz, t.x);
+    let bottom = mix(sky[first + yb * IRRADIANCE_W + xa].xyz,
+                     sky[first + yb * IRRADIANCE_W + xb].xyz, t.x);
     return mix(top, bottom, t.y);
 }
 
